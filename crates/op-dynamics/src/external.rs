@@ -1,0 +1,236 @@
+//! External actions (seed 000 eq. 12-13): gravity, forces on particle sets
+//! over time windows, linear and angular damping, and the per-particle
+//! force/torque accumulator other crates (op-implicit contact, tools) use to
+//! act on particles during the next step.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{self, ParamError};
+use crate::math::{Real, Vec3};
+
+/// A force applied to a set of particles during a time window, with an
+/// optional linear ramp at both ends (ramped loading and unloading avoid
+/// the dynamic overshoot of step loads, DESIGN §8).
+///
+/// The magnitude factor is 0 before `start`, rises linearly to 1 over
+/// `ramp`, stays 1, and falls linearly to 0 over `ramp` ending at `end`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceWindow {
+    /// Particle ids the force acts on (each gets the full force).
+    pub particles: Vec<u32>,
+    /// The force vector at full magnitude.
+    pub force: [Real; 3],
+    /// Start time. Default: 0.
+    #[serde(default)]
+    pub start: Real,
+    /// End time (> start). Default: infinity.
+    #[serde(default = "infinity")]
+    pub end: Real,
+    /// Ramp duration at each end, >= 0 and at most half the window.
+    /// Default: 0 (a step load).
+    #[serde(default)]
+    pub ramp: Real,
+}
+
+fn infinity() -> Real {
+    Real::INFINITY
+}
+
+impl ForceWindow {
+    /// Checks the window: finite force, `start < end`, a ramp that fits.
+    pub fn validate(&self, particle_count: usize) -> Result<(), ParamError> {
+        for f in self.force {
+            error::finite("force", f)?;
+        }
+        error::finite("start", self.start)?;
+        error::check(
+            "end",
+            self.end,
+            !self.end.is_nan() && self.end > self.start,
+            "must be greater than `start` (or infinite)",
+        )?;
+        error::non_negative("ramp", self.ramp)?;
+        error::check(
+            "ramp",
+            self.ramp,
+            2.0 * self.ramp <= self.end - self.start,
+            "must be at most half of `end - start`",
+        )?;
+        if let Some(&bad) = self.particles.iter().find(|&&p| p as usize >= particle_count) {
+            return Err(ParamError::Invalid {
+                field: "particles".into(),
+                message: format!(
+                    "particle id {bad} does not exist (valid ids: 0..{particle_count})"
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The magnitude factor in [0, 1] at time `t`.
+    pub fn factor(&self, t: Real) -> Real {
+        if t < self.start || t >= self.end {
+            return 0.0;
+        }
+        if self.ramp <= 0.0 {
+            return 1.0;
+        }
+        let up = (t - self.start) / self.ramp;
+        let down = (self.end - t) / self.ramp;
+        up.min(down).min(1.0)
+    }
+}
+
+/// Global external actions and damping (seed 000 eq. 12-13).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ExternalParams {
+    /// Gravity acceleration. Default: zero.
+    pub gravity: [Real; 3],
+    /// Linear damping `beta0` (force `-beta0 v`), >= 0. Default: 0.
+    pub linear_damping: Real,
+    /// Angular damping `beta1` (torque `-beta1 w`), >= 0. Default: 0.
+    pub angular_damping: Real,
+    /// Forces on particle sets over time windows. Default: none.
+    pub forces: Vec<ForceWindow>,
+}
+
+impl Default for ExternalParams {
+    fn default() -> Self {
+        ExternalParams {
+            gravity: [0.0; 3],
+            linear_damping: 0.0,
+            angular_damping: 0.0,
+            forces: Vec::new(),
+        }
+    }
+}
+
+impl ExternalParams {
+    /// Checks every field; `particle_count` bounds the ids of force windows.
+    pub fn validate(&self, particle_count: usize) -> Result<(), ParamError> {
+        for g in self.gravity {
+            error::finite("gravity", g)?;
+        }
+        error::non_negative("linear_damping", self.linear_damping)?;
+        error::non_negative("angular_damping", self.angular_damping)?;
+        for (k, w) in self.forces.iter().enumerate() {
+            w.validate(particle_count)
+                .map_err(|e| e.within(&format!("forces[{k}]")))?;
+        }
+        Ok(())
+    }
+
+    /// The gravity vector.
+    pub fn gravity(&self) -> Vec3 {
+        Vec3::from(self.gravity)
+    }
+}
+
+/// Force and torque added to particles by other crates for the next step
+/// (op-implicit contact reactions, tools), indexed by particle id. They are
+/// held constant during the step, then cleared.
+#[derive(Clone, Debug, Default)]
+pub struct ExternalAccumulator {
+    forces: Vec<Vec3>,
+    torques: Vec<Vec3>,
+    active: bool,
+}
+
+impl ExternalAccumulator {
+    /// An accumulator for `n` particles.
+    pub fn new(n: usize) -> Self {
+        ExternalAccumulator {
+            forces: vec![Vec3::zeros(); n],
+            torques: vec![Vec3::zeros(); n],
+            active: false,
+        }
+    }
+
+    /// Adds `force` and `torque` (world frame, torque about the particle's
+    /// position) to particle `id` for the next step.
+    pub fn add(&mut self, id: u32, force: Vec3, torque: Vec3) {
+        let i = id as usize;
+        self.forces[i] += force;
+        self.torques[i] += torque;
+        self.active = true;
+    }
+
+    /// True when something was added since the last clear.
+    pub fn is_active(&self) -> bool {
+        self.active
+    }
+
+    /// The force and torque pending on particle `id`.
+    #[inline]
+    pub fn get(&self, id: u32) -> (Vec3, Vec3) {
+        (self.forces[id as usize], self.torques[id as usize])
+    }
+
+    /// Clears every pending force and torque.
+    pub fn clear(&mut self) {
+        if self.active {
+            self.forces.iter_mut().for_each(|f| *f = Vec3::zeros());
+            self.torques.iter_mut().for_each(|t| *t = Vec3::zeros());
+            self.active = false;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ramp_factor() {
+        let w = ForceWindow {
+            particles: vec![0],
+            force: [1.0, 0.0, 0.0],
+            start: 1.0,
+            end: 5.0,
+            ramp: 1.0,
+        };
+        assert_eq!(w.factor(0.5), 0.0);
+        assert!((w.factor(1.5) - 0.5).abs() < 1e-15);
+        assert_eq!(w.factor(3.0), 1.0);
+        assert!((w.factor(4.75) - 0.25).abs() < 1e-15);
+        assert_eq!(w.factor(5.0), 0.0);
+        assert!(w.validate(1).is_ok());
+        assert!(w.validate(0).unwrap_err().to_string().contains("does not exist"));
+    }
+
+    #[test]
+    fn rejects_bad_windows() {
+        let mut w = ForceWindow {
+            particles: vec![],
+            force: [Real::NAN, 0.0, 0.0],
+            start: 0.0,
+            end: 1.0,
+            ramp: 0.0,
+        };
+        assert!(w.validate(0).is_err());
+        w.force = [0.0; 3];
+        w.ramp = 0.6;
+        assert!(w.validate(0).unwrap_err().to_string().contains("ramp"));
+        w.ramp = 0.0;
+        w.end = -1.0;
+        assert!(w.validate(0).unwrap_err().to_string().contains("end"));
+        let p = ExternalParams {
+            linear_damping: -1.0,
+            ..Default::default()
+        };
+        assert!(p.validate(0).unwrap_err().to_string().contains("linear_damping"));
+    }
+
+    #[test]
+    fn accumulator_clears() {
+        let mut a = ExternalAccumulator::new(2);
+        a.add(1, Vec3::x(), Vec3::y());
+        a.add(1, Vec3::x(), Vec3::zeros());
+        assert_eq!(a.get(1).0, 2.0 * Vec3::x());
+        a.clear();
+        assert_eq!(a.get(1), (Vec3::zeros(), Vec3::zeros()));
+        assert!(!a.is_active());
+    }
+}

@@ -1,0 +1,477 @@
+//! The particle store: a structure of arrays with private fields and slice
+//! accessors (DESIGN §3, STYLE "For this workspace").
+//!
+//! Each particle is a full frame (seed 002 §5): position `p`, velocity `v`,
+//! unit quaternion `q`, world angular velocity `w`, mass, diagonal body
+//! inertia, a body-frame normal axis `a` (world normal `n = R(q) a`), flags,
+//! object id, type (standard(k) / hinge), material index and rest curvature.
+//!
+//! Particles keep a stable *id* (their insertion index) while their storage
+//! *slot* may change: the world re-sorts particles in spatial order when it
+//! rebuilds neighbour lists, because memory order dominates speed.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{self, ParamError};
+use crate::flags::Flags;
+use crate::integrators::{Bodies, StateMut, StateRef};
+use crate::math::{tangent_axis, Point3, Quat, Real, Vec3};
+
+/// Particle type of seed 002 §5.
+///
+/// A hinge interacts completely with every standard particle; a standard
+/// particle of type `k` interacts completely with standard particles of the
+/// same `k` and with hinges; every other pair of the same object only repels.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum ParticleType {
+    /// A standard particle of the given part number.
+    Standard(u16),
+    /// A hinge joining parts.
+    Hinge,
+}
+
+impl Default for ParticleType {
+    fn default() -> Self {
+        ParticleType::Standard(0)
+    }
+}
+
+impl ParticleType {
+    /// True when two particles of these types interact completely (seed
+    /// 002 §5 rules; object membership is checked separately).
+    #[inline]
+    pub fn complete_with(self, other: ParticleType) -> bool {
+        match (self, other) {
+            (ParticleType::Standard(a), ParticleType::Standard(b)) => a == b,
+            (ParticleType::Hinge, ParticleType::Standard(_))
+            | (ParticleType::Standard(_), ParticleType::Hinge) => true,
+            (ParticleType::Hinge, ParticleType::Hinge) => false,
+        }
+    }
+}
+
+/// Everything needed to create one particle. Start from
+/// [`ParticleDesc::at`] and override what differs from the defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParticleDesc {
+    /// Position. No default (see [`ParticleDesc::at`]).
+    pub position: Point3,
+    /// Velocity. Default: zero.
+    pub velocity: Vec3,
+    /// Orientation (full frame). Default: identity.
+    pub orientation: Quat,
+    /// Angular velocity in the world frame. Default: zero.
+    pub angular_velocity: Vec3,
+    /// Mass, > 0. Default: 1.
+    pub mass: Real,
+    /// Principal moments of inertia in the body frame, each > 0.
+    /// Default: (0.1, 0.1, 0.1) (a sphere of radius ~0.5 r0 for unit mass).
+    pub inertia: Vec3,
+    /// Body-frame normal axis, normalized on creation. Default: +z.
+    pub normal_axis: Vec3,
+    /// Flags. Default: none.
+    pub flags: Flags,
+    /// Object id: complete interactions only within an object. Default: 0.
+    pub object: u32,
+    /// Particle type. Default: `Standard(0)`.
+    pub kind: ParticleType,
+    /// Index into the world's material table. Default: 0.
+    pub material: u16,
+    /// Rest curvature `kappa = 1/R` of the form interaction (seed 002 §4).
+    /// Default: 0 (flat).
+    pub curvature: Real,
+}
+
+impl ParticleDesc {
+    /// A particle at `position` with every other attribute at its default.
+    pub fn at(position: Point3) -> Self {
+        ParticleDesc {
+            position,
+            velocity: Vec3::zeros(),
+            orientation: Quat::identity(),
+            angular_velocity: Vec3::zeros(),
+            mass: 1.0,
+            inertia: Vec3::repeat(0.1),
+            normal_axis: Vec3::z(),
+            flags: Flags::empty(),
+            object: 0,
+            kind: ParticleType::default(),
+            material: 0,
+            curvature: 0.0,
+        }
+    }
+
+    /// Orients the particle so that its world normal is `normal` (the
+    /// shortest rotation from the body normal axis).
+    pub fn with_normal(mut self, normal: Vec3) -> Self {
+        let a = self.normal_axis.normalize();
+        let n = normal.normalize();
+        self.orientation = Quat::rotation_between(&a, &n)
+            .unwrap_or_else(|| Quat::from_axis_angle(&nalgebra::Unit::new_normalize(tangent_axis(&a)), std::f64::consts::PI));
+        self
+    }
+
+    /// Checks every field: finite values, positive mass and inertia, a
+    /// non-zero normal axis, a finite curvature.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        for k in 0..3 {
+            error::finite("position", self.position[k])?;
+            error::finite("velocity", self.velocity[k])?;
+            error::finite("angular_velocity", self.angular_velocity[k])?;
+            error::positive("inertia", self.inertia[k])?;
+            error::finite("normal_axis", self.normal_axis[k])?;
+        }
+        error::positive("mass", self.mass)?;
+        error::check(
+            "normal_axis",
+            self.normal_axis.norm(),
+            self.normal_axis.norm() > 1e-12,
+            "must be a non-zero vector",
+        )?;
+        error::finite("curvature", self.curvature)?;
+        let q = self.orientation.quaternion();
+        error::check(
+            "orientation",
+            q.norm(),
+            q.coords.iter().all(|c| c.is_finite()),
+            "must be a finite unit quaternion",
+        )
+    }
+}
+
+/// Static per-particle attributes the force evaluation reads (borrowed
+/// while the integrator mutates the state).
+#[derive(Clone, Copy)]
+pub struct Attributes<'a> {
+    /// Stable ids, by slot.
+    pub ids: &'a [u32],
+    /// Slot of each id (the inverse permutation of `ids`).
+    pub slot_of: &'a [u32],
+    /// Body-frame normal axes.
+    pub normal_axes: &'a [Vec3],
+    /// Body-frame tangent axes ("local x").
+    pub tangent_axes: &'a [Vec3],
+    /// Flags.
+    pub flags: &'a [Flags],
+    /// Object ids.
+    pub objects: &'a [u32],
+    /// Particle types.
+    pub kinds: &'a [ParticleType],
+    /// Material indices.
+    pub materials: &'a [u16],
+    /// Rest curvatures.
+    pub curvatures: &'a [Real],
+    /// Masses.
+    pub masses: &'a [Real],
+}
+
+/// Structure-of-arrays particle store. All arrays have the same length,
+/// which only the store's methods can change.
+#[derive(Clone, Debug, Default)]
+pub struct Particles {
+    ids: Vec<u32>,
+    slot_of: Vec<u32>,
+    positions: Vec<Point3>,
+    velocities: Vec<Vec3>,
+    orientations: Vec<Quat>,
+    angular_velocities: Vec<Vec3>,
+    masses: Vec<Real>,
+    inv_masses: Vec<Real>,
+    inertias: Vec<Vec3>,
+    normal_axes: Vec<Vec3>,
+    tangent_axes: Vec<Vec3>,
+    flags: Vec<Flags>,
+    objects: Vec<u32>,
+    kinds: Vec<ParticleType>,
+    materials: Vec<u16>,
+    curvatures: Vec<Real>,
+}
+
+macro_rules! slice_accessors {
+    ($($(#[$doc:meta])* $name:ident : $t:ty),* $(,)?) => {
+        $( $(#[$doc])* #[inline] pub fn $name(&self) -> &[$t] { &self.$name } )*
+    };
+}
+
+impl Particles {
+    /// An empty store.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Number of particles.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// True when the store holds no particle.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Adds a particle after validating it; returns its stable id.
+    pub fn push(&mut self, d: ParticleDesc) -> Result<u32, ParamError> {
+        d.validate()?;
+        let id = u32::try_from(self.len()).map_err(|_| ParamError::Invalid {
+            field: "particles".into(),
+            message: "at most 2^32 - 1 particles".into(),
+        })?;
+        let fixed_pos = d.flags.contains(Flags::FIXED_POSITION);
+        let fixed_rot = d.flags.contains(Flags::FIXED_ORIENTATION);
+        let a = d.normal_axis.normalize();
+        self.ids.push(id);
+        self.slot_of.push(id);
+        self.positions.push(d.position);
+        self.velocities
+            .push(if fixed_pos { Vec3::zeros() } else { d.velocity });
+        self.orientations
+            .push(Quat::new_normalize(*d.orientation.quaternion()));
+        self.angular_velocities.push(if fixed_rot {
+            Vec3::zeros()
+        } else {
+            d.angular_velocity
+        });
+        self.masses.push(d.mass);
+        self.inv_masses.push(if fixed_pos { 0.0 } else { 1.0 / d.mass });
+        self.inertias.push(d.inertia);
+        self.normal_axes.push(a);
+        self.tangent_axes.push(tangent_axis(&a));
+        self.flags.push(d.flags);
+        self.objects.push(d.object);
+        self.kinds.push(d.kind);
+        self.materials.push(d.material);
+        self.curvatures.push(d.curvature);
+        Ok(id)
+    }
+
+    slice_accessors! {
+        /// Stable id of the particle in each slot.
+        ids: u32,
+        /// Positions.
+        positions: Point3,
+        /// Velocities.
+        velocities: Vec3,
+        /// Orientations (unit quaternions).
+        orientations: Quat,
+        /// Angular velocities, world frame.
+        angular_velocities: Vec3,
+        /// Masses.
+        masses: Real,
+        /// Inverse masses (0 for fixed-position particles).
+        inv_masses: Real,
+        /// Principal moments of inertia, body frame.
+        inertias: Vec3,
+        /// Body-frame normal axes `a`.
+        normal_axes: Vec3,
+        /// Body-frame tangent axes ("local x").
+        tangent_axes: Vec3,
+        /// Flags.
+        flags: Flags,
+        /// Object ids.
+        objects: u32,
+        /// Particle types.
+        kinds: ParticleType,
+        /// Material indices.
+        materials: u16,
+        /// Rest curvatures.
+        curvatures: Real,
+    }
+
+    /// The slot currently holding particle `id`, if any.
+    #[inline]
+    pub fn slot_of(&self, id: u32) -> Option<usize> {
+        self.slot_of.get(id as usize).map(|&s| s as usize)
+    }
+
+    /// World normal `n = R(q) a` of the particle in `slot`.
+    #[inline]
+    pub fn normal(&self, slot: usize) -> Vec3 {
+        self.orientations[slot] * self.normal_axes[slot]
+    }
+
+    /// Sets the velocity of the particle in `slot` (ignored for fixed
+    /// positions).
+    pub fn set_velocity(&mut self, slot: usize, v: Vec3) {
+        if !self.flags[slot].contains(Flags::FIXED_POSITION) {
+            self.velocities[slot] = v;
+        }
+    }
+
+    /// Moves the particle in `slot` (used by scripted tools and tests).
+    pub fn set_position(&mut self, slot: usize, p: Point3) {
+        self.positions[slot] = p;
+    }
+
+    /// Sets the orientation of the particle in `slot`.
+    pub fn set_orientation(&mut self, slot: usize, q: Quat) {
+        self.orientations[slot] = q;
+    }
+
+    /// Sets the rest curvature of the particle in `slot`.
+    pub fn set_curvature(&mut self, slot: usize, kappa: Real) {
+        self.curvatures[slot] = kappa;
+    }
+
+    /// The state seen by the integrator.
+    pub fn state(&self) -> StateRef<'_> {
+        StateRef {
+            positions: &self.positions,
+            velocities: &self.velocities,
+            orientations: &self.orientations,
+            angular_velocities: &self.angular_velocities,
+        }
+    }
+
+    /// Splits the store into the mutable dynamic state, the mass properties
+    /// and the static attributes, so the integrator can advance the state
+    /// while the force field reads the attributes.
+    pub fn split(&mut self) -> (StateMut<'_>, Bodies<'_>, Attributes<'_>) {
+        (
+            StateMut {
+                positions: &mut self.positions,
+                velocities: &mut self.velocities,
+                orientations: &mut self.orientations,
+                angular_velocities: &mut self.angular_velocities,
+            },
+            Bodies {
+                inv_mass: &self.inv_masses,
+                inertia: &self.inertias,
+            },
+            Attributes {
+                ids: &self.ids,
+                slot_of: &self.slot_of,
+                normal_axes: &self.normal_axes,
+                tangent_axes: &self.tangent_axes,
+                flags: &self.flags,
+                objects: &self.objects,
+                kinds: &self.kinds,
+                materials: &self.materials,
+                curvatures: &self.curvatures,
+                masses: &self.masses,
+            },
+        )
+    }
+
+    /// The static attributes alone.
+    pub fn attributes(&self) -> Attributes<'_> {
+        Attributes {
+            ids: &self.ids,
+            slot_of: &self.slot_of,
+            normal_axes: &self.normal_axes,
+            tangent_axes: &self.tangent_axes,
+            flags: &self.flags,
+            objects: &self.objects,
+            kinds: &self.kinds,
+            materials: &self.materials,
+            curvatures: &self.curvatures,
+            masses: &self.masses,
+        }
+    }
+
+    /// Reorders every array so that new slot `s` holds the particle that was
+    /// in slot `order[s]`. `order` must be a permutation of `0..len`.
+    pub fn permute(&mut self, order: &[u32]) {
+        assert_eq!(order.len(), self.len(), "permutation length");
+        fn apply<T: Clone>(v: &mut Vec<T>, order: &[u32]) {
+            let new: Vec<T> = order.iter().map(|&o| v[o as usize].clone()).collect();
+            *v = new;
+        }
+        apply(&mut self.ids, order);
+        apply(&mut self.positions, order);
+        apply(&mut self.velocities, order);
+        apply(&mut self.orientations, order);
+        apply(&mut self.angular_velocities, order);
+        apply(&mut self.masses, order);
+        apply(&mut self.inv_masses, order);
+        apply(&mut self.inertias, order);
+        apply(&mut self.normal_axes, order);
+        apply(&mut self.tangent_axes, order);
+        apply(&mut self.flags, order);
+        apply(&mut self.objects, order);
+        apply(&mut self.kinds, order);
+        apply(&mut self.materials, order);
+        apply(&mut self.curvatures, order);
+        for (slot, &id) in self.ids.iter().enumerate() {
+            self.slot_of[id as usize] = slot as u32;
+        }
+    }
+
+    /// Renormalizes every orientation quaternion (a guard against round-off
+    /// drift accumulated over very long runs; the integrators already move
+    /// on the unit sphere).
+    pub fn renormalize_orientations(&mut self) {
+        for q in &mut self.orientations {
+            q.renormalize();
+        }
+    }
+
+    /// Bytes of storage per particle (the sum of the element sizes of every
+    /// array of the store).
+    pub const BYTES_PER_PARTICLE: usize = 2 * std::mem::size_of::<u32>()
+        + std::mem::size_of::<Point3>()
+        + 2 * std::mem::size_of::<Vec3>()
+        + std::mem::size_of::<Quat>()
+        + 2 * std::mem::size_of::<Real>()
+        + 3 * std::mem::size_of::<Vec3>()
+        + std::mem::size_of::<Flags>()
+        + std::mem::size_of::<u32>()
+        + std::mem::size_of::<ParticleType>()
+        + std::mem::size_of::<u16>()
+        + std::mem::size_of::<Real>();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn typing_rules_of_seed_002() {
+        use ParticleType::*;
+        assert!(Standard(1).complete_with(Standard(1)));
+        assert!(!Standard(1).complete_with(Standard(2)));
+        assert!(Hinge.complete_with(Standard(7)));
+        assert!(Standard(7).complete_with(Hinge));
+        assert!(!Hinge.complete_with(Hinge));
+    }
+
+    #[test]
+    fn push_validates() {
+        let mut p = Particles::new();
+        let mut d = ParticleDesc::at(Point3::origin());
+        d.mass = -1.0;
+        let e = p.push(d).unwrap_err().to_string();
+        assert!(e.contains("mass"), "{e}");
+        let mut d = ParticleDesc::at(Point3::new(Real::NAN, 0.0, 0.0));
+        d.mass = 1.0;
+        assert!(p.push(d).is_err());
+        assert!(p.is_empty());
+    }
+
+    #[test]
+    fn permute_keeps_ids_consistent() {
+        let mut p = Particles::new();
+        for k in 0..5 {
+            let mut d = ParticleDesc::at(Point3::new(k as Real, 0.0, 0.0));
+            d.curvature = k as Real;
+            p.push(d).unwrap();
+        }
+        p.permute(&[4, 2, 0, 1, 3]);
+        for id in 0..5u32 {
+            let s = p.slot_of(id).unwrap();
+            assert_eq!(p.ids()[s], id);
+            assert_eq!(p.positions()[s].x, id as Real);
+            assert_eq!(p.curvatures()[s], id as Real);
+        }
+    }
+
+    #[test]
+    fn with_normal_points_the_normal() {
+        let n = Vec3::new(0.3, -0.4, 0.8).normalize();
+        let d = ParticleDesc::at(Point3::origin()).with_normal(n);
+        assert!((d.orientation * d.normal_axis - n).norm() < 1e-12);
+        let d = ParticleDesc::at(Point3::origin()).with_normal(-Vec3::z());
+        assert!((d.orientation * d.normal_axis + Vec3::z()).norm() < 1e-12);
+    }
+}

@@ -1,0 +1,502 @@
+//! The world: particles, materials, the enabled interaction kernel, the
+//! neighbour list, external actions and the integrator, stepped in time.
+
+use serde::{Deserialize, Serialize};
+
+use crate::diagnostics::{self, Diagnostics};
+use crate::error::{self, ParamError};
+use crate::external::{ExternalAccumulator, ExternalParams};
+use crate::forces::{ForceContext, ForceScratch, Kernel};
+use crate::integrators::{Integrator, Scheme};
+use crate::interactions::{Material, PreparedMaterial};
+use crate::math::{Point3, Real, Vec3};
+use crate::neighbours::{spatial_order, NeighbourBackend, NeighbourList};
+use crate::particles::Particles;
+
+/// Neighbour-list settings (seed 000 §4.2, DESIGN §3 "Neighbours").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct NeighbourParams {
+    /// Search structure for the per-step lists. Default: the measured
+    /// faster one ([`NeighbourBackend::default`]).
+    pub backend: NeighbourBackend,
+    /// Skin as a fraction of the interaction cut-off: lists hold pairs
+    /// within `cutoff * (1 + skin)` and are rebuilt when a particle moved
+    /// more than half the skin. > 0. Default: 0.2.
+    pub skin: Real,
+    /// Re-sort particles in spatial (Morton) order at each rebuild.
+    /// Default: true.
+    pub reorder: bool,
+}
+
+impl Default for NeighbourParams {
+    fn default() -> Self {
+        NeighbourParams {
+            backend: NeighbourBackend::default(),
+            skin: 0.2,
+            reorder: true,
+        }
+    }
+}
+
+/// When a run is declared diverged (besides NaN / infinite values, which
+/// always are).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DivergenceParams {
+    /// Largest particle speed considered physical, > 0. Default: infinity.
+    pub max_speed: Real,
+}
+
+impl Default for DivergenceParams {
+    fn default() -> Self {
+        DivergenceParams {
+            max_speed: Real::INFINITY,
+        }
+    }
+}
+
+/// Settings of a world.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WorldParams {
+    /// Time integration scheme. Default: velocity Verlet.
+    pub scheme: Scheme,
+    /// Time step (fixed-step schemes) or initial and largest step
+    /// (adaptive), > 0. Default: 1e-3.
+    pub dt: Real,
+    /// Neighbour lists.
+    pub neighbours: NeighbourParams,
+    /// Gravity, damping and force windows.
+    pub external: ExternalParams,
+    /// Divergence detection.
+    pub divergence: DivergenceParams,
+}
+
+impl Default for WorldParams {
+    fn default() -> Self {
+        WorldParams {
+            scheme: Scheme::VelocityVerlet,
+            dt: 1e-3,
+            neighbours: NeighbourParams::default(),
+            external: ExternalParams::default(),
+            divergence: DivergenceParams::default(),
+        }
+    }
+}
+
+impl WorldParams {
+    /// Checks every field; `particle_count` bounds force-window ids.
+    pub fn validate(&self, particle_count: usize) -> Result<(), ParamError> {
+        error::positive("dt", self.dt)?;
+        error::positive("neighbours.skin", self.neighbours.skin)?;
+        error::check(
+            "divergence.max_speed",
+            self.divergence.max_speed,
+            self.divergence.max_speed > 0.0,
+            "must be > 0 (infinity disables the check)",
+        )?;
+        if let Scheme::Adaptive(a) = &self.scheme {
+            a.validate().map_err(|e| e.within("scheme"))?;
+        }
+        self.external
+            .validate(particle_count)
+            .map_err(|e| e.within("external"))
+    }
+}
+
+/// Why building a world failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum WorldError {
+    /// A parameter is out of range.
+    #[error("invalid parameter: {0}")]
+    Param(#[from] ParamError),
+}
+
+/// A run that blew up: the step, time and particle where it was detected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("simulation diverged at step {step} (t = {time}): particle {particle}: {reason}")]
+pub struct Divergence {
+    /// Index of the step that produced the bad state (1-based).
+    pub step: u64,
+    /// Simulation time after that step.
+    pub time: Real,
+    /// Stable id of the first bad particle.
+    pub particle: u32,
+    /// What was wrong.
+    pub reason: String,
+}
+
+/// The stages of [`World::step`], timed in [`StepReport`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Spatial re-sort at neighbour rebuilds.
+    Reorder,
+    /// Neighbour-list updates (inside force evaluations).
+    Neighbours,
+    /// Integration, including force evaluations.
+    Integrate,
+    /// Oscillation measure and divergence check.
+    Check,
+}
+
+/// What one call of [`World::step`] did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepReport {
+    /// Step size taken.
+    pub dt: Real,
+    /// Steps rejected by the adaptive controller.
+    pub rejected: u32,
+    /// Force evaluations.
+    pub force_evaluations: u32,
+    /// Whether particles were re-sorted.
+    pub reordered: bool,
+    /// Seconds per stage, indexed like [`Stage`].
+    pub seconds: [f64; 4],
+}
+
+/// An oriented particle world.
+pub struct World {
+    particles: Particles,
+    materials: Vec<PreparedMaterial>,
+    params: WorldParams,
+    kernel: Kernel,
+    friction: bool,
+    neighbours: Option<NeighbourList>,
+    integrator: Integrator,
+    accumulator: ExternalAccumulator,
+    scratch: ForceScratch,
+    forces: Vec<Vec3>,
+    torques: Vec<Vec3>,
+    prev_positions: Vec<Point3>,
+    time: Real,
+    steps: u64,
+    dt_next: Real,
+    oscillation: Real,
+    report: StepReport,
+}
+
+impl World {
+    /// Builds a world. Only what the materials enable is built: the kernel
+    /// (none, spacing-only or oriented) and the neighbour radius (the
+    /// largest cut-off among enabled terms; no list at all when nothing
+    /// interacts).
+    pub fn new(
+        particles: Particles,
+        materials: &[Material],
+        params: WorldParams,
+    ) -> Result<World, WorldError> {
+        params.validate(particles.len())?;
+        let prepared = materials
+            .iter()
+            .enumerate()
+            .map(|(k, m)| m.prepare().map_err(|e| e.within(&format!("materials[{k}]"))))
+            .collect::<Result<Vec<_>, _>>()?;
+        if let Some(&bad) = particles
+            .materials()
+            .iter()
+            .find(|&&m| m as usize >= prepared.len())
+        {
+            return Err(ParamError::Invalid {
+                field: "particles.material".into(),
+                message: format!(
+                    "material index {bad} does not exist ({} materials defined)",
+                    prepared.len()
+                ),
+            }
+            .into());
+        }
+        let used: Vec<&PreparedMaterial> = {
+            let mut seen = vec![false; prepared.len()];
+            particles.materials().iter().for_each(|&m| seen[m as usize] = true);
+            prepared.iter().zip(seen).filter(|(_, s)| *s).map(|(m, _)| m).collect()
+        };
+        let cutoff = used.iter().map(|m| m.cutoff()).fold(0.0, Real::max);
+        let friction = used.iter().any(|m| m.friction() > 0.0);
+        let oriented = used.iter().any(|m| m.has_orientation_terms());
+        let kernel = if cutoff <= 0.0 || particles.len() < 2 {
+            Kernel::None
+        } else if oriented || friction {
+            Kernel::Oriented
+        } else {
+            Kernel::Spacing
+        };
+        let neighbours = (kernel != Kernel::None).then(|| {
+            NeighbourList::new(
+                params.neighbours.backend,
+                cutoff,
+                cutoff * params.neighbours.skin,
+            )
+        });
+        let n = particles.len();
+        Ok(World {
+            materials: prepared,
+            kernel,
+            friction,
+            neighbours,
+            integrator: Integrator::new(params.scheme),
+            accumulator: ExternalAccumulator::new(n),
+            scratch: ForceScratch::default(),
+            forces: vec![Vec3::zeros(); n],
+            torques: vec![Vec3::zeros(); n],
+            prev_positions: particles.positions().to_vec(),
+            time: 0.0,
+            steps: 0,
+            dt_next: params.dt,
+            oscillation: 0.0,
+            report: StepReport::default(),
+            particles,
+            params,
+        })
+    }
+
+    /// The particles (read-only; slots may be re-sorted between steps, use
+    /// [`Particles::ids`] / [`Particles::slot_of`]).
+    pub fn particles(&self) -> &Particles {
+        &self.particles
+    }
+
+    /// Mutable access to the particles (scripted motion, tests). Cached
+    /// forces are invalidated.
+    pub fn particles_mut(&mut self) -> &mut Particles {
+        self.integrator.invalidate();
+        &mut self.particles
+    }
+
+    /// The parameters the world was built with.
+    pub fn params(&self) -> &WorldParams {
+        &self.params
+    }
+
+    /// The prepared materials.
+    pub fn materials(&self) -> &[PreparedMaterial] {
+        &self.materials
+    }
+
+    /// The pair kernel chosen from the enabled terms.
+    pub fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+
+    /// The neighbour list, if any interaction is enabled.
+    pub fn neighbours(&self) -> Option<&NeighbourList> {
+        self.neighbours.as_ref()
+    }
+
+    /// Names of what this world evaluates: the kernel, each enabled
+    /// interaction term of the materials in use, and the external actions.
+    pub fn enabled(&self) -> Vec<String> {
+        let mut out = vec![format!("kernel:{:?}", self.kernel).to_lowercase()];
+        let mut terms: Vec<&'static str> = Vec::new();
+        let mut seen = vec![false; self.materials.len()];
+        self.particles.materials().iter().for_each(|&m| seen[m as usize] = true);
+        for (m, s) in self.materials.iter().zip(seen) {
+            if s {
+                for t in m.enabled_terms() {
+                    if !terms.contains(&t) {
+                        terms.push(t);
+                    }
+                }
+            }
+        }
+        out.extend(terms.iter().map(|t| format!("term:{t}")));
+        if self.friction {
+            out.push("friction".into());
+        }
+        let e = &self.params.external;
+        if e.gravity() != Vec3::zeros() {
+            out.push("gravity".into());
+        }
+        if e.linear_damping > 0.0 || e.angular_damping > 0.0 {
+            out.push("damping".into());
+        }
+        if !e.forces.is_empty() {
+            out.push("force_windows".into());
+        }
+        out
+    }
+
+    /// Current simulation time.
+    pub fn time(&self) -> Real {
+        self.time
+    }
+
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The oscillation measure of the last step (seed 002 §3):
+    /// `O = sqrt(sum_i |dx_i|^2 - |sum_i dx_i|^2 / N)`, the movement of the
+    /// particles about their mean displacement during one step. The
+    /// extracted paper text lost the `1/N`; without it the quantity is not a
+    /// spread about the mass centre and can be negative.
+    pub fn oscillation(&self) -> Real {
+        self.oscillation
+    }
+
+    /// What the last step did.
+    pub fn last_report(&self) -> &StepReport {
+        &self.report
+    }
+
+    /// Adds a force and a torque (world frame, torque about the particle's
+    /// position) to particle `id`, held constant during the next step and
+    /// then cleared. This is how other crates (op-implicit contact, tools)
+    /// act on particles.
+    pub fn add_external_force(&mut self, id: u32, force: Vec3, torque: Vec3) {
+        self.accumulator.add(id, force, torque);
+    }
+
+    /// Advances by one step: the configured `dt`, or the adaptive
+    /// controller's suggestion (at most `dt`).
+    ///
+    /// Stages, in order: (1) re-sort particles in spatial order when the
+    /// neighbour list is about to be rebuilt; (2) integrate, each force
+    /// evaluation updating the neighbour list (list-only rebuild when a
+    /// stage moved particles past half the skin), running the pair kernel
+    /// and gathering per particle, adding external actions; (3) clear the
+    /// pending external forces, compute the oscillation measure and check
+    /// for divergence.
+    pub fn step(&mut self) -> Result<&StepReport, Divergence> {
+        let dt = self.dt_next.min(self.params.dt);
+        self.step_by(dt)
+    }
+
+    /// Advances until `t_end` (exactly: the last step is shortened).
+    pub fn advance_to(&mut self, t_end: Real) -> Result<(), Divergence> {
+        while self.time < t_end {
+            let remaining = t_end - self.time;
+            if remaining <= 1e-12 * self.params.dt {
+                break;
+            }
+            let dt = self.dt_next.min(self.params.dt).min(remaining);
+            self.step_by(dt)?;
+        }
+        Ok(())
+    }
+
+    fn step_by(&mut self, dt: Real) -> Result<&StepReport, Divergence> {
+        let mut report = StepReport::default();
+        let clock = std::time::Instant::now();
+        if let Some(list) = self.neighbours.as_mut() {
+            if self.params.neighbours.reorder && list.needs_rebuild(self.particles.positions()) {
+                let order = spatial_order(self.particles.positions(), list.cutoff() + list.skin());
+                self.particles.permute(&order);
+                list.rebuild(self.particles.positions());
+                self.integrator.invalidate();
+                report.reordered = true;
+            }
+        }
+        self.prev_positions.clear();
+        self.prev_positions.extend_from_slice(self.particles.positions());
+        report.seconds[Stage::Reorder as usize] = clock.elapsed().as_secs_f64();
+
+        let clock = std::time::Instant::now();
+        let neighbour_before = self.scratch.neighbour_seconds;
+        let (state, bodies, attributes) = self.particles.split();
+        let mut ctx = ForceContext {
+            kernel: self.kernel,
+            attributes,
+            materials: &self.materials,
+            friction: self.friction,
+            neighbours: self.neighbours.as_mut(),
+            external: &self.params.external,
+            accumulator: &self.accumulator,
+            scratch: &mut self.scratch,
+        };
+        let info = self.integrator.step(&mut ctx, &bodies, self.time, dt, state);
+        let neighbour_seconds = self.scratch.neighbour_seconds - neighbour_before;
+        report.seconds[Stage::Neighbours as usize] = neighbour_seconds;
+        report.seconds[Stage::Integrate as usize] =
+            clock.elapsed().as_secs_f64() - neighbour_seconds;
+        report.dt = info.dt_taken;
+        report.rejected = info.rejected;
+        report.force_evaluations = info.force_evaluations;
+        self.time += info.dt_taken;
+        self.steps += 1;
+        self.dt_next = info.dt_next;
+        if self.accumulator.is_active() {
+            self.accumulator.clear();
+            self.integrator.invalidate();
+        }
+
+        let clock = std::time::Instant::now();
+        self.oscillation = diagnostics::oscillation(&self.prev_positions, self.particles.positions());
+        let check = self.check_divergence();
+        report.seconds[Stage::Check as usize] = clock.elapsed().as_secs_f64();
+        self.report = report;
+        check?;
+        Ok(&self.report)
+    }
+
+    fn check_divergence(&self) -> Result<(), Divergence> {
+        let p = &self.particles;
+        let vmax2 = self.params.divergence.max_speed.powi(2);
+        let bad = (0..p.len()).find_map(|i| {
+            let finite = p.positions()[i].iter().all(|c| c.is_finite())
+                && p.velocities()[i].iter().all(|c| c.is_finite())
+                && p.angular_velocities()[i].iter().all(|c| c.is_finite())
+                && p.orientations()[i].coords.iter().all(|c| c.is_finite());
+            if !finite {
+                Some((i, "non-finite position, velocity or orientation".to_string()))
+            } else if p.velocities()[i].norm_squared() > vmax2 {
+                Some((
+                    i,
+                    format!(
+                        "speed {:.3e} exceeds divergence.max_speed = {:.3e}",
+                        p.velocities()[i].norm(),
+                        self.params.divergence.max_speed
+                    ),
+                ))
+            } else {
+                None
+            }
+        });
+        match bad {
+            None => Ok(()),
+            Some((i, reason)) => Err(Divergence {
+                step: self.steps,
+                time: self.time,
+                particle: p.ids()[i],
+                reason,
+            }),
+        }
+    }
+
+    /// Evaluates forces, torques and potential energy at the current state
+    /// (one extra force evaluation; used by diagnostics and tests).
+    pub fn evaluate_forces(&mut self) -> (&[Vec3], &[Vec3], Real) {
+        let state = self.particles.state();
+        let attributes = self.particles.attributes();
+        let mut ctx = ForceContext {
+            kernel: self.kernel,
+            attributes,
+            materials: &self.materials,
+            friction: self.friction,
+            neighbours: self.neighbours.as_mut(),
+            external: &self.params.external,
+            accumulator: &self.accumulator,
+            scratch: &mut self.scratch,
+        };
+        ctx.evaluate(self.time, state, &mut self.forces, &mut self.torques);
+        (&self.forces, &self.torques, self.scratch.potential)
+    }
+
+    /// Energies, momenta and the oscillation measure at the current state
+    /// (DESIGN §7). Costs one force evaluation for the potential energy.
+    pub fn diagnostics(&mut self) -> Diagnostics {
+        let potential = self.evaluate_forces().2;
+        let mut d = diagnostics::kinematic(&self.particles);
+        d.potential = potential;
+        d.total = d.kinetic_translational + d.kinetic_rotational + potential;
+        d.oscillation = self.oscillation;
+        d
+    }
+
+    /// Forces evaluated so far (all stages of all steps).
+    pub fn force_evaluations(&self) -> u64 {
+        self.scratch.evaluations
+    }
+}
