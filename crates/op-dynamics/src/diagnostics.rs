@@ -112,7 +112,10 @@ mod tests {
             .map(|k| Point3::new(k as Real, (k * k) as Real * 0.1, (k % 3) as Real))
             .collect();
         let q = Quat::from_euler_angles(0.3, -1.1, 2.0);
-        let moved: Vec<Point3> = rest.iter().map(|p| q * p + Vec3::new(3.0, -2.0, 1.0)).collect();
+        let moved: Vec<Point3> = rest
+            .iter()
+            .map(|p| q * p + Vec3::new(3.0, -2.0, 1.0))
+            .collect();
         assert!(rest_shape_rms(&rest, &moved) < 1e-12);
         let mut bent = moved.clone();
         bent[3] += Vec3::new(0.0, 0.0, 0.7);

@@ -95,7 +95,9 @@ mod tests {
 
     #[test]
     fn messages_name_field_value_and_rule() {
-        let e = positive("cohesion.alpha", Real::NAN).unwrap_err().within("material");
+        let e = positive("cohesion.alpha", Real::NAN)
+            .unwrap_err()
+            .within("material");
         let s = e.to_string();
         assert!(s.contains("material.cohesion.alpha"), "{s}");
         assert!(s.contains("NaN"), "{s}");

@@ -57,7 +57,11 @@ impl ForceWindow {
             2.0 * self.ramp <= self.end - self.start,
             "must be at most half of `end - start`",
         )?;
-        if let Some(&bad) = self.particles.iter().find(|&&p| p as usize >= particle_count) {
+        if let Some(&bad) = self
+            .particles
+            .iter()
+            .find(|&&p| p as usize >= particle_count)
+        {
             return Err(ParamError::Invalid {
                 field: "particles".into(),
                 message: format!(
@@ -197,7 +201,11 @@ mod tests {
         assert!((w.factor(4.75) - 0.25).abs() < 1e-15);
         assert_eq!(w.factor(5.0), 0.0);
         assert!(w.validate(1).is_ok());
-        assert!(w.validate(0).unwrap_err().to_string().contains("does not exist"));
+        assert!(w
+            .validate(0)
+            .unwrap_err()
+            .to_string()
+            .contains("does not exist"));
     }
 
     #[test]
@@ -220,7 +228,11 @@ mod tests {
             linear_damping: -1.0,
             ..Default::default()
         };
-        assert!(p.validate(0).unwrap_err().to_string().contains("linear_damping"));
+        assert!(p
+            .validate(0)
+            .unwrap_err()
+            .to_string()
+            .contains("linear_damping"));
     }
 
     #[test]

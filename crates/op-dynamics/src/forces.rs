@@ -88,7 +88,13 @@ impl crate::integrators::ForceField for ForceContext<'_> {
 
 impl ForceContext<'_> {
     /// Computes forces, torques and the potential energy at state `s`.
-    pub fn evaluate(&mut self, t: Real, s: StateRef<'_>, forces: &mut [Vec3], torques: &mut [Vec3]) {
+    pub fn evaluate(
+        &mut self,
+        t: Real,
+        s: StateRef<'_>,
+        forces: &mut [Vec3],
+        torques: &mut [Vec3],
+    ) {
         let n = s.positions.len();
         let sc = &mut *self.scratch;
         sc.evaluations += 1;
@@ -106,7 +112,9 @@ impl ForceContext<'_> {
                 refresh_sources(sc, list);
                 match kernel {
                     Kernel::Spacing => spacing_pass(sc, list, &self.attributes, self.materials, s),
-                    _ => oriented_pass(sc, list, &self.attributes, self.materials, self.friction, s),
+                    _ => {
+                        oriented_pass(sc, list, &self.attributes, self.materials, self.friction, s)
+                    }
                 }
                 gather(sc, list, kernel, forces, torques);
             }
@@ -177,7 +185,8 @@ fn coupling(a: &Attributes<'_>, i: usize, j: usize) -> Coupling {
     if a.objects[i] != a.objects[j] || !a.kinds[i].complete_with(a.kinds[j]) {
         Coupling::RepulsionOnly
     } else {
-        let oriented = !(a.flags[i].contains(Flags::UNORIENTED) || a.flags[j].contains(Flags::UNORIENTED));
+        let oriented =
+            !(a.flags[i].contains(Flags::UNORIENTED) || a.flags[j].contains(Flags::UNORIENTED));
         Coupling::Complete { oriented }
     }
 }
@@ -209,7 +218,10 @@ fn spacing_pass(
                 return;
             }
             let dist = d2.sqrt();
-            let (mi, mj) = (&materials[a.materials[i] as usize], &materials[a.materials[j] as usize]);
+            let (mi, mj) = (
+                &materials[a.materials[i] as usize],
+                &materials[a.materials[j] as usize],
+            );
             let (e, f) = match coupling(a, i, j) {
                 Coupling::Complete { .. } => evaluate_spacing(mi, mj, &r, dist),
                 Coupling::RepulsionOnly => {
@@ -265,7 +277,8 @@ fn oriented_pass(
     let pairs = list.pairs();
     let nbrs = pairs.neighbours();
     let cutoff2 = list.cutoff() * list.cutoff();
-    sc.oriented_pairs.resize(nbrs.len(), OrientedPair::default());
+    sc.oriented_pairs
+        .resize(nbrs.len(), OrientedPair::default());
     let (src, normals, tangents) = (&sc.sources, &sc.normals, &sc.tangents);
     let p = s.positions;
     sc.oriented_pairs
@@ -281,7 +294,10 @@ fn oriented_pass(
                 *out = OrientedPair::default();
                 return;
             }
-            let (mi, mj) = (&materials[a.materials[i] as usize], &materials[a.materials[j] as usize]);
+            let (mi, mj) = (
+                &materials[a.materials[i] as usize],
+                &materials[a.materials[j] as usize],
+            );
             let c = coupling(a, i, j);
             let res = evaluate_pair(
                 &view(p[i], normals[i], tangents[i], a.curvatures[i], mi),
@@ -290,7 +306,8 @@ fn oriented_pass(
             );
             let mut force_j = res.force_j;
             if friction && matches!(c, Coupling::Complete { .. }) {
-                force_j += friction_force(mi, mj, &r, d2.sqrt(), &(s.velocities[j] - s.velocities[i]));
+                force_j +=
+                    friction_force(mi, mj, &r, d2.sqrt(), &(s.velocities[j] - s.velocities[i]));
             }
             *out = OrientedPair {
                 force_j,
@@ -326,7 +343,13 @@ pub fn friction_force(
 /// Sums each particle's pair contributions in a fixed order: its row first
 /// (it is `i`: force `-F_j`, torque `tau_i`), then the incoming pairs (it
 /// is `j`: `F_j`, `tau_j`).
-fn gather(sc: &mut ForceScratch, list: &NeighbourList, kernel: Kernel, forces: &mut [Vec3], torques: &mut [Vec3]) {
+fn gather(
+    sc: &mut ForceScratch,
+    list: &NeighbourList,
+    kernel: Kernel,
+    forces: &mut [Vec3],
+    torques: &mut [Vec3],
+) {
     let pairs = list.pairs();
     let (sp, op) = (&sc.spacing_pairs, &sc.oriented_pairs);
     forces

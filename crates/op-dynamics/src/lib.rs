@@ -4,20 +4,20 @@
 //! memory extensions of Lombardo & Puech 1995 (seed 002): cohesion force,
 //! form interaction with per-particle curvature, hinge/standard typing and
 //! object membership.
-
-Entry points: build a [`Particles`] store from [`ParticleDesc`]s, describe
-the interactions with [`Material`]s, and make a [`World`] with
-[`WorldParams`] (integrator, time step, neighbour lists, external actions).
-[`World::step`] advances it; [`World::diagnostics`] reports energies,
-momenta and the oscillation measure. Other crates act on particles through
-[`World::add_external_force`].
+//!
+//! Entry points: build a [`Particles`] store from [`ParticleDesc`]s, describe
+//! the interactions with [`Material`]s, and make a [`World`] with
+//! [`WorldParams`] (integrator, time step, neighbour lists, external actions).
+//! [`World::step`] advances it; [`World::diagnostics`] reports energies,
+//! momenta and the oscillation measure. Other crates act on particles through
+//! [`World::add_external_force`].
 #![warn(missing_docs)]
 
 pub mod diagnostics;
 pub mod error;
 pub mod external;
-pub mod forces;
 pub mod flags;
+pub mod forces;
 pub mod integrators;
 pub mod interactions;
 pub mod math;
@@ -25,10 +25,10 @@ pub mod neighbours;
 pub mod particles;
 pub mod world;
 
-pub use error::ParamError;
-pub use flags::Flags;
 pub use diagnostics::Diagnostics;
+pub use error::ParamError;
 pub use external::{ExternalParams, ForceWindow};
+pub use flags::Flags;
 pub use integrators::{AdaptiveParams, Scheme};
 pub use interactions::Material;
 pub use math::{Mat3, Point3, Quat, Real, Vec3};

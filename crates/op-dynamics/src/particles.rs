@@ -106,8 +106,12 @@ impl ParticleDesc {
     pub fn with_normal(mut self, normal: Vec3) -> Self {
         let a = self.normal_axis.normalize();
         let n = normal.normalize();
-        self.orientation = Quat::rotation_between(&a, &n)
-            .unwrap_or_else(|| Quat::from_axis_angle(&nalgebra::Unit::new_normalize(tangent_axis(&a)), std::f64::consts::PI));
+        self.orientation = Quat::rotation_between(&a, &n).unwrap_or_else(|| {
+            Quat::from_axis_angle(
+                &nalgebra::Unit::new_normalize(tangent_axis(&a)),
+                std::f64::consts::PI,
+            )
+        });
         self
     }
 
@@ -234,7 +238,8 @@ impl Particles {
             d.angular_velocity
         });
         self.masses.push(d.mass);
-        self.inv_masses.push(if fixed_pos { 0.0 } else { 1.0 / d.mass });
+        self.inv_masses
+            .push(if fixed_pos { 0.0 } else { 1.0 / d.mass });
         self.inertias.push(d.inertia);
         self.normal_axes.push(a);
         self.tangent_axes.push(tangent_axis(&a));

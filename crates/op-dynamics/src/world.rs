@@ -191,7 +191,10 @@ impl World {
         let prepared = materials
             .iter()
             .enumerate()
-            .map(|(k, m)| m.prepare().map_err(|e| e.within(&format!("materials[{k}]"))))
+            .map(|(k, m)| {
+                m.prepare()
+                    .map_err(|e| e.within(&format!("materials[{k}]")))
+            })
             .collect::<Result<Vec<_>, _>>()?;
         if let Some(&bad) = particles
             .materials()
@@ -209,8 +212,16 @@ impl World {
         }
         let used: Vec<&PreparedMaterial> = {
             let mut seen = vec![false; prepared.len()];
-            particles.materials().iter().for_each(|&m| seen[m as usize] = true);
-            prepared.iter().zip(seen).filter(|(_, s)| *s).map(|(m, _)| m).collect()
+            particles
+                .materials()
+                .iter()
+                .for_each(|&m| seen[m as usize] = true);
+            prepared
+                .iter()
+                .zip(seen)
+                .filter(|(_, s)| *s)
+                .map(|(m, _)| m)
+                .collect()
         };
         let cutoff = used.iter().map(|m| m.cutoff()).fold(0.0, Real::max);
         let friction = used.iter().any(|m| m.friction() > 0.0);
@@ -290,7 +301,10 @@ impl World {
         let mut out = vec![format!("kernel:{:?}", self.kernel).to_lowercase()];
         let mut terms: Vec<&'static str> = Vec::new();
         let mut seen = vec![false; self.materials.len()];
-        self.particles.materials().iter().for_each(|&m| seen[m as usize] = true);
+        self.particles
+            .materials()
+            .iter()
+            .for_each(|&m| seen[m as usize] = true);
         for (m, s) in self.materials.iter().zip(seen) {
             if s {
                 for t in m.enabled_terms() {
@@ -361,23 +375,34 @@ impl World {
     /// for divergence.
     pub fn step(&mut self) -> Result<&StepReport, Divergence> {
         let dt = self.dt_next.min(self.params.dt);
-        self.step_by(dt)
+        self.step_by(dt, false)
     }
 
-    /// Advances until `t_end` (exactly: the last step is shortened).
+    /// Advances until `t_end`, landing on it exactly: the last step is
+    /// shortened (a shortened step does not change the adaptive
+    /// controller's suggestion for the next one).
     pub fn advance_to(&mut self, t_end: Real) -> Result<(), Divergence> {
-        while self.time < t_end {
+        loop {
             let remaining = t_end - self.time;
             if remaining <= 1e-12 * self.params.dt {
-                break;
+                return Ok(());
             }
-            let dt = self.dt_next.min(self.params.dt).min(remaining);
-            self.step_by(dt)?;
+            let h = self.dt_next.min(self.params.dt);
+            // A step within 1e-6 of the remaining time takes all of it, so
+            // round-off in the accumulated time never leaves a sliver step.
+            if remaining <= h * (1.0 + 1e-6) {
+                self.step_by(remaining, true)?;
+                if self.time < t_end && self.report.dt == remaining {
+                    // Land exactly despite round-off in `time + dt`.
+                    self.time = t_end;
+                }
+            } else {
+                self.step_by(h, false)?;
+            }
         }
-        Ok(())
     }
 
-    fn step_by(&mut self, dt: Real) -> Result<&StepReport, Divergence> {
+    fn step_by(&mut self, dt: Real, clipped: bool) -> Result<&StepReport, Divergence> {
         let mut report = StepReport::default();
         let clock = std::time::Instant::now();
         if let Some(list) = self.neighbours.as_mut() {
@@ -390,7 +415,8 @@ impl World {
             }
         }
         self.prev_positions.clear();
-        self.prev_positions.extend_from_slice(self.particles.positions());
+        self.prev_positions
+            .extend_from_slice(self.particles.positions());
         report.seconds[Stage::Reorder as usize] = clock.elapsed().as_secs_f64();
 
         let clock = std::time::Instant::now();
@@ -406,7 +432,9 @@ impl World {
             accumulator: &self.accumulator,
             scratch: &mut self.scratch,
         };
-        let info = self.integrator.step(&mut ctx, &bodies, self.time, dt, state);
+        let info = self
+            .integrator
+            .step(&mut ctx, &bodies, self.time, dt, state);
         let neighbour_seconds = self.scratch.neighbour_seconds - neighbour_before;
         report.seconds[Stage::Neighbours as usize] = neighbour_seconds;
         report.seconds[Stage::Integrate as usize] =
@@ -416,14 +444,17 @@ impl World {
         report.force_evaluations = info.force_evaluations;
         self.time += info.dt_taken;
         self.steps += 1;
-        self.dt_next = info.dt_next;
+        if !clipped || info.dt_taken < dt {
+            self.dt_next = info.dt_next;
+        }
         if self.accumulator.is_active() {
             self.accumulator.clear();
             self.integrator.invalidate();
         }
 
         let clock = std::time::Instant::now();
-        self.oscillation = diagnostics::oscillation(&self.prev_positions, self.particles.positions());
+        self.oscillation =
+            diagnostics::oscillation(&self.prev_positions, self.particles.positions());
         let check = self.check_divergence();
         report.seconds[Stage::Check as usize] = clock.elapsed().as_secs_f64();
         self.report = report;
@@ -440,7 +471,10 @@ impl World {
                 && p.angular_velocities()[i].iter().all(|c| c.is_finite())
                 && p.orientations()[i].coords.iter().all(|c| c.is_finite());
             if !finite {
-                Some((i, "non-finite position, velocity or orientation".to_string()))
+                Some((
+                    i,
+                    "non-finite position, velocity or orientation".to_string(),
+                ))
             } else if p.velocities()[i].norm_squared() > vmax2 {
                 Some((
                     i,

@@ -179,7 +179,9 @@ mod tests {
         ] {
             let a = angular_acceleration(&q, &w, &tau, &inertia);
             assert_eq!(a, Vec3::zeros());
-            assert!(angular_momentum(&q, &w, &inertia).iter().all(|x| x.is_finite()));
+            assert!(angular_momentum(&q, &w, &inertia)
+                .iter()
+                .all(|x| x.is_finite()));
             assert!(rotational_kinetic_energy(&q, &w, &inertia).is_finite());
             assert!(angular_velocity_from_momentum(&q, &w, &inertia).is_none());
         }

@@ -1,0 +1,568 @@
+//! Cohesion spacing force (seed 002 §3).
+//!
+//! Lombardo & Puech replace Lennard-Jones by the force
+//!
+//! `f(r) = E (r0 - r)³ / r · exp(-α (r0 - r)²)`   (positive = repulsive)
+//!
+//! which is repulsive below `r0`, zero at `r0` with zero slope (`f'(r0) = 0`,
+//! so explicit integrators oscillate much less), attractive beyond with a
+//! maximum attraction at `r_m` and a Gaussian fall-off. We taper it,
+//! `f_cut = f s(r)` (see [`super::cutoff`]), and define the energy as its
+//! integral, `U(r) = ∫_r^{r_c} f_cut`, so that the force on `j` is exactly
+//! `-U'(r) r/|r|` and energy is conserved.
+//!
+//! `U` has no closed form. Two evaluation modes ([`CohesionMode`]):
+//!
+//! - **exact**: the force in closed form; the energy by composite 16-point
+//!   Gauss–Legendre quadrature on a fixed partition of `[0.01 r0, r_c]` whose
+//!   tail integrals are precomputed (a query integrates one partial panel).
+//!   Panels are at most `min(0.5/√α, r0/4)` wide and never span more than a
+//!   factor 2 in `r`, so the `1/r` growth near 0 stays three half-widths away
+//!   from every panel and the rule is accurate to round-off (~1e-14
+//!   relative, measured in the tests). Below `0.01 r0` panels halve down to
+//!   `r` (the energy grows like `-ln r`).
+//! - **tabulated** (default): a cubic Hermite table of `U` with `U' = -f_cut`
+//!   at uniform nodes over `[table_start r0, r_c]`; the tabulated force is
+//!   exactly minus the derivative of the tabulated energy. Below the table
+//!   the exact mode is used (the two join continuously at the first node).
+//!
+//! Default cut-off: where `|f|` falls to [`AUTO_CUTOFF_RATIO`] (1e-6) of the
+//! maximum attraction. Reach and core softness are traded against each other
+//! by `α` (DESIGN §8): a large `α` narrows the well and shortens the reach
+//! but softens the repulsive core.
+
+use super::cutoff::{validate_fraction, Taper};
+use super::quadrature::{gauss_legendre, HermiteTable};
+use crate::error::{check, positive, ParamError};
+use crate::math::Real;
+use serde::{Deserialize, Serialize};
+
+/// The default cut-off is where `|f|` has fallen to this fraction of the
+/// maximum attraction force.
+pub const AUTO_CUTOFF_RATIO: Real = 1e-6;
+
+/// How the cohesion energy and force are evaluated.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum CohesionMode {
+    /// Closed-form force, quadrature energy (reference; slower).
+    Exact,
+    /// Cubic Hermite table of the energy (fast; see the module docs).
+    Tabulated,
+}
+
+/// Parameters of the cohesion force (seed 002 §3).
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CohesionParams {
+    /// Scaling factor `E` (> 0): stiffness. Default: 200 (maximum
+    /// attraction ≈ 0.98 at `r ≈ 1.29` with the default `r0` and `alpha`).
+    pub e: Real,
+    /// Rest distance `r0` (> 0). Default: 1.
+    pub r0: Real,
+    /// Gaussian decay `α` (> 0, units 1/length²). Default: 16 (reach
+    /// ≈ 2.08 r0 with the automatic cut-off).
+    pub alpha: Real,
+    /// Cut-off radius, or `None` for the automatic one (where `|f|` falls
+    /// to 1e-6 of its maximum attraction). The taper must start beyond the
+    /// maximum-attraction distance `r_m`. Default: `None`.
+    pub cutoff: Option<Real>,
+    /// Fraction of the cut-off over which the force is tapered to 0
+    /// (`0 < taper <= 1`). Default: 0.1.
+    pub taper: Real,
+    /// Evaluation mode. Default: `Tabulated`.
+    pub mode: CohesionMode,
+    /// Start of the table as a fraction of `r0` (`0 < table_start < 1`);
+    /// shorter distances use the exact mode. Default: 0.5.
+    pub table_start: Real,
+    /// Number of table nodes (16 ..= 1 000 000). Default: 1024.
+    pub table_nodes: usize,
+}
+
+impl Default for CohesionParams {
+    fn default() -> Self {
+        CohesionParams {
+            e: 200.0,
+            r0: 1.0,
+            alpha: 16.0,
+            cutoff: None,
+            taper: 0.1,
+            mode: CohesionMode::Tabulated,
+            table_start: 0.5,
+            table_nodes: 1024,
+        }
+    }
+}
+
+/// The untapered cohesion force `f(r) = E (r0-r)³/r exp(-α(r0-r)²)`
+/// (positive = repulsive).
+#[inline]
+pub fn cohesion_force(e: Real, r0: Real, alpha: Real, r: Real) -> Real {
+    let d = r0 - r;
+    e * d * d * d / r * (-alpha * d * d).exp()
+}
+
+/// Offset `u_m = r_m - r0` of the maximum attraction: the positive root of
+/// `3 r0 + 2u - 2α r0 u² - 2α u³` (from `d ln|f|/du = 0`).
+fn max_attraction_offset(r0: Real, alpha: Real) -> Real {
+    let p = |u: Real| 3.0 * r0 + 2.0 * u - 2.0 * alpha * u * u * (r0 + u);
+    let mut hi = (1.5 / alpha).sqrt();
+    while p(hi) > 0.0 {
+        hi *= 2.0;
+    }
+    bisect(0.0, hi, |u| p(u) > 0.0)
+}
+
+/// Bisection to round-off of a predicate true at `lo` and false at `hi`.
+fn bisect(mut lo: Real, mut hi: Real, below: impl Fn(Real) -> bool) -> Real {
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if below(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+impl CohesionParams {
+    /// `(r_m, f_max)`: where the untapered force is most attractive and the
+    /// magnitude of that attraction. Useful to match Lennard-Jones to
+    /// cohesion (same maximum attraction, DESIGN §8). Needs `r0`, `alpha`
+    /// and `e` valid.
+    pub fn max_attraction(&self) -> (Real, Real) {
+        let u = max_attraction_offset(self.r0, self.alpha);
+        let r_m = self.r0 + u;
+        (r_m, cohesion_force(self.e, self.r0, self.alpha, r_m).abs())
+    }
+
+    /// The cut-off in use: `cutoff`, or where `|f|` falls to
+    /// [`AUTO_CUTOFF_RATIO`] of the maximum attraction.
+    pub fn effective_cutoff(&self) -> Real {
+        if let Some(c) = self.cutoff {
+            return c;
+        }
+        let (r_m, f_max) = self.max_attraction();
+        let u_m = r_m - self.r0;
+        let target = (AUTO_CUTOFF_RATIO * f_max).ln();
+        let ln_f = |u: Real| self.e.ln() + 3.0 * u.ln() - (self.r0 + u).ln() - self.alpha * u * u;
+        let mut hi = 2.0 * u_m;
+        while ln_f(hi) > target {
+            hi *= 2.0;
+        }
+        self.r0 + bisect(u_m, hi, |u| ln_f(u) > target)
+    }
+
+    /// Rejects NaN, infinite and out-of-range values.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        positive("e", self.e)?;
+        positive("r0", self.r0)?;
+        positive("alpha", self.alpha)?;
+        if let Some(c) = self.cutoff {
+            positive("cutoff", c)?;
+        }
+        validate_fraction("taper", self.taper)?;
+        check(
+            "table_start",
+            self.table_start,
+            self.table_start.is_finite() && self.table_start > 0.0 && self.table_start < 1.0,
+            "must be a fraction of r0 with 0 < table_start < 1",
+        )?;
+        check(
+            "table_nodes",
+            self.table_nodes as Real,
+            (16..=1_000_000).contains(&self.table_nodes),
+            "must be between 16 and 1000000",
+        )?;
+        let (r_m, _) = self.max_attraction();
+        let r_c = self.effective_cutoff();
+        let r_on = r_c * (1.0 - self.taper);
+        if r_on.is_nan() || r_on < r_m {
+            return Err(ParamError::Invalid {
+                field: "cutoff".into(),
+                message: format!(
+                    "the taper starts at cutoff*(1-taper) = {r_on} (cutoff {r_c}), which must be \
+                     beyond the maximum attraction distance r_m = {r_m}: raise cutoff or lower taper"
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// Validates, integrates the energy partition and (in tabulated mode)
+    /// builds the table.
+    pub fn prepare(&self) -> Result<Cohesion, ParamError> {
+        self.validate()?;
+        let (r_m, f_max) = self.max_attraction();
+        let r_c = self.effective_cutoff();
+        let mut c = Cohesion {
+            e: self.e,
+            r0: self.r0,
+            alpha: self.alpha,
+            taper: Taper::new(r_c, self.taper),
+            r_m,
+            f_max,
+            breaks: Vec::new(),
+            tail: Vec::new(),
+            table: None,
+        };
+        c.build_partition();
+        if self.mode == CohesionMode::Tabulated {
+            let start = self.table_start * self.r0;
+            let table = HermiteTable::new(start, r_c, self.table_nodes, |r| {
+                (c.energy_exact(r), -c.force(r))
+            });
+            c.table = Some(table);
+        }
+        Ok(c)
+    }
+}
+
+/// The prepared cohesion force and energy (see the module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cohesion {
+    e: Real,
+    r0: Real,
+    alpha: Real,
+    taper: Taper,
+    r_m: Real,
+    f_max: Real,
+    /// Ascending panel breakpoints from `0.01 r0` to `r_c` (includes `r_on`).
+    breaks: Vec<Real>,
+    /// `tail[k] = ∫_{breaks[k]}^{r_c} f_cut`.
+    tail: Vec<Real>,
+    table: Option<HermiteTable>,
+}
+
+impl Cohesion {
+    fn build_partition(&mut self) {
+        let r_c = self.taper.cutoff();
+        let r_on = self.taper.r_on();
+        let width = (0.5 / self.alpha.sqrt()).min(0.25 * self.r0);
+        let s_lo = 0.01 * self.r0;
+        let mut breaks = Vec::new();
+        let mut b = r_on;
+        loop {
+            breaks.push(b);
+            if b <= s_lo {
+                break;
+            }
+            b = (b - width).max(0.5 * b).max(s_lo);
+        }
+        breaks.reverse();
+        let n_top = ((r_c - r_on) / width).ceil().max(1.0) as usize;
+        for k in 1..=n_top {
+            breaks.push(if k == n_top {
+                r_c
+            } else {
+                r_on + (r_c - r_on) * k as Real / n_top as Real
+            });
+        }
+        let mut tail = vec![0.0; breaks.len()];
+        for k in (0..breaks.len() - 1).rev() {
+            tail[k] = tail[k + 1] + self.panel(breaks[k], breaks[k + 1]);
+        }
+        self.breaks = breaks;
+        self.tail = tail;
+    }
+
+    /// `∫_a^b f_cut` on one panel.
+    fn panel(&self, a: Real, b: Real) -> Real {
+        gauss_legendre(a, b, |s| self.force(s))
+    }
+
+    /// The cut-off radius.
+    #[inline]
+    pub fn cutoff(&self) -> Real {
+        self.taper.cutoff()
+    }
+
+    /// The rest distance `r0`.
+    pub fn r0(&self) -> Real {
+        self.r0
+    }
+
+    /// `(r_m, f_max)`: distance and magnitude of the maximum attraction.
+    pub fn max_attraction(&self) -> (Real, Real) {
+        (self.r_m, self.f_max)
+    }
+
+    /// True when the energy is tabulated.
+    pub fn is_tabulated(&self) -> bool {
+        self.table.is_some()
+    }
+
+    /// The tapered force `f_cut(r) = f(r) s(r)` (positive = repulsive),
+    /// closed form, for `r > 0`.
+    #[inline]
+    pub fn force(&self, r: Real) -> Real {
+        if r >= self.taper.cutoff() {
+            return 0.0;
+        }
+        cohesion_force(self.e, self.r0, self.alpha, r) * self.taper.eval(r).0
+    }
+
+    /// `U(r) = ∫_r^{r_c} f_cut` by quadrature, for `r > 0`.
+    pub fn energy_exact(&self, r: Real) -> Real {
+        if r >= self.taper.cutoff() {
+            return 0.0;
+        }
+        let s_lo = self.breaks[0];
+        if r >= s_lo {
+            let k = self.breaks.partition_point(|&b| b <= r);
+            self.panel(r, self.breaks[k]) + self.tail[k]
+        } else {
+            let mut sum = self.tail[0];
+            let mut b = s_lo;
+            while b > r {
+                let a = (0.5 * b).max(r);
+                sum += self.panel(a, b);
+                b = a;
+            }
+            sum
+        }
+    }
+
+    /// `(U(r), dU/dr)` in the exact mode.
+    pub fn eval_exact(&self, r: Real) -> (Real, Real) {
+        (self.energy_exact(r), -self.force(r))
+    }
+
+    /// `(U(r), dU/dr)` in the configured mode, for `r > 0`; zero beyond
+    /// the cut-off.
+    #[inline]
+    pub fn eval(&self, r: Real) -> (Real, Real) {
+        if r >= self.taper.cutoff() {
+            return (0.0, 0.0);
+        }
+        match &self.table {
+            Some(t) if r >= t.start() => t.eval(r),
+            _ => self.eval_exact(r),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn exact(p: CohesionParams) -> Cohesion {
+        CohesionParams {
+            mode: CohesionMode::Exact,
+            ..p
+        }
+        .prepare()
+        .unwrap()
+    }
+
+    fn variants() -> Vec<CohesionParams> {
+        let d = CohesionParams::default();
+        vec![
+            d,
+            CohesionParams {
+                e: 3.0,
+                r0: 2.0,
+                alpha: 1.5,
+                taper: 0.25,
+                ..d
+            },
+            CohesionParams {
+                alpha: 60.0,
+                cutoff: Some(1.8),
+                ..d
+            },
+        ]
+    }
+
+    #[test]
+    fn force_is_zero_with_zero_slope_at_r0() {
+        for p in variants() {
+            let c = exact(p);
+            assert_eq!(c.force(p.r0), 0.0);
+            // f ~ -E (r - r0)³/r0: a central difference of step h gives
+            // -E h²/r0, so h = 1e-5 resolves a zero slope to ~1e-8.
+            let h = 1e-5 * p.r0;
+            let slope = (c.force(p.r0 + h) - c.force(p.r0 - h)) / (2.0 * h);
+            assert!(slope.abs() < 1e-6 * c.max_attraction().1, "{slope}");
+            assert!(c.force(0.9 * p.r0) > 0.0 && c.force(1.1 * p.r0) < 0.0);
+            // Energy minimum at r0.
+            let u0 = c.energy_exact(p.r0);
+            assert!(u0 < 0.0 && c.energy_exact(0.99 * p.r0) > u0);
+            assert!(c.energy_exact(1.01 * p.r0) > u0);
+        }
+    }
+
+    #[test]
+    fn max_attraction_and_automatic_cutoff() {
+        for p in variants() {
+            let c = exact(p);
+            let (r_m, f_max) = c.max_attraction();
+            assert!((c.force(r_m) + f_max).abs() < 1e-14 * f_max);
+            let h = 1e-5 * p.r0;
+            assert!(c.force(r_m - h) > c.force(r_m) && c.force(r_m + h) > c.force(r_m));
+            if p.cutoff.is_none() {
+                let f_rc = cohesion_force(p.e, p.r0, p.alpha, c.cutoff());
+                assert!((f_rc.abs() / f_max / AUTO_CUTOFF_RATIO - 1.0).abs() < 1e-9);
+            }
+        }
+        let (r_m, f_max) = CohesionParams::default().max_attraction();
+        assert!((r_m - 1.294).abs() < 1e-3 && (f_max - 0.98).abs() < 0.01);
+        assert!((CohesionParams::default().effective_cutoff() - 2.08).abs() < 0.01);
+    }
+
+    /// Exact energy against a reference integrated on a 6x finer partition,
+    /// and its derivative against the closed-form force.
+    #[test]
+    fn exact_energy_is_accurate_to_round_off() {
+        let mut worst: Real = 0.0;
+        for p in variants() {
+            let c = exact(p);
+            let r_c = c.cutoff();
+            let scale = c.energy_exact(p.r0).abs();
+            for k in 0..60 {
+                let r = p.r0 * (0.002 + (r_c / p.r0 - 0.002) * (k as Real / 60.0).powf(0.7));
+                // Reference: split [r, r_c] at r_on and at 6x finer panels.
+                let mut pts = vec![r];
+                let n = 240;
+                for i in 1..=n {
+                    let x = i as Real / n as Real;
+                    pts.push(r * (r_c / r).powf(x));
+                }
+                if c.taper.r_on() > r {
+                    pts.push(c.taper.r_on());
+                }
+                pts.sort_by(|a, b| a.partial_cmp(b).unwrap());
+                let reference: Real = pts.windows(2).map(|w| c.panel(w[0], w[1])).sum();
+                let u = c.energy_exact(r);
+                let err = (u - reference).abs() / reference.abs().max(scale);
+                worst = worst.max(err);
+                assert!(err < 1e-13, "r={r}: {u} vs {reference} ({err:e})");
+                let h = 1e-6 * r;
+                let du = (c.energy_exact(r + h) - c.energy_exact(r - h)) / (2.0 * h);
+                let f = c.force(r);
+                assert!(
+                    (du + f).abs() < 1e-6 * (f.abs() + c.f_max),
+                    "r={r}: {du} vs {f}"
+                );
+            }
+        }
+        eprintln!("cohesion exact energy: max relative quadrature error {worst:.2e}");
+    }
+
+    /// Interpolation error of the default table against the exact mode.
+    #[test]
+    fn table_error_is_small() {
+        let p = CohesionParams::default();
+        let c = p.prepare().unwrap();
+        let x = exact(p);
+        let (_, f_max) = c.max_attraction();
+        let depth = x.energy_exact(p.r0).abs();
+        let start = p.table_start * p.r0;
+        let (mut ef, mut eu, mut ef_rel) = (0.0 as Real, 0.0 as Real, 0.0 as Real);
+        let n = 20_000;
+        for k in 0..=n {
+            let r = start + (c.cutoff() - start) * k as Real / n as Real;
+            let (u, du) = c.eval(r);
+            let (ue, due) = x.eval(r);
+            ef = ef.max((du - due).abs() / f_max);
+            eu = eu.max((u - ue).abs() / depth);
+            if r > 0.8 * p.r0 && r < 1.6 * p.r0 {
+                ef_rel = ef_rel.max((du - due).abs() / due.abs().max(1e-3 * f_max));
+            }
+        }
+        eprintln!(
+            "cohesion table ({} nodes on [{start}, {:.4}]): max |force error|/f_max = {ef:.2e}, \
+             max |energy error|/depth = {eu:.2e}, force error relative to |f| on [0.8, 1.6] r0 \
+             = {ef_rel:.2e}",
+            p.table_nodes,
+            c.cutoff()
+        );
+        assert!(ef < 1e-6, "{ef:e}");
+        assert!(eu < 1e-9, "{eu:e}");
+    }
+
+    #[test]
+    fn tabulated_force_is_the_derivative_of_the_tabulated_energy() {
+        let c = CohesionParams::default().prepare().unwrap();
+        assert!(c.is_tabulated());
+        for k in 0..500 {
+            let r = 0.3 + 1.75 * k as Real / 499.0;
+            let h = 1e-7;
+            let fd = (c.eval(r + h).0 - c.eval(r - h).0) / (2.0 * h);
+            let du = c.eval(r).1;
+            assert!(
+                (fd - du).abs() < 1e-6 * (1.0 + du.abs()),
+                "r={r}: {fd} vs {du}"
+            );
+        }
+        // Joins the exact fallback continuously at the table start.
+        let s = 0.5;
+        let (a, b) = (c.eval(s - 1e-12), c.eval(s + 1e-12));
+        assert!((a.0 - b.0).abs() < 1e-9 && (a.1 - b.1).abs() < 1e-8);
+    }
+
+    #[test]
+    fn continuous_at_the_cutoff() {
+        for p in variants() {
+            for c in [exact(p), p.prepare().unwrap()] {
+                let rc = c.cutoff();
+                let (u, du) = c.eval(rc * (1.0 - 1e-7));
+                assert!(u.abs() < 1e-15 && du.abs() < 1e-12, "{u} {du}");
+                assert_eq!(c.eval(rc), (0.0, 0.0));
+            }
+        }
+    }
+
+    #[test]
+    fn validation_rejects_bad_values() {
+        let d = CohesionParams::default();
+        let cases = [
+            (CohesionParams { e: Real::NAN, ..d }, "cohesion.e"),
+            (CohesionParams { r0: 0.0, ..d }, "cohesion.r0"),
+            (CohesionParams { alpha: -3.0, ..d }, "cohesion.alpha"),
+            (
+                CohesionParams {
+                    cutoff: Some(Real::INFINITY),
+                    ..d
+                },
+                "cohesion.cutoff",
+            ),
+            (
+                CohesionParams {
+                    cutoff: Some(1.2),
+                    ..d
+                },
+                "maximum attraction",
+            ),
+            (CohesionParams { taper: 0.9, ..d }, "maximum attraction"),
+            (
+                CohesionParams {
+                    taper: Real::NAN,
+                    ..d
+                },
+                "cohesion.taper",
+            ),
+            (
+                CohesionParams {
+                    table_start: 1.0,
+                    ..d
+                },
+                "cohesion.table_start",
+            ),
+            (
+                CohesionParams {
+                    table_nodes: 3,
+                    ..d
+                },
+                "cohesion.table_nodes",
+            ),
+        ];
+        for (p, needle) in cases {
+            let e = p.prepare().unwrap_err().within("cohesion").to_string();
+            assert!(e.contains(needle), "{needle}: {e}");
+        }
+    }
+}

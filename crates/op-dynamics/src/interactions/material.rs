@@ -1,0 +1,466 @@
+//! Materials: the interaction weights and parameters of a set of particles
+//! (seed 000 eq. 11, seed 002 §4-5).
+//!
+//! A [`Material`] is plain data (serde, validated); [`Material::prepare`]
+//! turns it into a [`PreparedMaterial`] with tables built and the set of
+//! enabled terms fixed, which is what [`super::evaluate_pair`] reads.
+//!
+//! Default: cohesion spacing, every orientation weight 0 (a scene enables
+//! the terms it uses), normalized terms, default repulsion, no friction.
+
+use super::cocircularity;
+use super::conormality;
+use super::coplanarity;
+use super::form;
+use super::pair::{OrientationGrad, PairGeometry, TermGrad};
+use super::repulsion::{Repulsion, RepulsionParams};
+use super::spacing::{Spacing, SpacingKernel};
+use super::spin::{self, SpinKind};
+use super::weight::{Weight, WeightParams};
+use crate::error::{non_negative, ParamError};
+use crate::math::Real;
+use serde::{Deserialize, Serialize};
+
+/// The interaction weights and parameters of a set of particles.
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Material {
+    /// Spacing potential, or `None` for none. Default: cohesion with its
+    /// defaults.
+    pub spacing: Option<Spacing>,
+    /// Orientation weight `ψ` (seed 000 eq. 10). Default: isotropic,
+    /// `K = 1`, `a = 1`, cut-off 2.5.
+    pub weight: WeightParams,
+    /// Weight `α_P` of co-planarity (>= 0). Default: 0.
+    pub coplanarity: Real,
+    /// Weight `α_N` of co-normality (>= 0). Default: 0.
+    pub conormality: Real,
+    /// Weight `α_C` of co-circularity (>= 0). Default: 0.
+    pub cocircularity: Real,
+    /// Weight `α_F` of the form (shape memory) term (>= 0). Default: 0.
+    pub form: Real,
+    /// Weight `α_S` of the spin torque (>= 0). Default: 0.
+    pub spin: Real,
+    /// Which spin potential. Default: `MinCurvature` (seed 000 eq. 14).
+    pub spin_kind: SpinKind,
+    /// Use the normalized (dimensionless, roughly scale independent)
+    /// orientation terms (DESIGN §3). Default: true.
+    pub normalized: bool,
+    /// Exponential repulsion for pairs that do not interact completely.
+    /// Default: strength 1 at contact distance 1, decay 0.1, cut-off 2.
+    pub repulsion: RepulsionParams,
+    /// Inter-particle friction coefficient (>= 0; damping of relative
+    /// velocity, seed 002 §5, applied by the world). Default: 0.
+    pub friction: Real,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            spacing: Some(Spacing::default()),
+            weight: WeightParams::default(),
+            coplanarity: 0.0,
+            conormality: 0.0,
+            cocircularity: 0.0,
+            form: 0.0,
+            spin: 0.0,
+            spin_kind: SpinKind::default(),
+            normalized: true,
+            repulsion: RepulsionParams::default(),
+            friction: 0.0,
+        }
+    }
+}
+
+impl Material {
+    /// A material with no term enabled: no spacing, zero weights, zero
+    /// repulsion strength (a base to enable terms one by one).
+    pub fn empty() -> Self {
+        Material {
+            spacing: None,
+            repulsion: RepulsionParams {
+                strength: 0.0,
+                ..Default::default()
+            },
+            ..Default::default()
+        }
+    }
+
+    /// Rejects NaN, infinite and out-of-range values; the message names the
+    /// field path (e.g. `spacing.cohesion.alpha`, `weight.b`, `form`).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        if let Some(s) = &self.spacing {
+            s.validate().map_err(|e| e.within("spacing"))?;
+        }
+        self.weight.validate().map_err(|e| e.within("weight"))?;
+        non_negative("coplanarity", self.coplanarity)?;
+        non_negative("conormality", self.conormality)?;
+        non_negative("cocircularity", self.cocircularity)?;
+        non_negative("form", self.form)?;
+        non_negative("spin", self.spin)?;
+        self.repulsion
+            .validate()
+            .map_err(|e| e.within("repulsion"))?;
+        non_negative("friction", self.friction)
+    }
+
+    /// Validates and precomputes (weight constants, cohesion tables).
+    pub fn prepare(&self) -> Result<PreparedMaterial, ParamError> {
+        self.validate()?;
+        let spacing = match &self.spacing {
+            Some(s) => Some(s.prepare().map_err(|e| e.within("spacing"))?),
+            None => None,
+        };
+        let oriented = self.coplanarity > 0.0
+            || self.conormality > 0.0
+            || self.cocircularity > 0.0
+            || self.form > 0.0
+            || self.spin > 0.0;
+        Ok(PreparedMaterial {
+            spacing,
+            weight: self.weight.prepare().map_err(|e| e.within("weight"))?,
+            w_p: self.coplanarity,
+            w_n: self.conormality,
+            w_c: self.cocircularity,
+            w_f: self.form,
+            w_s: self.spin,
+            spin_kind: self.spin_kind,
+            normalized: self.normalized,
+            oriented,
+            repulsion: self
+                .repulsion
+                .prepare()
+                .map_err(|e| e.within("repulsion"))?,
+            friction: self.friction,
+            source: *self,
+        })
+    }
+}
+
+/// A validated material with its tables built and its enabled terms fixed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedMaterial {
+    spacing: Option<SpacingKernel>,
+    weight: Weight,
+    w_p: Real,
+    w_n: Real,
+    w_c: Real,
+    w_f: Real,
+    w_s: Real,
+    spin_kind: SpinKind,
+    normalized: bool,
+    oriented: bool,
+    repulsion: Repulsion,
+    friction: Real,
+    source: Material,
+}
+
+impl PreparedMaterial {
+    /// The material this was prepared from.
+    pub fn material(&self) -> &Material {
+        &self.source
+    }
+
+    /// The spacing potential, if any.
+    pub fn spacing(&self) -> Option<&SpacingKernel> {
+        self.spacing.as_ref()
+    }
+
+    /// True when some orientation term (co-planarity, co-normality,
+    /// co-circularity, form, spin) has a nonzero weight.
+    #[inline]
+    pub fn has_orientation_terms(&self) -> bool {
+        self.oriented
+    }
+
+    /// Spacing cut-off, or 0 without spacing.
+    pub fn spacing_cutoff(&self) -> Real {
+        self.spacing.as_ref().map_or(0.0, SpacingKernel::cutoff)
+    }
+
+    /// Cut-off of the orientation weight, or 0 without orientation terms.
+    #[inline]
+    pub fn orientation_cutoff(&self) -> Real {
+        if self.oriented {
+            self.weight.cutoff()
+        } else {
+            0.0
+        }
+    }
+
+    /// Repulsion cut-off, or 0 when the repulsion strength is 0.
+    pub fn repulsion_cutoff(&self) -> Real {
+        if self.repulsion.is_enabled() {
+            self.repulsion.cutoff()
+        } else {
+            0.0
+        }
+    }
+
+    /// The largest cut-off among the enabled terms (spacing, orientation
+    /// weight, repulsion): the neighbour radius this material needs.
+    pub fn cutoff(&self) -> Real {
+        self.spacing_cutoff()
+            .max(self.orientation_cutoff())
+            .max(self.repulsion_cutoff())
+    }
+
+    /// Names of the enabled terms, e.g. `["cohesion", "coplanarity",
+    /// "form", "repulsion"]`.
+    pub fn enabled_terms(&self) -> Vec<&'static str> {
+        let mut v = Vec::new();
+        if let Some(s) = &self.spacing {
+            v.push(s.name());
+        }
+        for (w, name) in [
+            (self.w_p, "coplanarity"),
+            (self.w_n, "conormality"),
+            (self.w_c, "cocircularity"),
+            (self.w_f, "form"),
+            (self.w_s, "spin"),
+        ] {
+            if w > 0.0 {
+                v.push(name);
+            }
+        }
+        if self.repulsion.is_enabled() {
+            v.push("repulsion");
+        }
+        v
+    }
+
+    /// Inter-particle friction coefficient (applied by the world).
+    pub fn friction(&self) -> Real {
+        self.friction
+    }
+
+    /// This material's spacing potential `(U(r), dU/dr)` (not halved);
+    /// zero without spacing.
+    #[inline]
+    pub fn spacing_eval(&self, dist: Real) -> (Real, Real) {
+        match &self.spacing {
+            Some(s) => s.eval(dist),
+            None => (0.0, 0.0),
+        }
+    }
+
+    /// This material's repulsion `(U(r), dU/dr)` (not halved).
+    #[inline]
+    pub fn repulsion_eval(&self, dist: Real) -> (Real, Real) {
+        self.repulsion.eval(dist)
+    }
+
+    /// The weighted orientation energy `E_ij` emitted by this material's
+    /// particle `i` and felt by `j`, its gradients, and the spin torque on
+    /// `i`. Zero-weight terms are skipped.
+    #[inline]
+    pub fn orientation(&self, g: &PairGeometry) -> OrientationGrad {
+        let mut out = OrientationGrad::default();
+        if !self.oriented {
+            return out;
+        }
+        let w = self.weight.eval(&g.r, g.dist, &g.n_i);
+        if w.psi == 0.0 {
+            return out;
+        }
+        let mut phi = TermGrad::default();
+        let norm = self.normalized;
+        if self.w_p > 0.0 {
+            let t = if norm {
+                coplanarity::normalized(g)
+            } else {
+                coplanarity::raw(g)
+            };
+            phi.add_scaled(self.w_p, &t);
+        }
+        if self.w_n > 0.0 {
+            phi.add_scaled(self.w_n, &conormality::eval(g));
+        }
+        if self.w_c > 0.0 {
+            let t = if norm {
+                cocircularity::normalized(g)
+            } else {
+                cocircularity::raw(g)
+            };
+            phi.add_scaled(self.w_c, &t);
+        }
+        if self.w_f > 0.0 {
+            let t = if norm {
+                form::normalized(g)
+            } else {
+                form::raw(g)
+            };
+            phi.add_scaled(self.w_f, &t);
+        }
+        out.energy = w.psi * phi.energy;
+        out.d_r = phi.d_r * w.psi + w.d_r * phi.energy;
+        out.d_ni = phi.d_ni * w.psi + w.d_n * phi.energy;
+        out.d_nj = phi.d_nj * w.psi;
+        if self.w_s > 0.0 {
+            let s = spin::eval(self.spin_kind, norm, g);
+            out.spin_torque = spin::torque(&g.n_i, &g.t_i, &(s.d_t * (self.w_s * w.psi)));
+        }
+        out
+    }
+
+    /// The weighted spin energy `α_S φ_S ψ` emitted by `i` (diagnostics;
+    /// not part of the pair energy, see [`super::spin`]).
+    pub fn spin_energy(&self, g: &PairGeometry) -> Real {
+        if self.w_s == 0.0 {
+            return 0.0;
+        }
+        let w = self.weight.eval(&g.r, g.dist, &g.n_i);
+        self.w_s * w.psi * spin::eval(self.spin_kind, self.normalized, g).energy
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interactions::cohesion::CohesionParams;
+    use crate::interactions::lennard_jones::LennardJonesParams;
+    use crate::interactions::weight::WeightShape;
+
+    #[test]
+    fn default_material_is_valid_spacing_only() {
+        let m = Material::default().prepare().unwrap();
+        assert_eq!(m.enabled_terms(), vec!["cohesion", "repulsion"]);
+        assert!(!m.has_orientation_terms());
+        assert!((m.spacing_cutoff() - 2.08).abs() < 0.01);
+        assert_eq!(m.cutoff(), m.spacing_cutoff());
+        assert_eq!(m.orientation_cutoff(), 0.0);
+        assert_eq!(m.friction(), 0.0);
+        assert_eq!(
+            Material::empty().prepare().unwrap().enabled_terms(),
+            Vec::<&str>::new()
+        );
+        assert_eq!(Material::empty().prepare().unwrap().cutoff(), 0.0);
+    }
+
+    #[test]
+    fn cutoff_is_the_largest_enabled_one() {
+        let m = Material {
+            spacing: Some(Spacing::LennardJones(LennardJonesParams::default())),
+            weight: WeightParams {
+                cutoff: 3.0,
+                ..Default::default()
+            },
+            coplanarity: 1.0,
+            spin: 0.5,
+            friction: 0.2,
+            ..Material::default()
+        }
+        .prepare()
+        .unwrap();
+        assert_eq!(m.cutoff(), 3.0);
+        assert_eq!(m.spacing_cutoff(), 2.5);
+        assert_eq!(m.repulsion_cutoff(), 2.0);
+        assert_eq!(m.friction(), 0.2);
+        assert_eq!(
+            m.enabled_terms(),
+            vec!["lennard_jones", "coplanarity", "spin", "repulsion"]
+        );
+        // Disabled orientation terms do not widen the radius.
+        let n = Material {
+            weight: WeightParams {
+                cutoff: 9.0,
+                ..Default::default()
+            },
+            ..Material::default()
+        }
+        .prepare()
+        .unwrap();
+        assert!(n.cutoff() < 2.1);
+    }
+
+    #[test]
+    fn validation_names_the_field_path() {
+        let d = Material::default();
+        let cases: Vec<(Material, &str)> = vec![
+            (
+                Material {
+                    coplanarity: Real::NAN,
+                    ..d
+                },
+                "`coplanarity` = NaN",
+            ),
+            (
+                Material {
+                    conormality: -1.0,
+                    ..d
+                },
+                "`conormality` = -1",
+            ),
+            (
+                Material {
+                    cocircularity: Real::INFINITY,
+                    ..d
+                },
+                "cocircularity",
+            ),
+            (Material { form: -0.5, ..d }, "`form`"),
+            (
+                Material {
+                    spin: Real::NAN,
+                    ..d
+                },
+                "`spin`",
+            ),
+            (
+                Material {
+                    friction: -0.1,
+                    ..d
+                },
+                "`friction`",
+            ),
+            (
+                Material {
+                    spacing: Some(Spacing::Cohesion(CohesionParams {
+                        alpha: Real::NAN,
+                        ..Default::default()
+                    })),
+                    ..d
+                },
+                "`spacing.cohesion.alpha` = NaN",
+            ),
+            (
+                Material {
+                    spacing: Some(Spacing::LennardJones(LennardJonesParams {
+                        m: 20.0,
+                        ..Default::default()
+                    })),
+                    ..d
+                },
+                "`spacing.lennard_jones.n`",
+            ),
+            (
+                Material {
+                    weight: WeightParams {
+                        shape: WeightShape::Anisotropic { b: -1.0 },
+                        ..Default::default()
+                    },
+                    ..d
+                },
+                "`weight.shape.b`",
+            ),
+            (
+                Material {
+                    repulsion: RepulsionParams {
+                        lambda: 0.0,
+                        ..Default::default()
+                    },
+                    ..d
+                },
+                "`repulsion.lambda`",
+            ),
+        ];
+        for (m, needle) in cases {
+            let e = m.prepare().unwrap_err().to_string();
+            assert!(e.contains(needle), "{needle}: {e}");
+            assert!(
+                e.contains("must") || e.contains(">"),
+                "says what is allowed: {e}"
+            );
+        }
+    }
+}

@@ -1,0 +1,585 @@
+//! The pair entry point: energy, forces and torques of one unordered pair,
+//! visited once, with both directions `E_ij` and `E_ji` evaluated
+//! (seed 000 eq. 11 and App. B, seed 002 §4-5, DESIGN §3).
+//!
+//! Conventions: for an ordered pair `i` emits and `j` feels, `r = p_j - p_i`,
+//! `n = R(q) a`, `t = R(q) tangent_axis(a)`. Every force and torque is
+//! derived from the energy:
+//!
+//! - force on `j` is `-∂E/∂r`, on `i` `+∂E/∂r` (so `F_i + F_j = 0`);
+//! - for a small world rotation `dθ` of a particle, `dn = dθ × n`, so
+//!   `∂E/∂θ = n × ∂E/∂n` and the torque is `τ = -n × ∂E/∂n = ∂E/∂n × n`.
+//!
+//! Every term is a rotation-invariant function of `(r, n_i, n_j)`, hence
+//! `r × ∂E/∂r + n_i × ∂E/∂n_i + n_j × ∂E/∂n_j = 0`: internal forces and
+//! torques conserve linear and angular momentum. The one exception is the
+//! spin torque ([`super::spin`]), torque-only by design.
+//!
+//! Pair energy, for [`Coupling::Complete`]: spacing `½(U_i(r) + U_j(r))`
+//! (each emitter's material gives half, so identical materials give `U`),
+//! plus, when oriented, `E_ij + E_ji` where
+//! `E_ij = ψ_i(r, n_i) Σ_term α_term φ_term(r, n_i, n_j, κ_i)` uses i's
+//! material and `E_ji` the same seen from `j` (`r → -r`, roles swapped,
+//! `κ_j`); plus spin torques from both sides (spin adds no energy). For
+//! [`Coupling::RepulsionOnly`]: `½(Rep_i(r) + Rep_j(r))`.
+//!
+//! Coincident particles (`|r| = 0`, direction undefined) contribute nothing.
+
+use super::material::PreparedMaterial;
+use crate::math::{Point3, Real, Vec3};
+
+/// The geometry of an ordered pair as seen from the emitter `i`.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct PairGeometry {
+    /// `r = p_j - p_i`.
+    pub r: Vec3,
+    /// `|r|` (> 0).
+    pub dist: Real,
+    /// Emitter's world normal.
+    pub n_i: Vec3,
+    /// Receiver's world normal.
+    pub n_j: Vec3,
+    /// Emitter's world tangent ("local x", used by the spin term only).
+    pub t_i: Vec3,
+    /// Emitter's rest curvature (form term).
+    pub kappa_i: Real,
+}
+
+/// An orientation term's value and gradients, before weighting by `ψ`.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct TermGrad {
+    /// `φ`.
+    pub energy: Real,
+    /// `∂φ/∂r`.
+    pub d_r: Vec3,
+    /// `∂φ/∂n_i`.
+    pub d_ni: Vec3,
+    /// `∂φ/∂n_j`.
+    pub d_nj: Vec3,
+}
+
+impl TermGrad {
+    /// `self += w * other`.
+    #[inline]
+    pub fn add_scaled(&mut self, w: Real, other: &TermGrad) {
+        self.energy += w * other.energy;
+        self.d_r += other.d_r * w;
+        self.d_ni += other.d_ni * w;
+        self.d_nj += other.d_nj * w;
+    }
+}
+
+/// The weighted orientation energy `E_ij` emitted by one particle, its
+/// gradients, and the spin torque on the emitter.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct OrientationGrad {
+    /// `E_ij` (spin excluded).
+    pub energy: Real,
+    /// `∂E_ij/∂r`.
+    pub d_r: Vec3,
+    /// `∂E_ij/∂n_i`.
+    pub d_ni: Vec3,
+    /// `∂E_ij/∂n_j`.
+    pub d_nj: Vec3,
+    /// Spin torque on the emitter (along `n_i`).
+    pub spin_torque: Vec3,
+}
+
+/// What the world knows about one particle of a pair.
+#[derive(Copy, Clone, Debug)]
+pub struct ParticleView<'a> {
+    /// Position `p`.
+    pub position: Point3,
+    /// World normal `n = R(q) a` (unit).
+    pub normal: Vec3,
+    /// World tangent `t = R(q) tangent_axis(a)` (unit, orthogonal to `n`).
+    pub tangent: Vec3,
+    /// Rest curvature `κ` (form term).
+    pub kappa: Real,
+    /// The particle's prepared material.
+    pub material: &'a PreparedMaterial,
+}
+
+/// How the two particles of a pair interact (seed 002 §5).
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Coupling {
+    /// Complete interaction: spacing, plus orientation terms when
+    /// `oriented` (false when either particle is unoriented, seed 000 §6).
+    Complete {
+        /// Evaluate the orientation terms.
+        oriented: bool,
+    },
+    /// Exponential repulsion only (different objects, or standard
+    /// particles of different types).
+    RepulsionOnly,
+}
+
+/// Energy, forces and torques of one pair.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct PairResult {
+    /// Pair energy (spin excluded).
+    pub energy: Real,
+    /// Force on `i`.
+    pub force_i: Vec3,
+    /// Force on `j`.
+    pub force_j: Vec3,
+    /// Torque on `i`.
+    pub torque_i: Vec3,
+    /// Torque on `j`.
+    pub torque_j: Vec3,
+}
+
+/// `½(f_i(r) + f_j(r))` of two per-material radial potentials, evaluated
+/// once when both particles share the material.
+#[inline]
+fn half_sum(
+    mi: &PreparedMaterial,
+    mj: &PreparedMaterial,
+    dist: Real,
+    f: impl Fn(&PreparedMaterial, Real) -> (Real, Real),
+) -> (Real, Real) {
+    if std::ptr::eq(mi, mj) {
+        f(mi, dist)
+    } else {
+        let (a, b) = (f(mi, dist), f(mj, dist));
+        (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1))
+    }
+}
+
+/// Spacing-only fast path (no orientation data touched): returns the pair
+/// spacing energy `½(U_i + U_j)` and the force on `j`; the force on `i` is
+/// its negative. `r = p_j - p_i`, `dist = |r|`; zero when `dist == 0`.
+#[inline]
+pub fn evaluate_spacing(
+    mi: &PreparedMaterial,
+    mj: &PreparedMaterial,
+    r: &Vec3,
+    dist: Real,
+) -> (Real, Vec3) {
+    if dist.is_nan() || dist <= 0.0 {
+        return (0.0, Vec3::zeros());
+    }
+    let (u, du) = half_sum(mi, mj, dist, PreparedMaterial::spacing_eval);
+    (u, r * (-du / dist))
+}
+
+/// Energy, forces and torques of the unordered pair `(i, j)` (see the
+/// module docs). No allocation.
+#[inline]
+pub fn evaluate_pair(i: &ParticleView, j: &ParticleView, coupling: Coupling) -> PairResult {
+    let r = j.position - i.position;
+    let dist = r.norm();
+    let mut out = PairResult::default();
+    if dist.is_nan() || dist <= 0.0 {
+        return out;
+    }
+    let oriented = match coupling {
+        Coupling::RepulsionOnly => {
+            let (u, du) = half_sum(
+                i.material,
+                j.material,
+                dist,
+                PreparedMaterial::repulsion_eval,
+            );
+            out.energy = u;
+            out.force_j = r * (-du / dist);
+            out.force_i = -out.force_j;
+            return out;
+        }
+        Coupling::Complete { oriented } => oriented,
+    };
+    let (u, f_j) = evaluate_spacing(i.material, j.material, &r, dist);
+    out.energy = u;
+    let mut f_j = f_j;
+    if oriented {
+        // E_ij: i emits.
+        let mi = i.material;
+        if mi.has_orientation_terms() && dist < mi.orientation_cutoff() {
+            let g = PairGeometry {
+                r,
+                dist,
+                n_i: i.normal,
+                n_j: j.normal,
+                t_i: i.tangent,
+                kappa_i: i.kappa,
+            };
+            let o = mi.orientation(&g);
+            out.energy += o.energy;
+            f_j -= o.d_r;
+            out.torque_i += o.d_ni.cross(&i.normal) + o.spin_torque;
+            out.torque_j += o.d_nj.cross(&j.normal);
+        }
+        // E_ji: j emits, seen from j (r -> -r).
+        let mj = j.material;
+        if mj.has_orientation_terms() && dist < mj.orientation_cutoff() {
+            let g = PairGeometry {
+                r: -r,
+                dist,
+                n_i: j.normal,
+                n_j: i.normal,
+                t_i: j.tangent,
+                kappa_i: j.kappa,
+            };
+            let o = mj.orientation(&g);
+            out.energy += o.energy;
+            f_j += o.d_r;
+            out.torque_j += o.d_ni.cross(&j.normal) + o.spin_torque;
+            out.torque_i += o.d_nj.cross(&i.normal);
+        }
+    }
+    out.force_j = f_j;
+    out.force_i = -f_j;
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interactions::cohesion::{CohesionMode, CohesionParams};
+    use crate::interactions::lennard_jones::LennardJonesParams;
+    use crate::interactions::material::Material;
+    use crate::interactions::spacing::Spacing;
+    use crate::interactions::spin::SpinKind;
+    use crate::interactions::test_support::{check_fd, check_momentum, random_pair, Body, Rng};
+    use crate::interactions::weight::{WeightParams, WeightShape};
+    use crate::math::{Quat, Real};
+
+    fn all_terms(normalized: bool, anisotropic: bool, spin: Real) -> Material {
+        Material {
+            spacing: Some(Spacing::LennardJones(LennardJonesParams::default())),
+            weight: WeightParams {
+                shape: if anisotropic {
+                    WeightShape::Anisotropic { b: 0.6 }
+                } else {
+                    WeightShape::Isotropic
+                },
+                ..Default::default()
+            },
+            coplanarity: 0.7,
+            conormality: 0.4,
+            cocircularity: 0.3,
+            form: 0.9,
+            spin,
+            spin_kind: SpinKind::MinAbsCurvature,
+            normalized,
+            ..Material::default()
+        }
+    }
+
+    const COMPLETE: Coupling = Coupling::Complete { oriented: true };
+
+    #[test]
+    fn spacing_potentials_match_energy_and_conserve_momentum() {
+        let lj = Material {
+            spacing: Some(Spacing::LennardJones(LennardJonesParams::default())),
+            ..Material::empty()
+        };
+        let exact = Material {
+            spacing: Some(Spacing::Cohesion(CohesionParams {
+                mode: CohesionMode::Exact,
+                ..Default::default()
+            })),
+            ..Material::empty()
+        };
+        let tab = Material {
+            spacing: Some(Spacing::Cohesion(CohesionParams::default())),
+            ..Material::empty()
+        };
+        let (lj, exact, tab) = (
+            lj.prepare().unwrap(),
+            exact.prepare().unwrap(),
+            tab.prepare().unwrap(),
+        );
+        let mut rng = Rng::new(21);
+        let pairs = [
+            (&lj, &lj),
+            (&exact, &exact),
+            (&tab, &tab),
+            (&lj, &tab),
+            (&exact, &lj),
+        ];
+        for (mi, mj) in pairs {
+            for _ in 0..40 {
+                let d = rng.range(0.3, mi.cutoff().max(mj.cutoff()));
+                let (bi, bj) = random_pair(&mut rng, d);
+                for oriented in [false, true] {
+                    let c = Coupling::Complete { oriented };
+                    check_fd(mi, mj, &bi, &bj, c);
+                    check_momentum(mi, mj, &bi, &bj, c);
+                }
+                let r = bj.p - bi.p;
+                let (e, f) = evaluate_spacing(mi, mj, &r, r.norm());
+                let full = evaluate_pair(&bi.view(mi), &bj.view(mj), COMPLETE);
+                assert_eq!((e, f), (full.energy, full.force_j));
+            }
+        }
+        // Same material: half of two equal halves is U itself.
+        let (u, _) = evaluate_spacing(&lj, &lj, &Vec3::x(), 1.0);
+        assert!((u + 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn repulsion_only_matches_energy() {
+        let a = Material::default().prepare().unwrap();
+        let b = Material {
+            repulsion: crate::interactions::repulsion::RepulsionParams {
+                strength: 3.0,
+                lambda: 0.2,
+                ..Default::default()
+            },
+            ..all_terms(true, true, 0.5)
+        }
+        .prepare()
+        .unwrap();
+        let mut rng = Rng::new(22);
+        for (mi, mj) in [(&a, &a), (&a, &b)] {
+            for _ in 0..40 {
+                let (bi, bj) = {
+                    let d = rng.range(0.3, 2.0);
+                    random_pair(&mut rng, d)
+                };
+                check_fd(mi, mj, &bi, &bj, Coupling::RepulsionOnly);
+                check_momentum(mi, mj, &bi, &bj, Coupling::RepulsionOnly);
+                let res = evaluate_pair(&bi.view(mi), &bj.view(mj), Coupling::RepulsionOnly);
+                assert_eq!(res.torque_i, Vec3::zeros());
+                // Repulsive: force on j points away from i (before the taper).
+                if (bj.p - bi.p).norm() < 1.6 {
+                    assert!(res.force_j.dot(&(bj.p - bi.p)) > 0.0);
+                }
+            }
+        }
+    }
+
+    /// Every term at once, different materials on both sides, spin
+    /// included: forces and torques against central differences.
+    #[test]
+    fn all_terms_with_different_materials_match_energy() {
+        let mut rng = Rng::new(23);
+        for normalized in [false, true] {
+            for anisotropic in [false, true] {
+                let mi = all_terms(normalized, anisotropic, 0.6).prepare().unwrap();
+                let mj = Material {
+                    spacing: Some(Spacing::Cohesion(CohesionParams::default())),
+                    weight: WeightParams {
+                        a: 0.8,
+                        cutoff: 2.2,
+                        ..Default::default()
+                    },
+                    coplanarity: 1.5,
+                    form: 0.2,
+                    spin_kind: SpinKind::MinCurvature,
+                    ..all_terms(normalized, !anisotropic, 0.3)
+                }
+                .prepare()
+                .unwrap();
+                for _ in 0..30 {
+                    let (bi, bj) = {
+                        let d = rng.range(0.5, 2.5);
+                        random_pair(&mut rng, d)
+                    };
+                    check_fd(&mi, &mj, &bi, &bj, COMPLETE);
+                    check_fd(&mj, &mi, &bj, &bi, COMPLETE);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn momentum_is_conserved_without_spin() {
+        let mut rng = Rng::new(24);
+        for normalized in [false, true] {
+            for anisotropic in [false, true] {
+                let mi = all_terms(normalized, anisotropic, 0.0).prepare().unwrap();
+                let mj = all_terms(normalized, !anisotropic, 0.0).prepare().unwrap();
+                for _ in 0..50 {
+                    let (bi, bj) = {
+                        let d = rng.range(0.3, 2.5);
+                        random_pair(&mut rng, d)
+                    };
+                    check_momentum(&mi, &mj, &bi, &bj, COMPLETE);
+                    check_momentum(&mi, &mi, &bi, &bj, COMPLETE);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rigid_motion_leaves_energy_unchanged_and_rotates_forces() {
+        let mut rng = Rng::new(25);
+        let mi = all_terms(true, true, 0.5).prepare().unwrap();
+        let mj = all_terms(false, false, 0.3).prepare().unwrap();
+        for _ in 0..50 {
+            let (bi, bj) = {
+                let d = rng.range(0.4, 2.4);
+                random_pair(&mut rng, d)
+            };
+            let rot: Quat = rng.rotation();
+            let shift = rng.unit_vector() * rng.range(0.0, 10.0);
+            let moved = |b: &Body| Body {
+                p: rot * b.p + shift,
+                q: rot * b.q,
+                ..*b
+            };
+            let (ci, cj) = (moved(&bi), moved(&bj));
+            for c in [COMPLETE, Coupling::RepulsionOnly] {
+                let a = evaluate_pair(&bi.view(&mi), &bj.view(&mj), c);
+                let b = evaluate_pair(&ci.view(&mi), &cj.view(&mj), c);
+                let scale = a.force_i.norm() + a.torque_i.norm() + a.torque_j.norm() + 1e-12;
+                assert!((a.energy - b.energy).abs() <= 1e-12 * (1.0 + a.energy.abs()));
+                for (u, v) in [
+                    (a.force_i, b.force_i),
+                    (a.force_j, b.force_j),
+                    (a.torque_i, b.torque_i),
+                    (a.torque_j, b.torque_j),
+                ] {
+                    assert!((rot * u - v).norm() <= 1e-11 * scale, "{u} {v}");
+                }
+            }
+        }
+    }
+
+    /// DESIGN §3: with normalized terms, scaling every length by `s` (and
+    /// each parameter by dimensional analysis: lengths by `s`, cohesion
+    /// `α` by `1/s²` and `E` by `1/s³`, curvatures by `1/s`) leaves energies
+    /// and torques unchanged and scales forces by `1/s`.
+    #[test]
+    fn normalized_terms_are_scale_invariant() {
+        fn scaled(m: &Material, s: Real) -> Material {
+            let spacing = match m.spacing {
+                Some(Spacing::Cohesion(c)) => Some(Spacing::Cohesion(CohesionParams {
+                    r0: c.r0 * s,
+                    alpha: c.alpha / (s * s),
+                    e: c.e / (s * s * s),
+                    cutoff: c.cutoff.map(|x| x * s),
+                    ..c
+                })),
+                Some(Spacing::LennardJones(l)) => Some(Spacing::LennardJones(LennardJonesParams {
+                    r0: l.r0 * s,
+                    cutoff: l.cutoff * s,
+                    ..l
+                })),
+                None => None,
+            };
+            let shape = match m.weight.shape {
+                WeightShape::Anisotropic { b } => WeightShape::Anisotropic { b: b * s },
+                WeightShape::Isotropic => WeightShape::Isotropic,
+            };
+            Material {
+                spacing,
+                weight: WeightParams {
+                    a: m.weight.a * s,
+                    cutoff: m.weight.cutoff * s,
+                    shape,
+                    ..m.weight
+                },
+                repulsion: crate::interactions::repulsion::RepulsionParams {
+                    sigma: m.repulsion.sigma * s,
+                    lambda: m.repulsion.lambda * s,
+                    cutoff: m.repulsion.cutoff * s,
+                    ..m.repulsion
+                },
+                ..*m
+            }
+        }
+        let mut rng = Rng::new(28);
+        let base_i = all_terms(true, true, 0.5);
+        let base_j = Material {
+            spacing: Some(Spacing::Cohesion(CohesionParams::default())),
+            ..all_terms(true, false, 0.2)
+        };
+        for s in [0.01, 3.7, 250.0] {
+            let (mi, mj) = (base_i.prepare().unwrap(), base_j.prepare().unwrap());
+            let (si, sj) = (
+                scaled(&base_i, s).prepare().unwrap(),
+                scaled(&base_j, s).prepare().unwrap(),
+            );
+            assert!((si.cutoff() / mi.cutoff() - s).abs() < 1e-12 * s);
+            for _ in 0..30 {
+                let d = rng.range(0.4, 2.4);
+                let (bi, bj) = random_pair(&mut rng, d);
+                let grow = |b: &Body| Body {
+                    p: Point3::from(b.p.coords * s),
+                    kappa: b.kappa / s,
+                    ..*b
+                };
+                for c in [COMPLETE, Coupling::RepulsionOnly] {
+                    let a = evaluate_pair(&bi.view(&mi), &bj.view(&mj), c);
+                    let b = evaluate_pair(&grow(&bi).view(&si), &grow(&bj).view(&sj), c);
+                    let scale = a.force_i.norm() + a.torque_i.norm() + a.torque_j.norm() + 1e-300;
+                    assert!(
+                        (a.energy - b.energy).abs() <= 1e-9 * (a.energy.abs() + 1e-6),
+                        "s={s}: {} vs {}",
+                        a.energy,
+                        b.energy
+                    );
+                    assert!((a.force_j - b.force_j * s).norm() <= 1e-9 * scale, "s={s}");
+                    assert!((a.torque_i - b.torque_i).norm() <= 1e-9 * scale, "s={s}");
+                    assert!((a.torque_j - b.torque_j).norm() <= 1e-9 * scale, "s={s}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn unoriented_pairs_keep_only_spacing() {
+        let m = all_terms(true, false, 0.5).prepare().unwrap();
+        let mut rng = Rng::new(26);
+        let (bi, bj) = random_pair(&mut rng, 1.2);
+        let res = evaluate_pair(
+            &bi.view(&m),
+            &bj.view(&m),
+            Coupling::Complete { oriented: false },
+        );
+        let r = bj.p - bi.p;
+        let (e, f) = evaluate_spacing(&m, &m, &r, r.norm());
+        assert_eq!(res.energy, e);
+        assert_eq!(res.force_j, f);
+        assert_eq!(res.torque_i, Vec3::zeros());
+        assert_eq!(res.torque_j, Vec3::zeros());
+    }
+
+    #[test]
+    fn coincident_particles_contribute_nothing() {
+        let m = all_terms(true, true, 0.5).prepare().unwrap();
+        let b = Body {
+            p: Point3::new(0.1, 0.2, 0.3),
+            q: Quat::identity(),
+            a: Vec3::z(),
+            kappa: 0.3,
+        };
+        for c in [COMPLETE, Coupling::RepulsionOnly] {
+            assert_eq!(
+                evaluate_pair(&b.view(&m), &b.view(&m), c),
+                PairResult::default()
+            );
+        }
+        assert_eq!(
+            evaluate_spacing(&m, &m, &Vec3::zeros(), 0.0),
+            (0.0, Vec3::zeros())
+        );
+    }
+
+    #[test]
+    fn energy_and_forces_vanish_continuously_at_the_cutoff() {
+        let mut rng = Rng::new(27);
+        for normalized in [false, true] {
+            for anisotropic in [false, true] {
+                let m = all_terms(normalized, anisotropic, 0.5).prepare().unwrap();
+                let rc = m.cutoff();
+                for c in [COMPLETE, Coupling::RepulsionOnly] {
+                    for _ in 0..10 {
+                        let (bi, bj) = random_pair(&mut rng, rc * (1.0 - 1e-7));
+                        let res = evaluate_pair(&bi.view(&m), &bj.view(&m), c);
+                        assert!(res.energy.abs() < 1e-12, "{}", res.energy);
+                        for v in [res.force_i, res.torque_i, res.torque_j] {
+                            assert!(v.norm() < 1e-9, "{v}");
+                        }
+                        let (bi, bj) = random_pair(&mut rng, rc * (1.0 + 1e-9));
+                        let res = evaluate_pair(&bi.view(&m), &bj.view(&m), c);
+                        assert_eq!(res, PairResult::default());
+                    }
+                }
+            }
+        }
+    }
+}

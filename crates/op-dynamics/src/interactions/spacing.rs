@@ -1,0 +1,93 @@
+//! The spacing potential of a material: Lennard-Jones (seed 000 eq. 5) or
+//! cohesion (seed 002 §3), as a function of distance.
+
+use super::cohesion::{Cohesion, CohesionParams};
+use super::lennard_jones::{LennardJones, LennardJonesParams};
+use crate::error::ParamError;
+use crate::math::Real;
+use serde::{Deserialize, Serialize};
+
+/// Which spacing potential a material uses, with its parameters.
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Spacing {
+    /// Lennard-Jones `B/rⁿ - A/rᵐ` (seed 000 eq. 5).
+    LennardJones(LennardJonesParams),
+    /// Cohesion force (seed 002 §3).
+    Cohesion(CohesionParams),
+}
+
+impl Default for Spacing {
+    fn default() -> Self {
+        Spacing::Cohesion(CohesionParams::default())
+    }
+}
+
+impl Spacing {
+    /// Validates the parameters; errors are prefixed `lennard_jones.` or
+    /// `cohesion.`.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        match self {
+            Spacing::LennardJones(p) => p.validate().map_err(|e| e.within("lennard_jones")),
+            Spacing::Cohesion(p) => p.validate().map_err(|e| e.within("cohesion")),
+        }
+    }
+
+    /// Validates and builds the evaluator.
+    pub fn prepare(&self) -> Result<SpacingKernel, ParamError> {
+        match self {
+            Spacing::LennardJones(p) => p
+                .prepare()
+                .map(SpacingKernel::LennardJones)
+                .map_err(|e| e.within("lennard_jones")),
+            Spacing::Cohesion(p) => p
+                .prepare()
+                .map(SpacingKernel::Cohesion)
+                .map_err(|e| e.within("cohesion")),
+        }
+    }
+}
+
+/// A prepared spacing potential.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpacingKernel {
+    /// Lennard-Jones.
+    LennardJones(LennardJones),
+    /// Cohesion (exact or tabulated).
+    Cohesion(Cohesion),
+}
+
+impl SpacingKernel {
+    /// `(U(r), dU/dr)` for `r > 0`; zero beyond the cut-off.
+    #[inline]
+    pub fn eval(&self, r: Real) -> (Real, Real) {
+        match self {
+            SpacingKernel::LennardJones(l) => l.eval(r),
+            SpacingKernel::Cohesion(c) => c.eval(r),
+        }
+    }
+
+    /// The cut-off radius.
+    #[inline]
+    pub fn cutoff(&self) -> Real {
+        match self {
+            SpacingKernel::LennardJones(l) => l.cutoff(),
+            SpacingKernel::Cohesion(c) => c.cutoff(),
+        }
+    }
+
+    /// `(r_m, f_max)`: distance and magnitude of the maximum attraction.
+    pub fn max_attraction(&self) -> (Real, Real) {
+        match self {
+            SpacingKernel::LennardJones(l) => l.max_attraction(),
+            SpacingKernel::Cohesion(c) => c.max_attraction(),
+        }
+    }
+
+    /// The name of the potential (`"lennard_jones"` or `"cohesion"`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            SpacingKernel::LennardJones(_) => "lennard_jones",
+            SpacingKernel::Cohesion(_) => "cohesion",
+        }
+    }
+}

@@ -1,0 +1,288 @@
+//! Sorted uniform cell list: particles counting-sorted into cubic cells of
+//! side `h >= radius`, each particle scanning the 27 cells around its own.
+//!
+//! The grid is dense over the bounding box of the finite positions, its
+//! number of cells capped at `MAX_CELLS_PER_PARTICLE * n + 1024` (and
+//! `2^20` per axis). A sheet tilted through its box needs many (mostly
+//! empty) cells, hence the generous cap; a sparse cloud with a huge extent
+//! gets larger cells instead (still correct, more candidates per particle).
+//! Coordinates are clamped into the grid, which keeps any two particles
+//! within `h` of each other in the same or adjacent cells, so overflowing
+//! or outlying coordinates cost time, never pairs.
+//!
+//! Rows are searched in particle order, so the search is fastest when the
+//! particles are in spatial order (see [`spatial_order`](super::spatial_order)).
+
+use rayon::prelude::*;
+
+use super::csr::{arr, dist2, is_finite, squared_radius, PairList};
+use crate::math::{Point3, Real};
+
+/// Relative margin of the cell size over the radius: it absorbs the
+/// round-off of the cell coordinates and of the pair test, so particles
+/// that pass the pair test are never more than one cell apart.
+const MARGIN: Real = 1e-6;
+/// At most this many cells along one axis (keeps cell coordinates exact to
+/// far better than `MARGIN`).
+const MAX_AXIS_CELLS: Real = (1u32 << 20) as Real;
+/// Cap on the cells per particle (4 bytes each): 32 left rotated 100k
+/// sheets uncoarsened, where 8 cost them 20% more time.
+const MAX_CELLS_PER_PARTICLE: usize = 32;
+/// Marks a particle that is in no cell (non-finite position).
+const NO_CELL: u32 = u32::MAX;
+
+/// Reusable buffers of the cell list.
+#[derive(Default)]
+pub(crate) struct GridScratch {
+    /// Cell of each particle (`NO_CELL` when its position is not finite).
+    cell_of: Vec<u32>,
+    /// `cell_start[c]..cell_start[c + 1]` indexes `sorted_*` for cell `c`.
+    cell_start: Vec<u32>,
+    /// Positions in cell order.
+    sorted_pos: Vec<[Real; 3]>,
+    /// Particle indices in cell order (ascending within a cell).
+    sorted_idx: Vec<u32>,
+}
+
+#[cfg(test)]
+impl GridScratch {
+    /// Identifies the buffers (to test that rebuilds reuse them).
+    pub(crate) fn buffer_ptrs(&self) -> [usize; 4] {
+        [
+            self.cell_of.as_ptr() as usize,
+            self.cell_start.as_ptr() as usize,
+            self.sorted_pos.as_ptr() as usize,
+            self.sorted_idx.as_ptr() as usize,
+        ]
+    }
+}
+
+/// The grid geometry.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    min: [Real; 3],
+    h: Real,
+    dims: [usize; 3],
+}
+
+impl Grid {
+    /// A grid over the box `[min, max]` with cells of side at least
+    /// `radius * (1 + MARGIN)` and at most `max_cells` cells.
+    fn new(min: [Real; 3], max: [Real; 3], radius: Real, max_cells: usize) -> Self {
+        // Extents may overflow to infinity for coordinates near Real::MAX.
+        let ext = [0, 1, 2].map(|k| {
+            let e = max[k] - min[k];
+            if e.is_finite() {
+                e
+            } else {
+                Real::MAX
+            }
+        });
+        let ext_max = ext[0].max(ext[1]).max(ext[2]);
+        let mut h = (radius * (1.0 + MARGIN))
+            .max(ext_max / MAX_AXIS_CELLS)
+            .max(Real::MIN_POSITIVE);
+        let dims_for = |h: Real| ext.map(|e| ((e / h).floor() as usize).saturating_add(1));
+        let mut dims = dims_for(h);
+        for _ in 0..10_000 {
+            let cells = dims.iter().map(|&d| d as Real).product::<Real>();
+            if cells <= max_cells as Real {
+                break;
+            }
+            let grow = (cells / max_cells as Real).cbrt().max(1.05);
+            h *= grow;
+            dims = dims_for(h);
+        }
+        if dims.iter().map(|&d| d as Real).product::<Real>() > max_cells as Real {
+            // Unreachable in practice; one cell is always correct.
+            h = Real::INFINITY;
+            dims = [1, 1, 1];
+        }
+        Grid { min, h, dims }
+    }
+
+    fn num_cells(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    /// Clamped cell coordinate along axis `k` (NaN lands in cell 0).
+    #[inline]
+    fn coord(&self, x: Real, k: usize) -> usize {
+        let f = (x - self.min[k]) / self.h;
+        let last = self.dims[k] - 1;
+        if f >= last as Real {
+            last
+        } else if f > 0.0 {
+            f as usize
+        } else {
+            0
+        }
+    }
+
+    #[inline]
+    fn cell_id(&self, c: [usize; 3]) -> usize {
+        (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]
+    }
+
+    #[inline]
+    fn decode(&self, id: usize) -> [usize; 3] {
+        let x = id % self.dims[0];
+        let yz = id / self.dims[0];
+        [x, yz % self.dims[1], yz / self.dims[1]]
+    }
+}
+
+/// Bounding box and count of the finite positions.
+fn finite_bounds(positions: &[Point3]) -> ([Real; 3], [Real; 3], usize) {
+    let empty = ([Real::INFINITY; 3], [Real::NEG_INFINITY; 3], 0usize);
+    positions
+        .par_iter()
+        .with_min_len(4096)
+        .fold(
+            || empty,
+            |(mut lo, mut hi, n), p| {
+                if !is_finite(p) {
+                    return (lo, hi, n);
+                }
+                let a = arr(p);
+                for k in 0..3 {
+                    lo[k] = lo[k].min(a[k]);
+                    hi[k] = hi[k].max(a[k]);
+                }
+                (lo, hi, n + 1)
+            },
+        )
+        .reduce(
+            || empty,
+            |(lo1, hi1, n1), (lo2, hi2, n2)| {
+                (
+                    [0, 1, 2].map(|k| lo1[k].min(lo2[k])),
+                    [0, 1, 2].map(|k| hi1[k].max(hi2[k])),
+                    n1 + n2,
+                )
+            },
+        )
+}
+
+/// Fills `out` with the half list of all pairs within `radius` (inclusive),
+/// using a sorted uniform cell list. Same output as
+/// [`all_pairs`](super::all_pairs).
+pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) {
+    let n = positions.len();
+    let Some(r2) = squared_radius(radius) else {
+        out.set_empty(n);
+        return;
+    };
+    let (min, max, finite) = finite_bounds(positions);
+    if finite < 2 {
+        out.set_empty(n);
+        return;
+    }
+    let grid = Grid::new(
+        min,
+        max,
+        radius,
+        n.saturating_mul(MAX_CELLS_PER_PARTICLE)
+            .saturating_add(1024)
+            .min(1 << 31),
+    );
+    let mut s = std::mem::take(&mut out.scratch.grid);
+
+    // Cell of every particle.
+    s.cell_of.resize(n, 0);
+    s.cell_of
+        .par_iter_mut()
+        .zip(positions.par_iter())
+        .with_min_len(4096)
+        .for_each(|(c, p)| {
+            *c = if is_finite(p) {
+                let a = arr(p);
+                grid.cell_id([0, 1, 2].map(|k| grid.coord(a[k], k))) as u32
+            } else {
+                NO_CELL
+            };
+        });
+
+    // Counting sort into cells (stable: ascending index within a cell).
+    let ncells = grid.num_cells();
+    s.cell_start.clear();
+    s.cell_start.resize(ncells + 1, 0);
+    for &c in &s.cell_of {
+        if c != NO_CELL {
+            s.cell_start[c as usize + 1] += 1;
+        }
+    }
+    for c in 0..ncells {
+        s.cell_start[c + 1] += s.cell_start[c];
+    }
+    s.sorted_pos.resize(finite, [0.0; 3]);
+    s.sorted_idx.resize(finite, 0);
+    for (i, &c) in s.cell_of.iter().enumerate() {
+        if c != NO_CELL {
+            let slot = s.cell_start[c as usize] as usize;
+            s.cell_start[c as usize] += 1;
+            s.sorted_pos[slot] = arr(&positions[i]);
+            s.sorted_idx[slot] = i as u32;
+        }
+    }
+    // Each start was advanced to the next cell's start: shift back.
+    s.cell_start.copy_within(0..ncells, 1);
+    s.cell_start[0] = 0;
+
+    let scratch = &s;
+    out.build_parallel(n, |i, row| {
+        let c = scratch.cell_of[i];
+        if c == NO_CELL {
+            return;
+        }
+        let p = arr(&positions[i]);
+        let [cx, cy, cz] = grid.decode(c as usize);
+        let x0 = cx.saturating_sub(1);
+        let x1 = (cx + 1).min(grid.dims[0] - 1);
+        for z in cz.saturating_sub(1)..=(cz + 1).min(grid.dims[2] - 1) {
+            for y in cy.saturating_sub(1)..=(cy + 1).min(grid.dims[1] - 1) {
+                // Cells x0..=x1 of this (y, z) line are contiguous.
+                let a = scratch.cell_start[grid.cell_id([x0, y, z])] as usize;
+                let b = scratch.cell_start[grid.cell_id([x1, y, z]) + 1] as usize;
+                for (q, &j) in scratch.sorted_pos[a..b]
+                    .iter()
+                    .zip(&scratch.sorted_idx[a..b])
+                {
+                    if j as usize > i && dist2(&p, q) <= r2 {
+                        row.push(j);
+                    }
+                }
+            }
+        }
+    });
+    out.scratch.grid = s;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_caps_cells_and_keeps_cell_size_above_radius() {
+        let g = Grid::new([0.0; 3], [1e6, 1e6, 1e6], 1.0, 10_000);
+        assert!(g.num_cells() <= 10_000, "{g:?}");
+        assert!(g.h >= 1.0);
+        let g = Grid::new([-Real::MAX; 3], [Real::MAX; 3], 1.0, 1000);
+        assert!(g.num_cells() <= 1000, "{g:?}");
+        assert_eq!(g.coord(Real::MAX, 0), g.dims[0] - 1);
+        assert_eq!(g.coord(-Real::MAX, 0), 0);
+        let g = Grid::new([1.0; 3], [1.0; 3], 0.0, 1000);
+        assert_eq!(g.dims, [1, 1, 1]);
+        let g = Grid::new([0.0; 3], [1.0; 3], Real::INFINITY, 1000);
+        assert_eq!(g.dims, [1, 1, 1]);
+        assert_eq!(g.coord(Real::NAN, 1), 0);
+    }
+
+    #[test]
+    fn decode_inverts_cell_id() {
+        let g = Grid::new([0.0; 3], [10.0, 5.0, 3.0], 1.0, 10_000);
+        for id in 0..g.num_cells() {
+            assert_eq!(g.cell_id(g.decode(id)), id);
+        }
+    }
+}

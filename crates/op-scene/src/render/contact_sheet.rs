@@ -1,0 +1,303 @@
+//! Contact sheets: frames of a run in a grid, seen from one fixed camera.
+
+use std::path::{Path, PathBuf};
+
+use image::RgbImage;
+
+use super::error::RenderError;
+use super::obj::ObjData;
+use super::{auto_camera, check_area, render_with_camera, RenderOptions, Rendering};
+
+/// Renders a grid of at most `max_frames` frames chosen evenly (first and last
+/// included) from the `*.obj` files of `dir`, or of `dir/frames` when `dir` has
+/// none, sorted by name with numbers in numeric order.
+///
+/// Each cell is `opts.width x opts.height` and is labelled with the frame's
+/// index (the number in its file name, else its rank). The grid has
+/// [`sheet_grid`]`(n)` columns and rows for `n` frames. The camera is
+/// `opts.camera`, or frames the union of all chosen frames' bounding boxes, so
+/// motion shows.
+///
+/// # Errors
+/// [`RenderError::BadOption`] for `max_frames == 0`, bad options or a sheet larger
+/// than [`super::MAX_PIXELS`]; [`RenderError::Io`] if the directory cannot be
+/// read; [`RenderError::Empty`] if it holds no OBJ file or the frames have no
+/// vertex; [`RenderError::Parse`] for a malformed frame.
+pub fn render_contact_sheet(
+    dir: &Path,
+    opts: &RenderOptions,
+    max_frames: usize,
+) -> Result<RgbImage, RenderError> {
+    contact_sheet(dir, opts, max_frames).map(|r| r.image)
+}
+
+/// Columns and rows of the contact sheet of `frames` frames (`ceil(sqrt(n))` columns).
+pub fn sheet_grid(frames: usize) -> (usize, usize) {
+    if frames == 0 {
+        return (0, 0);
+    }
+    let mut cols = (frames as f64).sqrt().ceil() as usize;
+    while cols * cols < frames {
+        cols += 1;
+    }
+    (cols, frames.div_ceil(cols))
+}
+
+/// [`render_contact_sheet`] with the notes of every frame (each note once).
+pub(crate) fn contact_sheet(
+    dir: &Path,
+    opts: &RenderOptions,
+    max_frames: usize,
+) -> Result<Rendering, RenderError> {
+    opts.validate()?;
+    if max_frames == 0 {
+        return Err(RenderError::option("max_frames", "0; allowed: 1 or more"));
+    }
+    let files = frame_files(dir)?;
+    let chosen = choose(files.len(), max_frames);
+    let (cols, rows) = sheet_grid(chosen.len());
+    let (w, h) = (opts.width as usize, opts.height as usize);
+    check_area((cols * w) as u64, (rows * h) as u64)?;
+
+    let mut frames = Vec::with_capacity(chosen.len());
+    for &i in &chosen {
+        frames.push((i, ObjData::read(&files[i])?));
+    }
+    let spec = match opts.camera {
+        Some(spec) => spec,
+        None => {
+            if frames.iter().all(|(_, d)| d.vertex_count() == 0) {
+                return Err(RenderError::empty(format!(
+                    "the frames in {} have no vertices",
+                    dir.display()
+                )));
+            }
+            auto_camera(frames.iter().map(|(_, d)| d), opts)
+        }
+    };
+
+    let mut sheet = RgbImage::from_pixel(
+        (cols * w) as u32,
+        (rows * h) as u32,
+        image::Rgb(opts.background),
+    );
+    let mut notes: Vec<String> = Vec::new();
+    let ink = ink_for(opts.background);
+    let scale = (h / 120).clamp(2, 8);
+    for (cell, (rank, data)) in frames.iter().enumerate() {
+        let r = render_with_camera(data, opts, &spec)?;
+        for note in r.notes {
+            if !notes.contains(&note) {
+                notes.push(note);
+            }
+        }
+        let (x0, y0) = ((cell % cols) * w, (cell / cols) * h);
+        for (x, y, px) in r.image.enumerate_pixels() {
+            sheet.put_pixel(x0 as u32 + x, y0 as u32 + y, *px);
+        }
+        let label = frame_number(&files[*rank]).unwrap_or(*rank as u64);
+        draw_number(
+            &mut sheet,
+            label,
+            x0 + 2 * scale,
+            y0 + 2 * scale,
+            scale,
+            ink,
+        );
+    }
+    draw_separators(&mut sheet, cols, rows, w, h, ink);
+    Ok(Rendering {
+        image: sheet,
+        notes,
+    })
+}
+
+/// `*.obj` files of `dir`, else of `dir/frames`, in frame order.
+fn frame_files(dir: &Path) -> Result<Vec<PathBuf>, RenderError> {
+    let mut files = obj_files(dir)?;
+    let sub = dir.join("frames");
+    if files.is_empty() && sub.is_dir() {
+        files = obj_files(&sub)?;
+    }
+    if files.is_empty() {
+        return Err(RenderError::empty(format!(
+            "no .obj files in {} or {}",
+            dir.display(),
+            sub.display()
+        )));
+    }
+    files.sort_by_cached_key(|p| sort_key(p));
+    Ok(files)
+}
+
+fn obj_files(dir: &Path) -> Result<Vec<PathBuf>, RenderError> {
+    let entries = std::fs::read_dir(dir).map_err(|e| RenderError::io(dir, e))?;
+    let mut out = Vec::new();
+    for entry in entries {
+        let path = entry.map_err(|e| RenderError::io(dir, e))?.path();
+        let is_obj = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+        if is_obj && path.is_file() {
+            out.push(path);
+        }
+    }
+    Ok(out)
+}
+
+/// The trailing number of a file stem (`frame_00012.obj` -> 12).
+fn frame_number(path: &Path) -> Option<u64> {
+    let stem = path.file_stem()?.to_str()?;
+    let digits = stem.len() - stem.trim_end_matches(|c: char| c.is_ascii_digit()).len();
+    stem[stem.len() - digits..].parse().ok()
+}
+
+/// Sort key: stem without its trailing number, the number, then the full name.
+fn sort_key(path: &Path) -> (String, Option<u64>, String) {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let stem = path
+        .file_stem()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let prefix = stem
+        .trim_end_matches(|c: char| c.is_ascii_digit())
+        .to_string();
+    (prefix, frame_number(path), name)
+}
+
+/// `min(m, n)` indices out of `0..n`, evenly spread, first and last included
+/// (just the last when `m == 1`).
+fn choose(n: usize, m: usize) -> Vec<usize> {
+    if m >= n {
+        return (0..n).collect();
+    }
+    if m == 1 {
+        return vec![n - 1];
+    }
+    (0..m)
+        .map(|i| (i * (n - 1) + (m - 1) / 2) / (m - 1))
+        .collect()
+}
+
+/// Dark ink on a light background, light ink on a dark one.
+fn ink_for(bg: [u8; 3]) -> [u8; 3] {
+    let luma = 0.299 * f64::from(bg[0]) + 0.587 * f64::from(bg[1]) + 0.114 * f64::from(bg[2]);
+    if luma > 128.0 {
+        [40, 40, 40]
+    } else {
+        [225, 225, 225]
+    }
+}
+
+fn draw_separators(
+    sheet: &mut RgbImage,
+    cols: usize,
+    rows: usize,
+    w: usize,
+    h: usize,
+    ink: [u8; 3],
+) {
+    let line = image::Rgb(ink.map(|c| ((u16::from(c) + 2 * 160) / 3) as u8));
+    for c in 1..cols {
+        for y in 0..sheet.height() {
+            sheet.put_pixel((c * w) as u32, y, line);
+        }
+    }
+    for r in 1..rows {
+        for x in 0..sheet.width() {
+            sheet.put_pixel(x, (r * h) as u32, line);
+        }
+    }
+}
+
+/// 5x7 bitmaps of the digits 0-9, one row per byte, bit 4 leftmost.
+const DIGITS: [[u8; 7]; 10] = [
+    [0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E],
+    [0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E],
+    [0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F],
+    [0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E],
+    [0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02],
+    [0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E],
+    [0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E],
+    [0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08],
+    [0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E],
+    [0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C],
+];
+
+/// Draws the decimal `value` with its top-left corner at `(x, y)`, each font
+/// pixel `scale x scale`; clipped to the image.
+fn draw_number(img: &mut RgbImage, value: u64, x: usize, y: usize, scale: usize, ink: [u8; 3]) {
+    let text = value.to_string();
+    for (k, ch) in text.bytes().enumerate() {
+        let glyph = &DIGITS[usize::from(ch - b'0')];
+        let gx = x + k * 6 * scale;
+        for (row, bits) in glyph.iter().enumerate() {
+            for col in 0..5 {
+                if bits & (0x10 >> col) == 0 {
+                    continue;
+                }
+                for dy in 0..scale {
+                    for dx in 0..scale {
+                        let (px, py) = (gx + col * scale + dx, y + row * scale + dy);
+                        if px < img.width() as usize && py < img.height() as usize {
+                            img.put_pixel(px as u32, py as u32, image::Rgb(ink));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_shapes() {
+        assert_eq!(sheet_grid(0), (0, 0));
+        assert_eq!(sheet_grid(1), (1, 1));
+        assert_eq!(sheet_grid(2), (2, 1));
+        assert_eq!(sheet_grid(5), (3, 2));
+        assert_eq!(sheet_grid(9), (3, 3));
+        assert_eq!(sheet_grid(10), (4, 3));
+    }
+
+    #[test]
+    fn frames_chosen_evenly() {
+        assert_eq!(choose(5, 10), vec![0, 1, 2, 3, 4]);
+        assert_eq!(choose(11, 3), vec![0, 5, 10]);
+        assert_eq!(choose(100, 4), vec![0, 33, 66, 99]);
+        assert_eq!(choose(7, 1), vec![6]);
+        let c = choose(1000, 12);
+        assert_eq!(c.len(), 12);
+        assert!(c.windows(2).all(|w| w[0] < w[1]));
+    }
+
+    #[test]
+    fn numeric_file_order() {
+        let mut names: Vec<PathBuf> = ["f10.obj", "f9.obj", "f100.obj", "a.obj"]
+            .iter()
+            .map(PathBuf::from)
+            .collect();
+        names.sort_by_cached_key(|p| sort_key(p));
+        let sorted: Vec<_> = names.iter().map(|p| p.to_str().unwrap()).collect();
+        assert_eq!(sorted, ["a.obj", "f9.obj", "f10.obj", "f100.obj"]);
+        assert_eq!(frame_number(Path::new("d/frame_00012.obj")), Some(12));
+        assert_eq!(frame_number(Path::new("d/frame.obj")), None);
+    }
+
+    #[test]
+    fn digits_are_drawn_and_clipped() {
+        let mut img = RgbImage::from_pixel(40, 20, image::Rgb([255, 255, 255]));
+        draw_number(&mut img, 1234567890, 1, 1, 2, [0, 0, 0]);
+        let inked = img.pixels().filter(|p| p.0 == [0, 0, 0]).count();
+        assert!(inked > 50, "{inked}");
+        // "1": the foot of the 1 (row 6 is 0x0E) is inked, its top-left corner is not.
+        assert_eq!(img.get_pixel(1, 1).0, [255, 255, 255]);
+        assert_eq!(img.get_pixel(1 + 2 * 2, 1 + 6 * 2).0, [0, 0, 0]);
+    }
+}

@@ -1,0 +1,274 @@
+//! Pictures of OBJ frames: the drawing half of `opsim render` (DESIGN §6).
+//!
+//! Entry points:
+//! - [`render_obj_file`] / [`render_data`]: one frame in one [`Style`] (seed 000
+//!   figure 4: axes, discs, wireframe, flat shaded);
+//! - [`render_contact_sheet`]: a grid of frames chosen evenly from a run's output
+//!   directory, seen from one fixed camera so that motion shows;
+//! - [`render_path`]: either of those by what the path is, with the notes about
+//!   fallbacks (for the CLI to print);
+//! - [`save_png`]: atomic PNG writing.
+//!
+//! Everything is pure Rust and deterministic: the same input and options give
+//! the same pixels. Frames are read by the small OBJ reader in [`ObjData`]; the
+//! camera frames the data's bounding box automatically unless
+//! [`RenderOptions::camera`] gives one. World `+y` is up.
+
+mod camera;
+mod contact_sheet;
+mod error;
+mod obj;
+mod raster;
+mod styles;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+pub use camera::{CameraSpec, DEFAULT_AZIMUTH_DEG, DEFAULT_ELEVATION_DEG, DEFAULT_FOV_Y_DEG};
+pub use contact_sheet::{render_contact_sheet, sheet_grid};
+pub use error::RenderError;
+pub use image::RgbImage;
+pub use obj::{ObjData, ObjObject};
+pub use styles::Style;
+
+use camera::Camera;
+use raster::Canvas;
+use styles::Painter;
+
+/// Largest accepted width or height, pixels.
+pub const MAX_SIDE: u32 = 16_384;
+/// Largest accepted picture (or contact sheet) area, pixels.
+pub const MAX_PIXELS: u64 = 50_000_000;
+
+/// What to draw and how big.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Picture width in pixels (a contact sheet cell's width), `1..=MAX_SIDE`. Default: 800.
+    pub width: u32,
+    /// Picture height in pixels (a contact sheet cell's height), `1..=MAX_SIDE`. Default: 600.
+    pub height: u32,
+    /// Drawing style. Default: [`Style::Shaded`].
+    pub style: Style,
+    /// Background colour. Default: white.
+    pub background: [u8; 3],
+    /// Camera; `None` frames the data's bounding box automatically. Default: `None`.
+    pub camera: Option<CameraSpec>,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            width: 800,
+            height: 600,
+            style: Style::default(),
+            background: [255, 255, 255],
+            camera: None,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// Checks sizes and the camera.
+    ///
+    /// # Errors
+    /// [`RenderError::BadOption`] naming the option and what is allowed.
+    pub fn validate(&self) -> Result<(), RenderError> {
+        for (name, v) in [("width", self.width), ("height", self.height)] {
+            if v == 0 || v > MAX_SIDE {
+                return Err(RenderError::option(
+                    name,
+                    format!("{v} pixels; allowed: 1 to {MAX_SIDE}"),
+                ));
+            }
+        }
+        check_area(u64::from(self.width), u64::from(self.height))?;
+        if let Some(cam) = &self.camera {
+            cam.validate()?;
+        }
+        Ok(())
+    }
+}
+
+fn check_area(width: u64, height: u64) -> Result<(), RenderError> {
+    if width * height > MAX_PIXELS {
+        return Err(RenderError::option(
+            "width x height",
+            format!("{width} x {height} pixels; allowed: at most {MAX_PIXELS} pixels in all"),
+        ));
+    }
+    Ok(())
+}
+
+/// A picture and the notes about it (fallbacks taken, objects not drawn).
+#[derive(Clone, Debug)]
+pub struct Rendering {
+    /// The picture.
+    pub image: RgbImage,
+    /// Human-readable notes, e.g. "shaded: no faces in the data, drawing particles
+    /// as discs". Empty when everything was drawn as asked.
+    pub notes: Vec<String>,
+}
+
+/// Renders `data`, returning the picture and notes.
+///
+/// # Errors
+/// [`RenderError::BadOption`] for bad options, [`RenderError::Empty`] if `data`
+/// has no vertex.
+pub fn render(data: &ObjData, opts: &RenderOptions) -> Result<Rendering, RenderError> {
+    opts.validate()?;
+    if data.vertex_count() == 0 {
+        return Err(RenderError::empty("the data has no vertices"));
+    }
+    let spec = match opts.camera {
+        Some(spec) => spec,
+        None => auto_camera([data], opts),
+    };
+    render_with_camera(data, opts, &spec)
+}
+
+/// The automatic camera fitted to all vertices of `frames`.
+pub(crate) fn auto_camera<'a>(
+    frames: impl IntoIterator<Item = &'a ObjData>,
+    opts: &RenderOptions,
+) -> CameraSpec {
+    let points: Vec<[f64; 3]> = frames
+        .into_iter()
+        .flat_map(|d| d.objects())
+        .flat_map(|o| o.vertices().iter().copied())
+        .collect();
+    CameraSpec::frame_points(&points, f64::from(opts.width) / f64::from(opts.height))
+}
+
+/// Renders `data` into a picture of `opts.width x opts.height`.
+///
+/// # Errors
+/// As [`render`].
+pub fn render_data(data: &ObjData, opts: &RenderOptions) -> Result<RgbImage, RenderError> {
+    render(data, opts).map(|r| r.image)
+}
+
+/// Reads the OBJ file at `path` and renders it.
+///
+/// # Errors
+/// [`RenderError::Io`] / [`RenderError::Parse`] for the file, otherwise as [`render`].
+pub fn render_obj_file(path: &Path, opts: &RenderOptions) -> Result<RgbImage, RenderError> {
+    render_file(path, opts).map(|r| r.image)
+}
+
+fn render_file(path: &Path, opts: &RenderOptions) -> Result<Rendering, RenderError> {
+    opts.validate()?;
+    let data = ObjData::read(path)?;
+    render(&data, opts).map_err(|e| match e {
+        RenderError::Empty { what } => RenderError::empty(format!("{}: {what}", path.display())),
+        e => e,
+    })
+}
+
+/// Renders what `path` is: an OBJ file as one picture, a directory as a contact
+/// sheet of at most `max_frames` frames (see [`render_contact_sheet`]).
+///
+/// # Errors
+/// As [`render_obj_file`] or [`render_contact_sheet`].
+pub fn render_path(
+    path: &Path,
+    opts: &RenderOptions,
+    max_frames: usize,
+) -> Result<Rendering, RenderError> {
+    if path.is_dir() {
+        contact_sheet::contact_sheet(path, opts, max_frames)
+    } else {
+        render_file(path, opts)
+    }
+}
+
+/// Supersampling factor: 2x2 for anti-aliasing unless the picture is large.
+fn supersample(width: u32, height: u32) -> usize {
+    if u64::from(width) * u64::from(height) <= 2_500_000 {
+        2
+    } else {
+        1
+    }
+}
+
+/// Renders with a given camera; options must be valid.
+pub(crate) fn render_with_camera(
+    data: &ObjData,
+    opts: &RenderOptions,
+    spec: &CameraSpec,
+) -> Result<Rendering, RenderError> {
+    let ss = supersample(opts.width, opts.height);
+    let (w, h) = (opts.width as usize * ss, opts.height as usize * ss);
+    let cam = Camera::new(spec, w, h)?;
+    // One nominal line-width pixel, grown a little on big pictures.
+    let size_factor = (f64::from(opts.width.min(opts.height)) / 600.0).clamp(0.75, 4.0);
+    let unit = ss as f64 * size_factor;
+    let mut painter = Painter::new(
+        &cam,
+        Canvas::new(w, h, opts.background),
+        unit,
+        opts.background,
+    );
+    let notes = styles::draw(data, opts.style, &mut painter);
+    let canvas = painter.into_canvas();
+    debug_assert_eq!((canvas.width(), canvas.height()), (w, h));
+    Ok(Rendering {
+        image: canvas.downsample(ss),
+        notes,
+    })
+}
+
+/// Writes `img` as a PNG at `path` atomically: a temporary file in the same
+/// directory, then a rename, so readers never see a half-written picture.
+///
+/// # Errors
+/// [`RenderError::Io`] if the directory is missing or not writable,
+/// [`RenderError::BadOption`] if `path` has no file name,
+/// [`RenderError::Encode`] if the encoder fails.
+pub fn save_png(img: &RgbImage, path: &Path) -> Result<(), RenderError> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| {
+            RenderError::option(
+                "output path",
+                format!("'{}' has no file name", path.display()),
+            )
+        })?
+        .to_string_lossy()
+        .into_owned();
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = write_png(img, &tmp, path)
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| RenderError::io(path, e)));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn write_png(img: &RgbImage, tmp: &Path, path: &Path) -> Result<(), RenderError> {
+    use image::ImageEncoder;
+    let file = std::fs::File::create(tmp).map_err(|e| RenderError::io(path, e))?;
+    let mut writer = std::io::BufWriter::new(file);
+    image::codecs::png::PngEncoder::new(&mut writer)
+        .write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| match e {
+            image::ImageError::IoError(io) => RenderError::io(path, io),
+            e => RenderError::Encode {
+                path: path.to_path_buf(),
+                source: e,
+            },
+        })?;
+    writer.flush().map_err(|e| RenderError::io(path, e))?;
+    let file = writer
+        .into_inner()
+        .map_err(|e| RenderError::io(path, e.into_error()))?;
+    file.sync_all().map_err(|e| RenderError::io(path, e))
+}
