@@ -1,0 +1,43 @@
+//! What a run writes (DESIGN §6): particle geometry in the OBJ frames and
+//! the metrics table. The runner writes only what is asked for.
+
+use serde::{Deserialize, Serialize};
+
+/// How particles appear in the OBJ frames (seed 000 fig. 4).
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ParticleOutput {
+    /// Not written.
+    None,
+    /// One vertex per particle with its normal as the vertex normal, and a
+    /// point element.
+    #[default]
+    Points,
+    /// A small hexagonal disc per particle, perpendicular to its normal.
+    Discs,
+    /// The particle's local frame: three line segments per particle.
+    Axes,
+}
+
+/// The outputs a scene asks for.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Outputs {
+    /// Particle geometry in each OBJ frame. Default: `Points`.
+    pub particles: ParticleOutput,
+    /// Size of discs and axes as a fraction of the object's rest spacing,
+    /// > 0. Default: 0.4.
+    pub glyph_size: f64,
+    /// Write `metrics.csv` (energies, oscillation, max speed per frame).
+    /// Default: true.
+    pub metrics: bool,
+}
+
+impl Default for Outputs {
+    fn default() -> Self {
+        Outputs {
+            particles: ParticleOutput::Points,
+            glyph_size: 0.4,
+            metrics: true,
+        }
+    }
+}
