@@ -11,7 +11,7 @@ use crate::integrators::{Integrator, Scheme};
 use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
 use crate::neighbours::{spatial_order, NeighbourBackend, NeighbourList};
-use crate::particles::Particles;
+use crate::particles::{ParticleType, Particles};
 
 /// Neighbour-list settings (seed 000 §4.2, DESIGN §3 "Neighbours").
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -156,6 +156,21 @@ pub struct StepReport {
     pub seconds: [f64; 4],
 }
 
+/// True when some pair of particles does not interact completely (several
+/// objects, several standard types, or two hinges), so the typing repulsion
+/// of seed 002 §5 can act and its cut-off counts for the neighbour radius.
+fn may_repel(p: &Particles) -> bool {
+    let objects = p.objects();
+    if objects.iter().any(|&o| o != objects[0]) {
+        return true;
+    }
+    let kinds = p.kinds();
+    let hinges = kinds.iter().filter(|k| **k == ParticleType::Hinge).count();
+    let mut standard = kinds.iter().filter(|k| **k != ParticleType::Hinge);
+    let first = standard.next();
+    hinges >= 2 || standard.any(|k| Some(k) != first)
+}
+
 /// An oriented particle world.
 pub struct World {
     particles: Particles,
@@ -163,6 +178,7 @@ pub struct World {
     params: WorldParams,
     kernel: Kernel,
     friction: bool,
+    repulsion: bool,
     neighbours: Option<NeighbourList>,
     integrator: Integrator,
     accumulator: ExternalAccumulator,
@@ -223,7 +239,18 @@ impl World {
                 .map(|(m, _)| m)
                 .collect()
         };
-        let cutoff = used.iter().map(|m| m.cutoff()).fold(0.0, Real::max);
+        let repulsion = may_repel(&particles);
+        let cutoff = used
+            .iter()
+            .map(|m| {
+                let c = m.spacing_cutoff().max(m.orientation_cutoff());
+                if repulsion {
+                    c.max(m.repulsion_cutoff())
+                } else {
+                    c
+                }
+            })
+            .fold(0.0, Real::max);
         let friction = used.iter().any(|m| m.friction() > 0.0);
         let oriented = used.iter().any(|m| m.has_orientation_terms());
         let kernel = if cutoff <= 0.0 || particles.len() < 2 {
@@ -245,6 +272,7 @@ impl World {
             materials: prepared,
             kernel,
             friction,
+            repulsion,
             neighbours,
             integrator: Integrator::new(params.scheme),
             accumulator: ExternalAccumulator::new(n),
@@ -308,7 +336,7 @@ impl World {
         for (m, s) in self.materials.iter().zip(seen) {
             if s {
                 for t in m.enabled_terms() {
-                    if !terms.contains(&t) {
+                    if (t != "repulsion" || self.repulsion) && !terms.contains(&t) {
                         terms.push(t);
                     }
                 }
