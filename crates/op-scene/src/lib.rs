@@ -7,8 +7,24 @@
 #![warn(missing_docs)]
 
 pub mod built;
+pub mod export;
 pub mod outputs;
 pub mod render;
+pub mod run;
 
 pub use built::{BuiltObject, BuiltScene};
 pub use outputs::{Outputs, ParticleOutput};
+pub use run::{run, RunError, RunOptions, Summary};
+
+pub mod build;
+pub mod error;
+pub mod generators;
+pub mod load;
+pub mod schema;
+
+pub use error::SceneError;
+pub use generators::Generator;
+pub use load::{build_scene_file, load_scene, parse_scene, Format};
+pub use schema::{
+    DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, WorldSettings,
+};

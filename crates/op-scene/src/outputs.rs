@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 pub enum ParticleOutput {
     /// Not written.
     None,
-    /// One vertex per particle with its normal as the vertex normal, and a
-    /// point element.
+    /// One vertex per particle with its normal as the `vn` of the same
+    /// rank (no element: loose vertices, a point cloud).
     #[default]
     Points,
     /// A small hexagonal disc per particle, perpendicular to its normal.

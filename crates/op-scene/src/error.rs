@@ -1,0 +1,184 @@
+//! Errors of loading, validating and building a scene (DESIGN §6): each
+//! names the file, then the line and column or the field path, then what is
+//! wrong and what would be valid. Nothing in the scene layer panics on bad
+//! input; it returns one of these.
+
+use std::path::PathBuf;
+
+use op_dynamics::ParamError;
+
+/// Why a scene could not be loaded, validated or built.
+///
+/// Display forms:
+///
+/// - `scenes/bad.ron:3:5: unknown field ...` ([`SceneError::Parse`])
+/// - `scenes/bad.ron: objects[0] "sheet".mass = -1: must be finite and > 0`
+///   ([`SceneError::Invalid`])
+/// - `scenes/data/patch.xyz:7: expected 3 or 6 numbers, found 2`
+///   ([`SceneError::Points`])
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// A file could not be read. Fix: check the path and permissions.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        source: std::io::Error,
+    },
+    /// The scene file's extension is not one the loader knows. Fix: name the
+    /// file `.ron` or `.json`.
+    #[error(
+        "{}: unsupported scene file extension {extension:?} (valid extensions: .ron, .json)",
+        path.display()
+    )]
+    UnsupportedExtension {
+        /// The file.
+        path: PathBuf,
+        /// Its extension (empty when it has none).
+        extension: String,
+    },
+    /// The text is not valid RON / JSON, or does not match the schema
+    /// (unknown field, wrong type, missing field). Fix: edit the file at
+    /// `line:column`.
+    #[error("{file}:{line}:{column}: {message}")]
+    Parse {
+        /// The scene file (or the origin label of an embedded scene).
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// The parser's message.
+        message: String,
+    },
+    /// The scene parsed but a value is out of range or inconsistent. Fix:
+    /// change the field named by `path` as `message` says.
+    #[error("{file}: {path}{}{message}", separator(message))]
+    Invalid {
+        /// The scene file (or the origin label of an embedded scene).
+        file: String,
+        /// Field path, e.g. `objects[1] "sheet".generator.HexSheet.spacing`.
+        path: String,
+        /// What is wrong and what is allowed. When a value is rejected it
+        /// starts with `= value: `, e.g. `= -1: must be finite and > 0`.
+        message: String,
+    },
+    /// A points file (`Points` generator) has a bad line or no point. Fix:
+    /// edit that line of the points file.
+    #[error("{file}:{line}: {message}")]
+    Points {
+        /// The points file.
+        file: String,
+        /// 1-based line (0 when the problem concerns the whole file).
+        line: usize,
+        /// What is wrong with the line.
+        message: String,
+    },
+    /// The validated scene could not be turned into a world (for example
+    /// coincident particles, or an error reported by op-dynamics).
+    #[error("{file}: {message}")]
+    Build {
+        /// The scene file (or the origin label of an embedded scene).
+        file: String,
+        /// What went wrong, with the object or material concerned.
+        message: String,
+    },
+}
+
+/// `" "` before a message that starts with `= value`, `": "` otherwise.
+fn separator(message: &str) -> &'static str {
+    if message.starts_with("= ") {
+        " "
+    } else {
+        ": "
+    }
+}
+
+impl SceneError {
+    /// An [`SceneError::Invalid`].
+    pub(crate) fn invalid(file: &str, path: impl Into<String>, message: impl Into<String>) -> Self {
+        SceneError::Invalid {
+            file: file.to_string(),
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+
+    /// An [`SceneError::Invalid`] for a rejected value.
+    pub(crate) fn value(
+        file: &str,
+        path: impl Into<String>,
+        value: impl std::fmt::Display,
+        allowed: &str,
+    ) -> Self {
+        Self::invalid(file, path, format!("= {value}: {allowed}"))
+    }
+
+    /// An op-dynamics parameter error under the scene path `prefix`
+    /// (`materials."soft"` + `spacing.cohesion.alpha`).
+    pub(crate) fn param(file: &str, prefix: &str, e: ParamError) -> Self {
+        match e {
+            ParamError::OutOfRange {
+                field,
+                value,
+                allowed,
+            } => Self::value(file, join(prefix, &field), value, &allowed),
+            ParamError::Invalid { field, message } => {
+                Self::invalid(file, join(prefix, &field), message)
+            }
+            other => Self::invalid(file, prefix, other.to_string()),
+        }
+    }
+}
+
+/// `prefix.field`, or `field` alone when `prefix` is empty.
+pub(crate) fn join(prefix: &str, field: &str) -> String {
+    if prefix.is_empty() {
+        field.to_string()
+    } else {
+        format!("{prefix}.{field}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn display_forms() {
+        let e = SceneError::value(
+            "scenes/bad.ron",
+            "objects[0] \"sheet\".mass",
+            -1.0,
+            "must be finite and > 0",
+        );
+        assert_eq!(
+            e.to_string(),
+            "scenes/bad.ron: objects[0] \"sheet\".mass = -1: must be finite and > 0"
+        );
+        let e = SceneError::invalid("a.ron", "objects[0] \"x\".material", "unknown material");
+        assert_eq!(
+            e.to_string(),
+            "a.ron: objects[0] \"x\".material: unknown material"
+        );
+        let e = SceneError::Parse {
+            file: "scenes/bad.ron".into(),
+            line: 3,
+            column: 5,
+            message: "unknown field".into(),
+        };
+        assert_eq!(e.to_string(), "scenes/bad.ron:3:5: unknown field");
+        let p = ParamError::OutOfRange {
+            field: "spacing.cohesion.alpha".into(),
+            value: f64::NAN,
+            allowed: "must be finite and > 0".into(),
+        };
+        let e = SceneError::param("s.ron", "materials.\"soft\"", p);
+        assert_eq!(
+            e.to_string(),
+            "s.ron: materials.\"soft\".spacing.cohesion.alpha = NaN: must be finite and > 0"
+        );
+    }
+}

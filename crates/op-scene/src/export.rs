@@ -1,0 +1,177 @@
+//! OBJ frames (DESIGN §6): one named OBJ object per scene object, particle
+//! geometry as asked by [`Outputs`], vertex normals from the particle
+//! frames, each file written atomically (temp file + rename) so a frame on
+//! disk is always complete.
+//!
+//! obj-exporter prints fixed 6 decimals: coordinates below 1e-6 scene units
+//! are lost, so keep scenes in sensible units (r0 ~ 1).
+
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use obj_exporter::{Geometry, ObjSet, Object, Primitive, Shape, Vertex};
+use op_dynamics::{Real, Vec3, World};
+
+use crate::built::BuiltObject;
+use crate::outputs::{Outputs, ParticleOutput};
+
+/// Writes `bytes_fn`'s output to `path` atomically: a temporary file in the
+/// same directory, flushed and synced, then renamed over `path`.
+pub fn write_atomically(
+    path: &Path,
+    bytes_fn: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let tmp: PathBuf = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    let result = (|| {
+        let file = fs::File::create(&tmp)?;
+        let mut w = BufWriter::new(file);
+        bytes_fn(&mut w)?;
+        w.flush()?;
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+fn vertex(v: Vec3) -> Vertex {
+    Vertex {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    }
+}
+
+fn shape(primitive: Primitive) -> Shape {
+    Shape {
+        primitive,
+        groups: Vec::new(),
+        smoothing_groups: Vec::new(),
+    }
+}
+
+/// Two unit vectors spanning the plane perpendicular to `n`.
+fn tangent_pair(n: &Vec3) -> (Vec3, Vec3) {
+    let a = if n.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
+    let t = (a - n * n.dot(&a)).normalize();
+    (t, n.cross(&t))
+}
+
+/// The OBJ object of one scene object at the world's current state.
+pub fn object_geometry(world: &World, object: &BuiltObject, outputs: &Outputs) -> Object {
+    let p = world.particles();
+    let size = outputs.glyph_size * object.rest_spacing;
+    let mut vertices = Vec::new();
+    let mut normals = Vec::new();
+    let mut shapes = Vec::new();
+    for &id in &object.ids {
+        let Some(s) = p.slot_of(id) else { continue };
+        let x = p.positions()[s].coords;
+        let q = p.orientations()[s];
+        let n = q * p.normal_axes()[s];
+        match outputs.particles {
+            ParticleOutput::None => {}
+            ParticleOutput::Points => {
+                // Plain `v` / `vn` pairs of the same rank and no element:
+                // every OBJ reader keeps loose vertices, while `p` elements
+                // are read by few (the wavefront_obj parser runs out of
+                // memory on them).
+                vertices.push(vertex(x));
+                normals.push(vertex(n));
+            }
+            ParticleOutput::Discs => {
+                let (t, b) = tangent_pair(&n);
+                let (c, nk) = (vertices.len(), normals.len());
+                vertices.push(vertex(x));
+                normals.push(vertex(n));
+                for k in 0..6 {
+                    let a = k as Real * std::f64::consts::PI / 3.0;
+                    vertices.push(vertex(x + size * (a.cos() * t + a.sin() * b)));
+                }
+                for k in 0..6 {
+                    let (v1, v2) = (c + 1 + k, c + 1 + (k + 1) % 6);
+                    shapes.push(shape(Primitive::Triangle(
+                        (c, None, Some(nk)),
+                        (v1, None, Some(nk)),
+                        (v2, None, Some(nk)),
+                    )));
+                }
+            }
+            ParticleOutput::Axes => {
+                let tx = q * p.tangent_axes()[s];
+                let ty = n.cross(&tx);
+                let c = vertices.len();
+                let nk = normals.len();
+                vertices.push(vertex(x));
+                normals.push(vertex(n));
+                for axis in [tx, ty, n] {
+                    let k = vertices.len();
+                    vertices.push(vertex(x + size * axis));
+                    shapes.push(shape(Primitive::Line(
+                        (c, None, Some(nk)),
+                        (k, None, Some(nk)),
+                    )));
+                }
+            }
+        }
+    }
+    Object {
+        name: object.name.clone(),
+        vertices,
+        tex_vertices: Vec::new(),
+        normals,
+        geometry: vec![Geometry {
+            material_name: None,
+            shapes,
+        }],
+    }
+}
+
+/// Writes one OBJ frame holding every object of the scene.
+pub fn write_frame(
+    path: &Path,
+    world: &World,
+    objects: &[BuiltObject],
+    outputs: &Outputs,
+) -> std::io::Result<()> {
+    let set = ObjSet {
+        material_library: None,
+        objects: objects
+            .iter()
+            .map(|o| object_geometry(world, o, outputs))
+            .collect(),
+    };
+    write_atomically(path, |w| {
+        let mut adapter = WriteAdapter(w);
+        obj_exporter::export(&set, &mut adapter)
+    })
+}
+
+/// `obj_exporter::export` wants a sized writer.
+struct WriteAdapter<'a>(&'a mut dyn Write);
+
+impl Write for WriteAdapter<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()
+    }
+}
+
+/// The file name of frame `k`: `frame_00000.obj`.
+pub fn frame_name(k: usize) -> String {
+    format!("frame_{k:05}.obj")
+}

@@ -1,0 +1,525 @@
+//! Particle generators: where an object's particles start, with their world
+//! normals and rest curvatures (the `generator` field of an object).
+//!
+//! Every generator returns a [`Generated`] set: positions, unit world
+//! normals and rest curvatures `κ` of the form term (seed 002 §4). The
+//! builder orients each particle by the shortest rotation taking the
+//! object's body `normal_axis` to the generated normal
+//! ([`op_dynamics::ParticleDesc::with_normal`]).
+//!
+//! **Curvature sign convention.** The form term has zero energy when the
+//! centre of curvature of particle `i` is `p_i - n_i / κ_i`: on a circle of
+//! radius `1/κ` with outward normals. Generators with curvature
+//! (spiral, sphere and torus shells) therefore emit *outward* normals and
+//! positive curvature for convex shapes.
+
+mod points;
+mod shapes;
+
+use std::path::{Path, PathBuf};
+
+use op_dynamics::{Point3, Real, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::SceneError;
+use crate::schema::checks;
+
+pub use points::{parse_xyz, resolve};
+
+/// Largest number of particles a scene may generate (all objects
+/// together). Larger requests are rejected before anything is allocated.
+pub const MAX_PARTICLES: usize = 10_000_000;
+
+/// Particles made by a generator: positions, unit world normals and rest
+/// curvatures, all of the same length.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Generated {
+    /// Positions.
+    pub positions: Vec<Point3>,
+    /// Unit world normals.
+    pub normals: Vec<Vec3>,
+    /// Rest curvatures `κ` (0 = flat).
+    pub curvatures: Vec<Real>,
+}
+
+impl Generated {
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// True when no particle was generated.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+}
+
+/// One explicit particle of [`Generator::List`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ListParticle {
+    /// Position. Required.
+    pub position: [Real; 3],
+    /// World normal (normalized; non-zero). Default: +z.
+    #[serde(default)]
+    pub normal: Option<[Real; 3]>,
+    /// Rest curvature. Default: 0.
+    #[serde(default)]
+    pub curvature: Option<Real>,
+}
+
+fn zero3() -> [Real; 3] {
+    [0.0; 3]
+}
+fn plus_x() -> [Real; 3] {
+    [1.0, 0.0, 0.0]
+}
+fn plus_z() -> [Real; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+/// How an object's particles are made.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Generator {
+    /// A planar curve integrated in arc length, `θ'(s) = κ(s)`, with the
+    /// curvature linear in the particle index from `curvature_start` to
+    /// `curvature_end` (each particle's rest curvature is its analytic
+    /// `κ_i`). Positive curvature turns left about `normal`; particle
+    /// normals lie in the plane, `n = t × normal` (`t` the tangent), which
+    /// points away from the centre of curvature where `κ > 0` (the centre
+    /// is `p_i - n_i/κ_i` for either sign). Its centroid is `center`.
+    ///
+    /// The total turning is `(κ_start + κ_end)/2 · (count-1) spacing`;
+    /// more than one turn (2π) makes successive turns come close and
+    /// interact, which is rarely what is wanted. The analytic shape is
+    /// close to, not exactly at, the rest shape of the form term (DESIGN
+    /// §8): settle first if a reference is needed.
+    Spiral {
+        /// Number of particles, >= 2.
+        count: usize,
+        /// Arc length between neighbours, > 0.
+        spacing: Real,
+        /// Curvature of the first particle (1/length, finite,
+        /// `|curvature_start| * spacing <= 1`: at most one radian of turning
+        /// between neighbours).
+        curvature_start: Real,
+        /// Curvature of the last particle (1/length, finite,
+        /// `|curvature_end| * spacing <= 1`).
+        curvature_end: Real,
+        /// Centroid. Default: origin.
+        #[serde(default = "zero3")]
+        center: [Real; 3],
+        /// Normal of the plane of the curve. Default: +z.
+        #[serde(default = "plus_z")]
+        normal: [Real; 3],
+    },
+    /// A hexagonal lattice of `nx` x `ny` particles (rows `spacing √3/2`
+    /// apart, odd rows shifted half a spacing), centroid at `center`,
+    /// normals all equal to the sheet normal, curvature 0.
+    HexSheet {
+        /// Particles per row, >= 1.
+        nx: usize,
+        /// Rows, >= 1.
+        ny: usize,
+        /// Distance between neighbours, > 0.
+        spacing: Real,
+        /// Centroid (before noise). Default: origin.
+        #[serde(default = "zero3")]
+        center: [Real; 3],
+        /// Sheet normal. Default: +z.
+        #[serde(default = "plus_z")]
+        normal: [Real; 3],
+        /// Amplitude (length) of a uniform random displacement in
+        /// `[-noise, noise]` along each of the sheet's three axes, in
+        /// `[0, spacing/4]` (so particles never coincide). Default: 0.
+        #[serde(default)]
+        noise: Real,
+        /// Seed of the noise. Default: 0.
+        #[serde(default)]
+        seed: u64,
+    },
+    /// `count` particles on a line from `start` along `direction`,
+    /// `spacing` apart, all with the given normal, curvature 0.
+    Chain {
+        /// Number of particles, >= 1.
+        count: usize,
+        /// Distance between neighbours, > 0.
+        spacing: Real,
+        /// First particle. Default: origin.
+        #[serde(default = "zero3")]
+        start: [Real; 3],
+        /// Direction of the line (normalized). Default: +x.
+        #[serde(default = "plus_x")]
+        direction: [Real; 3],
+        /// Normal of every particle (normalized). Default: +z.
+        #[serde(default = "plus_z")]
+        normal: [Real; 3],
+    },
+    /// A Fibonacci sphere: `round(4πR² / (√3/2 spacing²))` particles (the
+    /// count of a hexagonal lattice of that spacing covering the area),
+    /// outward normals, curvature `1/radius`.
+    SphereShell {
+        /// Radius, > 0.
+        radius: Real,
+        /// Target distance between neighbours, > 0.
+        spacing: Real,
+        /// Centre. Default: origin.
+        #[serde(default = "zero3")]
+        center: [Real; 3],
+    },
+    /// A ring torus about `axis`: rings of constant tube angle `v` about
+    /// `spacing √3/2` apart, each holding about `2π(R + r cos v)/spacing`
+    /// particles, alternate rings shifted half a step. Outward normals;
+    /// rest curvature is the **mean curvature**
+    /// `H = (R + 2r cos v) / (2r (R + r cos v))` (`1/r` and `cos v/(R + r
+    /// cos v)` averaged; negative on the inner side when `r < R < 2r`,
+    /// positive elsewhere). The form term holds one isotropic curvature,
+    /// so a torus is only approximately at rest.
+    TorusShell {
+        /// Major radius `R` (axis to tube centre), > minor.
+        major: Real,
+        /// Minor (tube) radius `r`, > 0.
+        minor: Real,
+        /// Target distance between neighbours, > 0.
+        spacing: Real,
+        /// Centre. Default: origin.
+        #[serde(default = "zero3")]
+        center: [Real; 3],
+        /// Axis of revolution. Default: +z.
+        #[serde(default = "plus_z")]
+        axis: [Real; 3],
+    },
+    /// Points read from a `.xyz` text file: `x y z [nx ny nz]` per line,
+    /// `#` comments, blank lines skipped; normals default to +z, curvature
+    /// 0.
+    Points {
+        /// The file, relative to the scene file's directory (or absolute).
+        path: PathBuf,
+    },
+    /// Explicit particles.
+    List {
+        /// The particles (at least one).
+        particles: Vec<ListParticle>,
+    },
+}
+
+impl Generator {
+    /// The variant name, as written in scene files (`"Spiral"`, ...).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Generator::Spiral { .. } => "Spiral",
+            Generator::HexSheet { .. } => "HexSheet",
+            Generator::Chain { .. } => "Chain",
+            Generator::SphereShell { .. } => "SphereShell",
+            Generator::TorusShell { .. } => "TorusShell",
+            Generator::Points { .. } => "Points",
+            Generator::List { .. } => "List",
+        }
+    }
+
+    /// The nominal distance between neighbours, when the generator has one.
+    pub fn nominal_spacing(&self) -> Option<Real> {
+        match self {
+            Generator::Spiral { spacing, .. }
+            | Generator::HexSheet { spacing, .. }
+            | Generator::Chain { spacing, .. }
+            | Generator::SphereShell { spacing, .. }
+            | Generator::TorusShell { spacing, .. } => Some(*spacing),
+            Generator::Points { .. } | Generator::List { .. } => None,
+        }
+    }
+
+    /// Checks the parameters without generating (a points file must exist,
+    /// it is not read). `file` names the scene in messages, `path` is the
+    /// generator's field path (e.g. `objects[0] "sheet".generator`).
+    pub fn validate(
+        &self,
+        base_dir: Option<&Path>,
+        file: &str,
+        path: &str,
+    ) -> Result<(), SceneError> {
+        let at = |field: &str| format!("{path}.{}.{field}", self.name());
+        let max = MAX_PARTICLES;
+        match self {
+            Generator::Spiral {
+                count,
+                spacing,
+                curvature_start,
+                curvature_end,
+                center,
+                normal,
+            } => {
+                if *count < 2 || *count > max {
+                    return Err(SceneError::value(
+                        file,
+                        at("count"),
+                        count,
+                        &format!("must be in 2..={max}"),
+                    ));
+                }
+                checks::positive(file, &at("spacing"), *spacing)?;
+                for (name, k) in [
+                    ("curvature_start", curvature_start),
+                    ("curvature_end", curvature_end),
+                ] {
+                    checks::finite(file, &at(name), *k)?;
+                    if k.abs() * spacing > 1.0 {
+                        return Err(SceneError::value(
+                            file,
+                            at(name),
+                            k,
+                            &format!(
+                                "turns the curve by more than one radian between neighbours: |curvature| * spacing must be <= 1, so |curvature| <= {}",
+                                1.0 / spacing
+                            ),
+                        ));
+                    }
+                }
+                checks::finite3(file, &at("center"), center)?;
+                checks::direction(file, &at("normal"), normal)
+            }
+            Generator::HexSheet {
+                nx,
+                ny,
+                spacing,
+                center,
+                normal,
+                noise,
+                seed: _,
+            } => {
+                for (name, n) in [("nx", nx), ("ny", ny)] {
+                    if *n < 1 {
+                        return Err(SceneError::value(
+                            file,
+                            at(name),
+                            n,
+                            "must be >= 1 (an empty sheet has no particle)",
+                        ));
+                    }
+                }
+                if nx.checked_mul(*ny).is_none_or(|n| n > max) {
+                    return Err(SceneError::invalid(
+                        file,
+                        at("nx"),
+                        format!("nx * ny = {nx} * {ny} particles; at most {max} are allowed"),
+                    ));
+                }
+                checks::positive(file, &at("spacing"), *spacing)?;
+                checks::finite3(file, &at("center"), center)?;
+                checks::direction(file, &at("normal"), normal)?;
+                if !(noise.is_finite() && *noise >= 0.0 && *noise <= 0.25 * spacing) {
+                    return Err(SceneError::value(
+                        file,
+                        at("noise"),
+                        noise,
+                        &format!("must be in [0, spacing/4] = [0, {}]", 0.25 * spacing),
+                    ));
+                }
+                Ok(())
+            }
+            Generator::Chain {
+                count,
+                spacing,
+                start,
+                direction,
+                normal,
+            } => {
+                if *count < 1 || *count > max {
+                    return Err(SceneError::value(
+                        file,
+                        at("count"),
+                        count,
+                        &format!("must be in 1..={max}"),
+                    ));
+                }
+                checks::positive(file, &at("spacing"), *spacing)?;
+                checks::finite3(file, &at("start"), start)?;
+                checks::direction(file, &at("direction"), direction)?;
+                checks::direction(file, &at("normal"), normal)
+            }
+            Generator::SphereShell {
+                radius,
+                spacing,
+                center,
+            } => {
+                checks::positive(file, &at("radius"), *radius)?;
+                checks::positive(file, &at("spacing"), *spacing)?;
+                checks::finite3(file, &at("center"), center)?;
+                let n = shapes::sphere_count(*radius, *spacing);
+                checks::count_at_most(file, &at("spacing"), n, max, "this radius and spacing")?;
+                if n < 1.0 {
+                    return Err(SceneError::value(
+                        file,
+                        at("spacing"),
+                        spacing,
+                        &format!(
+                            "gives no particle on a sphere of radius {radius}; must be below {:.4}",
+                            radius * (16.0 * std::f64::consts::PI / 3f64.sqrt()).sqrt()
+                        ),
+                    ));
+                }
+                Ok(())
+            }
+            Generator::TorusShell {
+                major,
+                minor,
+                spacing,
+                center,
+                axis,
+            } => {
+                checks::positive(file, &at("minor"), *minor)?;
+                checks::positive(file, &at("major"), *major)?;
+                if major <= minor {
+                    return Err(SceneError::value(
+                        file,
+                        at("major"),
+                        major,
+                        &format!("must be greater than minor = {minor} (a ring torus)"),
+                    ));
+                }
+                checks::positive(file, &at("spacing"), *spacing)?;
+                checks::finite3(file, &at("center"), center)?;
+                checks::direction(file, &at("axis"), axis)?;
+                let n = shapes::torus_estimate(*major, *minor, *spacing);
+                checks::count_at_most(file, &at("spacing"), n, max, "these radii and spacing")?;
+                Ok(())
+            }
+            Generator::Points { path: p } => {
+                let resolved = resolve(base_dir, p);
+                if resolved.is_file() {
+                    Ok(())
+                } else {
+                    Err(points::missing(file, &at("path"), p, &resolved))
+                }
+            }
+            Generator::List { particles } => {
+                if particles.is_empty() {
+                    return Err(SceneError::invalid(
+                        file,
+                        at("particles"),
+                        "is empty: give at least one particle",
+                    ));
+                }
+                if particles.len() > max {
+                    return Err(SceneError::invalid(
+                        file,
+                        at("particles"),
+                        format!("at most {max} particles"),
+                    ));
+                }
+                points::validate_list(particles, file, &at("particles"))
+            }
+        }
+    }
+
+    /// Number of particles it makes (validates first; reads a points file).
+    pub fn count(
+        &self,
+        base_dir: Option<&Path>,
+        file: &str,
+        path: &str,
+    ) -> Result<usize, SceneError> {
+        self.validate(base_dir, file, path)?;
+        Ok(match self {
+            Generator::Spiral { count, .. } | Generator::Chain { count, .. } => *count,
+            Generator::HexSheet { nx, ny, .. } => nx * ny,
+            Generator::SphereShell {
+                radius, spacing, ..
+            } => shapes::sphere_count(*radius, *spacing) as usize,
+            Generator::TorusShell {
+                major,
+                minor,
+                spacing,
+                ..
+            } => shapes::torus_rings(*major, *minor, *spacing)
+                .iter()
+                .map(|r| r.1)
+                .sum(),
+            Generator::Points { .. } => self.generate(base_dir, file, path)?.len(),
+            Generator::List { particles } => particles.len(),
+        })
+    }
+
+    /// Makes the particles (validates first). A points file that holds no
+    /// point is an error.
+    pub fn generate(
+        &self,
+        base_dir: Option<&Path>,
+        file: &str,
+        path: &str,
+    ) -> Result<Generated, SceneError> {
+        self.validate(base_dir, file, path)?;
+        Ok(match self {
+            Generator::Spiral {
+                count,
+                spacing,
+                curvature_start,
+                curvature_end,
+                center,
+                normal,
+            } => shapes::spiral(
+                *count,
+                *spacing,
+                *curvature_start,
+                *curvature_end,
+                center,
+                normal,
+            ),
+            Generator::HexSheet {
+                nx,
+                ny,
+                spacing,
+                center,
+                normal,
+                noise,
+                seed,
+            } => shapes::hex_sheet(&shapes::HexSheet {
+                nx: *nx,
+                ny: *ny,
+                spacing: *spacing,
+                center,
+                normal,
+                noise: *noise,
+                seed: *seed,
+            }),
+            Generator::Chain {
+                count,
+                spacing,
+                start,
+                direction,
+                normal,
+            } => shapes::chain(*count, *spacing, start, direction, normal),
+            Generator::SphereShell {
+                radius,
+                spacing,
+                center,
+            } => shapes::sphere_shell(
+                shapes::sphere_count(*radius, *spacing) as usize,
+                *radius,
+                center,
+            ),
+            Generator::TorusShell {
+                major,
+                minor,
+                spacing,
+                center,
+                axis,
+            } => shapes::torus_shell(*major, *minor, *spacing, center, axis),
+            Generator::Points { path: p } => {
+                let at = format!("{path}.Points.path");
+                let g = points::read_xyz(&resolve(base_dir, p), file, &at, p, MAX_PARTICLES)?;
+                if g.is_empty() {
+                    return Err(SceneError::value(
+                        file,
+                        at,
+                        format!("{:?}", p.display().to_string()),
+                        "the points file holds no point (an object needs at least one particle)",
+                    ));
+                }
+                g
+            }
+            Generator::List { particles } => points::list(particles),
+        })
+    }
+}

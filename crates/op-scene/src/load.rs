@@ -1,0 +1,204 @@
+//! Reading scene files: RON or JSON by extension, parsed into one schema,
+//! then validated (DESIGN §6).
+
+use std::path::Path;
+
+use ron::extensions::Extensions;
+
+use crate::built::BuiltScene;
+use crate::error::SceneError;
+use crate::schema::Scene;
+
+/// A scene file format.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// [RON](https://github.com/ron-rs/ron), extension `.ron`. `Option`
+    /// fields may omit `Some(...)` (the `implicit_some` extension is on).
+    Ron,
+    /// JSON, extension `.json`.
+    Json,
+}
+
+impl Format {
+    /// The format of `path` from its extension (case-insensitive), or
+    /// [`SceneError::UnsupportedExtension`].
+    pub fn from_path(path: &Path) -> Result<Format, SceneError> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        match ext.to_ascii_lowercase().as_str() {
+            "ron" => Ok(Format::Ron),
+            "json" => Ok(Format::Json),
+            _ => Err(SceneError::UnsupportedExtension {
+                path: path.to_path_buf(),
+                extension: ext,
+            }),
+        }
+    }
+}
+
+/// Reads, parses and validates the scene file at `path` (format from the
+/// extension: `.ron` or `.json`). Points files are resolved relative to the
+/// scene file's directory. The returned scene's [`Scene::origin`] is
+/// `path`.
+///
+/// Errors: [`SceneError::UnsupportedExtension`], [`SceneError::Io`],
+/// [`SceneError::Parse`] (with line and column), then the validation
+/// errors of [`Scene::validate`].
+pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    let format = Format::from_path(path)?;
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let scene = parse_unvalidated(&text, format, &path.display().to_string())?;
+    scene.validate(path.parent())?;
+    Ok(scene)
+}
+
+/// Loads the scene file at `path` and builds it ([`load_scene`] then
+/// [`Scene::build`] with the file's directory and path).
+pub fn build_scene_file(path: &Path) -> Result<BuiltScene, SceneError> {
+    let scene = load_scene(path)?;
+    scene.build(path.parent(), Some(path.to_path_buf()))
+}
+
+/// Parses and validates scene text (embedded scenes, tests). `origin`
+/// names it in messages (e.g. `<demo: scenes/sheet.ron>`). Points files
+/// are resolved relative to the working directory; use
+/// [`Scene::validate`] / [`Scene::build`] with a directory otherwise.
+pub fn parse_scene(text: &str, format: Format, origin: &str) -> Result<Scene, SceneError> {
+    let scene = parse_unvalidated(text, format, origin)?;
+    scene.validate(None)?;
+    Ok(scene)
+}
+
+/// Parses scene text without validating it.
+pub fn parse_unvalidated(text: &str, format: Format, origin: &str) -> Result<Scene, SceneError> {
+    let mut scene: Scene = match format {
+        Format::Ron => ron::Options::default()
+            .with_default_extension(Extensions::IMPLICIT_SOME)
+            .from_str(text)
+            .map_err(|e| SceneError::Parse {
+                file: origin.to_string(),
+                line: e.position.line,
+                column: e.position.col,
+                message: e.code.to_string(),
+            })?,
+        Format::Json => serde_json::from_str(text).map_err(|e| {
+            let message = e.to_string();
+            // serde_json appends " at line L column C"; the position is
+            // reported separately.
+            let message = match message.rfind(" at line ") {
+                Some(k) => message[..k].to_string(),
+                None => message,
+            };
+            SceneError::Parse {
+                file: origin.to_string(),
+                line: e.line(),
+                column: e.column(),
+                message,
+            }
+        })?,
+    };
+    scene.origin = origin.to_string();
+    Ok(scene)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BASE: &str = r#"(name: "t", materials: {"m": ()},
+        objects: [(name: "a", material: "m", generator: Chain(count: 3, spacing: 1))])"#;
+
+    #[test]
+    fn the_base_scene_parses_in_both_formats() {
+        let s = parse_scene(BASE, Format::Ron, "<t>").unwrap();
+        assert_eq!(s.origin(), "<t>");
+        assert_eq!(s.world, crate::schema::WorldSettings::default());
+        let json = serde_json::to_string(&s).unwrap();
+        let back = parse_scene(&json, Format::Json, "<t.json>").unwrap();
+        assert_eq!(back.objects, s.objects);
+    }
+
+    #[test]
+    fn unknown_fields_are_rejected_at_every_level() {
+        for (text, format, needle) in [
+            (
+                BASE.replace("spacing: 1)", "spacing: 1, colour: 2)"),
+                Format::Ron,
+                "colour",
+            ),
+            (
+                BASE.replace(
+                    "materials: {\"m\": ()}",
+                    "materials: {\"m\": (stiffness: 1)}",
+                ),
+                Format::Ron,
+                "stiffness",
+            ),
+            (
+                BASE.replace(
+                    "(name: \"t\",",
+                    "(name: \"t\", world: (divergence: (max_sped: 1)),",
+                ),
+                Format::Ron,
+                "max_sped",
+            ),
+            (
+                BASE.replace(")])", ", overrides: [(particles: All, fixed: true)])])"),
+                Format::Ron,
+                "fixed",
+            ),
+            (
+                BASE.replace(
+                    ")])",
+                    ")], forces: [(object: \"a\", force: (1, 0, 0), stop: 2)])",
+                ),
+                Format::Ron,
+                "stop",
+            ),
+            (
+                BASE.replace(")])", ")], outputs: (glyphs: 2))"),
+                Format::Ron,
+                "glyphs",
+            ),
+            (
+                r#"{"name": "t", "materials": {"m": {}}, "objects": [{"name": "a", "material": "m",
+                   "generator": {"List": {"particles": [{"position": [0, 0, 0], "colour": 1}]}}}]}"#
+                    .to_string(),
+                Format::Json,
+                "unknown field `colour`",
+            ),
+        ] {
+            let e = parse_scene(&text, format, "<t>").unwrap_err();
+            assert!(matches!(e, SceneError::Parse { .. }), "{e}");
+            assert!(e.to_string().contains(needle), "{needle}: {e}");
+        }
+    }
+
+    #[test]
+    fn format_from_extension() {
+        assert_eq!(
+            Format::from_path(Path::new("a/b.RON")).unwrap(),
+            Format::Ron
+        );
+        assert_eq!(
+            Format::from_path(Path::new("b.json")).unwrap(),
+            Format::Json
+        );
+        for bad in ["b.yaml", "b", "b.ron.txt"] {
+            let e = Format::from_path(Path::new(bad)).unwrap_err();
+            assert!(e.to_string().contains(".ron, .json"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_missing_file_is_an_io_error_naming_it() {
+        let e = load_scene(Path::new("/nonexistent/dir/scene.ron")).unwrap_err();
+        assert!(matches!(e, SceneError::Io { .. }));
+        assert!(e.to_string().contains("/nonexistent/dir/scene.ron"), "{e}");
+    }
+}

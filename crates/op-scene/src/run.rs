@@ -1,0 +1,243 @@
+//! The runner (DESIGN §6): steps a built scene frame by frame, writes OBJ
+//! frames, `metrics.csv` and `summary.json`, and detects divergence (NaN,
+//! infinities, speeds above the limit, runaway energy) without ever writing
+//! a bad frame: frames already on disk stay valid and the summary says
+//! `diverged: true`.
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use op_dynamics::diagnostics::rest_shape_rms;
+use op_dynamics::{Point3, Real};
+use serde::Serialize;
+
+use crate::built::{BuiltObject, BuiltScene};
+use crate::export::{frame_name, write_atomically, write_frame};
+use crate::outputs::ParticleOutput;
+
+/// How to run a scene.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Output directory (created if missing).
+    pub out_dir: PathBuf,
+    /// Number of frames to write, overriding the scene's duration: frame 0
+    /// is the initial state, then one every `1 / frame_rate`.
+    pub frames: Option<usize>,
+}
+
+/// Per-object figures of a run.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct ObjectSummary {
+    /// Object name.
+    pub name: String,
+    /// Number of particles.
+    pub particles: usize,
+    /// Rest shape error at the last frame: RMS distance to the rest shape
+    /// after the best rigid alignment (Kabsch), divided by the object's
+    /// mean rest spacing.
+    pub rest_shape_error_final: Real,
+    /// Largest rest shape error over the frames.
+    pub rest_shape_error_max: Real,
+}
+
+/// What `summary.json` holds.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Summary {
+    /// Scene name.
+    pub scene: String,
+    /// Steps taken.
+    pub steps: u64,
+    /// Simulated time reached.
+    pub sim_time: Real,
+    /// Wall-clock seconds of the run.
+    pub wall_seconds: f64,
+    /// True when the run stopped because it diverged.
+    pub diverged: bool,
+    /// The divergence message, when it diverged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub divergence: Option<String>,
+    /// Frames written.
+    pub frames: usize,
+    /// Rayon threads used.
+    pub threads: usize,
+    /// What the world evaluates (kernel, terms, external actions).
+    pub enabled: Vec<String>,
+    /// Per-object figures.
+    pub objects: Vec<ObjectSummary>,
+}
+
+/// Why a run stopped early.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RunError {
+    /// An output could not be written.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The simulation diverged; the summary (with `diverged: true`) and the
+    /// frames before it were written.
+    #[error("{message}")]
+    Diverged {
+        /// What diverged, where and when.
+        message: String,
+        /// The summary as written.
+        summary: Box<Summary>,
+    },
+}
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
+    move |source| RunError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Rest shape error of `object` in the world's current state.
+pub fn rest_shape_error(scene: &BuiltScene, object: &BuiltObject) -> Real {
+    let p = scene.world.particles();
+    let current: Vec<Point3> = object
+        .ids
+        .iter()
+        .map(|&id| p.positions()[p.slot_of(id).expect("id of the scene")])
+        .collect();
+    rest_shape_rms(&object.rest, &current) / object.rest_spacing.max(Real::MIN_POSITIVE)
+}
+
+/// Runs `scene`, writing into `opts.out_dir`; `on_frame(k, total)` is
+/// called after each frame (progress display).
+pub fn run(
+    scene: &mut BuiltScene,
+    opts: &RunOptions,
+    on_frame: &mut dyn FnMut(usize, usize),
+) -> Result<Summary, RunError> {
+    let clock = Instant::now();
+    let frames_dir = opts.out_dir.join("frames");
+    let write_frames = scene.outputs.particles != ParticleOutput::None;
+    if write_frames {
+        fs::create_dir_all(&frames_dir).map_err(io(&frames_dir))?;
+    } else {
+        fs::create_dir_all(&opts.out_dir).map_err(io(&opts.out_dir))?;
+    }
+    let total = opts
+        .frames
+        .unwrap_or_else(|| (scene.duration * scene.frame_rate).round() as usize + 1)
+        .max(1);
+    let metrics_path = opts.out_dir.join("metrics.csv");
+    let mut metrics = if scene.outputs.metrics {
+        let mut f = fs::File::create(&metrics_path).map_err(io(&metrics_path))?;
+        writeln!(
+            f,
+            "frame,time,kinetic,potential,total,oscillation,max_speed,wall_seconds"
+        )
+        .map_err(io(&metrics_path))?;
+        Some(f)
+    } else {
+        None
+    };
+    let mut max_err = vec![0.0; scene.objects.len()];
+    let mut last_err = vec![0.0; scene.objects.len()];
+    let mut energy_scale = None;
+    let mut written = 0;
+    let mut divergence: Option<String> = None;
+    let t0 = scene.world.time();
+    for k in 0..total {
+        if k > 0 {
+            let t = t0 + k as Real / scene.frame_rate;
+            if let Err(d) = scene.world.advance_to(t) {
+                divergence = Some(d.to_string());
+                break;
+            }
+        }
+        let d = scene.world.diagnostics();
+        let scale = *energy_scale.get_or_insert_with(|| {
+            (d.kinetic_translational + d.kinetic_rotational).abs()
+                + d.potential.abs()
+                + 1e-12 * scene.world.particles().len() as Real
+        });
+        let kinetic = d.kinetic_translational + d.kinetic_rotational;
+        if !d.total.is_finite() || kinetic > scene.energy_growth * scale {
+            let p = scene.world.particles();
+            let fastest = (0..p.len())
+                .max_by(|&a, &b| {
+                    p.velocities()[a]
+                        .norm()
+                        .total_cmp(&p.velocities()[b].norm())
+                })
+                .map_or(0, |s| p.ids()[s]);
+            divergence = Some(format!(
+                "simulation diverged at step {} (t = {}): particle {fastest}: runaway energy \
+                 (kinetic {kinetic:.3e} > {:.1e} x initial scale {scale:.3e})",
+                scene.world.steps(),
+                scene.world.time(),
+                scene.energy_growth
+            ));
+            break;
+        }
+        for (o, obj) in scene.objects.iter().enumerate() {
+            let e = rest_shape_error(scene, obj);
+            last_err[o] = e;
+            max_err[o] = Real::max(max_err[o], e);
+        }
+        if write_frames {
+            let path = frames_dir.join(frame_name(k));
+            write_frame(&path, &scene.world, &scene.objects, &scene.outputs).map_err(io(&path))?;
+        }
+        written += 1;
+        if let Some(f) = metrics.as_mut() {
+            writeln!(
+                f,
+                "{k},{},{kinetic},{},{},{},{},{}",
+                scene.world.time(),
+                d.potential,
+                d.total,
+                d.oscillation,
+                d.max_speed,
+                clock.elapsed().as_secs_f64()
+            )
+            .and_then(|_| f.flush())
+            .map_err(io(&metrics_path))?;
+        }
+        on_frame(k + 1, total);
+    }
+    let summary = Summary {
+        scene: scene.name.clone(),
+        steps: scene.world.steps(),
+        sim_time: scene.world.time(),
+        wall_seconds: clock.elapsed().as_secs_f64(),
+        diverged: divergence.is_some(),
+        divergence: divergence.clone(),
+        frames: written,
+        threads: rayon::current_num_threads(),
+        enabled: scene.world.enabled(),
+        objects: scene
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(o, obj)| ObjectSummary {
+                name: obj.name.clone(),
+                particles: obj.ids.len(),
+                rest_shape_error_final: last_err[o],
+                rest_shape_error_max: max_err[o],
+            })
+            .collect(),
+    };
+    let path = opts.out_dir.join("summary.json");
+    write_atomically(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &summary).map_err(std::io::Error::other)?;
+        writeln!(w)
+    })
+    .map_err(io(&path))?;
+    match divergence {
+        Some(message) => Err(RunError::Diverged {
+            message,
+            summary: Box::new(summary),
+        }),
+        None => Ok(summary),
+    }
+}

@@ -1,0 +1,396 @@
+//! The scene schema (DESIGN §6): one serde description read from RON or
+//! JSON. Every struct denies unknown fields; every optional field documents
+//! its default.
+//!
+//! ```
+//! use op_scene::{parse_scene, Format};
+//!
+//! let ron = r#"(
+//!     name: "sheet",
+//!     world: (dt: 5e-3, duration: 20, linear_damping: 0.5),
+//!     materials: {
+//!         "membrane": (spacing: LennardJones((cutoff: 1.5)), coplanarity: 10),
+//!     },
+//!     objects: [
+//!         (name: "sheet", material: "membrane",
+//!          generator: HexSheet(nx: 20, ny: 20, spacing: 1, noise: 0.1)),
+//!     ],
+//! )"#;
+//! let json = r#"{
+//!     "name": "sheet",
+//!     "world": {"dt": 5e-3, "duration": 20, "linear_damping": 0.5},
+//!     "materials": {
+//!         "membrane": {"spacing": {"LennardJones": {"cutoff": 1.5}}, "coplanarity": 10}
+//!     },
+//!     "objects": [
+//!         {"name": "sheet", "material": "membrane",
+//!          "generator": {"HexSheet": {"nx": 20, "ny": 20, "spacing": 1, "noise": 0.1}}}
+//!     ]
+//! }"#;
+//! let a = parse_scene(ron, Format::Ron, "<doc.ron>")?;
+//! let b = parse_scene(json, Format::Json, "<doc.json>")?;
+//! assert_eq!(a.objects, b.objects);
+//! assert_eq!(a.materials, b.materials);
+//! let built = a.build(None, None)?;
+//! assert_eq!(built.world.particles().len(), 400);
+//! # Ok::<(), op_scene::SceneError>(())
+//! ```
+//!
+//! The same in JSON: enum variants are objects with one key
+//! (`{"HexSheet": {"nx": 20, ...}}`), unit variants strings (`"All"`).
+//! In RON, `Option` fields may be written without `Some(...)`; newtype
+//! variants such as `LennardJones((...))` take double parentheses (or
+//! single ones with `#![enable(unwrap_variant_newtypes)]` at the top of the
+//! file).
+//!
+//! Sections: [`Scene::world`] ([`WorldSettings`]), [`Scene::materials`]
+//! (op-dynamics [`Material`]s by name), [`Scene::objects`]
+//! ([`ObjectSpec`]: a [`Generator`], per-particle defaults and
+//! [`Override`]s), [`Scene::forces`] ([`ForceSpec`]) and
+//! [`Scene::outputs`] ([`Outputs`]). Validation: [`Scene::validate`];
+//! building: [`Scene::build`].
+
+pub(crate) mod checks;
+pub(crate) mod validate;
+
+pub use validate::{MAX_COHESION_ALPHA_R0_SQUARED, MAX_COHESION_CUTOFF_OVER_R0};
+
+use std::collections::BTreeMap;
+
+use op_dynamics::world::NeighbourParams;
+use op_dynamics::{Material, ParticleType, Real, Scheme};
+use serde::{Deserialize, Serialize};
+
+pub use crate::generators::{Generator, ListParticle};
+use crate::outputs::Outputs;
+
+/// A scene: what to simulate, for how long, and what to write.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Scene name: the summary's `scene` field and the default output
+    /// folder name. Non-empty; no path separators, no control characters,
+    /// not `.` or `..`. Required.
+    pub name: String,
+    /// Time stepping, neighbour lists and global external actions.
+    /// Default: [`WorldSettings::default`].
+    #[serde(default)]
+    pub world: WorldSettings,
+    /// Materials by name (op-dynamics [`Material`] as is). Only those used
+    /// by some object go into the world. Default: none.
+    #[serde(default)]
+    pub materials: BTreeMap<String, Material>,
+    /// The objects, at least one. Each object is its own object id: its
+    /// particles interact completely with each other and only repel other
+    /// objects' (seed 002 §5). Required.
+    pub objects: Vec<ObjectSpec>,
+    /// Forces on particle sets over time windows. Default: none.
+    #[serde(default)]
+    pub forces: Vec<ForceSpec>,
+    /// What the runner writes. Default: [`Outputs::default`].
+    #[serde(default)]
+    pub outputs: Outputs,
+    /// Where the scene came from (file path or a label such as
+    /// `<demo>`), used in error messages. Not part of the file: set by
+    /// [`crate::load_scene`] / [`crate::parse_scene`]. Default: empty
+    /// (shown as `<scene>`).
+    #[serde(skip)]
+    pub origin: String,
+}
+
+impl Scene {
+    /// The origin label used in messages (`<scene>` when unset).
+    pub fn origin(&self) -> &str {
+        if self.origin.is_empty() {
+            "<scene>"
+        } else {
+            &self.origin
+        }
+    }
+}
+
+fn one_thousandth() -> Real {
+    1e-3
+}
+fn one() -> Real {
+    1.0
+}
+fn thirty() -> Real {
+    30.0
+}
+fn infinity() -> Real {
+    Real::INFINITY
+}
+fn million() -> Real {
+    1e6
+}
+/// Infinite defaults are left out when serializing: JSON has no infinity.
+fn is_infinite(v: &Real) -> bool {
+    *v == Real::INFINITY
+}
+
+/// Time stepping, neighbour lists and global external actions.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldSettings {
+    /// Time integration scheme (`ExplicitEuler`, `SymplecticEuler`,
+    /// `VelocityVerlet`, `Rk4`, `Adaptive((rtol: ...))`). Default:
+    /// `VelocityVerlet`.
+    #[serde(default = "default_scheme")]
+    pub integrator: Scheme,
+    /// Time step (fixed-step schemes), or initial and largest step
+    /// (adaptive), > 0. Default: 1e-3.
+    #[serde(default = "one_thousandth")]
+    pub dt: Real,
+    /// Simulated duration, > 0. Default: 1.
+    #[serde(default = "one")]
+    pub duration: Real,
+    /// Frames written per unit of simulated time, > 0. Default: 30.
+    #[serde(default = "thirty")]
+    pub frame_rate: Real,
+    /// Neighbour-list settings. Default: [`NeighbourParams::default`].
+    #[serde(default)]
+    pub neighbours: NeighbourParams,
+    /// Gravity acceleration. Default: zero.
+    #[serde(default)]
+    pub gravity: [Real; 3],
+    /// Linear damping `β0` (force `-β0 v`), >= 0. Default: 0.
+    #[serde(default)]
+    pub linear_damping: Real,
+    /// Angular damping `β1` (torque `-β1 ω`), >= 0. Default: 0.
+    #[serde(default)]
+    pub angular_damping: Real,
+    /// When a run is declared diverged. Default:
+    /// [`DivergenceSettings::default`].
+    #[serde(default)]
+    pub divergence: DivergenceSettings,
+}
+
+fn default_scheme() -> Scheme {
+    Scheme::VelocityVerlet
+}
+
+impl Default for WorldSettings {
+    fn default() -> Self {
+        WorldSettings {
+            integrator: default_scheme(),
+            dt: one_thousandth(),
+            duration: one(),
+            frame_rate: thirty(),
+            neighbours: NeighbourParams::default(),
+            gravity: [0.0; 3],
+            linear_damping: 0.0,
+            angular_damping: 0.0,
+            divergence: DivergenceSettings::default(),
+        }
+    }
+}
+
+/// When a run is declared diverged (besides NaN / infinite values, which
+/// always are).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DivergenceSettings {
+    /// Largest particle speed considered physical, > 0 (infinity disables
+    /// the check). Default: infinity.
+    #[serde(default = "infinity", skip_serializing_if = "is_infinite")]
+    pub max_speed: Real,
+    /// The run is declared diverged when the kinetic energy exceeds this
+    /// factor times the initial energy scale (see
+    /// [`crate::BuiltScene::energy_growth`]), > 0 (infinity disables the
+    /// check; JSON has no infinity literal: use a huge number there).
+    /// Default: 1e6.
+    #[serde(default = "million")]
+    pub energy_growth: Real,
+}
+
+impl Default for DivergenceSettings {
+    fn default() -> Self {
+        DivergenceSettings {
+            max_speed: infinity(),
+            energy_growth: million(),
+        }
+    }
+}
+
+fn default_inertia() -> [Real; 3] {
+    [0.1; 3]
+}
+fn plus_z() -> [Real; 3] {
+    [0.0, 0.0, 1.0]
+}
+
+/// One object: a set of particles made by a generator, sharing a material
+/// and an object id.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    /// Object name, unique in the scene (OBJ object name, summary).
+    /// Non-empty, no control characters. Required.
+    pub name: String,
+    /// Name of its material: a key of [`Scene::materials`]. Required.
+    pub material: String,
+    /// How its particles are made. Required.
+    pub generator: Generator,
+    /// Mass of each particle, > 0. Default: 1.
+    #[serde(default = "one")]
+    pub mass: Real,
+    /// Principal moments of inertia (body frame), each > 0.
+    /// Default: `[0.1, 0.1, 0.1]`.
+    #[serde(default = "default_inertia")]
+    pub inertia: [Real; 3],
+    /// Body-frame normal axis `a` (normalized; the world normal is
+    /// `R(q) a`). Default: +z.
+    #[serde(default = "plus_z")]
+    pub normal_axis: [Real; 3],
+    /// Particle type of seed 002 §5 (`Standard(k)` or `Hinge`).
+    /// Default: `Standard(0)`.
+    #[serde(default)]
+    pub kind: ParticleType,
+    /// Initial velocity of every particle. Default: zero.
+    #[serde(default)]
+    pub velocity: [Real; 3],
+    /// Initial angular velocity (world frame). Default: zero.
+    #[serde(default)]
+    pub angular_velocity: [Real; 3],
+    /// Per-particle changes, applied in order after generation.
+    /// Default: none.
+    #[serde(default)]
+    pub overrides: Vec<Override>,
+}
+
+/// Which particles of an object (indices in generation order).
+///
+/// RON: `All`, `List([0, 5, 9])`, `Range(0, 10)`, `First(3)`, `Last(3)`.
+/// JSON: `"All"`, `{"List": [0, 5, 9]}`, `{"Range": [0, 10]}`,
+/// `{"First": 3}`, `{"Last": 3}`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Selection {
+    /// Every particle.
+    #[default]
+    All,
+    /// These indices (each `< count`; a repeated index counts once).
+    List(Vec<usize>),
+    /// Indices `start..end` (half open, `start < end <= count`).
+    Range(usize, usize),
+    /// The first `n` particles (`1 <= n <= count`).
+    First(usize),
+    /// The last `n` particles (`1 <= n <= count`).
+    Last(usize),
+}
+
+impl Selection {
+    /// Checks the selection against an object of `count` particles; the
+    /// error says what is allowed.
+    pub fn check(&self, count: usize) -> Result<(), String> {
+        match self {
+            Selection::All => Ok(()),
+            Selection::List(v) => {
+                if v.is_empty() {
+                    return Err("= List([]): selects no particle; give at least one index".into());
+                }
+                match v.iter().find(|&&i| i >= count) {
+                    Some(bad) => Err(format!(
+                        "= List([..]): index {bad} is out of range (valid indices: 0..{count}, the object has {count} particles)"
+                    )),
+                    None => Ok(()),
+                }
+            }
+            Selection::Range(a, b) => {
+                if a < b && *b <= count {
+                    Ok(())
+                } else {
+                    Err(format!(
+                        "= Range({a}, {b}): out of range (need start < end <= {count}; valid indices: 0..{count})"
+                    ))
+                }
+            }
+            Selection::First(n) | Selection::Last(n) => {
+                if *n >= 1 && *n <= count {
+                    Ok(())
+                } else {
+                    let which = if matches!(self, Selection::First(_)) {
+                        "First"
+                    } else {
+                        "Last"
+                    };
+                    Err(format!(
+                        "= {which}({n}): out of range (need 1 <= n <= {count}, the object has {count} particles)"
+                    ))
+                }
+            }
+        }
+    }
+
+    /// The selected indices for an object of `count` particles, ascending
+    /// and without duplicates (a listed index counts once; out-of-range
+    /// entries are dropped: [`Selection::check`] first).
+    pub fn indices(&self, count: usize) -> Vec<usize> {
+        match self {
+            Selection::All => (0..count).collect(),
+            Selection::List(v) => {
+                let mut v: Vec<usize> = v.iter().copied().filter(|&i| i < count).collect();
+                v.sort_unstable();
+                v.dedup();
+                v
+            }
+            Selection::Range(a, b) => (*a..(*b).min(count)).collect(),
+            Selection::First(n) => (0..(*n).min(count)).collect(),
+            Selection::Last(n) => (count.saturating_sub(*n)..count).collect(),
+        }
+    }
+}
+
+/// Changes to some particles of an object, applied after generation in the
+/// order given. Unset fields leave the particles as they are.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Override {
+    /// Which particles. Default: `All`.
+    #[serde(default)]
+    pub particles: Selection,
+    /// Fix (true) or free (false) their positions. Default: unchanged.
+    #[serde(default)]
+    pub fixed_position: Option<bool>,
+    /// Fix (true) or free (false) their orientations. Default: unchanged.
+    #[serde(default)]
+    pub fixed_orientation: Option<bool>,
+    /// Make them unoriented (spacing forces only, seed 000 §6) or oriented.
+    /// Default: unchanged.
+    #[serde(default)]
+    pub unoriented: Option<bool>,
+    /// Set their particle type. Default: unchanged.
+    #[serde(default)]
+    pub kind: Option<ParticleType>,
+    /// Set their rest curvature (finite). Default: unchanged.
+    #[serde(default)]
+    pub curvature: Option<Real>,
+    /// Set their mass (> 0). Default: unchanged.
+    #[serde(default)]
+    pub mass: Option<Real>,
+}
+
+/// A force on some particles of an object over a time window (op-dynamics
+/// [`op_dynamics::ForceWindow`] over global particle ids).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceSpec {
+    /// Name of the object. Required.
+    pub object: String,
+    /// Which of its particles (each gets the full force). Default: `All`.
+    #[serde(default)]
+    pub particles: Selection,
+    /// The force vector at full magnitude (finite). Required.
+    pub force: [Real; 3],
+    /// Start time (finite). Default: 0.
+    #[serde(default)]
+    pub start: Real,
+    /// End time, > start (infinity allowed). Default: infinity.
+    #[serde(default = "infinity", skip_serializing_if = "is_infinite")]
+    pub end: Real,
+    /// Linear ramp at each end, >= 0 and at most half of `end - start`.
+    /// Default: 0 (a step load).
+    #[serde(default)]
+    pub ramp: Real,
+}

@@ -1,0 +1,835 @@
+//! Scene files end to end: every example scene loads, validates, builds and
+//! steps; generators make what they promise; overrides, selections and
+//! force windows land on the right particles; RON and JSON give the same
+//! world; and every scene of the bad-scene corpus (`tests/bad_scenes/`)
+//! fails with the right error.
+
+use std::path::{Path, PathBuf};
+
+use op_dynamics::diagnostics::rest_shape_rms;
+use op_dynamics::{Flags, ParticleType, Point3, Real, Vec3, World};
+use op_scene::{load_scene, parse_scene, BuiltScene, Format, Generator, Scene};
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
+}
+
+fn scene_files() -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(scenes_dir())
+        .expect("scenes/ exists")
+        .map(|e| e.unwrap().path())
+        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("ron" | "json")))
+        .collect();
+    v.sort();
+    v
+}
+
+fn build(path: &Path) -> BuiltScene {
+    let scene = load_scene(path).unwrap_or_else(|e| panic!("{e}"));
+    scene
+        .build(path.parent(), Some(path.to_path_buf()))
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A scene from RON text, validated and built without a directory.
+fn build_ron(text: &str) -> BuiltScene {
+    let scene = parse_scene(text, Format::Ron, "<test>").unwrap_or_else(|e| panic!("{e}"));
+    scene.build(None, None).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Positions of `ids`, in that order.
+fn positions_of(world: &World, ids: &[u32]) -> Vec<Point3> {
+    let p = world.particles();
+    ids.iter()
+        .map(|&id| p.positions()[p.slot_of(id).unwrap()])
+        .collect()
+}
+
+#[test]
+fn every_example_scene_loads_builds_and_steps() {
+    let files = scene_files();
+    let names: Vec<String> = files
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    for expected in [
+        "sheet.ron",
+        "chain.json",
+        "sphere_shell.ron",
+        "torus_shell.ron",
+        "two_sheets.ron",
+        "hinge.ron",
+        "points.ron",
+    ] {
+        assert!(
+            names.iter().any(|n| n == expected),
+            "missing scenes/{expected}"
+        );
+    }
+    for path in &files {
+        let mut built = build(path);
+        let n = built.world.particles().len();
+        assert!(n > 0 && n <= 2000, "{}: {n} particles", path.display());
+        assert!(!built.objects.is_empty());
+        for o in &built.objects {
+            assert_eq!(o.ids.len(), o.rest.len());
+            assert!(o.rest_spacing > 0.0 && o.rest_spacing.is_finite());
+        }
+        assert!(built.duration > 0.0 && built.frame_rate > 0.0);
+        for _ in 0..5 {
+            built
+                .world
+                .step()
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        }
+        assert_eq!(built.world.steps(), 5);
+    }
+}
+
+#[test]
+fn the_demo_scene_matches_its_description() {
+    let built = build(&scenes_dir().join("sheet.ron"));
+    assert_eq!(built.name, "sheet");
+    assert_eq!(built.world.params().dt, 5e-3);
+    assert_eq!(built.duration, 20.0);
+    assert_eq!(built.world.params().external.linear_damping, 0.5);
+    assert_eq!(built.world.params().external.angular_damping, 0.05);
+    let enabled = built.world.enabled();
+    for term in ["term:lennard_jones", "term:coplanarity", "damping"] {
+        assert!(enabled.iter().any(|e| e == term), "{enabled:?}");
+    }
+}
+
+/// Runs every example scene to its end (release: `cargo test --release -p
+/// op-scene --test scenes -- --ignored --nocapture`) and prints the rest
+/// shape error per object.
+#[test]
+#[ignore = "runs every scene to its end; slow in debug"]
+fn every_example_scene_runs_to_the_end() {
+    for path in scene_files() {
+        let mut built = build(&path);
+        let clock = std::time::Instant::now();
+        let frames = (built.duration * built.frame_rate).round() as usize;
+        let mut worst = vec![0.0f64; built.objects.len()];
+        for k in 1..=frames {
+            let t = built.duration * k as Real / frames as Real;
+            built
+                .world
+                .advance_to(t)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            for (o, w) in built.objects.iter().zip(&mut worst) {
+                let err =
+                    rest_shape_rms(&o.rest, &positions_of(&built.world, &o.ids)) / o.rest_spacing;
+                *w = w.max(err);
+            }
+        }
+        let d = built.world.diagnostics();
+        print!(
+            "{}: {} particles, {} steps, {:.1} s, kinetic {:.2e}, potential {:.3e};",
+            path.display(),
+            built.world.particles().len(),
+            built.world.steps(),
+            clock.elapsed().as_secs_f64(),
+            d.kinetic_translational + d.kinetic_rotational,
+            d.potential
+        );
+        for (o, w) in built.objects.iter().zip(&worst) {
+            let err = rest_shape_rms(&o.rest, &positions_of(&built.world, &o.ids)) / o.rest_spacing;
+            print!(" {}: rest error final {err:.3} max {w:.3};", o.name);
+        }
+        println!();
+    }
+}
+
+fn generate(g: &Generator) -> op_scene::generators::Generated {
+    g.generate(None, "<test>", "generator")
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn assert_unit_normals(normals: &[Vec3]) {
+    for n in normals {
+        assert!((n.norm() - 1.0).abs() < 1e-12, "{n}");
+    }
+}
+
+#[test]
+fn spiral_has_its_count_spacing_curvatures_and_outward_normals() {
+    let (count, h, k0, k1) = (41, 0.5, 0.4, 0.1);
+    let g = generate(&Generator::Spiral {
+        count,
+        spacing: h,
+        curvature_start: k0,
+        curvature_end: k1,
+        center: [1.0, -2.0, 0.5],
+        normal: [0.0, 1.0, 1.0],
+    });
+    assert_eq!(g.len(), count);
+    assert_unit_normals(&g.normals);
+    let plane = Vec3::new(0.0, 1.0, 1.0).normalize();
+    let centroid = g.positions.iter().map(|p| p.coords).sum::<Vec3>() / count as Real;
+    assert!((centroid - Vec3::new(1.0, -2.0, 0.5)).norm() < 1e-12);
+    for i in 0..count {
+        let k = k0 + (k1 - k0) * i as Real / (count - 1) as Real;
+        assert!((g.curvatures[i] - k).abs() < 1e-12);
+        assert!(
+            g.normals[i].dot(&plane).abs() < 1e-12,
+            "normal in the plane"
+        );
+        assert!(
+            ((g.positions[i] - g.positions[0]).dot(&plane)).abs() < 1e-12,
+            "planar"
+        );
+        if i + 1 < count {
+            // Arc length h between neighbours: chord h (1 - κ²h²/24 + ...).
+            let chord = (g.positions[i + 1] - g.positions[i]).norm();
+            let km = k.max(g.curvatures[i + 1]);
+            assert!(
+                (chord - h).abs() <= h * km * km * h * h / 24.0 * 1.01 + 1e-9,
+                "{i}: {chord}"
+            );
+        }
+        if i > 0 && i + 1 < count {
+            // The curve bends away from the normal (towards p - n/κ).
+            let second =
+                g.positions[i + 1] + g.positions[i - 1].coords - g.positions[i].coords * 2.0;
+            let bend = second.coords.dot(&g.normals[i]);
+            assert!(bend < 0.0, "{i}: normal not outward");
+            // Discrete curvature |second| / h² matches κ to O(h).
+            assert!((second.coords.norm() / (h * h) - k).abs() < 0.01, "{i}");
+            let tangent = g.positions[i + 1] - g.positions[i - 1];
+            assert!(tangent.normalize().dot(&g.normals[i]).abs() < 1e-3);
+        }
+    }
+}
+
+#[test]
+fn sphere_shell_particles_lie_on_the_sphere_with_outward_normals() {
+    let (radius, spacing) = (3.0, 0.5);
+    let c = [1.0, 2.0, 3.0];
+    let g = generate(&Generator::SphereShell {
+        radius,
+        spacing,
+        center: c,
+    });
+    let expected = (4.0 * std::f64::consts::PI * radius * radius * 2.0
+        / (3f64.sqrt() * spacing * spacing))
+        .round() as usize;
+    assert_eq!(g.len(), expected);
+    assert_unit_normals(&g.normals);
+    for ((p, n), k) in g.positions.iter().zip(&g.normals).zip(&g.curvatures) {
+        let r = p - Point3::from(c);
+        assert!((r.norm() - radius).abs() < 1e-12);
+        assert!((r / radius - n).norm() < 1e-12);
+        assert_eq!(*k, 1.0 / radius);
+    }
+    let built = build_ron(
+        "(name: \"s\", materials: {\"m\": ()}, objects: [(name: \"s\", material: \"m\", generator: SphereShell(radius: 3, spacing: 0.5))])",
+    );
+    let r0 = built.objects[0].rest_spacing;
+    assert!(r0 > 0.8 * spacing && r0 < 1.1 * spacing, "{r0}");
+}
+
+#[test]
+fn hex_sheet_chain_torus_list_and_points_generators() {
+    let g = generate(&Generator::HexSheet {
+        nx: 7,
+        ny: 5,
+        spacing: 0.3,
+        center: [0.0, 0.0, 1.0],
+        normal: [1.0, 0.0, 0.0],
+        noise: 0.0,
+        seed: 0,
+    });
+    assert_eq!(g.len(), 35);
+    for (i, p) in g.positions.iter().enumerate() {
+        assert!((p.x - 0.0).abs() < 1e-12, "in the plane x = 0");
+        assert_eq!(g.normals[i], Vec3::x());
+        let nearest = g
+            .positions
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != i)
+            .map(|(_, q)| (q - p).norm())
+            .fold(Real::INFINITY, Real::min);
+        assert!((nearest - 0.3).abs() < 1e-12);
+    }
+    let noisy = |seed| {
+        generate(&Generator::HexSheet {
+            nx: 4,
+            ny: 4,
+            spacing: 1.0,
+            center: [0.0; 3],
+            normal: [0.0, 0.0, 1.0],
+            noise: 0.2,
+            seed,
+        })
+    };
+    assert_eq!(noisy(3), noisy(3), "seeded");
+    assert_ne!(noisy(3), noisy(4));
+    assert!(noisy(3).positions.iter().any(|p| p.z.abs() > 1e-3));
+
+    let g = generate(&Generator::Chain {
+        count: 4,
+        spacing: 2.0,
+        start: [1.0, 0.0, 0.0],
+        direction: [0.0, 3.0, 0.0],
+        normal: [0.0, 0.0, -1.0],
+    });
+    assert_eq!(g.positions[3], Point3::new(1.0, 6.0, 0.0));
+    assert_eq!(g.normals[0], -Vec3::z());
+
+    let (major, minor) = (4.0, 1.5);
+    let g = generate(&Generator::TorusShell {
+        major,
+        minor,
+        spacing: 0.5,
+        center: [0.0; 3],
+        axis: [0.0, 0.0, 1.0],
+    });
+    let area = 4.0 * std::f64::consts::PI.powi(2) * major * minor;
+    let ideal = area * 2.0 / (3f64.sqrt() * 0.25);
+    assert!(
+        (g.len() as Real - ideal).abs() < 0.1 * ideal,
+        "{} vs {ideal}",
+        g.len()
+    );
+    assert_unit_normals(&g.normals);
+    for (p, n) in g.positions.iter().zip(&g.normals) {
+        let tube = p - n * minor;
+        assert!(tube.z.abs() < 1e-12 && ((tube.x.hypot(tube.y)) - major).abs() < 1e-12);
+    }
+
+    let g = generate(&Generator::List {
+        particles: vec![
+            op_scene::generators::ListParticle {
+                position: [0.0; 3],
+                normal: None,
+                curvature: None,
+            },
+            op_scene::generators::ListParticle {
+                position: [1.0, 0.0, 0.0],
+                normal: Some([0.0, 2.0, 0.0]),
+                curvature: Some(0.5),
+            },
+        ],
+    });
+    assert_eq!(g.normals, vec![Vec3::z(), Vec3::y()]);
+    assert_eq!(g.curvatures, vec![0.0, 0.5]);
+
+    let g = Generator::Points {
+        path: "data/patch.xyz".into(),
+    }
+    .generate(Some(&scenes_dir()), "<test>", "generator")
+    .unwrap();
+    assert_eq!(g.len(), 55);
+    assert_unit_normals(&g.normals);
+    assert!(
+        g.normals.iter().any(|n| n.z < 0.99),
+        "normals read from the file"
+    );
+}
+
+#[test]
+fn overrides_and_selections_apply() {
+    let built = build_ron(
+        r#"(
+        name: "o",
+        materials: {"m": (spacing: LennardJones((cutoff: 1.5)))},
+        objects: [
+            (name: "a", material: "m", generator: Chain(count: 3, spacing: 1)),
+            (name: "b", material: "m", generator: Chain(count: 10, spacing: 1, start: (0, 5, 0)),
+             mass: 2, kind: Standard(3),
+             overrides: [
+                (particles: First(2), fixed_position: true, fixed_orientation: true),
+                (particles: Range(4, 6), kind: Hinge, curvature: 0.5),
+                (particles: List([9, 7]), unoriented: true, mass: 5),
+                (particles: Last(1), unoriented: false),
+                (particles: All, fixed_orientation: false),
+             ]),
+        ],
+    )"#,
+    );
+    let p = built.world.particles();
+    let at = |id: u32| p.slot_of(id).unwrap();
+    assert_eq!(built.objects[1].ids, (3..13).collect::<Vec<u32>>());
+    for local in 0..10u32 {
+        let s = at(3 + local);
+        let i = local as usize;
+        assert_eq!(p.objects()[s], 1);
+        assert_eq!(p.flags()[s].contains(Flags::FIXED_POSITION), i < 2, "{i}");
+        assert!(!p.flags()[s].contains(Flags::FIXED_ORIENTATION), "{i}");
+        assert_eq!(p.flags()[s].contains(Flags::UNORIENTED), i == 7, "{i}");
+        let kind = if (4..6).contains(&i) {
+            ParticleType::Hinge
+        } else {
+            ParticleType::Standard(3)
+        };
+        assert_eq!(p.kinds()[s], kind, "{i}");
+        assert_eq!(
+            p.curvatures()[s],
+            if (4..6).contains(&i) { 0.5 } else { 0.0 }
+        );
+        assert_eq!(
+            p.masses()[s],
+            if i == 7 || i == 9 { 5.0 } else { 2.0 },
+            "{i}"
+        );
+    }
+    for local in 0..3 {
+        let s = at(local);
+        assert_eq!(p.objects()[s], 0);
+        assert_eq!(p.flags()[s], Flags::empty());
+        assert_eq!(p.kinds()[s], ParticleType::Standard(0));
+        assert_eq!(p.masses()[s], 1.0);
+    }
+}
+
+#[test]
+fn particles_are_oriented_from_their_normal_axis() {
+    let built = build_ron(
+        r#"(name: "n", materials: {"m": ()}, objects: [
+            (name: "s", material: "m", normal_axis: (1, 0, 0),
+             generator: SphereShell(radius: 2, spacing: 1)),
+        ])"#,
+    );
+    let p = built.world.particles();
+    for s in 0..p.len() {
+        assert_eq!(p.normal_axes()[s], Vec3::x());
+        let n = p.normal(s);
+        let outward = p.positions()[s].coords.normalize();
+        assert!((n - outward).norm() < 1e-9);
+    }
+}
+
+#[test]
+fn force_windows_map_to_global_ids() {
+    let built = build_ron(
+        r#"(
+        name: "f",
+        materials: {"m": ()},
+        objects: [
+            (name: "a", material: "m", generator: Chain(count: 4, spacing: 1)),
+            (name: "b", material: "m", generator: Chain(count: 6, spacing: 1, start: (0, 3, 0))),
+        ],
+        forces: [
+            (object: "b", particles: Range(1, 3), force: (1, 0, 0), start: 0.5, end: 2, ramp: 0.25),
+            (object: "a", particles: Last(1), force: (0, 0, -1)),
+            (object: "b", force: (0, 1, 0)),
+            (object: "a", particles: List([2, 0, 2]), force: (0, 1, 0)),
+        ],
+    )"#,
+    );
+    let forces = &built.world.params().external.forces;
+    assert_eq!(forces.len(), 4);
+    assert_eq!(forces[0].particles, vec![5, 6]);
+    assert_eq!(
+        (forces[0].start, forces[0].end, forces[0].ramp),
+        (0.5, 2.0, 0.25)
+    );
+    assert_eq!(forces[0].force, [1.0, 0.0, 0.0]);
+    assert_eq!(forces[1].particles, vec![3]);
+    assert_eq!(forces[1].end, Real::INFINITY);
+    assert_eq!(forces[2].particles, (4..10).collect::<Vec<u32>>());
+    assert_eq!(forces[3].particles, vec![0, 2], "sorted, each once");
+}
+
+#[test]
+fn only_used_materials_enter_the_world() {
+    let built = build_ron(
+        r#"(
+        name: "m",
+        materials: {
+            "a_unused": (spacing: LennardJones(()), coplanarity: 3),
+            "b_used": (spacing: Cohesion((cutoff: 1.5))),
+            "c_unused": (form: 1),
+        },
+        objects: [(name: "x", material: "b_used", generator: Chain(count: 3, spacing: 1))],
+    )"#,
+    );
+    assert_eq!(built.world.materials().len(), 1);
+    assert_eq!(built.world.particles().materials(), &[0, 0, 0]);
+    let enabled = built.world.enabled();
+    assert!(
+        enabled.contains(&"term:cohesion".to_string()),
+        "{enabled:?}"
+    );
+    assert!(!enabled
+        .iter()
+        .any(|e| e.contains("coplanarity") || e.contains("form")));
+}
+
+/// Every observable of two worlds.
+fn assert_same_world(a: &World, b: &World) {
+    assert_eq!(a.params(), b.params());
+    assert_eq!(a.materials(), b.materials());
+    assert_eq!(a.kernel(), b.kernel());
+    assert_eq!(a.enabled(), b.enabled());
+    let (p, q) = (a.particles(), b.particles());
+    assert_eq!(p.ids(), q.ids());
+    assert_eq!(p.positions(), q.positions());
+    assert_eq!(p.velocities(), q.velocities());
+    assert_eq!(p.orientations(), q.orientations());
+    assert_eq!(p.angular_velocities(), q.angular_velocities());
+    assert_eq!(p.masses(), q.masses());
+    assert_eq!(p.inertias(), q.inertias());
+    assert_eq!(p.normal_axes(), q.normal_axes());
+    assert_eq!(p.flags(), q.flags());
+    assert_eq!(p.objects(), q.objects());
+    assert_eq!(p.kinds(), q.kinds());
+    assert_eq!(p.materials(), q.materials());
+    assert_eq!(p.curvatures(), q.curvatures());
+}
+
+/// `scenes/chain.json`, written in RON.
+const CHAIN_RON: &str = r#"(
+    name: "chain",
+    world: (integrator: VelocityVerlet, dt: 1e-3, duration: 10, frame_rate: 10,
+            gravity: (0, 0, -1), linear_damping: 0.05),
+    materials: {"rope": (spacing: LennardJones((epsilon: 10, r0: 1, cutoff: 1.5)))},
+    objects: [(
+        name: "chain", material: "rope",
+        generator: Chain(count: 20, spacing: 1, start: (0, 0, 0), direction: (1, 0, 0)),
+        mass: 0.1,
+        overrides: [(particles: First(1), fixed_position: true)],
+    )],
+    forces: [(object: "chain", particles: Last(1), force: (0, 0.5, 0), start: 4, end: 6, ramp: 0.5)],
+    outputs: (particles: Points, metrics: true),
+)"#;
+
+#[test]
+fn ron_and_json_versions_build_identical_worlds() {
+    let json_path = scenes_dir().join("chain.json");
+    let from_json = load_scene(&json_path).unwrap();
+    let from_ron = parse_scene(CHAIN_RON, Format::Ron, "<chain.ron>").unwrap();
+    assert_eq!(
+        Scene {
+            origin: String::new(),
+            ..from_json.clone()
+        },
+        Scene {
+            origin: String::new(),
+            ..from_ron.clone()
+        }
+    );
+    let mut a = from_json.build(json_path.parent(), None).unwrap();
+    let mut b = from_ron.build(None, None).unwrap();
+    assert_same_world(&a.world, &b.world);
+    for _ in 0..20 {
+        a.world.step().unwrap();
+        b.world.step().unwrap();
+    }
+    assert_same_world(&a.world, &b.world);
+}
+
+#[test]
+fn every_example_scene_survives_ron_and_json_round_trips() {
+    for path in scene_files() {
+        let scene = load_scene(&path).unwrap();
+        let texts = [
+            (
+                ron::ser::to_string_pretty(&scene, Default::default()).unwrap(),
+                Format::Ron,
+            ),
+            (serde_json::to_string_pretty(&scene).unwrap(), Format::Json),
+        ];
+        for (text, format) in texts {
+            let back = op_scene::load::parse_unvalidated(&text, format, &scene.origin)
+                .unwrap_or_else(|e| panic!("{}: {e}\n{text}", path.display()));
+            // Points paths are relative to the scene's directory.
+            back.validate(path.parent()).unwrap();
+            assert_eq!(back, scene, "{} via {format:?}", path.display());
+        }
+    }
+}
+
+/// The kind of error a bad scene must give.
+#[derive(Debug)]
+enum Expect {
+    /// `SceneError::Parse` at this line and column.
+    Parse(usize, usize),
+    Invalid,
+    Points,
+    Unsupported,
+    Build,
+}
+
+/// The bad-scene corpus: file, error kind, fragments the message must
+/// contain.
+const BAD_SCENES: &[(&str, Expect, &[&str])] = &[
+    ("syntax_error.ron", Expect::Parse(4, 5), &["Expected comma"]),
+    ("wrong_type.ron", Expect::Parse(7, 16), &["Expected float"]),
+    (
+        "wrong_type.json",
+        Expect::Parse(5, 75),
+        &["invalid type: string \"three\"", "expected usize"],
+    ),
+    (
+        "unknown_field.ron",
+        Expect::Parse(7, 16),
+        &["colour", "expected one of", "generator"],
+    ),
+    (
+        "unknown_field.json",
+        Expect::Parse(3, 34),
+        &["unknown field `timestep`", "expected one of", "`dt`"],
+    ),
+    (
+        "unknown_generator.ron",
+        Expect::Parse(5, 57),
+        &["Cube", "Spiral", "HexSheet"],
+    ),
+    (
+        "missing_field.ron",
+        Expect::Parse(5, 40),
+        &["missing", "generator"],
+    ),
+    (
+        "nan_mass.ron",
+        Expect::Invalid,
+        &["objects[0] \"sheet\".mass = NaN: must be finite and > 0"],
+    ),
+    (
+        "infinite_dt.ron",
+        Expect::Invalid,
+        &["world.dt = inf: must be finite and > 0"],
+    ),
+    (
+        "negative_mass.ron",
+        Expect::Invalid,
+        &["objects[0] \"sheet\".mass = -1: must be finite and > 0"],
+    ),
+    (
+        "negative_spacing.ron",
+        Expect::Invalid,
+        &["objects[1] \"sheet\".generator.HexSheet.spacing = -0.5: must be finite and > 0"],
+    ),
+    (
+        "zero_radius.ron",
+        Expect::Invalid,
+        &["generator.SphereShell.radius = 0: must be finite and > 0"],
+    ),
+    (
+        "zero_count.ron",
+        Expect::Invalid,
+        &["generator.Chain.count = 0: must be in 1..="],
+    ),
+    (
+        "empty_list.ron",
+        Expect::Invalid,
+        &["generator.List.particles: is empty"],
+    ),
+    (
+        "empty_points.ron",
+        Expect::Invalid,
+        &["generator.Points.path", "holds no point"],
+    ),
+    (
+        "missing_points.ron",
+        Expect::Invalid,
+        &["generator.Points.path", "does_not_exist.xyz", "not found"],
+    ),
+    (
+        "bad_points_line.ron",
+        Expect::Points,
+        &[
+            "bad_line.xyz:3:",
+            "`oops` is not a number",
+            "objects[0] \"cloud\".generator.Points.path",
+        ],
+    ),
+    (
+        "unsupported.yaml",
+        Expect::Unsupported,
+        &["unsupported.yaml", "\"yaml\"", ".ron, .json"],
+    ),
+    (
+        "unknown_material.ron",
+        Expect::Invalid,
+        &[
+            "objects[0] \"sheet\".material = \"steel\": unknown material",
+            "\"membrane\", \"rubber\"",
+        ],
+    ),
+    (
+        "duplicate_names.ron",
+        Expect::Invalid,
+        &["objects[1] \"sheet\".name", "duplicate", "objects[0]"],
+    ),
+    (
+        "selection_out_of_range.ron",
+        Expect::Invalid,
+        &[
+            "objects[0] \"rope\".overrides[0].particles = Range(5, 12)",
+            "valid indices: 0..10",
+        ],
+    ),
+    (
+        "force_index_out_of_range.ron",
+        Expect::Invalid,
+        &["forces[0].particles", "index 10", "0..10"],
+    ),
+    (
+        "force_unknown_object.ron",
+        Expect::Invalid,
+        &["forces[0].object = \"cable\"", "\"rope\""],
+    ),
+    (
+        "force_window.ron",
+        Expect::Invalid,
+        &["forces[0].end = 1", "greater than start = 2"],
+    ),
+    (
+        "bad_material.ron",
+        Expect::Invalid,
+        &["materials.\"soft\".spacing.cohesion.alpha = -1", "> 0"],
+    ),
+    (
+        "too_noisy.ron",
+        Expect::Invalid,
+        &["generator.HexSheet.noise = 0.6", "spacing/4"],
+    ),
+    (
+        "spindle_torus.ron",
+        Expect::Invalid,
+        &["generator.TorusShell.major = 1", "greater than minor = 2"],
+    ),
+    (
+        "too_many_particles.ron",
+        Expect::Invalid,
+        &["SphereShell.spacing", "at most 10000000"],
+    ),
+    ("no_objects.json", Expect::Invalid, &["objects: is empty"]),
+    (
+        "bad_name.ron",
+        Expect::Invalid,
+        &["name = \"../escape\"", "/"],
+    ),
+    (
+        "zero_normal.ron",
+        Expect::Invalid,
+        &["generator.Spiral.normal = [0, 0, 0]", "non-zero"],
+    ),
+    (
+        "coincident.ron",
+        Expect::Build,
+        &["objects[0] \"pair\"", "particles 0 and 1 coincide"],
+    ),
+    (
+        "adaptive_params.ron",
+        Expect::Invalid,
+        &["world.integrator.adaptive.rtol = -1"],
+    ),
+];
+
+fn bad_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_scenes")
+}
+
+#[test]
+fn bad_scenes_fail_with_the_right_error() {
+    use op_scene::SceneError;
+    for (file, expect, fragments) in BAD_SCENES {
+        let path = bad_dir().join(file);
+        assert!(path.is_file(), "{file} is missing");
+        let err = match op_scene::build_scene_file(&path) {
+            Ok(_) => panic!("{file}: built without error"),
+            Err(e) => e,
+        };
+        let text = err.to_string();
+        let ok = match (expect, &err) {
+            (Expect::Parse(l, c), SceneError::Parse { line, column, .. }) => {
+                assert_eq!((line, column), (l, c), "{file}: {text}");
+                true
+            }
+            (Expect::Invalid, SceneError::Invalid { .. })
+            | (Expect::Points, SceneError::Points { .. })
+            | (Expect::Unsupported, SceneError::UnsupportedExtension { .. })
+            | (Expect::Build, SceneError::Build { .. }) => true,
+            _ => false,
+        };
+        assert!(ok, "{file}: expected {expect:?}, got {err:?}");
+        assert!(
+            text.contains(file),
+            "{file}: the message names the file: {text}"
+        );
+        for f in *fragments {
+            assert!(text.contains(f), "{file}: {text:?} lacks {f:?}");
+        }
+    }
+}
+
+#[test]
+fn the_bad_scene_table_covers_the_corpus() {
+    for entry in std::fs::read_dir(bad_dir()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_file() {
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            assert!(
+                BAD_SCENES.iter().any(|(f, _, _)| *f == name),
+                "{name} has no expectation in BAD_SCENES"
+            );
+        }
+    }
+}
+
+/// Replaces the `k`-th number of `text` by `with`.
+fn replace_number(text: &str, k: usize, with: &str) -> Option<String> {
+    let bytes = text.as_bytes();
+    let mut found = 0;
+    let mut i = 0;
+    while i < bytes.len() {
+        let starts = bytes[i].is_ascii_digit()
+            && (i == 0 || !(bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_'));
+        if starts {
+            let mut j = i;
+            while j < bytes.len()
+                && (bytes[j].is_ascii_digit() || matches!(bytes[j], b'.' | b'e' | b'-'))
+            {
+                j += 1;
+            }
+            if found == k {
+                return Some(format!("{}{with}{}", &text[..i], &text[j..]));
+            }
+            found += 1;
+            i = j;
+        } else {
+            i += 1;
+        }
+    }
+    None
+}
+
+/// Mutated example scenes (every number replaced by hostile values, and
+/// every prefix of the text) give errors, never panics.
+#[test]
+fn mutated_scenes_never_panic() {
+    for path in scene_files() {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let format = op_scene::Format::from_path(&path).unwrap();
+        let dir = path.parent().unwrap();
+        let try_build = |t: &str| {
+            if let Ok(s) = op_scene::load::parse_unvalidated(t, format, "<mutant>") {
+                let _ = s.build(Some(dir), None);
+            }
+        };
+        for k in 0.. {
+            let mut any = false;
+            for with in ["NaN", "-1", "0", "1e300", "-inf", "4294967296", "0.5"] {
+                if let Some(m) = replace_number(&text, k, with) {
+                    any = true;
+                    eprintln!("MUTANT {} #{k} -> {with}", path.display());
+                    try_build(&m);
+                }
+            }
+            if !any {
+                break;
+            }
+        }
+        for cut in (0..text.len())
+            .step_by(7)
+            .filter(|&c| text.is_char_boundary(c))
+        {
+            try_build(&text[..cut]);
+        }
+    }
+}
