@@ -161,8 +161,25 @@ impl CohesionParams {
         positive("e", self.e)?;
         positive("r0", self.r0)?;
         positive("alpha", self.alpha)?;
+        // Bounds that keep the quadrature partition and the automatic
+        // cut-off search finite: the well's width is ~1/sqrt(alpha), so
+        // alpha r0^2 outside [1e-6, 1e6] describes no useful cohesion and
+        // would need an unbounded number of panels.
+        let a = self.alpha * self.r0 * self.r0;
+        check(
+            "alpha",
+            self.alpha,
+            (1e-6..=1e6).contains(&a),
+            "must satisfy 1e-6 <= alpha * r0^2 <= 1e6 (the well's width is about 1/sqrt(alpha))",
+        )?;
         if let Some(c) = self.cutoff {
             positive("cutoff", c)?;
+            check(
+                "cutoff",
+                c,
+                c <= 1000.0 * self.r0,
+                "must be at most 1000 r0 (cohesion acts over a few r0)",
+            )?;
         }
         validate_fraction("taper", self.taper)?;
         check(
@@ -375,6 +392,19 @@ mod tests {
                 ..d
             },
         ]
+    }
+
+    #[test]
+    fn extreme_alpha_and_cutoff_are_rejected_not_allocated() {
+        for (alpha, cutoff) in [(1e12, None), (1e-12, None), (16.0, Some(1e300))] {
+            let p = CohesionParams {
+                alpha,
+                cutoff,
+                ..Default::default()
+            };
+            let e = p.prepare().unwrap_err().to_string();
+            assert!(e.contains("alpha") || e.contains("cutoff"), "{e}");
+        }
     }
 
     #[test]
