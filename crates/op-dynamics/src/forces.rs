@@ -54,7 +54,7 @@ pub(crate) struct ForceScratch {
     sources: Vec<u32>,
     /// Rebuild count of the list `sources` was made for.
     sources_for: u64,
-    spacing_pairs: Vec<[Real; 4]>,
+    spacing_pairs: Vec<SpacingPair>,
     oriented_pairs: Vec<OrientedPair>,
     normals: Vec<Vec3>,
     tangents: Vec<Vec3>,
@@ -74,6 +74,8 @@ pub(crate) struct ForceContext<'a> {
     pub attributes: Attributes<'a>,
     pub materials: &'a [PreparedMaterial],
     pub friction: bool,
+    /// Some particle has a fixed position or orientation.
+    pub has_fixed: bool,
     pub neighbours: Option<&'a mut NeighbourList>,
     pub external: &'a ExternalParams,
     pub accumulator: &'a ExternalAccumulator,
@@ -88,6 +90,12 @@ impl crate::integrators::ForceField for ForceContext<'_> {
 
 impl ForceContext<'_> {
     /// Computes forces, torques and the potential energy at state `s`.
+    ///
+    /// On one thread the pairs are scattered directly into the particle
+    /// sums; on several, each pair's result goes into its slot of a pair
+    /// buffer and each particle gathers its slots. Both add, for every
+    /// particle, its incoming pairs in ascending order and then its own row
+    /// in list order, so the two paths give the same bits.
     pub fn evaluate(
         &mut self,
         t: Real,
@@ -96,30 +104,58 @@ impl ForceContext<'_> {
         torques: &mut [Vec3],
     ) {
         let n = s.positions.len();
-        let sc = &mut *self.scratch;
-        sc.evaluations += 1;
-        sc.energies.resize(n, 0.0);
+        let ForceScratch {
+            sources,
+            sources_for,
+            spacing_pairs,
+            oriented_pairs,
+            normals,
+            tangents,
+            energies,
+            potential,
+            evaluations,
+            neighbour_seconds,
+        } = &mut *self.scratch;
+        *evaluations += 1;
+        energies.resize(n, 0.0);
         match (self.kernel, self.neighbours.as_deref_mut()) {
             (Kernel::None, _) | (_, None) => {
                 forces.iter_mut().for_each(|f| *f = Vec3::zeros());
                 torques.iter_mut().for_each(|t| *t = Vec3::zeros());
-                sc.energies.iter_mut().for_each(|e| *e = 0.0);
+                energies.iter_mut().for_each(|e| *e = 0.0);
             }
             (kernel, Some(list)) => {
                 let clock = std::time::Instant::now();
                 list.update(s.positions);
-                sc.neighbour_seconds += clock.elapsed().as_secs_f64();
-                refresh_sources(sc, list);
-                match kernel {
-                    Kernel::Spacing => spacing_pass(sc, list, &self.attributes, self.materials, s),
-                    _ => {
-                        oriented_pass(sc, list, &self.attributes, self.materials, self.friction, s)
-                    }
+                *neighbour_seconds += clock.elapsed().as_secs_f64();
+                let serial = rayon::current_num_threads() == 1;
+                if !serial {
+                    refresh_sources(sources, sources_for, list);
                 }
-                gather(sc, list, kernel, forces, torques);
+                let a = &self.attributes;
+                let m = self.materials;
+                let cutoff2 = list.cutoff() * list.cutoff();
+                let out = Sums {
+                    forces,
+                    torques,
+                    energies,
+                };
+                if kernel == Kernel::Spacing {
+                    let uniform = uniform_spacing(a);
+                    let pair = |i: usize, j: usize| spacing_pair(a, m, uniform, cutoff2, s, i, j);
+                    accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
+                } else {
+                    frames(normals, tangents, a, s);
+                    let (normals, tangents) = (&*normals, &*tangents);
+                    let friction = self.friction;
+                    let pair = |i: usize, j: usize| {
+                        oriented_pair(a, m, friction, cutoff2, normals, tangents, s, i, j)
+                    };
+                    accumulate::<true, _, _>(list, sources, oriented_pairs, serial, pair, out);
+                }
             }
         }
-        sc.potential = sc.energies.iter().sum();
+        *potential = energies.iter().sum();
         self.add_external(t, s, forces, torques);
     }
 
@@ -131,19 +167,22 @@ impl ForceContext<'_> {
         let b1 = self.external.angular_damping;
         let a = &self.attributes;
         let acc = self.accumulator;
-        forces
-            .par_iter_mut()
-            .zip(torques.par_iter_mut())
-            .enumerate()
-            .for_each(|(i, (f, tq))| {
-                *f += a.masses[i] * g - b0 * s.velocities[i];
-                *tq -= b1 * s.angular_velocities[i];
-                if acc.is_active() {
-                    let (fe, te) = acc.get(a.ids[i]);
-                    *f += fe;
-                    *tq += te;
-                }
-            });
+        let uniform = g != Vec3::zeros() || b0 != 0.0 || b1 != 0.0 || acc.is_active();
+        if uniform {
+            forces
+                .par_iter_mut()
+                .zip(torques.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, (f, tq))| {
+                    *f += a.masses[i] * g - b0 * s.velocities[i];
+                    *tq -= b1 * s.angular_velocities[i];
+                    if acc.is_active() {
+                        let (fe, te) = acc.get(a.ids[i]);
+                        *f += fe;
+                        *tq += te;
+                    }
+                });
+        }
         for w in &self.external.forces {
             let k = w.factor(t);
             if k != 0.0 {
@@ -152,6 +191,9 @@ impl ForceContext<'_> {
                     forces[a.slot_of[id as usize] as usize] += fw;
                 }
             }
+        }
+        if !self.has_fixed {
+            return;
         }
         for (i, fl) in a.flags.iter().enumerate() {
             if fl.contains(Flags::FIXED_POSITION) {
@@ -165,17 +207,17 @@ impl ForceContext<'_> {
 }
 
 /// Recomputes the source particle of every pair after a list rebuild.
-fn refresh_sources(sc: &mut ForceScratch, list: &NeighbourList) {
-    if sc.sources_for == list.rebuilds() && sc.sources.len() == list.pairs().num_pairs() {
+fn refresh_sources(sources: &mut Vec<u32>, sources_for: &mut u64, list: &NeighbourList) {
+    if *sources_for == list.rebuilds() && sources.len() == list.pairs().num_pairs() {
         return;
     }
     let pairs = list.pairs();
-    sc.sources.clear();
+    sources.clear();
     for i in 0..pairs.len() {
         let r = pairs.row_range(i);
-        sc.sources.extend(std::iter::repeat_n(i as u32, r.len()));
+        sources.extend(std::iter::repeat_n(i as u32, r.len()));
     }
-    sc.sources_for = list.rebuilds();
+    *sources_for = list.rebuilds();
 }
 
 /// Coupling of two particles: object membership, then typing, then
@@ -191,50 +233,217 @@ fn coupling(a: &Attributes<'_>, i: usize, j: usize) -> Coupling {
     }
 }
 
-fn spacing_pass(
-    sc: &mut ForceScratch,
+/// True when every particle has material 0, object 0's id and type
+/// `Standard(0)`'s coupling: then every pair is a complete spacing pair of
+/// material 0 and the spacing kernel skips the per-pair lookups.
+fn uniform_spacing(a: &Attributes<'_>) -> bool {
+    let (o, k) = match (a.objects.first(), a.kinds.first()) {
+        (Some(&o), Some(&k)) => (o, k),
+        _ => return true,
+    };
+    k != crate::particles::ParticleType::Hinge
+        && a.materials.iter().all(|&m| m == 0)
+        && a.objects.iter().all(|&x| x == o)
+        && a.kinds.iter().all(|&x| x == k)
+}
+
+/// The per-particle sums a force evaluation fills.
+struct Sums<'a> {
+    forces: &'a mut [Vec3],
+    torques: &'a mut [Vec3],
+    energies: &'a mut [Real],
+}
+
+/// One pair's contribution: the force on `j` (the force on `i` is its
+/// negative), the torques on `i` and `j`, the pair energy.
+trait PairOut: Copy + Default + Send + Sync {
+    fn force_j(&self) -> Vec3;
+    fn torque_i(&self) -> Vec3;
+    fn torque_j(&self) -> Vec3;
+    fn energy(&self) -> Real;
+}
+
+/// Result slot of one pair in the spacing kernel.
+#[derive(Copy, Clone, Debug, Default)]
+struct SpacingPair {
+    force_j: Vec3,
+    energy: Real,
+}
+
+impl PairOut for SpacingPair {
+    #[inline]
+    fn force_j(&self) -> Vec3 {
+        self.force_j
+    }
+    #[inline]
+    fn torque_i(&self) -> Vec3 {
+        Vec3::zeros()
+    }
+    #[inline]
+    fn torque_j(&self) -> Vec3 {
+        Vec3::zeros()
+    }
+    #[inline]
+    fn energy(&self) -> Real {
+        self.energy
+    }
+}
+
+impl PairOut for OrientedPair {
+    #[inline]
+    fn force_j(&self) -> Vec3 {
+        self.force_j
+    }
+    #[inline]
+    fn torque_i(&self) -> Vec3 {
+        self.torque_i
+    }
+    #[inline]
+    fn torque_j(&self) -> Vec3 {
+        self.torque_j
+    }
+    #[inline]
+    fn energy(&self) -> Real {
+        self.energy
+    }
+}
+
+/// Evaluates every listed pair once and sums the contributions per
+/// particle: incoming pairs first (ascending source), then the particle's
+/// own row (list order). `TORQUES` is false for kernels without torques.
+fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> O + Sync>(
     list: &NeighbourList,
-    a: &Attributes<'_>,
-    materials: &[PreparedMaterial],
-    s: StateRef<'_>,
+    sources: &[u32],
+    buffer: &mut Vec<O>,
+    serial: bool,
+    pair: P,
+    out: Sums<'_>,
 ) {
     let pairs = list.pairs();
     let nbrs = pairs.neighbours();
-    let cutoff2 = list.cutoff() * list.cutoff();
-    sc.spacing_pairs.resize(nbrs.len(), [0.0; 4]);
-    let src = &sc.sources;
-    let p = s.positions;
-    sc.spacing_pairs
+    let Sums {
+        forces,
+        torques,
+        energies,
+    } = out;
+    if serial {
+        forces.iter_mut().for_each(|f| *f = Vec3::zeros());
+        torques.iter_mut().for_each(|t| *t = Vec3::zeros());
+        for i in 0..forces.len() {
+            let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
+            for k in pairs.row_range(i) {
+                let j = nbrs[k] as usize;
+                let o = pair(i, j);
+                fo -= o.force_j();
+                eo += o.energy();
+                forces[j] += o.force_j();
+                if TORQUES {
+                    to += o.torque_i();
+                    torques[j] += o.torque_j();
+                }
+            }
+            forces[i] += fo;
+            if TORQUES {
+                torques[i] += to;
+            }
+            energies[i] = eo;
+        }
+        return;
+    }
+    buffer.resize(nbrs.len(), O::default());
+    buffer
         .par_iter_mut()
         .with_min_len(256)
         .enumerate()
-        .for_each(|(k, out)| {
-            let i = src[k] as usize;
-            let j = nbrs[k] as usize;
-            let r = p[j] - p[i];
-            let d2 = r.norm_squared();
-            if d2 > cutoff2 {
-                *out = [0.0; 4];
-                return;
-            }
-            let dist = d2.sqrt();
-            let (mi, mj) = (
-                &materials[a.materials[i] as usize],
-                &materials[a.materials[j] as usize],
-            );
-            let (e, f) = match coupling(a, i, j) {
-                Coupling::Complete { .. } => evaluate_spacing(mi, mj, &r, dist),
-                Coupling::RepulsionOnly => {
-                    let res = evaluate_pair(
-                        &view(p[i], Vec3::zeros(), Vec3::zeros(), 0.0, mi),
-                        &view(p[j], Vec3::zeros(), Vec3::zeros(), 0.0, mj),
-                        Coupling::RepulsionOnly,
-                    );
-                    (res.energy, res.force_j)
+        .for_each(|(k, o)| *o = pair(sources[k] as usize, nbrs[k] as usize));
+    let buffer = &*buffer;
+    forces
+        .par_iter_mut()
+        .zip(torques.par_iter_mut())
+        .zip(energies.par_iter_mut())
+        .enumerate()
+        .with_min_len(256)
+        .for_each(|(i, ((f, t), e))| {
+            let (mut fin, mut tin) = (Vec3::zeros(), Vec3::zeros());
+            for &k in pairs.incoming(i) {
+                let o = &buffer[k as usize];
+                fin += o.force_j();
+                if TORQUES {
+                    tin += o.torque_j();
                 }
-            };
-            *out = [f.x, f.y, f.z, e];
+            }
+            let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
+            for k in pairs.row_range(i) {
+                let o = &buffer[k];
+                fo -= o.force_j();
+                eo += o.energy();
+                if TORQUES {
+                    to += o.torque_i();
+                }
+            }
+            *f = fin + fo;
+            *t = if TORQUES { tin + to } else { Vec3::zeros() };
+            *e = eo;
         });
+}
+
+/// World normals and tangents of every particle at state `s`.
+fn frames(normals: &mut Vec<Vec3>, tangents: &mut Vec<Vec3>, a: &Attributes<'_>, s: StateRef<'_>) {
+    let n = s.positions.len();
+    normals.resize(n, Vec3::zeros());
+    tangents.resize(n, Vec3::zeros());
+    normals
+        .par_iter_mut()
+        .zip(tangents.par_iter_mut())
+        .enumerate()
+        .with_min_len(1024)
+        .for_each(|(i, (nv, tv))| {
+            let q = &s.orientations[i];
+            *nv = q * a.normal_axes[i];
+            *tv = q * a.tangent_axes[i];
+        });
+}
+
+/// The spacing kernel's pair: spacing potential for complete pairs, the
+/// typing repulsion otherwise; zero beyond the cut-off.
+#[inline]
+fn spacing_pair(
+    a: &Attributes<'_>,
+    materials: &[PreparedMaterial],
+    uniform: bool,
+    cutoff2: Real,
+    s: StateRef<'_>,
+    i: usize,
+    j: usize,
+) -> SpacingPair {
+    let p = s.positions;
+    let r = p[j] - p[i];
+    let d2 = r.norm_squared();
+    if d2 > cutoff2 {
+        return SpacingPair::default();
+    }
+    let dist = d2.sqrt();
+    if uniform {
+        let m = &materials[0];
+        let (energy, force_j) = evaluate_spacing(m, m, &r, dist);
+        return SpacingPair { force_j, energy };
+    }
+    let (mi, mj) = (
+        &materials[a.materials[i] as usize],
+        &materials[a.materials[j] as usize],
+    );
+    let (energy, force_j) = match coupling(a, i, j) {
+        Coupling::Complete { .. } => evaluate_spacing(mi, mj, &r, dist),
+        Coupling::RepulsionOnly => {
+            let res = evaluate_pair(
+                &view(p[i], Vec3::zeros(), Vec3::zeros(), 0.0, mi),
+                &view(p[j], Vec3::zeros(), Vec3::zeros(), 0.0, mj),
+                Coupling::RepulsionOnly,
+            );
+            (res.energy, res.force_j)
+        }
+    };
+    SpacingPair { force_j, energy }
 }
 
 #[inline]
@@ -254,68 +463,48 @@ fn view(
     }
 }
 
-fn oriented_pass(
-    sc: &mut ForceScratch,
-    list: &NeighbourList,
+/// The oriented kernel's pair: the full interaction of the pair's coupling
+/// plus inter-particle friction; zero beyond the cut-off.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn oriented_pair(
     a: &Attributes<'_>,
     materials: &[PreparedMaterial],
     friction: bool,
+    cutoff2: Real,
+    normals: &[Vec3],
+    tangents: &[Vec3],
     s: StateRef<'_>,
-) {
-    let n = s.positions.len();
-    sc.normals.resize(n, Vec3::zeros());
-    sc.tangents.resize(n, Vec3::zeros());
-    sc.normals
-        .par_iter_mut()
-        .zip(sc.tangents.par_iter_mut())
-        .enumerate()
-        .for_each(|(i, (nv, tv))| {
-            let q = &s.orientations[i];
-            *nv = q * a.normal_axes[i];
-            *tv = q * a.tangent_axes[i];
-        });
-    let pairs = list.pairs();
-    let nbrs = pairs.neighbours();
-    let cutoff2 = list.cutoff() * list.cutoff();
-    sc.oriented_pairs
-        .resize(nbrs.len(), OrientedPair::default());
-    let (src, normals, tangents) = (&sc.sources, &sc.normals, &sc.tangents);
+    i: usize,
+    j: usize,
+) -> OrientedPair {
     let p = s.positions;
-    sc.oriented_pairs
-        .par_iter_mut()
-        .with_min_len(128)
-        .enumerate()
-        .for_each(|(k, out)| {
-            let i = src[k] as usize;
-            let j = nbrs[k] as usize;
-            let r = p[j] - p[i];
-            let d2 = r.norm_squared();
-            if d2 > cutoff2 {
-                *out = OrientedPair::default();
-                return;
-            }
-            let (mi, mj) = (
-                &materials[a.materials[i] as usize],
-                &materials[a.materials[j] as usize],
-            );
-            let c = coupling(a, i, j);
-            let res = evaluate_pair(
-                &view(p[i], normals[i], tangents[i], a.curvatures[i], mi),
-                &view(p[j], normals[j], tangents[j], a.curvatures[j], mj),
-                c,
-            );
-            let mut force_j = res.force_j;
-            if friction && matches!(c, Coupling::Complete { .. }) {
-                force_j +=
-                    friction_force(mi, mj, &r, d2.sqrt(), &(s.velocities[j] - s.velocities[i]));
-            }
-            *out = OrientedPair {
-                force_j,
-                torque_i: res.torque_i,
-                torque_j: res.torque_j,
-                energy: res.energy,
-            };
-        });
+    let r = p[j] - p[i];
+    let d2 = r.norm_squared();
+    if d2 > cutoff2 {
+        return OrientedPair::default();
+    }
+    let (mi, mj) = (
+        &materials[a.materials[i] as usize],
+        &materials[a.materials[j] as usize],
+    );
+    let c = coupling(a, i, j);
+    let res = evaluate_pair(
+        &view(p[i], normals[i], tangents[i], a.curvatures[i], mi),
+        &view(p[j], normals[j], tangents[j], a.curvatures[j], mj),
+        c,
+    );
+    let mut force_j = res.force_j;
+    if friction && matches!(c, Coupling::Complete { .. }) {
+        let v_rel = s.velocities[j] - s.velocities[i];
+        force_j += friction_force(mi, mj, &r, d2.sqrt(), &v_rel);
+    }
+    OrientedPair {
+        force_j,
+        torque_i: res.torque_i,
+        torque_j: res.torque_j,
+        energy: res.energy,
+    }
 }
 
 /// Inter-particle friction (seed 002 §3, §5): damping of the relative
@@ -338,58 +527,4 @@ pub fn friction_force(
     }
     let e = r / dist;
     -gamma * (1.0 - dist / rc) * v_rel.dot(&e) * e
-}
-
-/// Sums each particle's pair contributions in a fixed order: its row first
-/// (it is `i`: force `-F_j`, torque `tau_i`), then the incoming pairs (it
-/// is `j`: `F_j`, `tau_j`).
-fn gather(
-    sc: &mut ForceScratch,
-    list: &NeighbourList,
-    kernel: Kernel,
-    forces: &mut [Vec3],
-    torques: &mut [Vec3],
-) {
-    let pairs = list.pairs();
-    let (sp, op) = (&sc.spacing_pairs, &sc.oriented_pairs);
-    forces
-        .par_iter_mut()
-        .zip(torques.par_iter_mut())
-        .zip(sc.energies.par_iter_mut())
-        .enumerate()
-        .with_min_len(256)
-        .for_each(|(i, ((f, t), e))| {
-            let mut fo = Vec3::zeros();
-            let mut to = Vec3::zeros();
-            let mut eo = 0.0;
-            match kernel {
-                Kernel::Spacing => {
-                    for k in pairs.row_range(i) {
-                        let o = &sp[k];
-                        fo -= Vec3::new(o[0], o[1], o[2]);
-                        eo += o[3];
-                    }
-                    for &k in pairs.incoming(i) {
-                        let o = &sp[k as usize];
-                        fo += Vec3::new(o[0], o[1], o[2]);
-                    }
-                }
-                _ => {
-                    for k in pairs.row_range(i) {
-                        let o = &op[k];
-                        fo -= o.force_j;
-                        to += o.torque_i;
-                        eo += o.energy;
-                    }
-                    for &k in pairs.incoming(i) {
-                        let o = &op[k as usize];
-                        fo += o.force_j;
-                        to += o.torque_j;
-                    }
-                }
-            }
-            *f = fo;
-            *t = to;
-            *e = eo;
-        });
 }

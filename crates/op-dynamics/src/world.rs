@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::diagnostics::{self, Diagnostics};
 use crate::error::{self, ParamError};
 use crate::external::{ExternalAccumulator, ExternalParams};
+use crate::flags::Flags;
 use crate::forces::{ForceContext, ForceScratch, Kernel};
 use crate::integrators::{Integrator, Scheme};
 use crate::interactions::{Material, PreparedMaterial};
@@ -179,6 +180,10 @@ pub struct World {
     kernel: Kernel,
     friction: bool,
     repulsion: bool,
+    has_fixed: bool,
+    /// Something may have set particles rotating (initial spin, external
+    /// torques, direct state edits): the divergence check reads frames.
+    may_rotate: bool,
     neighbours: Option<NeighbourList>,
     integrator: Integrator,
     accumulator: ExternalAccumulator,
@@ -189,7 +194,6 @@ pub struct World {
     time: Real,
     steps: u64,
     dt_next: Real,
-    oscillation: Real,
     report: StepReport,
 }
 
@@ -273,6 +277,14 @@ impl World {
             kernel,
             friction,
             repulsion,
+            has_fixed: particles
+                .flags()
+                .iter()
+                .any(|f| f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)),
+            may_rotate: particles
+                .angular_velocities()
+                .iter()
+                .any(|w| *w != Vec3::zeros()),
             neighbours,
             integrator: Integrator::new(params.scheme),
             accumulator: ExternalAccumulator::new(n),
@@ -283,7 +295,6 @@ impl World {
             time: 0.0,
             steps: 0,
             dt_next: params.dt,
-            oscillation: 0.0,
             report: StepReport::default(),
             particles,
             params,
@@ -300,6 +311,7 @@ impl World {
     /// forces are invalidated.
     pub fn particles_mut(&mut self) -> &mut Particles {
         self.integrator.invalidate();
+        self.may_rotate = true;
         &mut self.particles
     }
 
@@ -374,8 +386,14 @@ impl World {
     /// particles about their mean displacement during one step. The
     /// extracted paper text lost the `1/N`; without it the quantity is not a
     /// spread about the mass centre and can be negative.
+    ///
+    /// Computed on demand from the positions before and after the last step
+    /// (the step itself only copies the positions), 0 before the first step.
     pub fn oscillation(&self) -> Real {
-        self.oscillation
+        if self.steps == 0 {
+            return 0.0;
+        }
+        diagnostics::oscillation(&self.prev_positions, self.particles.positions())
     }
 
     /// What the last step did.
@@ -388,6 +406,7 @@ impl World {
     /// then cleared. This is how other crates (op-implicit contact, tools)
     /// act on particles.
     pub fn add_external_force(&mut self, id: u32, force: Vec3, torque: Vec3) {
+        self.may_rotate |= torque != Vec3::zeros();
         self.accumulator.add(id, force, torque);
     }
 
@@ -455,6 +474,7 @@ impl World {
             attributes,
             materials: &self.materials,
             friction: self.friction,
+            has_fixed: self.has_fixed,
             neighbours: self.neighbours.as_mut(),
             external: &self.params.external,
             accumulator: &self.accumulator,
@@ -481,8 +501,6 @@ impl World {
         }
 
         let clock = std::time::Instant::now();
-        self.oscillation =
-            diagnostics::oscillation(&self.prev_positions, self.particles.positions());
         let check = self.check_divergence();
         report.seconds[Stage::Check as usize] = clock.elapsed().as_secs_f64();
         self.report = report;
@@ -493,11 +511,15 @@ impl World {
     fn check_divergence(&self) -> Result<(), Divergence> {
         let p = &self.particles;
         let vmax2 = self.params.divergence.max_speed.powi(2);
+        // Without torques (spacing kernel, no pending torque) and without
+        // initial spin, orientations cannot change: skip reading them.
+        let rotating = self.kernel == Kernel::Oriented || self.may_rotate;
         let bad = (0..p.len()).find_map(|i| {
             let finite = p.positions()[i].iter().all(|c| c.is_finite())
                 && p.velocities()[i].iter().all(|c| c.is_finite())
-                && p.angular_velocities()[i].iter().all(|c| c.is_finite())
-                && p.orientations()[i].coords.iter().all(|c| c.is_finite());
+                && (!rotating
+                    || (p.angular_velocities()[i].iter().all(|c| c.is_finite())
+                        && p.orientations()[i].coords.iter().all(|c| c.is_finite())));
             if !finite {
                 Some((
                     i,
@@ -537,6 +559,7 @@ impl World {
             attributes,
             materials: &self.materials,
             friction: self.friction,
+            has_fixed: self.has_fixed,
             neighbours: self.neighbours.as_mut(),
             external: &self.params.external,
             accumulator: &self.accumulator,
@@ -553,7 +576,7 @@ impl World {
         let mut d = diagnostics::kinematic(&self.particles);
         d.potential = potential;
         d.total = d.kinetic_translational + d.kinetic_rotational + potential;
-        d.oscillation = self.oscillation;
+        d.oscillation = self.oscillation();
         d
     }
 

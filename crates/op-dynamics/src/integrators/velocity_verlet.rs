@@ -79,6 +79,20 @@ pub(crate) fn kick_drift(
 ) -> (Particle, Vec3) {
     let v = s.v + (0.5 * h * inv_mass) * f;
     let p = s.p + h * v;
+    if s.w == Vec3::zeros() && *tau == Vec3::zeros() {
+        // Not rotating and no torque: the rotational half is the identity
+        // (L = 0, q unchanged) and is skipped, so spacing-only scenes do
+        // not pay for frames they never turn.
+        return (
+            Particle {
+                p,
+                v,
+                q: s.q,
+                w: s.w,
+            },
+            Vec3::zeros(),
+        );
+    }
     if rigid::inverse_moments(inertia).is_none() {
         let q = rotate_by(&s.q, &(h * s.w));
         return (Particle { p, v, q, w: s.w }, Vec3::zeros());
@@ -102,6 +116,9 @@ pub(crate) fn kick(
     h: Real,
 ) -> Particle {
     let v = s.v + (0.5 * h * inv_mass) * f;
+    if *l == Vec3::zeros() && *tau == Vec3::zeros() && s.w == Vec3::zeros() {
+        return Particle { v, ..*s };
+    }
     let l1 = l + 0.5 * h * tau;
     let w = angular_velocity_from_momentum(&s.q, &l1, inertia).unwrap_or(s.w);
     Particle { v, w, ..*s }
