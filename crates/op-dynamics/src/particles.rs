@@ -173,12 +173,18 @@ pub struct Attributes<'a> {
 /// which only the store's methods can change.
 #[derive(Clone, Debug, Default)]
 pub struct Particles {
-    ids: Vec<u32>,
-    slot_of: Vec<u32>,
     positions: Vec<Point3>,
     velocities: Vec<Vec3>,
     orientations: Vec<Quat>,
     angular_velocities: Vec<Vec3>,
+    statics: Statics,
+}
+
+/// The arrays the integrator does not advance.
+#[derive(Clone, Debug, Default)]
+struct Statics {
+    ids: Vec<u32>,
+    slot_of: Vec<u32>,
     masses: Vec<Real>,
     inv_masses: Vec<Real>,
     inertias: Vec<Vec3>,
@@ -191,9 +197,29 @@ pub struct Particles {
     curvatures: Vec<Real>,
 }
 
+impl Statics {
+    fn view(&self) -> Attributes<'_> {
+        Attributes {
+            ids: &self.ids,
+            slot_of: &self.slot_of,
+            normal_axes: &self.normal_axes,
+            tangent_axes: &self.tangent_axes,
+            flags: &self.flags,
+            objects: &self.objects,
+            kinds: &self.kinds,
+            materials: &self.materials,
+            curvatures: &self.curvatures,
+            masses: &self.masses,
+        }
+    }
+}
+
 macro_rules! slice_accessors {
-    ($($(#[$doc:meta])* $name:ident : $t:ty),* $(,)?) => {
+    (state; $($(#[$doc:meta])* $name:ident : $t:ty),* $(,)?) => {
         $( $(#[$doc])* #[inline] pub fn $name(&self) -> &[$t] { &self.$name } )*
+    };
+    (statics; $($(#[$doc:meta])* $name:ident : $t:ty),* $(,)?) => {
+        $( $(#[$doc])* #[inline] pub fn $name(&self) -> &[$t] { &self.statics.$name } )*
     };
 }
 
@@ -225,8 +251,8 @@ impl Particles {
         let fixed_pos = d.flags.contains(Flags::FIXED_POSITION);
         let fixed_rot = d.flags.contains(Flags::FIXED_ORIENTATION);
         let a = d.normal_axis.normalize();
-        self.ids.push(id);
-        self.slot_of.push(id);
+        self.statics.ids.push(id);
+        self.statics.slot_of.push(id);
         self.positions.push(d.position);
         self.velocities
             .push(if fixed_pos { Vec3::zeros() } else { d.velocity });
@@ -237,23 +263,22 @@ impl Particles {
         } else {
             d.angular_velocity
         });
-        self.masses.push(d.mass);
-        self.inv_masses
+        self.statics.masses.push(d.mass);
+        self.statics
+            .inv_masses
             .push(if fixed_pos { 0.0 } else { 1.0 / d.mass });
-        self.inertias.push(d.inertia);
-        self.normal_axes.push(a);
-        self.tangent_axes.push(tangent_axis(&a));
-        self.flags.push(d.flags);
-        self.objects.push(d.object);
-        self.kinds.push(d.kind);
-        self.materials.push(d.material);
-        self.curvatures.push(d.curvature);
+        self.statics.inertias.push(d.inertia);
+        self.statics.normal_axes.push(a);
+        self.statics.tangent_axes.push(tangent_axis(&a));
+        self.statics.flags.push(d.flags);
+        self.statics.objects.push(d.object);
+        self.statics.kinds.push(d.kind);
+        self.statics.materials.push(d.material);
+        self.statics.curvatures.push(d.curvature);
         Ok(id)
     }
 
-    slice_accessors! {
-        /// Stable id of the particle in each slot.
-        ids: u32,
+    slice_accessors! { state;
         /// Positions.
         positions: Point3,
         /// Velocities.
@@ -262,6 +287,11 @@ impl Particles {
         orientations: Quat,
         /// Angular velocities, world frame.
         angular_velocities: Vec3,
+    }
+
+    slice_accessors! { statics;
+        /// Stable id of the particle in each slot.
+        ids: u32,
         /// Masses.
         masses: Real,
         /// Inverse masses (0 for fixed-position particles).
@@ -287,19 +317,19 @@ impl Particles {
     /// The slot currently holding particle `id`, if any.
     #[inline]
     pub fn slot_of(&self, id: u32) -> Option<usize> {
-        self.slot_of.get(id as usize).map(|&s| s as usize)
+        self.statics.slot_of.get(id as usize).map(|&s| s as usize)
     }
 
     /// World normal `n = R(q) a` of the particle in `slot`.
     #[inline]
     pub fn normal(&self, slot: usize) -> Vec3 {
-        self.orientations[slot] * self.normal_axes[slot]
+        self.orientations[slot] * self.statics.normal_axes[slot]
     }
 
     /// Sets the velocity of the particle in `slot` (ignored for fixed
     /// positions).
     pub fn set_velocity(&mut self, slot: usize, v: Vec3) {
-        if !self.flags[slot].contains(Flags::FIXED_POSITION) {
+        if !self.statics.flags[slot].contains(Flags::FIXED_POSITION) {
             self.velocities[slot] = v;
         }
     }
@@ -316,7 +346,7 @@ impl Particles {
 
     /// Sets the rest curvature of the particle in `slot`.
     pub fn set_curvature(&mut self, slot: usize, kappa: Real) {
-        self.curvatures[slot] = kappa;
+        self.statics.curvatures[slot] = kappa;
     }
 
     /// The state seen by the integrator.
@@ -341,38 +371,16 @@ impl Particles {
                 angular_velocities: &mut self.angular_velocities,
             },
             Bodies {
-                inv_mass: &self.inv_masses,
-                inertia: &self.inertias,
+                inv_mass: &self.statics.inv_masses,
+                inertia: &self.statics.inertias,
             },
-            Attributes {
-                ids: &self.ids,
-                slot_of: &self.slot_of,
-                normal_axes: &self.normal_axes,
-                tangent_axes: &self.tangent_axes,
-                flags: &self.flags,
-                objects: &self.objects,
-                kinds: &self.kinds,
-                materials: &self.materials,
-                curvatures: &self.curvatures,
-                masses: &self.masses,
-            },
+            self.statics.view(),
         )
     }
 
     /// The static attributes alone.
     pub fn attributes(&self) -> Attributes<'_> {
-        Attributes {
-            ids: &self.ids,
-            slot_of: &self.slot_of,
-            normal_axes: &self.normal_axes,
-            tangent_axes: &self.tangent_axes,
-            flags: &self.flags,
-            objects: &self.objects,
-            kinds: &self.kinds,
-            materials: &self.materials,
-            curvatures: &self.curvatures,
-            masses: &self.masses,
-        }
+        self.statics.view()
     }
 
     /// Reorders every array so that new slot `s` holds the particle that was
@@ -383,23 +391,23 @@ impl Particles {
             let new: Vec<T> = order.iter().map(|&o| v[o as usize].clone()).collect();
             *v = new;
         }
-        apply(&mut self.ids, order);
+        apply(&mut self.statics.ids, order);
         apply(&mut self.positions, order);
         apply(&mut self.velocities, order);
         apply(&mut self.orientations, order);
         apply(&mut self.angular_velocities, order);
-        apply(&mut self.masses, order);
-        apply(&mut self.inv_masses, order);
-        apply(&mut self.inertias, order);
-        apply(&mut self.normal_axes, order);
-        apply(&mut self.tangent_axes, order);
-        apply(&mut self.flags, order);
-        apply(&mut self.objects, order);
-        apply(&mut self.kinds, order);
-        apply(&mut self.materials, order);
-        apply(&mut self.curvatures, order);
-        for (slot, &id) in self.ids.iter().enumerate() {
-            self.slot_of[id as usize] = slot as u32;
+        apply(&mut self.statics.masses, order);
+        apply(&mut self.statics.inv_masses, order);
+        apply(&mut self.statics.inertias, order);
+        apply(&mut self.statics.normal_axes, order);
+        apply(&mut self.statics.tangent_axes, order);
+        apply(&mut self.statics.flags, order);
+        apply(&mut self.statics.objects, order);
+        apply(&mut self.statics.kinds, order);
+        apply(&mut self.statics.materials, order);
+        apply(&mut self.statics.curvatures, order);
+        for (slot, &id) in self.statics.ids.iter().enumerate() {
+            self.statics.slot_of[id as usize] = slot as u32;
         }
     }
 
