@@ -1,11 +1,43 @@
 //! # op-implicit: implicit skins on oriented-particle skeletons
 //!
 //! Seed 002 §6 and DESIGN §5: skeleton primitives posed in particle frames,
-//! compact-support field kernels, polygonization with the `isosurface`
-//! crate, and contact (against parry colliders and between implicit
-//! objects, Gascuel's model) fed back to the particles through
-//! `op_dynamics::World::add_external_force`.
+//! a compact-support field kernel (Wyvill 1986), the summed field with
+//! analytic gradient, and polygonization of its iso-surface with the
+//! `isosurface` crate.
 //!
-//! This crate holds no code yet: the skinning and contact work is tracked as
-//! its own issue, and the workspace builds and tests without it.
+//! Entry points:
+//! - [`Primitive`] (point, segment, rectangle/square, ellipsoid) in a
+//!   particle's body frame, with its support radius;
+//! - [`Skin::new`] attaches primitives to the particles of an
+//!   `op_dynamics::World`; [`Skin::repose`] follows the particles;
+//! - [`Field`] (from [`Skin::field`]) evaluates the field and gradient,
+//!   one point or many in parallel;
+//! - [`polygonize()`] turns a field into a closed, outward-oriented
+//!   [`Mesh`] with analytic normals.
+//!
+//! - [`collider_reactions`] computes the contact reactions of a sampled
+//!   skin against a parry collider, shared among the particles and applied
+//!   with [`Reactions::apply`] (`World::add_external_force`).
+//!
+//! Not implemented yet: contact between two implicit objects (Gascuel's
+//! interpenetration and propagation regions, DESIGN §5).
 #![warn(missing_docs)]
+
+pub mod contact;
+pub mod error;
+pub mod field;
+mod grid;
+pub mod kernel;
+pub mod polygonize;
+pub mod primitives;
+pub mod skin;
+#[cfg(test)]
+mod test_util;
+
+pub use contact::{collider_reactions, ContactParams, Reaction, Reactions};
+pub use error::{PolygonizeError, SkinError};
+pub use field::Field;
+pub use kernel::{iso_radius, ISO};
+pub use polygonize::{polygonize, Mesh, PolygonizeParams};
+pub use primitives::{PosedPrimitive, Primitive, Shape};
+pub use skin::Skin;

@@ -1,0 +1,114 @@
+//! A uniform cell grid over bounding spheres (DEPENDENCIES.md: a sorted
+//! cell list beat kiddo on flat sheets such as skinned spirals): each cell
+//! lists, in increasing order, the spheres whose bounding box overlaps it,
+//! stored flat (CSR).
+
+use op_dynamics::{Point3, Real};
+
+/// Cells per sphere are bounded by making cells at least as large as the
+/// mean sphere diameter; the total cell count is capped at this many per
+/// sphere (plus a constant) by coarsening the grid.
+const MAX_CELLS_PER_SPHERE: usize = 64;
+
+/// The grid: origin, cell size, dimensions, and the CSR lists.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct CellGrid {
+    origin: Point3,
+    inv_cell: Real,
+    dims: [usize; 3],
+    starts: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl CellGrid {
+    /// Builds the grid over `spheres` (centre, radius).
+    pub(crate) fn new(spheres: &[(Point3, Real)]) -> Self {
+        if spheres.is_empty() {
+            return CellGrid::default();
+        }
+        let mut lo = Point3::from([Real::INFINITY; 3]);
+        let mut hi = Point3::from([Real::NEG_INFINITY; 3]);
+        let mut mean_diameter = 0.0;
+        for (c, r) in spheres {
+            for k in 0..3 {
+                lo[k] = lo[k].min(c[k] - r);
+                hi[k] = hi[k].max(c[k] + r);
+            }
+            mean_diameter += 2.0 * r;
+        }
+        mean_diameter /= spheres.len() as Real;
+        let extent = hi - lo;
+        let mut cell = mean_diameter
+            .max(1e-9 * extent.max())
+            .max(Real::MIN_POSITIVE);
+        let budget = MAX_CELLS_PER_SPHERE * spheres.len() + 1024;
+        let dims_for = |cell: Real| -> [usize; 3] {
+            [0, 1, 2].map(|k| ((extent[k] / cell).floor() as usize + 1).max(1))
+        };
+        let mut dims = dims_for(cell);
+        while dims.iter().product::<usize>() > budget {
+            cell *= 1.5;
+            dims = dims_for(cell);
+        }
+        let mut grid = CellGrid {
+            origin: lo,
+            inv_cell: 1.0 / cell,
+            dims,
+            starts: Vec::new(),
+            items: Vec::new(),
+        };
+        let n_cells: usize = dims.iter().product();
+        let mut counts = vec![0u32; n_cells + 1];
+        grid.for_each_cell_of(spheres, |_, cell| counts[cell + 1] += 1);
+        for k in 1..counts.len() {
+            counts[k] += counts[k - 1];
+        }
+        let mut fill = counts.clone();
+        let mut items = vec![0u32; counts[n_cells] as usize];
+        grid.for_each_cell_of(spheres, |i, cell| {
+            items[fill[cell] as usize] = i as u32;
+            fill[cell] += 1;
+        });
+        grid.starts = counts;
+        grid.items = items;
+        grid
+    }
+
+    fn cell_coord(&self, x: Real, k: usize) -> usize {
+        let c = ((x - self.origin[k]) * self.inv_cell).floor();
+        c.clamp(0.0, (self.dims[k] - 1) as Real) as usize
+    }
+
+    fn for_each_cell_of(&self, spheres: &[(Point3, Real)], mut visit: impl FnMut(usize, usize)) {
+        for (i, (c, r)) in spheres.iter().enumerate() {
+            let lo = [0, 1, 2].map(|k| self.cell_coord(c[k] - r, k));
+            let hi = [0, 1, 2].map(|k| self.cell_coord(c[k] + r, k));
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
+                        visit(i, (z * self.dims[1] + y) * self.dims[0] + x);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The spheres whose box overlaps the cell holding `p`, in increasing
+    /// order (empty outside the grid).
+    #[inline]
+    pub(crate) fn candidates(&self, p: &Point3) -> &[u32] {
+        if self.starts.is_empty() {
+            return &[];
+        }
+        let mut idx = [0usize; 3];
+        for k in 0..3 {
+            let c = ((p[k] - self.origin[k]) * self.inv_cell).floor();
+            if !(c >= 0.0 && c < self.dims[k] as Real) {
+                return &[];
+            }
+            idx[k] = c as usize;
+        }
+        let cell = (idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0];
+        &self.items[self.starts[cell] as usize..self.starts[cell + 1] as usize]
+    }
+}

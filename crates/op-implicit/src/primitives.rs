@@ -1,0 +1,370 @@
+//! Skeleton primitives posed in a particle's local frame (seed 002 §6).
+//!
+//! "Each skeleton can be a complex object defined as a collection of
+//! primitives placed in the oriented particle referential" (seed 002 §6).
+//! A [`Primitive`] is a [`Shape`] with its own pose (offset and rotation)
+//! in the body frame of the particle that carries it and a support radius
+//! `R` for the field kernel ([`crate::kernel`]). Each frame the particle's
+//! world pose is composed with the primitive's to give a [`PosedPrimitive`],
+//! which measures the squared (possibly scaled) distance from world points
+//! with an analytic gradient.
+//!
+//! Shapes, in the primitive's own frame:
+//! - [`Shape::Point`]: the origin;
+//! - [`Shape::Segment`]: `[-L, L]` along x;
+//! - [`Shape::Rectangle`]: `[-a, a] x [-b, b]` in the x-y plane (the square
+//!   skeletons of seed 002 fig. 6);
+//! - [`Shape::Ellipsoid`]: the origin, with distance measured in the frame
+//!   scaled per axis, `d^2 = sum (p_i / k_i)^2`: an anisotropic potential
+//!   (seed 002 §6) whose support is an ellipsoid of semi-axes `k_i R`.
+//!
+//! For the first three, `d^2 = |p - proj(p)|^2` with `proj` the closest
+//! point of the (convex) skeleton, and `grad d^2 = 2 (p - proj(p))`.
+
+use nalgebra::{Isometry3, Translation3};
+use op_dynamics::{Point3, Quat, Real, Vec3};
+
+use crate::kernel;
+
+/// The geometry of a skeleton primitive in its own frame (module doc).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// A point at the origin.
+    Point,
+    /// The segment from `(-half_length, 0, 0)` to `(half_length, 0, 0)`.
+    Segment {
+        /// Half the segment's length, >= 0.
+        half_length: Real,
+    },
+    /// The rectangle `[-a, a] x [-b, b] x {0}`, `[a, b] = half_extents`.
+    Rectangle {
+        /// Half side lengths along x and y, each >= 0.
+        half_extents: [Real; 2],
+    },
+    /// A point with the distance measured after dividing local coordinates
+    /// by `scales` (each > 0): an ellipsoidal support of semi-axes
+    /// `scales * radius`.
+    Ellipsoid {
+        /// Per-axis scale of the local frame.
+        scales: Vec3,
+    },
+}
+
+impl Shape {
+    /// Squared (scaled) distance from local point `p` and its gradient with
+    /// respect to `p`.
+    #[inline]
+    pub fn distance2_and_gradient(&self, p: &Vec3) -> (Real, Vec3) {
+        let diff = match *self {
+            Shape::Point => *p,
+            Shape::Segment { half_length } => {
+                Vec3::new(p.x - p.x.clamp(-half_length, half_length), p.y, p.z)
+            }
+            Shape::Rectangle {
+                half_extents: [a, b],
+            } => Vec3::new(p.x - p.x.clamp(-a, a), p.y - p.y.clamp(-b, b), p.z),
+            Shape::Ellipsoid { scales } => {
+                let q = p.component_div(&scales);
+                let g = q.component_div(&scales) * 2.0;
+                return (q.norm_squared(), g);
+            }
+        };
+        (diff.norm_squared(), diff * 2.0)
+    }
+
+    /// Radius of the smallest origin-centred sphere holding the skeleton,
+    /// and the factor by which the support radius grows along the worst axis
+    /// (1 except for ellipsoids): the support lies within
+    /// `extent + factor * R` of the origin.
+    fn extent_and_factor(&self) -> (Real, Real) {
+        match *self {
+            Shape::Point => (0.0, 1.0),
+            Shape::Segment { half_length } => (half_length, 1.0),
+            Shape::Rectangle {
+                half_extents: [a, b],
+            } => (a.hypot(b), 1.0),
+            Shape::Ellipsoid { scales } => (0.0, scales.max()),
+        }
+    }
+
+    fn is_valid(&self) -> bool {
+        match *self {
+            Shape::Point => true,
+            Shape::Segment { half_length } => half_length.is_finite() && half_length >= 0.0,
+            Shape::Rectangle { half_extents } => {
+                half_extents.iter().all(|h| h.is_finite() && *h >= 0.0)
+            }
+            Shape::Ellipsoid { scales } => scales.iter().all(|k| k.is_finite() && *k > 0.0),
+        }
+    }
+}
+
+/// A skeleton primitive posed in a particle's body frame, with the support
+/// radius of its field kernel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Primitive {
+    /// Origin of the primitive's frame in the particle's body frame.
+    /// Default (constructors): zero unless given.
+    pub offset: Vec3,
+    /// Rotation of the primitive's frame relative to the particle's body
+    /// frame.
+    pub rotation: Quat,
+    /// The skeleton geometry in the primitive's frame.
+    pub shape: Shape,
+    /// Support radius `R` of the kernel, > 0: the field vanishes at scaled
+    /// distance `>= R` and the skin of an isolated primitive lies at `R/2`.
+    pub radius: Real,
+}
+
+impl Primitive {
+    /// A point skeleton at `offset` (body frame).
+    pub fn point(offset: Vec3, radius: Real) -> Self {
+        Primitive {
+            offset,
+            rotation: Quat::identity(),
+            shape: Shape::Point,
+            radius,
+        }
+    }
+
+    /// The segment from `a` to `b` (body frame).
+    pub fn segment(a: Vec3, b: Vec3, radius: Real) -> Self {
+        let d = b - a;
+        let rotation = Quat::rotation_between(&Vec3::x(), &d).unwrap_or_else(|| {
+            if d.x < 0.0 {
+                Quat::from_axis_angle(&Vec3::z_axis(), std::f64::consts::PI)
+            } else {
+                Quat::identity()
+            }
+        });
+        Primitive {
+            offset: (a + b) * 0.5,
+            rotation,
+            shape: Shape::Segment {
+                half_length: 0.5 * d.norm(),
+            },
+            radius,
+        }
+    }
+
+    /// A rectangle centred at `offset`, its plane's x and y axes given by
+    /// `rotation` (body frame), with half side lengths `half_extents`.
+    pub fn rectangle(offset: Vec3, rotation: Quat, half_extents: [Real; 2], radius: Real) -> Self {
+        Primitive {
+            offset,
+            rotation,
+            shape: Shape::Rectangle { half_extents },
+            radius,
+        }
+    }
+
+    /// The square skeleton of seed 002 fig. 6: centred on the particle,
+    /// normal to the body-frame axis `normal_axis` (the particle's normal
+    /// axis, usually +z), half side `half_side`.
+    pub fn square(normal_axis: Vec3, half_side: Real, radius: Real) -> Self {
+        let rotation = Quat::rotation_between(&Vec3::z(), &normal_axis)
+            .unwrap_or_else(|| Quat::from_axis_angle(&Vec3::x_axis(), std::f64::consts::PI));
+        Self::rectangle(Vec3::zeros(), rotation, [half_side; 2], radius)
+    }
+
+    /// An ellipsoidal (anisotropic) point primitive at `offset`, its axes
+    /// given by `rotation` (body frame), scaled per axis by `scales`.
+    pub fn ellipsoid(offset: Vec3, rotation: Quat, scales: Vec3, radius: Real) -> Self {
+        Primitive {
+            offset,
+            rotation,
+            shape: Shape::Ellipsoid { scales },
+            radius,
+        }
+    }
+
+    /// Whether every number is finite, the radius positive and the shape's
+    /// sizes non-negative (ellipsoid scales positive).
+    pub fn is_valid(&self) -> bool {
+        self.offset.iter().all(|x| x.is_finite())
+            && self.rotation.coords.iter().all(|x| x.is_finite())
+            && self.radius.is_finite()
+            && self.radius > 0.0
+            && self.shape.is_valid()
+    }
+
+    /// Poses the primitive on a particle at `position` with orientation
+    /// `orientation`, owned by particle `particle`.
+    pub fn posed(&self, particle: u32, position: &Point3, orientation: &Quat) -> PosedPrimitive {
+        let body = Isometry3::from_parts(Translation3::from(position.coords), *orientation);
+        let local = Isometry3::from_parts(Translation3::from(self.offset), self.rotation);
+        let pose = body * local;
+        let (extent, factor) = self.shape.extent_and_factor();
+        PosedPrimitive {
+            particle,
+            particle_position: *position,
+            pose,
+            shape: self.shape,
+            inv_radius2: 1.0 / (self.radius * self.radius),
+            bound: extent + factor * self.radius,
+        }
+    }
+}
+
+/// A primitive in world space: its frame composed with its particle's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PosedPrimitive {
+    particle: u32,
+    particle_position: Point3,
+    pose: Isometry3<Real>,
+    shape: Shape,
+    inv_radius2: Real,
+    bound: Real,
+}
+
+impl PosedPrimitive {
+    /// Id of the particle carrying the primitive.
+    #[inline]
+    pub fn particle(&self) -> u32 {
+        self.particle
+    }
+
+    /// World position of the carrying particle (the point about which
+    /// contact torques act).
+    #[inline]
+    pub fn particle_position(&self) -> &Point3 {
+        &self.particle_position
+    }
+
+    /// World pose of the primitive's frame.
+    #[inline]
+    pub fn pose(&self) -> &Isometry3<Real> {
+        &self.pose
+    }
+
+    /// The skeleton geometry.
+    #[inline]
+    pub fn shape(&self) -> &Shape {
+        &self.shape
+    }
+
+    /// Centre and radius of a sphere holding the field's support.
+    #[inline]
+    pub fn bounding_sphere(&self) -> (Point3, Real) {
+        (Point3::from(self.pose.translation.vector), self.bound)
+    }
+
+    /// Squared (scaled) distance from world point `p` and its world-frame
+    /// gradient.
+    #[inline]
+    pub fn distance2_and_gradient(&self, p: &Point3) -> (Real, Vec3) {
+        let local = self.pose.inverse_transform_point(p).coords;
+        let (d2, g) = self.shape.distance2_and_gradient(&local);
+        (d2, self.pose.rotation * g)
+    }
+
+    /// The primitive's field at `p` ([`kernel::value_sq`] of
+    /// `d^2 / R^2`) and its world gradient. Zero outside the support.
+    #[inline]
+    pub fn field_and_gradient(&self, p: &Point3) -> (Real, Vec3) {
+        let (d2, g) = self.distance2_and_gradient(p);
+        let s = d2 * self.inv_radius2;
+        if s >= 1.0 {
+            return (0.0, Vec3::zeros());
+        }
+        (
+            kernel::value_sq(s),
+            g * (kernel::derivative_sq(s) * self.inv_radius2),
+        )
+    }
+
+    /// The primitive's field at `p` (no gradient).
+    #[inline]
+    pub fn field(&self, p: &Point3) -> Real {
+        let local = self.pose.inverse_transform_point(p).coords;
+        let (d2, _) = self.shape.distance2_and_gradient(&local);
+        kernel::value_sq(d2 * self.inv_radius2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_util::Rng;
+
+    fn kinds() -> Vec<Primitive> {
+        let rot = Quat::from_scaled_axis(Vec3::new(0.3, -0.7, 0.5));
+        vec![
+            Primitive::point(Vec3::new(0.1, 0.0, -0.2), 0.8),
+            Primitive::segment(Vec3::new(-0.3, 0.1, 0.0), Vec3::new(0.2, 0.3, 0.1), 0.7),
+            Primitive::rectangle(Vec3::new(0.0, 0.1, 0.0), rot, [0.3, 0.15], 0.6),
+            Primitive::square(Vec3::new(0.2, 0.1, 1.0), 0.25, 0.6),
+            Primitive::ellipsoid(Vec3::zeros(), rot, Vec3::new(1.0, 0.6, 1.4), 0.7),
+        ]
+    }
+
+    #[test]
+    fn gradients_match_central_differences_in_rotated_frames() {
+        let mut rng = Rng::new(7);
+        let h = 1e-6;
+        for prim in kinds() {
+            assert!(prim.is_valid());
+            let q = Quat::from_scaled_axis(rng.vec() * 2.0);
+            let x = Point3::from(rng.vec());
+            let posed = prim.posed(3, &x, &q);
+            for _ in 0..200 {
+                let p = x + rng.vec() * 0.9;
+                let (d2, g) = posed.distance2_and_gradient(&p);
+                let (f, gf) = posed.field_and_gradient(&p);
+                assert_eq!(f, posed.field(&p));
+                for k in 0..3 {
+                    let mut e = Vec3::zeros();
+                    e[k] = h;
+                    let fd2 = (posed.distance2_and_gradient(&(p + e)).0
+                        - posed.distance2_and_gradient(&(p - e)).0)
+                        / (2.0 * h);
+                    let ff = (posed.field(&(p + e)) - posed.field(&(p - e))) / (2.0 * h);
+                    assert!((fd2 - g[k]).abs() < 1e-6, "{prim:?} d2 {d2}");
+                    assert!((ff - gf[k]).abs() < 1e-6, "{prim:?} f {f}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn support_lies_in_bounding_sphere() {
+        let mut rng = Rng::new(11);
+        for prim in kinds() {
+            let posed = prim.posed(
+                0,
+                &Point3::new(1.0, 2.0, 3.0),
+                &Quat::from_scaled_axis(rng.vec()),
+            );
+            let (c, r) = posed.bounding_sphere();
+            for _ in 0..2000 {
+                let p = c + rng.vec() * 2.0;
+                if posed.field(&p) > 0.0 {
+                    assert!((p - c).norm() <= r + 1e-12, "{prim:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn distances_of_simple_shapes() {
+        let seg = Primitive::segment(Vec3::zeros(), Vec3::new(0.0, 2.0, 0.0), 1.0).posed(
+            0,
+            &Point3::origin(),
+            &Quat::identity(),
+        );
+        assert!((seg.distance2_and_gradient(&Point3::new(0.5, 1.0, 0.0)).0 - 0.25).abs() < 1e-14);
+        assert!((seg.distance2_and_gradient(&Point3::new(0.0, 3.0, 0.0)).0 - 1.0).abs() < 1e-14);
+        let sq =
+            Primitive::square(Vec3::z(), 1.0, 1.0).posed(0, &Point3::origin(), &Quat::identity());
+        assert!((sq.distance2_and_gradient(&Point3::new(0.5, -0.5, 0.3)).0 - 0.09).abs() < 1e-14);
+        assert!((sq.distance2_and_gradient(&Point3::new(2.0, 0.0, 0.0)).0 - 1.0).abs() < 1e-14);
+        let ell = Primitive::ellipsoid(
+            Vec3::zeros(),
+            Quat::identity(),
+            Vec3::new(2.0, 1.0, 1.0),
+            1.0,
+        )
+        .posed(0, &Point3::origin(), &Quat::identity());
+        assert!((ell.distance2_and_gradient(&Point3::new(2.0, 0.0, 0.0)).0 - 1.0).abs() < 1e-14);
+    }
+}

@@ -1,0 +1,201 @@
+//! An implicit object skinned on oriented particles (seed 002 §6: "we
+//! propose the use of an oriented particles system to handle skeletons").
+
+use op_dynamics::{Particles, World};
+
+use crate::error::SkinError;
+use crate::field::Field;
+use crate::primitives::Primitive;
+
+/// An implicit object: skeleton primitives attached to particles of an
+/// op-dynamics world, and the field they produce at the particles' current
+/// poses. Call [`Skin::repose`] after the world moved to follow it.
+#[derive(Clone, Debug)]
+pub struct Skin {
+    attachments: Vec<(u32, Primitive)>,
+    field: Field,
+}
+
+impl Skin {
+    /// Builds the skin of `attachments` (particle id, primitive in that
+    /// particle's body frame) posed on `world`'s particles.
+    pub fn new(world: &World, attachments: Vec<(u32, Primitive)>) -> Result<Skin, SkinError> {
+        Self::from_particles(world.particles(), attachments)
+    }
+
+    /// As [`Skin::new`], from a particle store.
+    pub fn from_particles(
+        particles: &Particles,
+        attachments: Vec<(u32, Primitive)>,
+    ) -> Result<Skin, SkinError> {
+        if let Some(index) = attachments.iter().position(|(_, p)| !p.is_valid()) {
+            return Err(SkinError::InvalidPrimitive { index });
+        }
+        let mut skin = Skin {
+            attachments,
+            field: Field::default(),
+        };
+        skin.repose_particles(particles)?;
+        Ok(skin)
+    }
+
+    /// Re-poses every primitive from the current particle frames of
+    /// `world` and rebuilds the field's pruning grid.
+    pub fn repose(&mut self, world: &World) -> Result<(), SkinError> {
+        self.repose_particles(world.particles())
+    }
+
+    /// As [`Skin::repose`], from a particle store.
+    pub fn repose_particles(&mut self, particles: &Particles) -> Result<(), SkinError> {
+        let positions = particles.positions();
+        let orientations = particles.orientations();
+        let posed = self
+            .attachments
+            .iter()
+            .enumerate()
+            .map(|(index, &(id, prim))| {
+                let slot = particles
+                    .slot_of(id)
+                    .filter(|&s| s < positions.len())
+                    .ok_or(SkinError::UnknownParticle { index, id })?;
+                Ok(prim.posed(id, &positions[slot], &orientations[slot]))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        self.field = Field::new(posed);
+        Ok(())
+    }
+
+    /// The (particle id, primitive) attachments, in the order given.
+    pub fn attachments(&self) -> &[(u32, Primitive)] {
+        &self.attachments
+    }
+
+    /// The field at the last pose; `field().primitives()[i]` is
+    /// `attachments()[i]` posed.
+    pub fn field(&self) -> &Field {
+        &self.field
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::ISO;
+    use crate::polygonize::{polygonize, PolygonizeParams};
+    use op_dynamics::{Material, ParticleDesc, Point3, Quat, Real, Vec3, WorldParams};
+
+    fn row_world(n: usize) -> World {
+        let mut particles = Particles::new();
+        for i in 0..n {
+            particles
+                .push(ParticleDesc::at(Point3::new(i as Real * 0.5, 0.0, 0.0)))
+                .unwrap();
+        }
+        World::new(particles, &[Material::default()], WorldParams::default()).unwrap()
+    }
+
+    fn squares(n: u32) -> Vec<(u32, Primitive)> {
+        (0..n)
+            .map(|id| (id, Primitive::square(Vec3::z(), 0.25, 0.4)))
+            .collect()
+    }
+
+    #[test]
+    fn moving_and_turning_particles_moves_the_skin() {
+        let mut world = row_world(4);
+        let mut skin = Skin::new(&world, squares(4)).unwrap();
+        let params = PolygonizeParams::with_cell_size(0.05);
+        let before = polygonize(skin.field(), &params).unwrap();
+        let top = |m: &crate::Mesh| m.positions().iter().map(|p| p.z).fold(Real::MIN, Real::max);
+        assert!(top(&before) < 0.4);
+
+        // Lift particle 3 and stand it on its edge (normal along +x).
+        let old = Point3::new(1.5, 0.0, 0.0);
+        let new = Point3::new(1.5, 0.0, 1.0);
+        let slot = world.particles().slot_of(3).unwrap();
+        world.particles_mut().set_position(slot, new);
+        let turn = Quat::rotation_between(&Vec3::z(), &Vec3::x()).unwrap();
+        world.particles_mut().set_orientation(slot, turn);
+        // The field is still at the old pose until re-posed.
+        assert!(skin.field().value(&old) > ISO);
+        skin.repose(&world).unwrap();
+        assert!(skin.field().value(&old) < ISO);
+        assert!(skin.field().value(&new) > ISO);
+        // The turned square now extends along z, not along x.
+        assert!(skin.field().value(&(new + Vec3::new(0.0, 0.0, 0.3))) > ISO);
+        assert!(skin.field().value(&(new + Vec3::new(0.3, 0.0, 0.0))) < ISO);
+        let after = polygonize(skin.field(), &params).unwrap();
+        assert!(top(&after) > 1.3);
+        assert!(after.is_closed_oriented_manifold());
+        assert!(after.signed_volume() > 0.0);
+    }
+
+    #[test]
+    fn bad_attachments_are_reported() {
+        let world = row_world(2);
+        let err = Skin::new(
+            &world,
+            vec![
+                (0, Primitive::point(Vec3::zeros(), 0.3)),
+                (7, Primitive::point(Vec3::zeros(), 0.3)),
+            ],
+        );
+        assert_eq!(
+            err.unwrap_err(),
+            SkinError::UnknownParticle { index: 1, id: 7 }
+        );
+        let err = Skin::new(&world, vec![(0, Primitive::point(Vec3::zeros(), -1.0))]);
+        assert_eq!(err.unwrap_err(), SkinError::InvalidPrimitive { index: 0 });
+    }
+
+    /// Timing probe, run in release:
+    /// `cargo test -p op-implicit --release -- --ignored --nocapture`.
+    /// 1024 particles on a flat spiral (seed 002 fig. 5-6), each with a square.
+    #[test]
+    #[ignore]
+    fn timing_1k_skinned_spiral() {
+        use std::time::Instant;
+        let mut particles = Particles::new();
+        let n = 1024;
+        for i in 0..n {
+            let t = 0.05 * i as Real;
+            let r = 0.3 + 0.06 * t;
+            let p = Point3::new(r * t.cos(), r * t.sin(), 0.0);
+            particles.push(ParticleDesc::at(p)).unwrap();
+        }
+        let world = World::new(particles, &[Material::default()], WorldParams::default()).unwrap();
+        let t0 = Instant::now();
+        let skin = Skin::new(&world, squares(n as u32)).unwrap();
+        let build = t0.elapsed();
+        let (lo, hi) = skin.field().support_box().unwrap();
+        let m = 100usize;
+        let pts: Vec<Point3> = (0..m * m * m)
+            .map(|i| {
+                let u = Vec3::new(
+                    (i % m) as Real,
+                    ((i / m) % m) as Real,
+                    (i / (m * m)) as Real,
+                ) / m as Real;
+                lo + (hi - lo).component_mul(&u)
+            })
+            .collect();
+        let t1 = Instant::now();
+        let vg = skin.field().values_and_gradients(&pts);
+        let eval = t1.elapsed();
+        assert_eq!(vg.len(), pts.len());
+        for h in [0.04, 0.02] {
+            let t2 = Instant::now();
+            let mesh = polygonize(skin.field(), &PolygonizeParams::with_cell_size(h)).unwrap();
+            eprintln!(
+                "h {h}: polygonize {:?}, {} triangles, manifold {}",
+                t2.elapsed(),
+                mesh.triangles().len(),
+                mesh.is_closed_oriented_manifold()
+            );
+        }
+        eprintln!(
+            "1024 squares: skin build/repose {build:?}; 1e6 value+gradient {eval:?}; box {:?}",
+            hi - lo
+        );
+    }
+}
