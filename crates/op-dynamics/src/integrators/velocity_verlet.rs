@@ -149,6 +149,14 @@ pub(crate) fn step_all<F: ForceField>(
         evals += 1;
     }
     for i in 0..n {
+        if state.angular_velocities[i] == Vec3::zeros() && torques[i] == Vec3::zeros() {
+            // Translation only (see `kick_drift`): touch only p and v.
+            let v = state.velocities[i] + (0.5 * h * bodies.inv_mass[i]) * forces[i];
+            state.velocities[i] = v;
+            state.positions[i] += h * v;
+            momenta[i] = Vec3::zeros();
+            continue;
+        }
         let s = state.view().particle(i);
         let (s1, l) = kick_drift(
             &s,
@@ -164,6 +172,13 @@ pub(crate) fn step_all<F: ForceField>(
     field.forces(t + h, state.view(), forces, torques);
     evals += 1;
     for i in 0..n {
+        if momenta[i] == Vec3::zeros()
+            && torques[i] == Vec3::zeros()
+            && state.angular_velocities[i] == Vec3::zeros()
+        {
+            state.velocities[i] += (0.5 * h * bodies.inv_mass[i]) * forces[i];
+            continue;
+        }
         let s = state.view().particle(i);
         let s1 = kick(
             &s,
