@@ -16,6 +16,22 @@ use crate::error::{positive, ParamError};
 use crate::math::Real;
 use serde::{Deserialize, Serialize};
 
+/// `x^n` for a small positive integer `n` by repeated squaring, inlined
+/// (`powi` is a call into the runtime library in the hot pair loop).
+#[inline(always)]
+fn int_pow(mut x: Real, n: i32) -> Real {
+    let mut n = n.unsigned_abs();
+    let mut r = 1.0;
+    while n > 0 {
+        if n & 1 == 1 {
+            r *= x;
+        }
+        x *= x;
+        n >>= 1;
+    }
+    r
+}
+
 /// Parameters of the Lennard-Jones spacing potential.
 #[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -130,7 +146,7 @@ impl LennardJones {
         }
         let x = self.r0 / r;
         let (xn, xm) = match self.integer_exponents {
-            Some((n, m)) => (x.powi(n), x.powi(m)),
+            Some((n, m)) => (int_pow(x, n), int_pow(x, m)),
             None => (x.powf(self.n), x.powf(self.m)),
         };
         let u = self.scale * (self.m * xn - self.n * xm);
