@@ -14,7 +14,7 @@ use op_scene::render::{self, RenderOptions, Style};
 use op_scene::{BuiltScene, RunError, RunOptions};
 
 /// The default demo scene, embedded so `opsim` works from any directory.
-const DEMO_SCENE: &str = include_str!("../scenes/sheet.ron");
+const DEMO_SCENE: &str = include_str!("../scenes/spiral.ron");
 
 #[derive(Parser, Debug)]
 #[command(
@@ -113,7 +113,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             let scene = op_scene::parse_scene(
                 DEMO_SCENE,
                 op_scene::Format::Ron,
-                "<demo: scenes/sheet.ron>",
+                "<demo: scenes/spiral.ron>",
             )?;
             let built = scene.build(None, None)?;
             run_built(built, None, None)

@@ -51,8 +51,8 @@ fn no_argument_runs_the_demo() {
     let cwd = temp_dir("demo");
     let o = opsim(&[], &cwd);
     assert!(o.status.success(), "{}", text(&o));
-    let out = cwd.join("opsim-out").join("sheet");
-    assert!(text(&o).contains("opsim-out/sheet"), "{}", text(&o));
+    let out = cwd.join("opsim-out").join("spiral");
+    assert!(text(&o).contains("opsim-out/spiral"), "{}", text(&o));
     assert!(out.join("summary.json").is_file());
     assert!(out.join("metrics.csv").is_file());
     let s = summary(&out);

@@ -28,12 +28,15 @@ impl Scene {
     /// 3. puts into the world only the materials some object uses (sorted
     ///    by name), so nothing unused is prepared or evaluated;
     /// 4. maps forces to [`ForceWindow`]s over global particle ids (objects
-    ///    are numbered consecutively in scene order);
+    ///    are numbered consecutively in scene order), their times shifted by
+    ///    the settle phase (`world.settle`) so they count from its end;
     /// 5. builds [`WorldParams`] and the [`World`].
     ///
     /// Each [`BuiltObject`] records its ids, rest positions and rest
     /// spacing (mean nearest-neighbour distance within the object; the
-    /// generator's spacing, or 1, for a single particle). Coincident
+    /// generator's spacing, or 1, for a single particle) at build time; a
+    /// scene with a settle phase replaces them with the settled ones when
+    /// [`BuiltScene::settle`] runs (the runner does it first). Coincident
     /// particles within an object are an error. `source` is stored in the
     /// result.
     pub fn build(
@@ -132,6 +135,7 @@ impl Scene {
                     .iter()
                     .position(|o| o.name == f.object)
                     .unwrap_or(0);
+                let (start, end) = (f.start + self.world.settle, f.end + self.world.settle);
                 ForceWindow {
                     particles: f
                         .particles
@@ -140,9 +144,10 @@ impl Scene {
                         .map(|i| (offsets[k] + i) as u32)
                         .collect(),
                     force: f.force,
-                    start: f.start,
-                    end: f.end,
-                    ramp: f.ramp,
+                    start,
+                    end,
+                    // Shifting may round `end - start` down by an ulp.
+                    ramp: f.ramp.min(0.5 * (end - start)),
                 }
             })
             .collect();
@@ -178,6 +183,8 @@ impl Scene {
             world,
             objects,
             duration: w.duration,
+            settle: w.settle,
+            settled: w.settle == 0.0,
             frame_rate: w.frame_rate,
             outputs: self.outputs.clone(),
             energy_growth: w.divergence.energy_growth,

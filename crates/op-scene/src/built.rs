@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use op_dynamics::{Point3, Real, World};
+use op_dynamics::{Divergence, Point3, Real, World};
 
 use crate::outputs::Outputs;
 
@@ -13,11 +13,12 @@ pub struct BuiltObject {
     pub name: String,
     /// Stable particle ids of the object, in generation order.
     pub ids: Vec<u32>,
-    /// Rest positions (positions at build time, in `ids` order): the
-    /// reference of the rest shape error.
+    /// Rest positions (in `ids` order): the reference of the rest shape
+    /// error. The positions at build time, replaced by the settled ones
+    /// when [`BuiltScene::settle`] runs a settle phase.
     pub rest: Vec<Point3>,
-    /// Mean nearest-neighbour distance at rest: the `r0` that divides the
-    /// rest shape error (DESIGN §6).
+    /// Mean nearest-neighbour distance of `rest`: the `r0` that divides
+    /// the rest shape error (DESIGN §6).
     pub rest_spacing: Real,
 }
 
@@ -31,8 +32,14 @@ pub struct BuiltScene {
     pub world: World,
     /// The objects, in scene order.
     pub objects: Vec<BuiltObject>,
-    /// Simulated duration.
+    /// Simulated duration (after the settle phase).
     pub duration: Real,
+    /// Duration of the settle phase run before frame 0 (`world.settle`;
+    /// the force windows start counting at its end).
+    pub settle: Real,
+    /// True once the settle phase ran (or when there is none): see
+    /// [`BuiltScene::settle`].
+    pub settled: bool,
     /// Frames written per unit of simulated time.
     pub frame_rate: Real,
     /// What to write.
@@ -42,4 +49,48 @@ pub struct BuiltScene {
     /// scale (|kinetic| + |potential| at t = 0, at least 1e-12 per
     /// particle). Default 1e6; infinity disables the check.
     pub energy_growth: Real,
+}
+
+impl BuiltScene {
+    /// Runs the settle phase once (the runner calls this before frame 0):
+    /// advances the world to time [`BuiltScene::settle`] (no force window
+    /// acts before it), then takes the settled positions as each object's
+    /// rest shape and recomputes its rest spacing. Does nothing when there
+    /// is no settle phase or it already ran.
+    ///
+    /// # Errors
+    ///
+    /// The divergence, if the world blew up while settling (the rest shapes
+    /// are then left as built).
+    pub fn settle(&mut self) -> Result<(), Divergence> {
+        if self.settled {
+            return Ok(());
+        }
+        self.world.advance_to(self.settle)?;
+        self.settled = true;
+        let p = self.world.particles();
+        for o in &mut self.objects {
+            o.rest = o
+                .ids
+                .iter()
+                .map(|&id| p.positions()[p.slot_of(id).expect("id of the scene")])
+                .collect();
+            // Particles cannot coincide after a finite, non-divergent settle
+            // phase unless the material lets them; keep the built spacing then.
+            if let Ok(r0) = crate::build::rest_spacing(&o.rest, Some(o.rest_spacing)) {
+                o.rest_spacing = r0;
+            }
+        }
+        Ok(())
+    }
+
+    /// Scene time: the world's time minus the settle phase once it ran
+    /// (frame 0 is at scene time 0; force windows are in scene time).
+    pub fn scene_time(&self) -> Real {
+        if self.settled {
+            self.world.time() - self.settle
+        } else {
+            self.world.time()
+        }
+    }
 }

@@ -23,7 +23,7 @@ pub mod load;
 pub mod schema;
 
 pub use error::SceneError;
-pub use generators::Generator;
+pub use generators::{CurvatureLaw, Generator};
 pub use load::{build_scene_file, load_scene, parse_scene, Format};
 pub use schema::{
     DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, WorldSettings,

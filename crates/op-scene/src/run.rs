@@ -49,13 +49,17 @@ pub struct Summary {
     pub scene: String,
     /// Steps taken.
     pub steps: u64,
-    /// Simulated time reached.
+    /// Scene time reached (from frame 0, after the settle phase).
     pub sim_time: Real,
+    /// Duration of the settle phase simulated before frame 0 (its steps
+    /// count in `steps`).
+    pub settle: Real,
     /// Wall-clock seconds of the run.
     pub wall_seconds: f64,
     /// True when the run stopped because it diverged.
     pub diverged: bool,
-    /// The divergence message, when it diverged.
+    /// The divergence message, when it diverged (its step and time are the
+    /// world's, settle phase included).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub divergence: Option<String>,
     /// Frames written.
@@ -145,8 +149,14 @@ pub fn run(
     let mut energy_scale = None;
     let mut written = 0;
     let mut divergence: Option<String> = None;
+    if let Err(d) = scene.settle() {
+        divergence = Some(format!("while settling: {d}"));
+    }
     let t0 = scene.world.time();
     for k in 0..total {
+        if divergence.is_some() {
+            break;
+        }
         if k > 0 {
             let t = t0 + k as Real / scene.frame_rate;
             if let Err(d) = scene.world.advance_to(t) {
@@ -193,7 +203,7 @@ pub fn run(
             writeln!(
                 f,
                 "{k},{},{kinetic},{},{},{},{},{}",
-                scene.world.time(),
+                scene.scene_time(),
                 d.potential,
                 d.total,
                 d.oscillation,
@@ -208,7 +218,8 @@ pub fn run(
     let summary = Summary {
         scene: scene.name.clone(),
         steps: scene.world.steps(),
-        sim_time: scene.world.time(),
+        sim_time: scene.scene_time(),
+        settle: if scene.settled { scene.settle } else { 0.0 },
         wall_seconds: clock.elapsed().as_secs_f64(),
         diverged: divergence.is_some(),
         divergence: divergence.clone(),

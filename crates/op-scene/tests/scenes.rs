@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use op_dynamics::diagnostics::rest_shape_rms;
 use op_dynamics::{Flags, ParticleType, Point3, Real, Vec3, World};
-use op_scene::{load_scene, parse_scene, BuiltScene, Format, Generator, Scene};
+use op_scene::{load_scene, parse_scene, BuiltScene, CurvatureLaw, Format, Generator, Scene};
 
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
@@ -58,8 +58,13 @@ fn every_example_scene_loads_builds_and_steps() {
         "sphere_shell.ron",
         "torus_shell.ron",
         "two_sheets.ron",
-        "hinge.ron",
+        "hinge_spiral.ron",
         "points.ron",
+        "spiral.ron",
+        "spiral_8.ron",
+        "spiral_13.ron",
+        "spiral_x10.ron",
+        "colliding_objects.ron",
     ] {
         assert!(
             names.iter().any(|n| n == expected),
@@ -88,16 +93,32 @@ fn every_example_scene_loads_builds_and_steps() {
 
 #[test]
 fn the_demo_scene_matches_its_description() {
-    let built = build(&scenes_dir().join("sheet.ron"));
-    assert_eq!(built.name, "sheet");
+    // The spiral that uncoils and recovers (seed 002 fig. 5), embedded in
+    // `opsim` as the default demo.
+    let built = build(&scenes_dir().join("spiral.ron"));
+    assert_eq!(built.name, "spiral");
     assert_eq!(built.world.params().dt, 5e-3);
-    assert_eq!(built.duration, 20.0);
-    assert_eq!(built.world.params().external.linear_damping, 0.5);
+    assert_eq!((built.settle, built.duration), (40.0, 80.0));
+    assert_eq!(built.world.params().external.linear_damping, 0.3);
     assert_eq!(built.world.params().external.angular_damping, 0.05);
+    assert_eq!(built.world.particles().len(), 10);
     let enabled = built.world.enabled();
-    for term in ["term:lennard_jones", "term:coplanarity", "damping"] {
+    for term in [
+        "term:cohesion",
+        "term:form",
+        "term:coplanarity",
+        "friction",
+        "damping",
+        "force_windows",
+    ] {
         assert!(enabled.iter().any(|e| e == term), "{enabled:?}");
     }
+    let forces = &built.world.params().external.forces;
+    assert_eq!(forces.len(), 2);
+    assert_eq!(
+        (forces[0].start, forces[0].end, forces[0].ramp),
+        (40.0, 80.0, 10.0)
+    );
 }
 
 /// Runs every example scene to its end (release: `cargo test --release -p
@@ -109,10 +130,14 @@ fn every_example_scene_runs_to_the_end() {
     for path in scene_files() {
         let mut built = build(&path);
         let clock = std::time::Instant::now();
+        built
+            .settle()
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let t0 = built.world.time();
         let frames = (built.duration * built.frame_rate).round() as usize;
         let mut worst = vec![0.0f64; built.objects.len()];
         for k in 1..=frames {
-            let t = built.duration * k as Real / frames as Real;
+            let t = t0 + built.duration * k as Real / frames as Real;
             built
                 .world
                 .advance_to(t)
@@ -160,6 +185,7 @@ fn spiral_has_its_count_spacing_curvatures_and_outward_normals() {
         spacing: h,
         curvature_start: k0,
         curvature_end: k1,
+        law: CurvatureLaw::Linear,
         center: [1.0, -2.0, 0.5],
         normal: [0.0, 1.0, 1.0],
     });
@@ -200,6 +226,51 @@ fn spiral_has_its_count_spacing_curvatures_and_outward_normals() {
             assert!(tangent.normalize().dot(&g.normals[i]).abs() < 1e-3);
         }
     }
+}
+
+#[test]
+fn geometric_spiral_curvature_grows_by_a_constant_ratio() {
+    let (count, h, k0, k1) = (13, 1.0, 0.2, 0.8);
+    let g = generate(&Generator::Spiral {
+        count,
+        spacing: h,
+        curvature_start: k0,
+        curvature_end: k1,
+        law: CurvatureLaw::Geometric,
+        center: [0.0; 3],
+        normal: [0.0, 0.0, 1.0],
+    });
+    assert_eq!(g.len(), count);
+    assert_unit_normals(&g.normals);
+    let ratio = (k1 / k0).powf(1.0 / (count - 1) as Real);
+    for i in 0..count {
+        let k = k0 * ratio.powi(i as i32);
+        assert!((g.curvatures[i] - k).abs() < 1e-12, "{i}");
+        if i + 1 < count {
+            let chord = (g.positions[i + 1] - g.positions[i]).norm();
+            assert!(chord < h && chord > h * (1.0 - 0.8 * 0.8 / 24.0) - 1e-9);
+        }
+        if i > 0 && i + 1 < count {
+            let second =
+                g.positions[i + 1] + g.positions[i - 1].coords - g.positions[i].coords * 2.0;
+            assert!(second.coords.dot(&g.normals[i]) < 0.0, "{i}: outward");
+            // Discrete curvature: κ (1 - κ²h²/12) to leading order.
+            let discrete = second.coords.norm() / (h * h);
+            assert!((discrete - k).abs() < 0.06 * k, "{i}: {discrete} vs {k}");
+        }
+    }
+    // Mixed signs have no geometric law.
+    let bad = Generator::Spiral {
+        count,
+        spacing: h,
+        curvature_start: 0.2,
+        curvature_end: -0.2,
+        law: CurvatureLaw::Geometric,
+        center: [0.0; 3],
+        normal: [0.0, 0.0, 1.0],
+    };
+    let e = bad.validate(None, "<t>", "g").unwrap_err().to_string();
+    assert!(e.contains("g.Spiral.law") && e.contains("same sign"), "{e}");
 }
 
 #[test]
@@ -431,6 +502,83 @@ fn force_windows_map_to_global_ids() {
     assert_eq!(forces[1].end, Real::INFINITY);
     assert_eq!(forces[2].particles, (4..10).collect::<Vec<u32>>());
     assert_eq!(forces[3].particles, vec![0, 2], "sorted, each once");
+}
+
+/// A settle phase runs before frame 0: force windows count from its end,
+/// the rest shape is the settled one, reported times start at 0.
+#[test]
+fn settle_phase_shifts_forces_and_sets_the_rest_shape() {
+    let text = |settle: &str| {
+        format!(
+            r#"(
+            name: "settle",
+            world: (dt: 0.01, duration: 1, frame_rate: 4, settle: {settle}, linear_damping: 0.5),
+            materials: {{"m": (spacing: Cohesion((cutoff: 1.5)), form: 2, weight: (cutoff: 1.5))}},
+            objects: [(name: "s", material: "m",
+                generator: Spiral(count: 6, spacing: 1, curvature_start: 0.3, curvature_end: 0.9))],
+            forces: [(object: "s", particles: First(1), force: (0.1, 0, 0), start: 0.25, end: 0.75, ramp: 0.25)],
+        )"#
+        )
+    };
+    let plain = build_ron(&text("0"));
+    assert!(plain.settled);
+    let mut built = build_ron(&text("2.5"));
+    assert!(!built.settled);
+    let w = &built.world.params().external.forces[0];
+    assert_eq!((w.start, w.end, w.ramp), (2.75, 3.25, 0.25));
+    let generated = built.objects[0].rest.clone();
+    assert_eq!(generated, plain.objects[0].rest, "build does not settle");
+    built.settle().unwrap();
+    assert!(built.settled);
+    assert_eq!(built.world.time(), 2.5);
+    assert_eq!(built.scene_time(), 0.0);
+    let settled = positions_of(&built.world, &built.objects[0].ids);
+    assert_eq!(
+        built.objects[0].rest, settled,
+        "the settled shape is the reference"
+    );
+    let moved = rest_shape_rms(&generated, &settled);
+    assert!(
+        moved > 1e-6,
+        "the analytic spiral is not exactly at rest: {moved}"
+    );
+    // Mean nearest-neighbour distance, by brute force.
+    let mean = |p: &[Point3]| {
+        let nearest = |i: usize| {
+            (0..p.len())
+                .filter(|&j| j != i)
+                .map(|j| (p[j] - p[i]).norm())
+                .fold(Real::INFINITY, Real::min)
+        };
+        (0..p.len()).map(nearest).sum::<Real>() / p.len() as Real
+    };
+    assert!((built.objects[0].rest_spacing - mean(&settled)).abs() < 1e-12);
+    built.settle().unwrap();
+    assert_eq!(built.world.time(), 2.5, "settles once");
+    // The runner settles, then reports scene time.
+    let dir = std::env::temp_dir().join(format!("op-scene-settle-{}", std::process::id()));
+    let mut again = build_ron(&text("2.5"));
+    let summary = op_scene::run(
+        &mut again,
+        &op_scene::RunOptions {
+            out_dir: dir.clone(),
+            frames: None,
+        },
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert_eq!(summary.settle, 2.5);
+    assert!(
+        (summary.sim_time - 1.0).abs() < 1e-12,
+        "{}",
+        summary.sim_time
+    );
+    assert_eq!(summary.frames, 5);
+    let metrics = std::fs::read_to_string(dir.join("metrics.csv")).unwrap();
+    let first: Vec<&str> = metrics.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!(first[1].parse::<Real>().unwrap(), 0.0);
+    assert!(summary.objects[0].rest_shape_error_max > 0.0);
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]
@@ -718,6 +866,11 @@ const BAD_SCENES: &[(&str, Expect, &[&str])] = &[
         "adaptive_params.ron",
         Expect::Invalid,
         &["world.integrator.adaptive.rtol = -1"],
+    ),
+    (
+        "negative_settle.ron",
+        Expect::Invalid,
+        &["world.settle = -2: must be finite and >= 0"],
     ),
 ];
 

@@ -78,14 +78,27 @@ fn plus_z() -> [Real; 3] {
     [0.0, 0.0, 1.0]
 }
 
+/// How the rest curvature of a [`Generator::Spiral`] varies along it, from
+/// `curvature_start` at the first particle to `curvature_end` at the last.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum CurvatureLaw {
+    /// Linear in arc length: `κ(s) = κ_start + (κ_end - κ_start) s/L`.
+    #[default]
+    Linear,
+    /// Geometric in arc length: `κ(s) = κ_start (κ_end/κ_start)^(s/L)`
+    /// (a constant relative growth per unit length, as along a logarithmic
+    /// spiral). Both curvatures must be nonzero and of the same sign.
+    Geometric,
+}
+
 /// How an object's particles are made.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum Generator {
     /// A planar curve integrated in arc length, `θ'(s) = κ(s)`, with the
-    /// curvature linear in the particle index from `curvature_start` to
-    /// `curvature_end` (each particle's rest curvature is its analytic
-    /// `κ_i`). Positive curvature turns left about `normal`; particle
+    /// curvature going from `curvature_start` to `curvature_end` along the
+    /// curve by `law` (linear by default; each particle's rest curvature is
+    /// its analytic `κ_i`). Positive curvature turns left about `normal`; particle
     /// normals lie in the plane, `n = t × normal` (`t` the tangent), which
     /// points away from the centre of curvature where `κ > 0` (the centre
     /// is `p_i - n_i/κ_i` for either sign). Its centroid is `center`.
@@ -107,6 +120,9 @@ pub enum Generator {
         /// Curvature of the last particle (1/length, finite,
         /// `|curvature_end| * spacing <= 1`).
         curvature_end: Real,
+        /// How the curvature varies in between. Default: `Linear`.
+        #[serde(default)]
+        law: CurvatureLaw,
         /// Centroid. Default: origin.
         #[serde(default = "zero3")]
         center: [Real; 3],
@@ -247,6 +263,7 @@ impl Generator {
                 spacing,
                 curvature_start,
                 curvature_end,
+                law,
                 center,
                 normal,
             } => {
@@ -275,6 +292,16 @@ impl Generator {
                             ),
                         ));
                     }
+                }
+                if *law == CurvatureLaw::Geometric && curvature_start * curvature_end <= 0.0 {
+                    return Err(SceneError::value(
+                        file,
+                        at("law"),
+                        "Geometric",
+                        &format!(
+                            "needs curvature_start and curvature_end nonzero and of the same sign (they are {curvature_start} and {curvature_end})"
+                        ),
+                    ));
                 }
                 checks::finite3(file, &at("center"), center)?;
                 checks::direction(file, &at("normal"), normal)
@@ -456,13 +483,13 @@ impl Generator {
                 spacing,
                 curvature_start,
                 curvature_end,
+                law,
                 center,
                 normal,
             } => shapes::spiral(
                 *count,
                 *spacing,
-                *curvature_start,
-                *curvature_end,
+                (*curvature_start, *curvature_end, *law),
                 center,
                 normal,
             ),

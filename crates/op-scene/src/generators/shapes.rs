@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 use op_dynamics::math::tangent_axis;
 use op_dynamics::{Point3, Real, Vec3};
 
-use super::Generated;
+use super::{CurvatureLaw, Generated};
 
 /// An orthonormal right-handed frame `(e1, e2, n)` with `n` the given
 /// direction (normalized) and `e1` chosen deterministically.
@@ -29,35 +29,57 @@ fn recenter(positions: &mut [Point3], center: &[Real; 3]) {
     }
 }
 
-/// Curvature at index `i` of a spiral: linear in the index.
-pub(super) fn spiral_curvature(count: usize, k0: Real, k1: Real, i: usize) -> Real {
-    if count < 2 {
+/// Curvature at arc length `s` of a spiral of length `length` whose
+/// curvature goes from `k0` to `k1` by `law`.
+pub(super) fn spiral_curvature(
+    law: CurvatureLaw,
+    k0: Real,
+    k1: Real,
+    s: Real,
+    length: Real,
+) -> Real {
+    if length <= 0.0 {
         return k0;
     }
-    k0 + (k1 - k0) * i as Real / (count - 1) as Real
+    let x = s / length;
+    match law {
+        CurvatureLaw::Linear => k0 + (k1 - k0) * x,
+        CurvatureLaw::Geometric => k0 * (k1 / k0).powf(x),
+    }
 }
 
-/// A planar curve integrated in arc length (`θ'(s) = κ(s)`, `κ` linear in
-/// `s` from `k0` to `k1`), particles `spacing` apart in arc length, centroid
-/// at `center`, normals `t × n_plane` (away from the centre of curvature
-/// where `κ > 0`), rest curvature the analytic `κ_i`.
+/// Turning angle `θ(s) = ∫_0^s κ` of the spiral of [`spiral_curvature`].
+fn spiral_angle(law: CurvatureLaw, k0: Real, k1: Real, s: Real, length: Real) -> Real {
+    if length <= 0.0 {
+        return k0 * s;
+    }
+    match law {
+        CurvatureLaw::Linear => k0 * s + (k1 - k0) * s * s / (2.0 * length),
+        CurvatureLaw::Geometric => {
+            let log_ratio = (k1 / k0).ln();
+            if log_ratio.abs() < 1e-12 {
+                k0 * s
+            } else {
+                k0 * length / log_ratio * (log_ratio * s / length).exp_m1()
+            }
+        }
+    }
+}
+
+/// A planar curve integrated in arc length (`θ'(s) = κ(s)`, `κ` going from
+/// `k0` to `k1` by `law`), particles `spacing` apart in arc length,
+/// centroid at `center`, normals `t × n_plane` (away from the centre of
+/// curvature where `κ > 0`), rest curvature the analytic `κ_i`.
 pub(super) fn spiral(
     count: usize,
     spacing: Real,
-    k0: Real,
-    k1: Real,
+    (k0, k1, law): (Real, Real, CurvatureLaw),
     center: &[Real; 3],
     normal: &[Real; 3],
 ) -> Generated {
     let (e1, e2, n) = plane_frame(normal);
     let length = spacing * (count.saturating_sub(1)) as Real;
-    let theta = |s: Real| {
-        if length > 0.0 {
-            k0 * s + (k1 - k0) * s * s / (2.0 * length)
-        } else {
-            k0 * s
-        }
-    };
+    let theta = |s: Real| spiral_angle(law, k0, k1, s, length);
     let tangent = |s: Real| {
         let t = theta(s);
         (t.cos(), t.sin())
@@ -96,7 +118,7 @@ pub(super) fn spiral(
         let (c, sn) = tangent(s);
         let t = e1 * c + e2 * sn;
         normals.push(t.cross(&n).normalize());
-        curvatures.push(spiral_curvature(count, k0, k1, i));
+        curvatures.push(spiral_curvature(law, k0, k1, s, length));
     }
     recenter(&mut positions, center);
     Generated {
@@ -276,7 +298,22 @@ mod tests {
     #[test]
     fn spiral_of_constant_curvature_is_a_circle_with_outward_normals() {
         let k = 0.25;
-        let g = spiral(20, 0.5, k, k, &[1.0, 2.0, 3.0], &[0.0, 0.0, 1.0]);
+        let g = spiral(
+            20,
+            0.5,
+            (k, k, CurvatureLaw::Linear),
+            &[1.0, 2.0, 3.0],
+            &[0.0, 0.0, 1.0],
+        );
+        // A geometric law of ratio 1 is the same circle.
+        let geometric = spiral(
+            20,
+            0.5,
+            (k, k, CurvatureLaw::Geometric),
+            &[1.0, 2.0, 3.0],
+            &[0.0, 0.0, 1.0],
+        );
+        assert_eq!(geometric, g);
         for (p, n) in g.positions.iter().zip(&g.normals) {
             let centre = p - n / k;
             let c0 = g.positions[0] - g.normals[0] / k;

@@ -142,9 +142,21 @@ pub struct WorldSettings {
     /// (adaptive), > 0. Default: 1e-3.
     #[serde(default = "one_thousandth")]
     pub dt: Real,
-    /// Simulated duration, > 0. Default: 1.
+    /// Simulated duration, > 0 (after the settle phase). Default: 1.
     #[serde(default = "one")]
     pub duration: Real,
+    /// Settle phase, >= 0: the runner advances the world by this duration
+    /// before frame 0, with no force window acting (every force window's
+    /// `start` and `end` count from the end of the settle phase), and takes
+    /// the settled positions as the rest shape (the reference of the rest
+    /// shape error and its rest spacing). Generated shapes are close to, not
+    /// exactly at, rest (DESIGN §8: a spiral made from its analytic
+    /// curvature); settling first makes the reference a true rest state.
+    /// Times in `metrics.csv` and `summary.json` count from the end of the
+    /// settle phase. Building a scene does not settle it; see
+    /// [`crate::BuiltScene::settle`]. Default: 0 (no settle phase).
+    #[serde(default)]
+    pub settle: Real,
     /// Frames written per unit of simulated time, > 0. Default: 30.
     #[serde(default = "thirty")]
     pub frame_rate: Real,
@@ -176,6 +188,7 @@ impl Default for WorldSettings {
             integrator: default_scheme(),
             dt: one_thousandth(),
             duration: one(),
+            settle: 0.0,
             frame_rate: thirty(),
             neighbours: NeighbourParams::default(),
             gravity: [0.0; 3],

@@ -146,6 +146,7 @@ impl Scene {
             .map_err(|e| SceneError::param(file, "world.integrator", e))?;
         positive(file, "world.dt", w.dt)?;
         positive(file, "world.duration", w.duration)?;
+        non_negative(file, "world.settle", w.settle)?;
         positive(file, "world.frame_rate", w.frame_rate)?;
         positive(file, "world.neighbours.skin", w.neighbours.skin)?;
         finite3(file, "world.gravity", &w.gravity)?;
@@ -249,6 +250,18 @@ impl Scene {
                 at("end"),
                 f.end,
                 &format!("must be greater than start = {} (or infinite)", f.start),
+            ));
+        }
+        let settle = self.world.settle;
+        if f.end + settle <= f.start + settle {
+            return Err(SceneError::value(
+                file,
+                "world.settle",
+                settle,
+                &format!(
+                    "is too large for {path} (start {} and end {} become equal once shifted by the settle phase)",
+                    f.start, f.end
+                ),
             ));
         }
         non_negative(file, &at("ramp"), f.ramp)?;

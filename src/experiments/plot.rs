@@ -1,0 +1,487 @@
+//! Hand-written SVG figures for the reports: line plots with axes, ticks,
+//! a legend, optional log scale and shaded time intervals, and panels of
+//! particle shapes. No plotting crate: a few hundred bytes of SVG per
+//! element, readable in any browser and in the markdown report.
+
+use std::fmt::Write;
+
+use op_dynamics::{Point3, Real, Vec3};
+
+/// One curve of a [`LinePlot`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend text.
+    pub label: String,
+    /// SVG colour.
+    pub color: String,
+    /// Dashed line.
+    pub dashed: bool,
+    /// `(x, y)` points, in order.
+    pub points: Vec<(Real, Real)>,
+}
+
+/// A line plot.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinePlot {
+    /// Title above the plot.
+    pub title: String,
+    /// x-axis label.
+    pub x_label: String,
+    /// y-axis label.
+    pub y_label: String,
+    /// Logarithmic y axis (non-positive values are dropped).
+    pub log_y: bool,
+    /// The curves.
+    pub series: Vec<Series>,
+    /// Shaded x intervals with a label (e.g. load phases).
+    pub bands: Vec<(Real, Real, String)>,
+    /// Horizontal reference lines with a label (e.g. a tolerance).
+    pub hlines: Vec<(Real, String)>,
+    /// Fixed y range (points outside are clipped), or `None` to fit the
+    /// data.
+    pub y_range: Option<(Real, Real)>,
+    /// Picture width in pixels.
+    pub width: Real,
+    /// Picture height in pixels.
+    pub height: Real,
+}
+
+impl LinePlot {
+    /// An empty plot of 640 x 400 pixels.
+    pub fn new(title: &str, x_label: &str, y_label: &str) -> LinePlot {
+        LinePlot {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            log_y: false,
+            series: Vec::new(),
+            bands: Vec::new(),
+            hlines: Vec::new(),
+            y_range: None,
+            width: 640.0,
+            height: 400.0,
+        }
+    }
+
+    /// Adds a curve.
+    pub fn line(mut self, label: &str, color: &str, points: Vec<(Real, Real)>) -> LinePlot {
+        self.series.push(Series {
+            label: label.into(),
+            color: color.into(),
+            dashed: false,
+            points,
+        });
+        self
+    }
+
+    /// The SVG document.
+    pub fn svg(&self) -> String {
+        let (w, h) = (self.width, self.height);
+        let (left, right, top, bottom) = (70.0, 20.0, 36.0, 50.0);
+        let ty = |y: Real| if self.log_y { y.log10() } else { y };
+        let in_range = |y: Real| self.y_range.is_none_or(|(a, b)| y >= a && y <= b);
+        let usable = |&(x, y): &(Real, Real)| {
+            x.is_finite() && y.is_finite() && (!self.log_y || y > 0.0) && in_range(y)
+        };
+        let pts = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().filter(|p| usable(p)));
+        let (mut x0, mut x1, mut y0, mut y1) = (
+            Real::INFINITY,
+            Real::NEG_INFINITY,
+            Real::INFINITY,
+            Real::NEG_INFINITY,
+        );
+        for &(x, y) in pts {
+            x0 = x0.min(x);
+            x1 = x1.max(x);
+            y0 = y0.min(ty(y));
+            y1 = y1.max(ty(y));
+        }
+        for (y, _) in &self.hlines {
+            if !self.log_y || *y > 0.0 {
+                y0 = y0.min(ty(*y));
+                y1 = y1.max(ty(*y));
+            }
+        }
+        if !x0.is_finite() {
+            (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+        }
+        if let Some((a, b)) = self.y_range {
+            (y0, y1) = (ty(a), ty(b));
+        }
+        if x1 <= x0 {
+            x1 = x0 + 1.0;
+        }
+        let (xt, x0, x1) = ticks(x0, x1);
+        let (yt, y0, y1) = if let (Some(_), false) = (self.y_range, self.log_y) {
+            let (t, _, _) = ticks(y0, y1);
+            (
+                t.into_iter()
+                    .filter(|v| *v >= y0 - 1e-12 && *v <= y1 + 1e-12)
+                    .collect(),
+                y0,
+                y1,
+            )
+        } else if self.log_y {
+            let (a, b) = (y0.floor(), y1.ceil().max(y0.floor() + 1.0));
+            (((a as i64)..=(b as i64)).map(|k| k as Real).collect(), a, b)
+        } else {
+            if y1 <= y0 {
+                y1 = y0 + 1.0;
+            }
+            ticks(y0, y1)
+        };
+        let (pw, ph) = (w - left - right, h - top - bottom);
+        let sx = |x: Real| left + (x - x0) / (x1 - x0) * pw;
+        let sy = |y: Real| top + (1.0 - (ty(y) - y0) / (y1 - y0)) * ph;
+        let syt = |t: Real| top + (1.0 - (t - y0) / (y1 - y0)) * ph;
+        let mut s = header(w, h);
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="22" text-anchor="middle" font-size="15">{}</text>"#,
+            w / 2.0,
+            esc(&self.title)
+        );
+        let bands: Vec<(Real, Real, &String)> = self
+            .bands
+            .iter()
+            .map(|(a, b, l)| (a.max(x0), b.min(x1), l))
+            .filter(|(a, b, _)| b > a)
+            .collect();
+        for (a, b, _) in &bands {
+            let _ = writeln!(
+                s,
+                r##"<rect x="{:.1}" y="{top}" width="{:.1}" height="{ph}" fill="#f2e6c9"/>"##,
+                sx(*a),
+                sx(*b) - sx(*a)
+            );
+        }
+        for &t in &xt {
+            let _ = writeln!(
+                s,
+                r##"<line x1="{0:.1}" y1="{top}" x2="{0:.1}" y2="{1}" stroke="#ddd"/><text x="{0:.1}" y="{2}" text-anchor="middle" font-size="11">{3}</text>"##,
+                sx(t),
+                top + ph,
+                top + ph + 16.0,
+                fmt_tick(t)
+            );
+        }
+        for &t in &yt {
+            let label = if self.log_y {
+                format!("1e{}", t as i64)
+            } else {
+                fmt_tick(t)
+            };
+            let _ = writeln!(
+                s,
+                r##"<line x1="{left}" y1="{0:.1}" x2="{1}" y2="{0:.1}" stroke="#ddd"/><text x="{2}" y="{3:.1}" text-anchor="end" font-size="11">{4}</text>"##,
+                syt(t),
+                left + pw,
+                left - 6.0,
+                syt(t) + 4.0,
+                label
+            );
+        }
+        for (a, b, label) in &bands {
+            let _ = writeln!(
+                s,
+                r##"<text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="11" fill="#8a6d3b">{}</text>"##,
+                0.5 * (sx(*a) + sx(*b)),
+                top + ph - 6.0,
+                esc(label)
+            );
+        }
+        let _ = writeln!(
+            s,
+            r##"<rect x="{left}" y="{top}" width="{pw}" height="{ph}" fill="none" stroke="#333"/>"##
+        );
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="middle" font-size="13">{}</text>"#,
+            left + pw / 2.0,
+            h - 12.0,
+            esc(&self.x_label)
+        );
+        let _ = writeln!(
+            s,
+            r#"<text transform="translate(18,{}) rotate(-90)" text-anchor="middle" font-size="13">{}</text>"#,
+            top + ph / 2.0,
+            esc(&self.y_label)
+        );
+        for (y, label) in &self.hlines {
+            if !self.log_y || *y > 0.0 {
+                let _ = writeln!(
+                    s,
+                    r##"<line x1="{left}" y1="{0:.1}" x2="{1}" y2="{0:.1}" stroke="#888" stroke-dasharray="2,3"/><text x="{1}" y="{2:.1}" text-anchor="end" font-size="11" fill="#555">{3}</text>"##,
+                    sy(*y),
+                    left + pw - 4.0,
+                    sy(*y) - 4.0,
+                    esc(label)
+                );
+            }
+        }
+        for ser in &self.series {
+            let mut d = String::new();
+            let mut pen_up = true;
+            for p in &ser.points {
+                if !usable(p) {
+                    pen_up = true;
+                    continue;
+                }
+                let _ = write!(
+                    d,
+                    "{}{:.1},{:.1} ",
+                    if pen_up { "M" } else { "L" },
+                    sx(p.0),
+                    sy(p.1)
+                );
+                pen_up = false;
+            }
+            let dash = if ser.dashed {
+                r#" stroke-dasharray="6,4""#
+            } else {
+                ""
+            };
+            let _ = writeln!(
+                s,
+                r#"<path d="{d}" fill="none" stroke="{}" stroke-width="1.6"{dash}/>"#,
+                ser.color
+            );
+        }
+        if !self.series.is_empty() {
+            let _ = writeln!(
+                s,
+                r##"<rect x="{}" y="{}" width="176" height="{}" fill="white" fill-opacity="0.85" stroke="#ccc"/>"##,
+                left + pw - 178.0,
+                top + 4.0,
+                16.0 * self.series.len() as Real + 6.0
+            );
+        }
+        for (k, ser) in self.series.iter().enumerate() {
+            let y = top + 14.0 + 16.0 * k as Real;
+            let x = left + pw - 170.0;
+            let _ = writeln!(
+                s,
+                r#"<line x1="{x}" y1="{y}" x2="{}" y2="{y}" stroke="{}" stroke-width="2"/><text x="{}" y="{}" font-size="12">{}</text>"#,
+                x + 24.0,
+                ser.color,
+                x + 30.0,
+                y + 4.0,
+                esc(&ser.label)
+            );
+        }
+        s.push_str("</svg>\n");
+        s
+    }
+}
+
+fn header(w: Real, h: Real) -> String {
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n"
+    )
+}
+
+fn esc(t: &str) -> String {
+    t.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+fn fmt_tick(t: Real) -> String {
+    if t == 0.0 {
+        "0".into()
+    } else if t.abs() >= 1e4 || t.abs() < 1e-3 {
+        format!("{t:.0e}")
+    } else {
+        let s = format!("{t:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+/// "Nice" ticks (1, 2, 5 times a power of ten) covering `[a, b]`, and the
+/// widened range.
+fn ticks(a: Real, b: Real) -> (Vec<Real>, Real, Real) {
+    let raw = (b - a) / 6.0;
+    let mag = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * mag)
+        .find(|s| *s >= raw)
+        .unwrap_or(10.0 * mag);
+    let lo = (a / step).floor() * step;
+    let hi = (b / step).ceil() * step;
+    let n = ((hi - lo) / step).round() as i64;
+    ((0..=n).map(|k| lo + k as Real * step).collect(), lo, hi)
+}
+
+/// At most about `max` points of `points` (sorted by x): the largest `y`
+/// of each bucket of consecutive points, so peaks survive.
+pub fn downsample(points: &[(Real, Real)], max: usize) -> Vec<(Real, Real)> {
+    if points.len() <= max || max == 0 {
+        return points.to_vec();
+    }
+    let per = points.len().div_ceil(max);
+    points
+        .chunks(per)
+        .filter_map(|c| {
+            c.iter()
+                .copied()
+                .filter(|p| p.1.is_finite())
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+        })
+        .collect()
+}
+
+/// One panel of [`shapes_svg`]: a caption, the particles' positions and
+/// normals (drawn in the x-y plane).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapePanel {
+    /// Caption under the panel.
+    pub caption: String,
+    /// Positions, in chain order.
+    pub positions: Vec<Point3>,
+    /// Normals (drawn as short ticks).
+    pub normals: Vec<Vec3>,
+}
+
+/// Panels of planar particle chains side by side, at one common scale, in
+/// rows of `per_row`; `reference` (the rest shape, if any) is drawn in
+/// grey under each panel, centred on the panel's shape.
+pub fn shapes_svg(
+    title: &str,
+    panels: &[ShapePanel],
+    reference: Option<&[Point3]>,
+    per_row: usize,
+) -> String {
+    let per_row = per_row.max(1);
+    let (cell, pad) = (230.0, 14.0);
+    let rows = panels.len().div_ceil(per_row);
+    let (w, h) = (
+        cell * per_row.min(panels.len()).max(1) as Real,
+        40.0 + cell * rows as Real,
+    );
+    let centred = |pts: &[Point3]| -> Vec<(Real, Real)> {
+        let n = pts.len().max(1) as Real;
+        let (cx, cy) = pts
+            .iter()
+            .fold((0.0, 0.0), |a, p| (a.0 + p.x / n, a.1 + p.y / n));
+        pts.iter().map(|p| (p.x - cx, p.y - cy)).collect()
+    };
+    let mut extent: Real = 1e-9;
+    for p in panels {
+        for (x, y) in centred(&p.positions) {
+            extent = extent.max(x.abs()).max(y.abs());
+        }
+    }
+    if let Some(r) = reference {
+        for (x, y) in centred(r) {
+            extent = extent.max(x.abs()).max(y.abs());
+        }
+    }
+    let scale = (cell / 2.0 - pad - 12.0) / extent;
+    let mut s = header(w, h);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="22" text-anchor="middle" font-size="15">{}</text>"#,
+        w / 2.0,
+        esc(title)
+    );
+    for (k, p) in panels.iter().enumerate() {
+        let (ox, oy) = (
+            cell * (k % per_row) as Real + cell / 2.0,
+            40.0 + cell * (k / per_row) as Real + cell / 2.0 - 10.0,
+        );
+        let tx = |(x, y): (Real, Real)| (ox + x * scale, oy - y * scale);
+        let _ = writeln!(
+            s,
+            r##"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="#ccc"/>"##,
+            ox - cell / 2.0 + 4.0,
+            oy - cell / 2.0 + 14.0,
+            cell - 8.0,
+            cell - 8.0
+        );
+        if let Some(r) = reference {
+            let d: Vec<String> = centred(r)
+                .into_iter()
+                .map(tx)
+                .map(|(x, y)| format!("{x:.1},{y:.1}"))
+                .collect();
+            let _ = writeln!(
+                s,
+                r##"<polyline points="{}" fill="none" stroke="#bbb" stroke-width="1.2"/>"##,
+                d.join(" ")
+            );
+        }
+        let c = centred(&p.positions);
+        let d: Vec<String> = c
+            .iter()
+            .copied()
+            .map(tx)
+            .map(|(x, y)| format!("{x:.1},{y:.1}"))
+            .collect();
+        let _ = writeln!(
+            s,
+            r##"<polyline points="{}" fill="none" stroke="#1f5fa8" stroke-width="1.6"/>"##,
+            d.join(" ")
+        );
+        for (i, &q) in c.iter().enumerate() {
+            let (x, y) = tx(q);
+            if let Some(n) = p.normals.get(i) {
+                let (nx, ny) = (x + n.x * 12.0, y - n.y * 12.0);
+                let _ = writeln!(
+                    s,
+                    r##"<line x1="{x:.1}" y1="{y:.1}" x2="{nx:.1}" y2="{ny:.1}" stroke="#c0392b" stroke-width="1.2"/>"##
+                );
+            }
+            let fill = if i == 0 { "#2c7a2c" } else { "#1f5fa8" };
+            let _ = writeln!(
+                s,
+                r#"<circle cx="{x:.1}" cy="{y:.1}" r="3.2" fill="{fill}"/>"#
+            );
+        }
+        let _ = writeln!(
+            s,
+            r#"<text x="{ox}" y="{}" text-anchor="middle" font-size="12">{}</text>"#,
+            oy + cell / 2.0 - 2.0,
+            esc(&p.caption)
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_cover_the_range_with_round_steps() {
+        let (t, lo, hi) = ticks(0.3, 9.7);
+        assert!(
+            lo <= 0.3 && hi >= 9.7 && t.len() >= 4 && t.len() <= 12,
+            "{t:?}"
+        );
+        assert_eq!(t[1] - t[0], 2.0);
+    }
+
+    #[test]
+    fn plots_are_well_formed_svg() {
+        let p = LinePlot {
+            log_y: true,
+            ..LinePlot::new("O(t)", "t", "O")
+        }
+        .line("a", "red", vec![(0.0, 1e-3), (1.0, 1e-5), (2.0, 0.0)]);
+        let s = p.svg();
+        assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
+        assert!(s.contains("<path") && s.contains("1e-5") && !s.contains("NaN"));
+        let d = downsample(
+            &(0..1000)
+                .map(|k| (k as Real, (k % 7) as Real))
+                .collect::<Vec<_>>(),
+            100,
+        );
+        assert!(d.len() <= 100 && d.iter().all(|p| p.1 == 6.0));
+    }
+}

@@ -1,0 +1,291 @@
+//! Shape memory (seed 002 §5, fig. 5; DESIGN §7-8): the spiral that
+//! uncoils under opposing end forces and recovers its shape, the same
+//! recovery for other spirals from the same parameter recipe and for the
+//! seed spiral scaled by dimensional analysis, a hinged spiral that stays
+//! in one piece, and two objects that collide without merging.
+//!
+//! The scenes are the files of `scenes/`; their parameters come from the
+//! one recipe of `oriented_particles::experiments::spiral`. Runs take well
+//! under a second each (tiny worlds, run on one thread).
+
+use std::path::{Path, PathBuf};
+
+use oriented_particles::experiments::membership::{run_collision, run_hinge};
+use oriented_particles::experiments::scaling::Scaling;
+use oriented_particles::experiments::single_threaded;
+use oriented_particles::experiments::spiral::{
+    experiment_shapes, run_spiral, SpiralRecipe, SpiralShape, Units,
+};
+use oriented_particles::op_scene::outputs::ParticleOutput;
+use oriented_particles::op_scene::{self, load_scene, CurvatureLaw, RunOptions, Scene, Summary};
+use serde_json::Value;
+
+fn scene(name: &str) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.ron"));
+    load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Numbers equal to 1e-9 relative, everything else identical.
+fn assert_close(a: &Value, b: &Value, path: &str) {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            assert!(
+                (x - y).abs() <= 1e-9 * x.abs().max(y.abs()) + 1e-15,
+                "{path}: {x} != {y}"
+            );
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            let (kx, ky): (Vec<_>, Vec<_>) = (x.keys().collect(), y.keys().collect());
+            assert_eq!(kx, ky, "{path}: fields");
+            for k in x.keys() {
+                assert_close(&x[k], &y[k], &format!("{path}.{k}"));
+            }
+        }
+        (Value::Array(x), Value::Array(y)) => {
+            assert_eq!(x.len(), y.len(), "{path}: lengths");
+            for (k, (u, v)) in x.iter().zip(y).enumerate() {
+                assert_close(u, v, &format!("{path}[{k}]"));
+            }
+        }
+        _ => assert_eq!(a, b, "{path}"),
+    }
+}
+
+fn json(s: &Scene) -> Value {
+    serde_json::to_value(s).unwrap()
+}
+
+/// Runs `scene` with the real runner (no OBJ frames) into a temporary
+/// directory and returns its summary.
+fn run_scene(mut scene: Scene) -> Summary {
+    scene.outputs.particles = ParticleOutput::None;
+    scene.outputs.metrics = false;
+    let out: PathBuf = std::env::temp_dir().join(format!(
+        "op-shape-memory-{}-{}",
+        scene.name,
+        std::process::id()
+    ));
+    let mut built = scene.build(None, None).unwrap_or_else(|e| panic!("{e}"));
+    let opts = RunOptions {
+        out_dir: out.clone(),
+        frames: None,
+    };
+    let summary = single_threaded(|| op_scene::run(&mut built, &opts, &mut |_, _| {}))
+        .unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+    let _ = std::fs::remove_dir_all(out);
+    summary
+}
+
+/// Every spiral scene file holds exactly what the one recipe makes of its
+/// shape (no per-case tuning), and the x10 file is also the seed file
+/// scaled by dimensional analysis.
+#[test]
+fn spiral_scenes_follow_the_one_recipe() {
+    let recipe = SpiralRecipe::default();
+    for (name, shape) in experiment_shapes() {
+        let file = scene(name);
+        assert_close(&json(&file), &json(&recipe.scene(name, &shape)), name);
+        assert!(shape.turns() <= 1.0, "{name}: {} turns", shape.turns());
+    }
+    // The hinge and collision scenes use the recipe's material too.
+    let memory = json(&recipe.scene("m", &SpiralShape::seed()))["materials"].clone();
+    for name in ["hinge_spiral", "colliding_objects"] {
+        assert_close(&json(&scene(name))["materials"], &memory, name);
+    }
+    let mut scaled = Scaling::length(10.0).scene(&scene("spiral")).unwrap();
+    scaled.name = "spiral_x10".into();
+    assert_close(&json(&scaled), &json(&scene("spiral_x10")), "x10");
+    assert!(matches!(
+        scene("spiral_13").objects[0].generator,
+        op_scene::Generator::Spiral {
+            law: CurvatureLaw::Geometric,
+            count: 13,
+            ..
+        }
+    ));
+}
+
+/// The seed spiral: ten particles, less than one turn, turns far enough
+/// apart that non-adjacent particles do not interact at rest.
+#[test]
+fn seed_spiral_turns_are_apart() {
+    let s = scene("spiral");
+    let shape = SpiralShape::seed();
+    assert_eq!(s.objects[0].generator, shape.generator());
+    assert!(shape.turns() < 1.0);
+    let mut b = s.build(None, None).unwrap();
+    single_threaded(|| b.settle()).unwrap();
+    let rest = &b.objects[0].rest;
+    assert_eq!(rest.len(), 10);
+    let reach = b.world.neighbours().unwrap().cutoff();
+    let mut closest = f64::INFINITY;
+    for i in 0..rest.len() {
+        for j in i + 2..rest.len() {
+            closest = closest.min((rest[j] - rest[i]).norm());
+        }
+    }
+    eprintln!(
+        "seed spiral: {:.3} turns, non-adjacent particles >= {closest:.3} apart, reach {reach}",
+        shape.turns()
+    );
+    assert!(closest > reach, "{closest} <= {reach}");
+}
+
+/// Pulled apart it really uncoils (rest shape error >= 1 rest spacing,
+/// end-to-end distance at the balanced state at least twice the rest
+/// one); released it returns (final error <= 0.01).
+#[test]
+fn seed_spiral_uncoils_and_recovers() {
+    let s = scene("spiral");
+    let summary = run_scene(s.clone());
+    let o = &summary.objects[0];
+    eprintln!(
+        "seed spiral (runner): rest_shape_error_max {:.4}, rest_shape_error_final {:.5}, {} steps, {:.2} s",
+        o.rest_shape_error_max, o.rest_shape_error_final, summary.steps, summary.wall_seconds
+    );
+    assert!(!summary.diverged);
+    assert_eq!(summary.settle, 40.0);
+    assert!(o.rest_shape_error_max >= 1.0, "{}", o.rest_shape_error_max);
+    assert!(
+        o.rest_shape_error_final <= 0.01,
+        "{}",
+        o.rest_shape_error_final
+    );
+
+    let recipe = SpiralRecipe::default();
+    let schedule = recipe.schedule(&Units::of(&SpiralShape::seed()));
+    let run = single_threaded(|| run_spiral(&s, &schedule)).unwrap();
+    eprintln!(
+        "seed spiral: end to end {:.3} at rest, {:.3} balanced (x{:.2}, max speed {:.1e}); error max while loaded {:.4}, final {:.5}",
+        run.rest_end_to_end,
+        run.balanced_end_to_end,
+        run.balanced_end_to_end / run.rest_end_to_end,
+        run.balanced_max_speed,
+        run.max_error_loaded,
+        run.final_error
+    );
+    assert!(run.max_error_loaded >= 1.0, "uncoils during the pull");
+    assert!(run.balanced_end_to_end >= 2.0 * run.rest_end_to_end);
+    assert!(
+        run.balanced_max_speed < 0.02,
+        "balanced: nearly at rest under load"
+    );
+    assert!((run.final_error - o.rest_shape_error_final).abs() < 1e-12);
+    assert_eq!(run.max_out_of_plane, 0.0, "stays in its plane, bit for bit");
+}
+
+/// The same recipe recovers other spirals: 8 particles, 13 particles with
+/// a geometric curvature law, and the seed spiral scaled by 10.
+#[test]
+fn recovery_is_not_tuned_to_one_case() {
+    for name in ["spiral_8", "spiral_13", "spiral_x10"] {
+        let summary = run_scene(scene(name));
+        let o = &summary.objects[0];
+        eprintln!(
+            "{name}: rest_shape_error_max {:.4}, rest_shape_error_final {:.5}",
+            o.rest_shape_error_max, o.rest_shape_error_final
+        );
+        assert!(!summary.diverged, "{name}");
+        assert!(
+            o.rest_shape_error_max >= 0.5,
+            "{name}: {}",
+            o.rest_shape_error_max
+        );
+        assert!(
+            o.rest_shape_error_final <= 0.01,
+            "{name}: {}",
+            o.rest_shape_error_final
+        );
+    }
+}
+
+/// Scaled by dimensional analysis, the run is the seed run with lengths
+/// times 10; scaling the geometry alone is a different system.
+#[test]
+fn scaled_spiral_repeats_the_seed_motion_and_geometry_alone_does_not() {
+    let recipe = SpiralRecipe::default();
+    let schedule = recipe.schedule(&Units::of(&SpiralShape::seed()));
+    let seed = single_threaded(|| run_spiral(&scene("spiral"), &schedule)).unwrap();
+    let x10 = single_threaded(|| run_spiral(&scene("spiral_x10"), &schedule)).unwrap();
+    assert_eq!(seed.errors.len(), x10.errors.len());
+    // The motion is exactly planar (see `SpiralRecipe::object`), so the
+    // runs agree to round-off all along, recoil included.
+    let worst = seed
+        .errors
+        .iter()
+        .zip(&x10.errors)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    eprintln!("x10 against seed: rest shape errors differ by at most {worst:.1e}");
+    assert!(worst < 1e-9, "{worst}");
+    let naive = Scaling::geometry_only(&scene("spiral"), 10.0).unwrap();
+    let g = single_threaded(|| run_spiral(&naive, &schedule)).unwrap();
+    eprintln!(
+        "geometry only x10: error max {:.3}, final {:.3}",
+        g.max_error, g.final_error
+    );
+    assert!(
+        g.final_error > 0.1,
+        "geometry-only scaling is not the same system"
+    );
+}
+
+/// Two spiral parts joined by a free hinge stay one connected object: the
+/// bonds to the hinge hold under the pull, each part recovers its own
+/// shape, the joint keeps no memory.
+#[test]
+fn hinge_spiral_stays_connected() {
+    let s = scene("hinge_spiral");
+    let built = s.build(None, None).unwrap();
+    assert!(built.world.enabled().iter().any(|e| e == "term:repulsion"));
+    let run = single_threaded(|| run_hinge(&s)).unwrap();
+    eprintln!("hinge spiral: {run:?}");
+    assert_eq!(run.part_sizes, vec![6, 6]);
+    assert_eq!(run.hinge, 6);
+    assert!(run.hinge_unoriented);
+    // Always short of the distance of the maximum cohesion attraction,
+    // beyond which a bond under a constant load gives way.
+    let (r_m, _) = SpiralRecipe::default()
+        .cohesion(&Units::of(&SpiralShape::seed()))
+        .max_attraction();
+    assert!(run.max_bond < r_m, "{} >= {r_m}", run.max_bond);
+    assert!(run.max_hinge_bond < r_m, "{}", run.max_hinge_bond);
+    for (k, (&max, &last)) in run
+        .part_errors_max
+        .iter()
+        .zip(&run.part_errors_final)
+        .enumerate()
+    {
+        assert!(max > 0.2, "part {k} was deformed: {max}");
+        assert!(last <= 0.01, "part {k} recovers its own shape: {last}");
+    }
+    assert!(
+        run.object_error_final > 0.5,
+        "the free hinge does not return"
+    );
+    assert!(run.part_distance.1 < run.part_distance.0 + 5.0);
+}
+
+/// Two objects thrown at each other repel and never merge: the net force
+/// between them never attracts, they never interpenetrate, they come
+/// apart beyond every cut-off and each recovers its own shape.
+#[test]
+fn colliding_objects_repel_and_never_merge() {
+    let s = scene("colliding_objects");
+    let run = single_threaded(|| run_collision(&s, 0.05)).unwrap();
+    eprintln!("colliding objects: {run:?}");
+    assert!(run.min_distance < 1.5, "they came within reach");
+    assert!(run.min_distance > 1.0, "and did not interpenetrate");
+    assert!(run.max_repulsion > 0.1);
+    assert!(
+        run.max_attraction <= 1e-9 * run.max_repulsion,
+        "attracted: {}",
+        run.max_attraction
+    );
+    assert!(run.final_distance > 1.5, "apart at the end");
+    assert!(run.separation.1 > run.separation.0 + 1.0);
+    for e in &run.final_errors {
+        assert!(*e < 0.02, "{e}");
+    }
+}
