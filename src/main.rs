@@ -34,7 +34,7 @@ enum Command {
     Run {
         /// Scene file (.ron or .json).
         scene: PathBuf,
-        /// Output directory. Default: ./opsim-out/<scene name>.
+        /// Output directory. Default: `./opsim-out/<scene name>`.
         #[arg(long)]
         out: Option<PathBuf>,
         /// Number of frames to write (overrides the scene's duration).
