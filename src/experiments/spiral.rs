@@ -441,7 +441,7 @@ impl SpiralRecipe {
             objects: vec![self.object("spiral", "memory", shape, &units)],
             forces: self.end_forces("spiral", shape, &units),
             outputs: Outputs {
-                particles: ParticleOutput::Axes,
+                particles: ParticleOutput::Discs,
                 ..Outputs::default()
             },
             origin: String::new(),
