@@ -54,8 +54,8 @@ pub(crate) struct ForceScratch {
     sources: Vec<u32>,
     /// Rebuild count of the list `sources` was made for.
     sources_for: u64,
-    spacing_pairs: Vec<SpacingPair>,
-    oriented_pairs: Vec<OrientedPair>,
+    spacing_pairs: Vec<Option<SpacingPair>>,
+    oriented_pairs: Vec<Option<OrientedPair>>,
     normals: Vec<Vec3>,
     tangents: Vec<Vec3>,
     /// Potential energy attributed to each particle (its row's pairs).
@@ -311,10 +311,10 @@ impl PairOut for OrientedPair {
 /// Evaluates every listed pair once and sums the contributions per
 /// particle: incoming pairs first (ascending source), then the particle's
 /// own row (list order). `TORQUES` is false for kernels without torques.
-fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> O + Sync>(
+fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> Option<O> + Sync>(
     list: &NeighbourList,
     sources: &[u32],
-    buffer: &mut Vec<O>,
+    buffer: &mut Vec<Option<O>>,
     serial: bool,
     pair: P,
     out: Sums<'_>,
@@ -333,7 +333,7 @@ fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> O + Sync>(
             let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
             for k in pairs.row_range(i) {
                 let j = nbrs[k] as usize;
-                let o = pair(i, j);
+                let Some(o) = pair(i, j) else { continue };
                 fo -= o.force_j();
                 eo += o.energy();
                 forces[j] += o.force_j();
@@ -350,7 +350,7 @@ fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> O + Sync>(
         }
         return;
     }
-    buffer.resize(nbrs.len(), O::default());
+    buffer.resize(nbrs.len(), None);
     buffer
         .par_iter_mut()
         .with_min_len(256)
@@ -366,7 +366,9 @@ fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> O + Sync>(
         .for_each(|(i, ((f, t), e))| {
             let (mut fin, mut tin) = (Vec3::zeros(), Vec3::zeros());
             for &k in pairs.incoming(i) {
-                let o = &buffer[k as usize];
+                let Some(o) = &buffer[k as usize] else {
+                    continue;
+                };
                 fin += o.force_j();
                 if TORQUES {
                     tin += o.torque_j();
@@ -374,7 +376,7 @@ fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> O + Sync>(
             }
             let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
             for k in pairs.row_range(i) {
-                let o = &buffer[k];
+                let Some(o) = &buffer[k] else { continue };
                 fo -= o.force_j();
                 eo += o.energy();
                 if TORQUES {
@@ -415,18 +417,18 @@ fn spacing_pair(
     s: StateRef<'_>,
     i: usize,
     j: usize,
-) -> SpacingPair {
+) -> Option<SpacingPair> {
     let p = s.positions;
     let r = p[j] - p[i];
     let d2 = r.norm_squared();
     if d2 > cutoff2 {
-        return SpacingPair::default();
+        return None;
     }
     let dist = d2.sqrt();
     if uniform {
         let m = &materials[0];
         let (energy, force_j) = evaluate_spacing(m, m, &r, dist);
-        return SpacingPair { force_j, energy };
+        return Some(SpacingPair { force_j, energy });
     }
     let (mi, mj) = (
         &materials[a.materials[i] as usize],
@@ -443,7 +445,7 @@ fn spacing_pair(
             (res.energy, res.force_j)
         }
     };
-    SpacingPair { force_j, energy }
+    Some(SpacingPair { force_j, energy })
 }
 
 #[inline]
@@ -477,12 +479,12 @@ fn oriented_pair(
     s: StateRef<'_>,
     i: usize,
     j: usize,
-) -> OrientedPair {
+) -> Option<OrientedPair> {
     let p = s.positions;
     let r = p[j] - p[i];
     let d2 = r.norm_squared();
     if d2 > cutoff2 {
-        return OrientedPair::default();
+        return None;
     }
     let (mi, mj) = (
         &materials[a.materials[i] as usize],
@@ -499,12 +501,12 @@ fn oriented_pair(
         let v_rel = s.velocities[j] - s.velocities[i];
         force_j += friction_force(mi, mj, &r, d2.sqrt(), &v_rel);
     }
-    OrientedPair {
+    Some(OrientedPair {
         force_j,
         torque_i: res.torque_i,
         torque_j: res.torque_j,
         energy: res.energy,
-    }
+    })
 }
 
 /// Inter-particle friction (seed 002 §3, §5): damping of the relative
