@@ -141,9 +141,16 @@ impl ForceContext<'_> {
                     energies,
                 };
                 if kernel == Kernel::Spacing {
-                    let uniform = uniform_spacing(a);
-                    let pair = |i: usize, j: usize| spacing_pair(a, m, uniform, cutoff2, s, i, j);
-                    accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
+                    if uniform_spacing(a) {
+                        // One material, every pair complete: the dedicated
+                        // spacing loop, small enough to be inlined whole.
+                        let (m0, p) = (&m[0], s.positions);
+                        let pair = |i: usize, j: usize| uniform_spacing_pair(m0, cutoff2, p, i, j);
+                        accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
+                    } else {
+                        let pair = |i: usize, j: usize| spacing_pair(a, m, cutoff2, s, i, j);
+                        accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
+                    }
                 } else {
                     frames(normals, tangents, a, s);
                     let (normals, tangents) = (&*normals, &*tangents);
@@ -406,13 +413,31 @@ fn frames(normals: &mut Vec<Vec3>, tangents: &mut Vec<Vec3>, a: &Attributes<'_>,
         });
 }
 
+/// The spacing kernel's pair when every particle has the same material and
+/// every pair interacts completely ([`uniform_spacing`]).
+#[inline]
+fn uniform_spacing_pair(
+    m: &PreparedMaterial,
+    cutoff2: Real,
+    p: &[crate::math::Point3],
+    i: usize,
+    j: usize,
+) -> Option<SpacingPair> {
+    let r = p[j] - p[i];
+    let d2 = r.norm_squared();
+    if d2 > cutoff2 {
+        return None;
+    }
+    let (energy, force_j) = evaluate_spacing(m, m, &r, d2.sqrt());
+    Some(SpacingPair { force_j, energy })
+}
+
 /// The spacing kernel's pair: spacing potential for complete pairs, the
 /// typing repulsion otherwise; zero beyond the cut-off.
 #[inline]
 fn spacing_pair(
     a: &Attributes<'_>,
     materials: &[PreparedMaterial],
-    uniform: bool,
     cutoff2: Real,
     s: StateRef<'_>,
     i: usize,
@@ -425,11 +450,6 @@ fn spacing_pair(
         return None;
     }
     let dist = d2.sqrt();
-    if uniform {
-        let m = &materials[0];
-        let (energy, force_j) = evaluate_spacing(m, m, &r, dist);
-        return Some(SpacingPair { force_j, energy });
-    }
     let (mi, mj) = (
         &materials[a.materials[i] as usize],
         &materials[a.materials[j] as usize],
