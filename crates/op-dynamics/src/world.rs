@@ -468,6 +468,9 @@ impl World {
 
         let clock = std::time::Instant::now();
         let neighbour_before = self.scratch.neighbour_seconds;
+        // Spacing-only worlds that nothing set spinning never rotate.
+        let rotating = self.kernel == Kernel::Oriented || self.may_rotate;
+        self.integrator.set_translation_only(!rotating);
         let (state, bodies, attributes) = self.particles.split();
         let mut ctx = ForceContext {
             kernel: self.kernel,

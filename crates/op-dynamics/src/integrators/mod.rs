@@ -317,6 +317,9 @@ pub struct Integrator {
     rk: RkBuffers,
     /// Adaptive: the step proposed by the controller after the last step.
     dt_suggested: Option<Real>,
+    /// The caller guarantees no particle rotates and no torque acts
+    /// (see [`Integrator::set_translation_only`]).
+    translation_only: bool,
 }
 
 impl Integrator {
@@ -345,6 +348,7 @@ impl Integrator {
             momenta: Vec::new(),
             rk: RkBuffers::default(),
             dt_suggested: None,
+            translation_only: false,
         })
     }
 
@@ -359,6 +363,15 @@ impl Integrator {
     /// suggestion is kept: a bad guess only costs a rejected attempt.
     pub fn invalidate(&mut self) {
         self.cache_valid = false;
+    }
+
+    /// Declares that, until further notice, every angular velocity is zero
+    /// and the force field produces no torque (a spacing-only world without
+    /// spin). Velocity Verlet then updates positions and velocities only,
+    /// without reading the rotational state: the same result, less memory
+    /// traffic. Other schemes ignore the flag.
+    pub fn set_translation_only(&mut self, on: bool) {
+        self.translation_only = on;
     }
 
     /// Advances the state by `dt` (fixed-step schemes) or by at most `dt`
@@ -431,7 +444,12 @@ impl Integrator {
                 fixed(1)
             }
             Scheme::VelocityVerlet => {
-                let evals = velocity_verlet::step_all(
+                let step = if self.translation_only {
+                    velocity_verlet::step_translation
+                } else {
+                    velocity_verlet::step_all
+                };
+                let evals = step(
                     field,
                     bodies,
                     t,

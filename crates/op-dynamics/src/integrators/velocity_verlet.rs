@@ -194,9 +194,126 @@ pub(crate) fn step_all<F: ForceField>(
     evals
 }
 
+/// [`step_all`] for a state that never rotates (every angular velocity zero,
+/// no torque): positions and velocities only. Same arguments, same result.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn step_translation<F: ForceField>(
+    field: &mut F,
+    bodies: &Bodies<'_>,
+    t: Real,
+    h: Real,
+    state: StateMut<'_>,
+    forces: &mut [Vec3],
+    torques: &mut [Vec3],
+    _momenta: &mut Vec<Vec3>,
+    cached: bool,
+) -> u32 {
+    let mut evals = 0;
+    if !cached {
+        field.forces(t, state.view(), forces, torques);
+        evals += 1;
+    }
+    for ((p, v), (f, &w)) in state
+        .positions
+        .iter_mut()
+        .zip(state.velocities.iter_mut())
+        .zip(forces.iter().zip(bodies.inv_mass))
+    {
+        *v += (0.5 * h * w) * f;
+        *p += h * *v;
+    }
+    field.forces(t + h, state.view(), forces, torques);
+    evals += 1;
+    for (v, (f, &w)) in state
+        .velocities
+        .iter_mut()
+        .zip(forces.iter().zip(bodies.inv_mass))
+    {
+        *v += (0.5 * h * w) * f;
+    }
+    evals
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrators::StateRef;
+    use crate::math::Point3;
+
+    /// Anharmonic springs to the origin, no torque.
+    struct Springs;
+    impl ForceField for Springs {
+        fn forces(&mut self, _t: Real, s: StateRef<'_>, f: &mut [Vec3], tau: &mut [Vec3]) {
+            for i in 0..f.len() {
+                let x = s.positions[i].coords;
+                f[i] = -x * (1.0 + x.norm_squared());
+                tau[i] = Vec3::zeros();
+            }
+        }
+    }
+
+    #[test]
+    fn translation_only_step_equals_the_general_step() {
+        let n = 5;
+        let mut p: Vec<Point3> = (0..n)
+            .map(|k| Point3::new(k as Real * 0.3, 1.0 - k as Real * 0.2, 0.1))
+            .collect();
+        let mut v: Vec<Vec3> = (0..n)
+            .map(|k| Vec3::new(0.1, -0.05 * k as Real, 0.2))
+            .collect();
+        let mut q = vec![Quat::from_scaled_axis(Vec3::new(0.2, 0.1, -0.3)); n];
+        let mut w = vec![Vec3::zeros(); n];
+        let (mut p2, mut v2, mut q2, mut w2) = (p.clone(), v.clone(), q.clone(), w.clone());
+        let inv_mass = vec![0.7; n];
+        let inertia = vec![Vec3::new(1.0, 2.0, 3.0); n];
+        let bodies = Bodies {
+            inv_mass: &inv_mass,
+            inertia: &inertia,
+        };
+        let (mut f1, mut t1, mut m1) = (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n], Vec::new());
+        let (mut f2, mut t2, mut m2) = (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n], Vec::new());
+        for k in 0..50 {
+            let t = k as Real * 0.01;
+            let a = StateMut {
+                positions: &mut p,
+                velocities: &mut v,
+                orientations: &mut q,
+                angular_velocities: &mut w,
+            };
+            step_all(
+                &mut Springs,
+                &bodies,
+                t,
+                0.01,
+                a,
+                &mut f1,
+                &mut t1,
+                &mut m1,
+                k > 0,
+            );
+            let b = StateMut {
+                positions: &mut p2,
+                velocities: &mut v2,
+                orientations: &mut q2,
+                angular_velocities: &mut w2,
+            };
+            step_translation(
+                &mut Springs,
+                &bodies,
+                t,
+                0.01,
+                b,
+                &mut f2,
+                &mut t2,
+                &mut m2,
+                k > 0,
+            );
+        }
+        assert_eq!(p, p2);
+        assert_eq!(v, v2);
+        assert_eq!(q, q2);
+        assert_eq!(w, w2);
+    }
 
     #[test]
     fn midpoint_drift_is_symmetric() {
