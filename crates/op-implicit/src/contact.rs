@@ -16,8 +16,7 @@
 //! serially in sample order, so the result does not depend on the thread
 //! count. The stiffness is per sample: the total reaction grows with the
 //! sampling density (keep the polygonization cell size fixed in a scene).
-//! Not yet done: the contact between two implicit objects (the
-//! interpenetration and propagation regions of DESIGN §5).
+//! Contact between two implicit objects is in [`crate::implicit_contact`].
 
 use std::collections::BTreeMap;
 
@@ -61,7 +60,8 @@ impl Reactions {
         &self.reactions
     }
 
-    /// Number of samples found inside the collider.
+    /// Number of samples in contact (inside the collider, or on the
+    /// contact surface of [`crate::implicit_contact`]).
     pub fn samples_in_contact(&self) -> usize {
         self.samples_in_contact
     }
@@ -107,41 +107,69 @@ pub fn collider_reactions(
             (depth > 0.0).then(|| (*p, out * params.stiffness))
         })
         .collect();
-    let mut out = Reactions::default();
-    let mut per_particle: BTreeMap<u32, (Vec3, Vec3)> = BTreeMap::new();
-    let mut shares: Vec<(usize, Real)> = Vec::new();
+    let mut acc = ReactionAccumulator::default();
     for (p, force) in hits.into_iter().flatten() {
-        shares.clear();
-        field.for_each_near(&p, |i, prim| {
-            let f = prim.field(&p);
+        acc.add(field, &p, force);
+    }
+    acc.finish()
+}
+
+/// Serial accumulator of sample reactions into per-particle (force,
+/// torque) pairs, shared among primitives by field share (module doc).
+/// Shared with [`crate::implicit_contact`].
+#[derive(Default)]
+pub(crate) struct ReactionAccumulator {
+    per_particle: BTreeMap<u32, (Vec3, Vec3)>,
+    shares: Vec<(usize, Real)>,
+    samples: usize,
+    total_force: Vec3,
+}
+
+impl ReactionAccumulator {
+    /// Shares `force`, acting at `p`, among the primitives of `field` with
+    /// a positive field at `p`; returns false (and adds nothing) when there
+    /// are none.
+    pub(crate) fn add(&mut self, field: &Field, p: &Point3, force: Vec3) -> bool {
+        self.shares.clear();
+        field.for_each_near(p, |i, prim| {
+            let f = prim.field(p);
             if f > 0.0 {
-                shares.push((i, f));
+                self.shares.push((i, f));
             }
         });
-        let total: Real = shares.iter().map(|s| s.1).sum();
+        let total: Real = self.shares.iter().map(|s| s.1).sum();
         if total <= 0.0 {
-            continue;
+            return false;
         }
-        out.samples_in_contact += 1;
-        out.total_force += force;
-        for &(i, f) in &shares {
+        self.samples += 1;
+        self.total_force += force;
+        for &(i, f) in &self.shares {
             let prim = &field.primitives()[i];
             let share = force * (f / total);
             let lever = p - prim.particle_position();
-            let entry = per_particle.entry(prim.particle()).or_default();
+            let entry = self.per_particle.entry(prim.particle()).or_default();
             entry.0 += share;
             entry.1 += lever.cross(&share);
         }
+        true
     }
-    out.reactions = per_particle
-        .into_iter()
-        .map(|(particle, (force, torque))| Reaction {
-            particle,
-            force,
-            torque,
-        })
-        .collect();
-    out
+
+    /// The accumulated reactions, in increasing particle id.
+    pub(crate) fn finish(self) -> Reactions {
+        Reactions {
+            reactions: self
+                .per_particle
+                .into_iter()
+                .map(|(particle, (force, torque))| Reaction {
+                    particle,
+                    force,
+                    torque,
+                })
+                .collect(),
+            samples_in_contact: self.samples,
+            total_force: self.total_force,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -116,6 +116,33 @@ impl Field {
     }
 }
 
+/// What [`crate::polygonize_field`] needs of a field: value, analytic
+/// gradient and a box holding the skin. Implemented by [`Field`] and by the
+/// deformed fields of [`crate::implicit_contact`].
+pub trait ScalarField: Sync {
+    /// The field at `p`.
+    fn value(&self, p: &Point3) -> Real;
+    /// The field at `p` and its gradient.
+    fn value_and_gradient(&self, p: &Point3) -> ValueGradient;
+    /// An axis-aligned box `(lo, hi)` outside which the field is below
+    /// [`crate::ISO`], or `None` when the field is empty.
+    fn support_box(&self) -> Option<(Point3, Point3)>;
+}
+
+impl ScalarField for Field {
+    fn value(&self, p: &Point3) -> Real {
+        Field::value(self, p)
+    }
+
+    fn value_and_gradient(&self, p: &Point3) -> ValueGradient {
+        Field::value_and_gradient(self, p)
+    }
+
+    fn support_box(&self) -> Option<(Point3, Point3)> {
+        Field::support_box(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

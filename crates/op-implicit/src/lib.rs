@@ -19,14 +19,19 @@
 //!   skin against a parry collider, shared among the particles and applied
 //!   with [`Reactions::apply`] (`World::add_external_force`).
 //!
-//! Not implemented yet: contact between two implicit objects (Gascuel's
-//! interpenetration and propagation regions, DESIGN §5).
+//! - [`ContactPair`] is the contact between two implicit objects (Gascuel
+//!   1993, DESIGN §5): [`ContactPair::deformed_a`] / [`ContactPair::deformed_b`]
+//!   are the deformed fields (exact contact surface, optional
+//!   propagation-region [`Bulge`]), polygonized with [`polygonize_field`];
+//!   [`ContactPair::reactions`] gives equal and opposite reactions on both
+//!   objects' particles, applied with [`PairReactions::apply`].
 #![warn(missing_docs)]
 
 pub mod contact;
 pub mod error;
 pub mod field;
 mod grid;
+pub mod implicit_contact;
 pub mod kernel;
 pub mod polygonize;
 pub mod primitives;
@@ -36,8 +41,11 @@ mod test_util;
 
 pub use contact::{collider_reactions, ContactParams, Reaction, Reactions};
 pub use error::{PolygonizeError, SkinError};
-pub use field::Field;
+pub use field::{Field, ScalarField};
+pub use implicit_contact::{
+    deform, Bulge, ContactPair, ContactSample, DeformedField, ImplicitContactParams, PairReactions,
+};
 pub use kernel::{iso_radius, ISO};
-pub use polygonize::{polygonize, Mesh, PolygonizeParams};
+pub use polygonize::{polygonize, polygonize_field, Mesh, PolygonizeParams};
 pub use primitives::{PosedPrimitive, Primitive, Shape};
 pub use skin::Skin;

@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 
 use crate::error::PolygonizeError;
-use crate::field::Field;
+use crate::field::{Field, ScalarField};
 use crate::kernel::ISO;
 
 /// Parameters of [`polygonize`].
@@ -151,6 +151,15 @@ impl Extractor for Collect {
 /// of `params` (module doc for the stages). An empty field gives an empty
 /// mesh.
 pub fn polygonize(field: &Field, params: &PolygonizeParams) -> Result<Mesh, PolygonizeError> {
+    polygonize_field(field, params)
+}
+
+/// As [`polygonize`], for any [`ScalarField`]: for instance the deformed
+/// skin of an object in contact, [`crate::DeformedField`].
+pub fn polygonize_field<F: ScalarField + ?Sized>(
+    field: &F,
+    params: &PolygonizeParams,
+) -> Result<Mesh, PolygonizeError> {
     let h = params.cell_size;
     if !(h.is_finite() && h > 0.0) {
         return Err(PolygonizeError::InvalidCellSize(h));

@@ -1,0 +1,394 @@
+//! Contact between two implicit objects: Gascuel's exact contact surface
+//! (Gascuel 1993, "An implicit formulation for precise contact modeling
+//! between flexible solids", SIGGRAPH 93; DESIGN §5, seed 002 §6: "exact
+//! contact surfaces are modelled by adding negative terms to the
+//! potentials").
+//!
+//! **Deformation.** Write each field as its excess over the iso value,
+//! `e_A = f_A - ISO`, `e_B = f_B - ISO` (positive inside). In the
+//! interpenetration region (`e_A > 0` and `e_B > 0`) the deformed fields
+//! are `f'_A = f_A - e_B` and `f'_B = f_B - e_A`, so both deformed skins
+//! lie on the one surface `e_A = e_B`: no gap, no overlap. (The same
+//! subtraction is applied wherever the other excess is positive, which
+//! leaves the skins unchanged and keeps the fields continuous; see
+//! [`deform`]; the deformed field is continuous, with a crease at
+//! `e_B = 0`.) Elsewhere the fields are unchanged, unless the optional [`Bulge`]
+//! (default off) is on: outside B (`e_B < 0`), A's field gets `+ g(-e_B)`,
+//! a C1 profile of two cubic pieces in the distance to the interpenetration
+//! boundary (see [`Bulge`]). [`DeformedField`] is the deformed field of one
+//! object, a [`ScalarField`], so [`crate::polygonize_field`] exports the
+//! deformed skin.
+//!
+//! **Reaction.** The contact surface `e_A = e_B > 0` is sampled on a grid
+//! of cubic cells over the intersection of the two objects' support boxes:
+//! every grid edge along which `e_A - e_B` changes sign is bisected to
+//! round-off, and the crossing is a sample when the common excess
+//! `e = e_A = e_B` is positive there. A crossing on an edge along axis `k`
+//! stands for the area `h^2 |n_k|` (`h` the cell size, `n` the unit
+//! contact normal): summed over the three axes this is, on average, the
+//! surface area, so the total reaction does not depend on `h` (unlike the
+//! per-sample stiffness of [`crate::contact`]). The contact normal is
+//! `n = (grad e_B - grad e_A) / |...|`, pointing out of A into B. The
+//! pressure is `stiffness * e` (the removed excess, `e_B` for A and `e_A`
+//! for B, equal on the surface); the sample's reaction `stiffness * e *
+//! area * n` pushes B along `+n` and A along `-n`, equal and opposite.
+//! Each object's share is distributed among its primitives by their share
+//! of that object's field at the sample, and acts on their particles as a
+//! force and a torque about the particle's position, exactly as in
+//! [`crate::contact`]: over both objects, forces and torques about any
+//! point sum to zero up to round-off.
+//!
+//! Grid nodes and edge bisections run in parallel with ordered collects;
+//! reactions are accumulated serially in edge order: the same bits for any
+//! thread count. Contact regions thinner than a cell, whose crossing edges
+//! have no endpoint inside either object, may be missed.
+
+use op_dynamics::{Point3, Real, Vec3, World};
+use rayon::prelude::*;
+
+use crate::contact::{ReactionAccumulator, Reactions};
+use crate::error::PolygonizeError;
+use crate::field::{Field, ScalarField, ValueGradient};
+use crate::kernel::ISO;
+
+/// The optional bulge of Gascuel's propagation region (DESIGN §5).
+///
+/// Outside the other object B (`s = -e_B > 0`, the distance to the
+/// interpenetration boundary measured in B's field units, i.e. about the
+/// distance times `|grad f_B|`), A's deformed field is `f_A + g(s)`:
+///
+/// ```text
+/// g(s) = s - s^3 / (3 s0^2)                       0 <= s <= s0
+/// g(s) = (2/3) s0 (1 - 3u^2 + 2u^3),  u = (s-s0)/(w-s0)   s0 <= s <= w
+/// g(s) = 0                                         s >= w
+/// ```
+///
+/// with `s0 = peak * w`. `g(0) = 0` and `g'(0) = 1`, matching the slope of
+/// `f_A - e_B` inside, so the deformed field is C1 across the
+/// interpenetration boundary; `g` peaks at `s0` with height `2 s0 / 3`
+/// (C1 join of the two cubics) and ends at `w` with zero value and slope.
+/// `g(s) <= s` everywhere, which keeps the bulged skins disjoint. The bulge
+/// is applied wherever A's skin comes within `w` of B's, also away from
+/// the contact itself; keep `w` small.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bulge {
+    /// Width `w` of the propagation region, in field units, in
+    /// `(0, ISO]` (so the bulge never creates skin outside A's support).
+    pub width: Real,
+    /// Position of the bulge's peak as a fraction of the width, in
+    /// `(0, 1)`. Default: 0.5.
+    pub peak: Real,
+}
+
+impl Bulge {
+    /// A bulge of width `width` peaking at mid-width.
+    pub fn with_width(width: Real) -> Self {
+        Bulge { width, peak: 0.5 }
+    }
+
+    /// Whether `0 < width <= ISO` and `0 < peak < 1`.
+    pub fn is_valid(&self) -> bool {
+        self.width > 0.0 && self.width <= ISO && self.peak > 0.0 && self.peak < 1.0
+    }
+
+    /// `g(s)` and `g'(s)` (type doc).
+    pub fn profile(&self, s: Real) -> (Real, Real) {
+        let w = self.width;
+        let s0 = self.peak * w;
+        if s <= 0.0 || s >= w {
+            (0.0, 0.0)
+        } else if s <= s0 {
+            (s - s * s * s / (3.0 * s0 * s0), 1.0 - s * s / (s0 * s0))
+        } else {
+            let h = 2.0 / 3.0 * s0;
+            let u = (s - s0) / (w - s0);
+            (
+                h * (1.0 - u * u * (3.0 - 2.0 * u)),
+                h * 6.0 * u * (u - 1.0) / (w - s0),
+            )
+        }
+    }
+}
+
+/// The deformed field of `own` in contact with `other` (module doc), from
+/// both fields' values and gradients at one point.
+///
+/// `f_own - e_other` wherever `e_other > 0`: in the interpenetration region
+/// this is Gascuel's deformation; inside the other object but outside this
+/// one it lowers a field already below `ISO`, so the skin is unchanged
+/// there, and the deformed field stays continuous (the polygonizer
+/// interpolates linearly along cell edges: a jump at this object's
+/// original skin inside the other would misplace the vertices there by up
+/// to a cell).
+pub fn deform(own: ValueGradient, other: ValueGradient, bulge: Option<&Bulge>) -> ValueGradient {
+    let (fa, ga) = own;
+    let (fb, gb) = other;
+    let eb = fb - ISO;
+    if eb > 0.0 {
+        return (fa - eb, ga - gb);
+    }
+    match bulge {
+        Some(b) if eb < 0.0 => {
+            let (g, dg) = b.profile(-eb);
+            (fa + g, ga - gb * dg)
+        }
+        _ => (fa, ga),
+    }
+}
+
+/// The deformed field of one object of a [`ContactPair`]: a
+/// [`ScalarField`] for [`crate::polygonize_field`].
+#[derive(Clone, Copy, Debug)]
+pub struct DeformedField<'a> {
+    own: &'a Field,
+    other: &'a Field,
+    bulge: Option<Bulge>,
+}
+
+impl ScalarField for DeformedField<'_> {
+    fn value(&self, p: &Point3) -> Real {
+        let own = (self.own.value(p), Vec3::zeros());
+        let other = (self.other.value(p), Vec3::zeros());
+        deform(own, other, self.bulge.as_ref()).0
+    }
+
+    fn value_and_gradient(&self, p: &Point3) -> ValueGradient {
+        let own = self.own.value_and_gradient(p);
+        deform(own, self.other.value_and_gradient(p), self.bulge.as_ref())
+    }
+
+    /// The own field's support box: the deformation only lowers the field,
+    /// and a valid bulge adds less than `ISO`.
+    fn support_box(&self) -> Option<(Point3, Point3)> {
+        self.own.support_box()
+    }
+}
+
+/// Parameters of [`ContactPair::reactions`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImplicitContactParams {
+    /// Pressure per unit removed field excess, >= 0 (force / area / field
+    /// unit): the contact stiffness of both objects.
+    pub stiffness: Real,
+    /// Edge length of the cubic sampling cells, world units, > 0.
+    pub cell_size: Real,
+    /// Largest number of grid nodes along an axis. Default: 512.
+    pub max_nodes_per_axis: usize,
+}
+
+impl ImplicitContactParams {
+    /// `stiffness` and `cell_size`, the node limit at its default.
+    pub fn new(stiffness: Real, cell_size: Real) -> Self {
+        ImplicitContactParams {
+            stiffness,
+            cell_size,
+            max_nodes_per_axis: 512,
+        }
+    }
+}
+
+/// One sample of the contact surface `e_A = e_B > 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactSample {
+    /// Position (world).
+    pub position: Point3,
+    /// Unit contact normal, out of A into B.
+    pub normal: Vec3,
+    /// The common excess `e_A = e_B` (the removed excess), > 0.
+    pub excess: Real,
+    /// Surface area the sample stands for.
+    pub area: Real,
+}
+
+/// The reactions of one pair evaluation: on A, on B, and the samples.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PairReactions {
+    a: Reactions,
+    b: Reactions,
+    samples: Vec<ContactSample>,
+}
+
+impl PairReactions {
+    /// Reactions on A's particles.
+    pub fn a(&self) -> &Reactions {
+        &self.a
+    }
+
+    /// Reactions on B's particles.
+    pub fn b(&self) -> &Reactions {
+        &self.b
+    }
+
+    /// The contact samples, in grid edge order.
+    pub fn samples(&self) -> &[ContactSample] {
+        &self.samples
+    }
+
+    /// Adds the reactions on both objects to `world` for its next step
+    /// (`World::add_external_force`).
+    pub fn apply(&self, world: &mut World) {
+        self.a.apply(world);
+        self.b.apply(world);
+    }
+}
+
+/// Two implicit objects in contact (module doc).
+#[derive(Clone, Copy, Debug)]
+pub struct ContactPair<'a> {
+    a: &'a Field,
+    b: &'a Field,
+    bulge: Option<Bulge>,
+}
+
+impl<'a> ContactPair<'a> {
+    /// The pair of objects with fields `a` and `b`, without bulge.
+    pub fn new(a: &'a Field, b: &'a Field) -> Self {
+        ContactPair { a, b, bulge: None }
+    }
+
+    /// The same pair with the propagation-region bulge on (`None` turns it
+    /// off). Panics if the bulge is not [`Bulge::is_valid`].
+    pub fn with_bulge(mut self, bulge: Option<Bulge>) -> Self {
+        assert!(
+            bulge.is_none_or(|b| b.is_valid()),
+            "invalid bulge {bulge:?}"
+        );
+        self.bulge = bulge;
+        self
+    }
+
+    /// A's deformed field.
+    pub fn deformed_a(&self) -> DeformedField<'a> {
+        DeformedField {
+            own: self.a,
+            other: self.b,
+            bulge: self.bulge,
+        }
+    }
+
+    /// B's deformed field.
+    pub fn deformed_b(&self) -> DeformedField<'a> {
+        DeformedField {
+            own: self.b,
+            other: self.a,
+            bulge: self.bulge,
+        }
+    }
+
+    /// Samples the contact surface and computes the reactions on both
+    /// objects (module doc). No overlap gives empty reactions. Errors (the
+    /// sampling grid's, as for polygonization): a cell size that is not
+    /// finite and > 0, or more than `max_nodes_per_axis` nodes along an
+    /// axis of the intersection of the two support boxes.
+    pub fn reactions(
+        &self,
+        params: &ImplicitContactParams,
+    ) -> Result<PairReactions, PolygonizeError> {
+        let h = params.cell_size;
+        if !(h.is_finite() && h > 0.0) {
+            return Err(PolygonizeError::InvalidCellSize(h));
+        }
+        let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) = (self.a.support_box(), self.b.support_box())
+        else {
+            return Ok(PairReactions::default());
+        };
+        let (lo, hi) = (lo_a.sup(&lo_b), hi_a.inf(&hi_b));
+        if (0..3).any(|k| hi[k] <= lo[k]) {
+            return Ok(PairReactions::default());
+        }
+        let dims = [0, 1, 2].map(|k| ((hi[k] - lo[k]) / h).ceil() as usize + 1);
+        let needed = dims.into_iter().max().unwrap_or(1);
+        if needed > params.max_nodes_per_axis {
+            return Err(PolygonizeError::TooManyNodes {
+                needed,
+                max: params.max_nodes_per_axis,
+            });
+        }
+        let [nx, ny, nz] = dims;
+        let node = |i: usize| {
+            lo + Vec3::new(
+                (i % nx) as Real,
+                ((i / nx) % ny) as Real,
+                (i / (nx * ny)) as Real,
+            ) * h
+        };
+        let excess: Vec<(Real, Real)> = (0..nx * ny * nz)
+            .into_par_iter()
+            .map(|i| {
+                let p = node(i);
+                (self.a.value(&p) - ISO, self.b.value(&p) - ISO)
+            })
+            .collect();
+        let strides = [1, nx, nx * ny];
+        let mut edges: Vec<(usize, usize)> = Vec::new();
+        for (i, &(ea, eb)) in excess.iter().enumerate() {
+            let ijk = [i % nx, (i / nx) % ny, i / (nx * ny)];
+            for k in 0..3 {
+                if ijk[k] + 1 == dims[k] {
+                    continue;
+                }
+                let (fa, fb) = excess[i + strides[k]];
+                let crosses = (ea > eb) != (fa > fb);
+                if crosses && ea.max(eb).max(fa).max(fb) > 0.0 {
+                    edges.push((i, k));
+                }
+            }
+        }
+        let samples: Vec<ContactSample> = edges
+            .par_iter()
+            .filter_map(|&(i, k)| {
+                let mut dir = Vec3::zeros();
+                dir[k] = h;
+                self.sample_on_edge(&node(i), &dir, k, h)
+            })
+            .collect();
+        let mut acc_a = ReactionAccumulator::default();
+        let mut acc_b = ReactionAccumulator::default();
+        for s in &samples {
+            let force = s.normal * (params.stiffness * s.excess * s.area);
+            acc_a.add(self.a, &s.position, -force);
+            acc_b.add(self.b, &s.position, force);
+        }
+        Ok(PairReactions {
+            a: acc_a.finish(),
+            b: acc_b.finish(),
+            samples,
+        })
+    }
+
+    /// Bisects `e_A - e_B` on the edge from `p0` to `p0 + dir` (axis `k`,
+    /// length `h`) and returns the crossing when it is in contact.
+    fn sample_on_edge(&self, p0: &Point3, dir: &Vec3, k: usize, h: Real) -> Option<ContactSample> {
+        let phi = |t: Real| {
+            let p = p0 + dir * t;
+            self.a.value(&p) - self.b.value(&p)
+        };
+        let (mut t0, mut t1) = (0.0, 1.0);
+        let positive0 = phi(0.0) > 0.0;
+        for _ in 0..48 {
+            let tm = 0.5 * (t0 + t1);
+            if tm <= t0 || tm >= t1 {
+                break;
+            }
+            if (phi(tm) > 0.0) == positive0 {
+                t0 = tm;
+            } else {
+                t1 = tm;
+            }
+        }
+        let position = p0 + dir * (0.5 * (t0 + t1));
+        let (fa, ga) = self.a.value_and_gradient(&position);
+        let (fb, gb) = self.b.value_and_gradient(&position);
+        let excess = 0.5 * (fa + fb) - ISO;
+        let normal = (gb - ga).try_normalize(0.0)?;
+        (excess > 0.0).then(|| ContactSample {
+            position,
+            normal,
+            excess,
+            area: h * h * normal[k].abs(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests;
