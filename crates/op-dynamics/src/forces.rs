@@ -6,9 +6,12 @@
 //! list is flat, so a parallel pass over *pairs* writes each pair's result
 //! into its own slot of a pair buffer; a second parallel pass over
 //! *particles* gathers, in a fixed order, the contributions of the pairs
-//! where the particle is first (its row) and then of those where it is
-//! second (the transposed index). No locks, no atomics, no scheduling
-//! dependence, no allocation once the buffers are sized.
+//! where the particle is second (the transposed index, ascending source)
+//! and then of those where it is first (its row). No locks, no atomics, no
+//! scheduling dependence, no allocation once the buffers are sized. On one
+//! thread the pairs are scattered straight into the particle sums instead,
+//! which adds the same terms in the same order: the same bits, without the
+//! buffer's memory traffic.
 //!
 //! Two kernels are compiled and one is chosen when the world is built
 //! (pay for what you use): [`Kernel::Spacing`] touches positions only;
