@@ -233,7 +233,7 @@ fn print_check(path: &Path, built: &BuiltScene) {
             o.rest_spacing
         );
     }
-    println!("  enabled: {}", w.enabled().join(", "));
+    println!("  enabled: {}", built.stages().join(", "));
     match w.neighbours() {
         Some(n) => println!(
             "  neighbours: {:?}, cut-off {:.4}, skin {:.4}",

@@ -398,6 +398,7 @@ impl SpiralRecipe {
             velocity: [0.0; 3],
             angular_velocity: [0.0; 3],
             overrides: Vec::new(),
+            skin: None,
         }
     }
 

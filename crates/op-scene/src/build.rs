@@ -16,6 +16,7 @@ use crate::built::{BuiltObject, BuiltScene};
 use crate::error::SceneError;
 use crate::schema::validate::object_path;
 use crate::schema::{ObjectSpec, Override, Scene};
+use crate::skins::{BuiltSkin, ContactStats};
 
 impl Scene {
     /// Validates the scene ([`Scene::validate`]; points files relative to
@@ -177,7 +178,21 @@ impl Scene {
                 message,
             }
         })?;
+        let mut skins = Vec::new();
+        for (k, o) in self.objects.iter().enumerate() {
+            let Some(spec) = &o.skin else { continue };
+            let skin =
+                BuiltSkin::new(&world, k, &objects[k], spec, o.normal_axis).map_err(|e| {
+                    SceneError::Build {
+                        file: file.to_string(),
+                        message: format!("{}.skin: {e}", object_path(k, &o.name)),
+                    }
+                })?;
+            skins.push(skin);
+        }
         Ok(BuiltScene {
+            skins,
+            contact: ContactStats::default(),
             name: self.name.clone(),
             source,
             world,

@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use op_dynamics::{Divergence, Point3, Real, World};
 
-use crate::outputs::Outputs;
+use crate::outputs::{Outputs, ParticleOutput};
+use crate::skins::{contact_step, BuiltSkin, ContactStats};
 
 /// One object of a built scene.
 #[derive(Clone, Debug)]
@@ -49,6 +50,11 @@ pub struct BuiltScene {
     /// scale (|kinetic| + |potential| at t = 0, at least 1e-12 per
     /// particle). Default 1e6; infinity disables the check.
     pub energy_growth: Real,
+    /// The implicit skins of the skinned objects, in scene order (empty
+    /// when no object has a skin: nothing of op-implicit is built).
+    pub skins: Vec<BuiltSkin>,
+    /// Contact figures accumulated by [`BuiltScene::advance_to`].
+    pub contact: ContactStats,
 }
 
 impl BuiltScene {
@@ -80,6 +86,72 @@ impl BuiltScene {
             if let Ok(r0) = crate::build::rest_spacing(&o.rest, Some(o.rest_spacing)) {
                 o.rest_spacing = r0;
             }
+        }
+        Ok(())
+    }
+
+    /// What the scene computes: the world's stages
+    /// ([`World::enabled`]) followed by `skin` (skins are posed) and
+    /// `polygonize` (skins are written in the frames) when some object has
+    /// a skin, and `contact` when at least two have (implicit contact).
+    pub fn stages(&self) -> Vec<String> {
+        let mut stages = self.world.enabled();
+        if !self.skins.is_empty() {
+            stages.push("skin".into());
+            if self.outputs.particles != ParticleOutput::None {
+                stages.push("polygonize".into());
+            }
+        }
+        if self.has_contact() {
+            stages.push("contact".into());
+        }
+        stages
+    }
+
+    /// Whether skins are in implicit contact (two or more skinned objects).
+    pub fn has_contact(&self) -> bool {
+        self.skins.len() >= 2
+    }
+
+    /// Advances the world to world time `t_end`. Without contact this is
+    /// [`World::advance_to`]; with contact the world advances one step at a
+    /// time, the contact reactions computed before each step and applied
+    /// during it, and [`BuiltScene::contact`] is updated (see
+    /// [`crate::skins`]). Skins are re-posed at `t_end` either way.
+    ///
+    /// # Errors
+    ///
+    /// The divergence or contact sampling error, as a message.
+    pub fn advance_to(&mut self, t_end: Real) -> Result<(), String> {
+        if self.has_contact() {
+            let dt = self.world.params().dt;
+            loop {
+                let remaining = t_end - self.world.time();
+                if remaining <= 1e-12 * dt {
+                    break;
+                }
+                let h = if remaining <= dt * (1.0 + 1e-6) {
+                    remaining
+                } else {
+                    dt
+                };
+                contact_step(
+                    &mut self.world,
+                    &mut self.skins,
+                    &self.objects,
+                    h,
+                    &mut self.contact,
+                )?;
+                let target = self.world.time() + h;
+                self.world.advance_to(target).map_err(|d| d.to_string())?;
+            }
+        } else {
+            self.world.advance_to(t_end).map_err(|d| d.to_string())?;
+        }
+        for s in &mut self.skins {
+            s.skin
+                .repose(&self.world)
+                .map_err(|e| format!("posing skin {}: {e}", s.name))?;
         }
         Ok(())
     }

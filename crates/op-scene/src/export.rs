@@ -1,6 +1,6 @@
 //! OBJ frames (DESIGN §6): one named OBJ object per scene object, particle
 //! geometry as asked by [`Outputs`], vertex normals from the particle
-//! frames, each file written atomically (temp file + rename) so a frame on
+//! frames, skins as triangle meshes with vertex normals, each file written atomically (temp file + rename) so a frame on
 //! disk is always complete.
 //!
 //! obj-exporter prints fixed 6 decimals: coordinates below 1e-6 scene units
@@ -12,9 +12,11 @@ use std::path::{Path, PathBuf};
 
 use obj_exporter::{Geometry, ObjSet, Object, Primitive, Shape, Vertex};
 use op_dynamics::{Real, Vec3, World};
+use op_implicit::Mesh;
 
 use crate::built::BuiltObject;
 use crate::outputs::{Outputs, ParticleOutput};
+use crate::skins::BuiltSkin;
 
 /// Writes `bytes_fn`'s output to `path` atomically: a temporary file in the
 /// same directory, flushed and synced, then renamed over `path`.
@@ -139,19 +141,45 @@ pub fn object_geometry(world: &World, object: &BuiltObject, outputs: &Outputs) -
     }
 }
 
-/// Writes one OBJ frame holding every object of the scene.
+/// The OBJ object `name` of a polygonized skin: its triangles with
+/// per-vertex normals (analytic field gradient).
+pub fn mesh_geometry(name: &str, mesh: &Mesh) -> Object {
+    let tri = |t: &[u32; 3]| {
+        let c = |k: usize| (t[k] as usize, None, Some(t[k] as usize));
+        shape(Primitive::Triangle(c(0), c(1), c(2)))
+    };
+    Object {
+        name: name.to_string(),
+        vertices: mesh.positions().iter().map(|p| vertex(p.coords)).collect(),
+        tex_vertices: Vec::new(),
+        normals: mesh.normals().iter().map(|&n| vertex(n)).collect(),
+        geometry: vec![Geometry {
+            material_name: None,
+            shapes: mesh.triangles().iter().map(tri).collect(),
+        }],
+    }
+}
+
+/// Writes one OBJ frame holding every object of the scene, then every
+/// skin (polygonized at its current pose) as an object `<object>_skin`.
 pub fn write_frame(
     path: &Path,
     world: &World,
     objects: &[BuiltObject],
+    skins: &[BuiltSkin],
     outputs: &Outputs,
 ) -> std::io::Result<()> {
+    let mut objects: Vec<Object> = objects
+        .iter()
+        .map(|o| object_geometry(world, o, outputs))
+        .collect();
+    for s in skins {
+        let mesh = s.mesh().map_err(std::io::Error::other)?;
+        objects.push(mesh_geometry(&s.name, &mesh));
+    }
     let set = ObjSet {
         material_library: None,
-        objects: objects
-            .iter()
-            .map(|o| object_geometry(world, o, outputs))
-            .collect(),
+        objects,
     };
     write_atomically(path, |w| {
         let mut adapter = WriteAdapter(w);

@@ -11,10 +11,12 @@ pub mod export;
 pub mod outputs;
 pub mod render;
 pub mod run;
+pub mod skins;
 
 pub use built::{BuiltObject, BuiltScene};
 pub use outputs::{Outputs, ParticleOutput};
 pub use run::{run, RunError, RunOptions, Summary};
+pub use skins::{BuiltSkin, ContactStats, SkinPrimitive, SkinSpec};
 
 pub mod build;
 pub mod error;

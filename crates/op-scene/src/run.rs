@@ -16,6 +16,7 @@ use serde::Serialize;
 use crate::built::{BuiltObject, BuiltScene};
 use crate::export::{frame_name, write_atomically, write_frame};
 use crate::outputs::ParticleOutput;
+use crate::skins::ContactStats;
 
 /// How to run a scene.
 #[derive(Clone, Debug)]
@@ -66,8 +67,14 @@ pub struct Summary {
     pub frames: usize,
     /// Rayon threads used.
     pub threads: usize,
-    /// What the world evaluates (kernel, terms, external actions).
+    /// What the scene computes: [`BuiltScene::stages`] (the world's
+    /// kernel, terms and external actions, then skin, polygonize, contact
+    /// when used).
     pub enabled: Vec<String>,
+    /// Contact figures, for scenes with implicit contact (two or more
+    /// skinned objects; see [`crate::skins`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactStats>,
     /// Per-object figures.
     pub objects: Vec<ObjectSummary>,
 }
@@ -159,10 +166,14 @@ pub fn run(
         }
         if k > 0 {
             let t = t0 + k as Real / scene.frame_rate;
-            if let Err(d) = scene.world.advance_to(t) {
-                divergence = Some(d.to_string());
+            if let Err(d) = scene.advance_to(t) {
+                divergence = Some(d);
                 break;
             }
+        } else if let Err(e) = scene.advance_to(scene.world.time()) {
+            // Poses the skins on the settled particles.
+            divergence = Some(e);
+            break;
         }
         let d = scene.world.diagnostics();
         let scale = *energy_scale.get_or_insert_with(|| {
@@ -196,7 +207,14 @@ pub fn run(
         }
         if write_frames {
             let path = frames_dir.join(frame_name(k));
-            write_frame(&path, &scene.world, &scene.objects, &scene.outputs).map_err(io(&path))?;
+            write_frame(
+                &path,
+                &scene.world,
+                &scene.objects,
+                &scene.skins,
+                &scene.outputs,
+            )
+            .map_err(io(&path))?;
         }
         written += 1;
         if let Some(f) = metrics.as_mut() {
@@ -225,7 +243,8 @@ pub fn run(
         divergence: divergence.clone(),
         frames: written,
         threads: rayon::current_num_threads(),
-        enabled: scene.world.enabled(),
+        enabled: scene.stages(),
+        contact: scene.has_contact().then_some(scene.contact),
         objects: scene
             .objects
             .iter()

@@ -63,6 +63,7 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::generators::{Generator, ListParticle};
 use crate::outputs::Outputs;
+use crate::skins::SkinSpec;
 
 /// A scene: what to simulate, for how long, and what to write.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -270,6 +271,12 @@ pub struct ObjectSpec {
     /// Default: none.
     #[serde(default)]
     pub overrides: Vec<Override>,
+    /// An implicit skin on its particles (seed 002 §6; see
+    /// [`crate::skins`]): RON `skin: Some((primitive: Square(half_side:
+    /// 0.5), radius: 1.2, cell_size: 0.2))`. Two skinned objects are in
+    /// implicit contact. Default: none (nothing of op-implicit is built).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin: Option<SkinSpec>,
 }
 
 /// Which particles of an object (indices in generation order).

@@ -209,6 +209,9 @@ impl Scene {
                 "makes no particle: an object needs at least one",
             ));
         }
+        if let Some(skin) = &o.skin {
+            skin.validate(file, &at("skin"))?;
+        }
         for (j, ov) in o.overrides.iter().enumerate() {
             let op = format!("{path}.overrides[{j}]");
             ov.particles
