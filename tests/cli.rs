@@ -40,6 +40,18 @@ fn frames(dir: &Path) -> Vec<PathBuf> {
     v
 }
 
+/// `opsim run SCENE --out OUT [extra..]` in `out`; returns the output.
+fn run_scene(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    opsim(&args, out)
+}
+
 fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
@@ -69,17 +81,7 @@ fn no_argument_runs_the_demo() {
 fn run_writes_frames_metrics_and_summary() {
     let out = temp_dir("run");
     let scene = repo().join("scenes/two_sheets.ron");
-    let o = opsim(
-        &[
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--frames",
-            "4",
-        ],
-        &out,
-    );
+    let o = run_scene(&scene, &out, &["--frames", "4"]);
     assert!(o.status.success(), "{}", text(&o));
     let f = frames(&out);
     assert_eq!(f.len(), 4);
@@ -131,19 +133,7 @@ fn same_frames_at_one_and_two_threads() {
     let mut outs = Vec::new();
     for t in ["1", "2"] {
         let out = temp_dir(&format!("threads{t}"));
-        let o = opsim(
-            &[
-                "run",
-                scene.to_str().unwrap(),
-                "--out",
-                out.to_str().unwrap(),
-                "--frames",
-                "6",
-                "--threads",
-                t,
-            ],
-            &out,
-        );
+        let o = run_scene(&scene, &out, &["--frames", "6", "--threads", t]);
         assert!(o.status.success(), "{}", text(&o));
         outs.push(out);
     }
@@ -164,15 +154,7 @@ fn same_frames_at_one_and_two_threads() {
 fn divergence_exits_3_and_keeps_valid_frames() {
     let out = temp_dir("diverge");
     let scene = repo().join("tests/data/diverge.ron");
-    let o = opsim(
-        &[
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        &out,
-    );
+    let o = run_scene(&scene, &out, &[]);
     assert_eq!(o.status.code(), Some(3), "{}", text(&o));
     let msg = text(&o);
     assert!(
@@ -242,17 +224,7 @@ fn check_prints_enabled_terms() {
 fn render_each_style() {
     let out = temp_dir("render");
     let scene = repo().join("scenes/sheet.ron");
-    let o = opsim(
-        &[
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--frames",
-            "2",
-        ],
-        &out,
-    );
+    let o = run_scene(&scene, &out, &["--frames", "2"]);
     assert!(o.status.success(), "{}", text(&o));
     let frame = &frames(&out)[1];
     for style in ["axes", "discs", "wireframe", "shaded"] {
