@@ -161,7 +161,8 @@ pub fn mesh_geometry(name: &str, mesh: &Mesh) -> Object {
 }
 
 /// Writes one OBJ frame holding every object of the scene, then every
-/// skin (polygonized at its current pose) as an object `<object>_skin`.
+/// skin (polygonized at its current pose, deformed where it touches another
+/// skin) as an object `<object>_skin`.
 pub fn write_frame(
     path: &Path,
     world: &World,
@@ -174,7 +175,7 @@ pub fn write_frame(
         .map(|o| object_geometry(world, o, outputs))
         .collect();
     for s in skins {
-        let mesh = s.mesh().map_err(std::io::Error::other)?;
+        let mesh = s.mesh_in(skins).map_err(std::io::Error::other)?;
         objects.push(mesh_geometry(&s.name, &mesh));
     }
     let set = ObjSet {

@@ -14,9 +14,12 @@
 //! ([`op_implicit::PairReactions::apply`]): contact is explicit, one
 //! evaluation per world step. With contact the world is therefore advanced
 //! one step of `dt` at a time (with the adaptive scheme a step of `dt` may
-//! be split; the reactions then act on its first sub-step only). Each written frame holds each skin polygonized
-//! (undeformed field) as an extra OBJ object `<object>_skin` with vertex
-//! normals from the analytic field gradient.
+//! be split; the reactions then act on its first sub-step only). Each
+//! written frame holds each skin polygonized as an extra OBJ object
+//! `<object>_skin` with vertex normals from the analytic field gradient;
+//! where two skins' supports overlap, the exported field is the deformed
+//! one ([`BuiltSkin::mesh_in`]), so skins in contact meet on the exact
+//! contact surface.
 //!
 //! **Figures** ([`ContactStats`], `summary.json` `contact`):
 //! `total_impulse` is the sum over steps of `|F| dt`, `F` the total contact
@@ -28,9 +31,10 @@
 //! `e / |grad f_A| + e / |grad f_B|` (how deep each undeformed skin reaches
 //! past the contact surface, summed).
 
-use op_dynamics::{Real, World};
+use op_dynamics::{Point3, Real, World};
 use op_implicit::{
-    polygonize, ContactPair, ImplicitContactParams, Mesh, PolygonizeParams, Primitive, Skin,
+    polygonize, polygonize_field, ContactPair, ImplicitContactParams, Mesh, PolygonizeParams,
+    Primitive, Skin,
 };
 use serde::{Deserialize, Serialize};
 
@@ -157,6 +161,36 @@ impl BuiltSkin {
             &PolygonizeParams::with_cell_size(self.cell_size),
         )
     }
+
+    /// The skin's mesh at its current pose, deformed by contact (Gascuel,
+    /// DESIGN §5): when another skin of `skins` overlaps its support, the
+    /// exported surface is the deformed field's, so two skins in contact
+    /// meet on one contact surface (no gap, no overlap). With several
+    /// overlapping skins, the first one in scene order deforms it.
+    pub fn mesh_in(&self, skins: &[BuiltSkin]) -> Result<Mesh, op_implicit::PolygonizeError> {
+        let own = self.skin.field();
+        let params = PolygonizeParams::with_cell_size(self.cell_size);
+        let other = skins.iter().find(|o| {
+            o.object != self.object
+                && boxes_overlap(own.support_box(), o.skin.field().support_box())
+        });
+        match other {
+            Some(o) => {
+                polygonize_field(&ContactPair::new(own, o.skin.field()).deformed_a(), &params)
+            }
+            None => polygonize(own, &params),
+        }
+    }
+}
+
+/// True when two axis-aligned boxes (lower, upper corners) intersect.
+fn boxes_overlap(a: Option<(Point3, Point3)>, b: Option<(Point3, Point3)>) -> bool {
+    match (a, b) {
+        (Some((alo, ahi)), Some((blo, bhi))) => {
+            (0..3).all(|k| alo[k] <= bhi[k] && blo[k] <= ahi[k])
+        }
+        _ => false,
+    }
 }
 
 /// Contact figures of a run (module doc): `summary.json` `contact`.
@@ -212,4 +246,71 @@ pub fn contact_step(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use op_dynamics::{Material, ParticleDesc, Particles, WorldParams};
+
+    /// Two point skins of radius 2 (skins of radius 1) whose centres are
+    /// `gap` apart, as two objects.
+    fn pair(gap: Real) -> (World, Vec<BuiltSkin>) {
+        let mut p = Particles::new();
+        for (k, x) in [0.0, gap].into_iter().enumerate() {
+            let mut d = ParticleDesc::at(Point3::new(x, 0.0, 0.0));
+            d.object = k as u32;
+            p.push(d).unwrap();
+        }
+        let world = World::new(p, &[Material::empty()], WorldParams::default()).unwrap();
+        let spec = SkinSpec {
+            primitive: SkinPrimitive::Point,
+            radius: 2.0,
+            cell_size: 0.1,
+            stiffness: 100.0,
+        };
+        let skins = (0..2u32)
+            .map(|k| {
+                let object = BuiltObject {
+                    name: format!("o{k}"),
+                    ids: vec![k],
+                    rest: vec![Point3::origin()],
+                    rest_spacing: 1.0,
+                };
+                BuiltSkin::new(&world, k as usize, &object, &spec, [0.0, 0.0, 1.0]).unwrap()
+            })
+            .collect();
+        (world, skins)
+    }
+
+    /// Apart, the exported skin is the undeformed one; overlapping, it is
+    /// the deformed one: no vertex of either skin lies inside the other's
+    /// deformed skin, and both reach the mid-plane (the contact surface)
+    /// instead of crossing it.
+    #[test]
+    fn skins_in_contact_export_the_deformed_surface() {
+        let (_, apart) = pair(5.0);
+        let plain = apart[0].mesh().unwrap();
+        let exported = apart[0].mesh_in(&apart).unwrap();
+        assert_eq!(plain.positions().len(), exported.positions().len());
+        let (_, touching) = pair(1.5);
+        let plain = touching[0].mesh().unwrap();
+        let deformed = touching[0].mesh_in(&touching).unwrap();
+        let max_x = |m: &Mesh| m.positions().iter().map(|p| p.x).fold(Real::MIN, Real::max);
+        // Undeformed skin of radius 1 at x = 0 reaches x = 1, past the
+        // mid-plane x = 0.75; the deformed one stops at the contact plane.
+        assert!(max_x(&plain) > 0.95, "{}", max_x(&plain));
+        assert!(
+            (max_x(&deformed) - 0.75).abs() < 0.02,
+            "{}",
+            max_x(&deformed)
+        );
+        let other = touching[1].mesh_in(&touching).unwrap();
+        let min_x = other
+            .positions()
+            .iter()
+            .map(|p| p.x)
+            .fold(Real::MAX, Real::min);
+        assert!((min_x - 0.75).abs() < 0.02, "{min_x}");
+    }
 }
