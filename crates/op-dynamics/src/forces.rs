@@ -85,6 +85,41 @@ pub(crate) struct ForceContext<'a> {
     pub scratch: &'a mut ForceScratch,
 }
 
+/// The force evaluation's configuration and scratch, owned by the world:
+/// the chosen kernel, the prepared materials, the neighbour list.
+pub(crate) struct Pipeline {
+    pub kernel: Kernel,
+    pub materials: Vec<PreparedMaterial>,
+    pub friction: bool,
+    /// Some particle has a fixed position or orientation.
+    pub has_fixed: bool,
+    pub neighbours: Option<NeighbourList>,
+    pub scratch: ForceScratch,
+}
+
+impl Pipeline {
+    /// The force field of the world's particles with these attributes and
+    /// external actions.
+    pub fn context<'a>(
+        &'a mut self,
+        attributes: Attributes<'a>,
+        external: &'a ExternalParams,
+        accumulator: &'a ExternalAccumulator,
+    ) -> ForceContext<'a> {
+        ForceContext {
+            kernel: self.kernel,
+            attributes,
+            materials: &self.materials,
+            friction: self.friction,
+            has_fixed: self.has_fixed,
+            neighbours: self.neighbours.as_mut(),
+            external,
+            accumulator,
+            scratch: &mut self.scratch,
+        }
+    }
+}
+
 impl crate::integrators::ForceField for ForceContext<'_> {
     fn forces(&mut self, t: Real, s: StateRef<'_>, forces: &mut [Vec3], torques: &mut [Vec3]) {
         self.evaluate(t, s, forces, torques);

@@ -7,7 +7,7 @@ use crate::diagnostics::{self, Diagnostics};
 use crate::error::{self, ParamError};
 use crate::external::{ExternalAccumulator, ExternalParams};
 use crate::flags::Flags;
-use crate::forces::{ForceContext, ForceScratch, Kernel};
+use crate::forces::{ForceScratch, Kernel, Pipeline};
 use crate::integrators::{Integrator, Scheme};
 use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
@@ -175,19 +175,15 @@ fn may_repel(p: &Particles) -> bool {
 /// An oriented particle world.
 pub struct World {
     particles: Particles,
-    materials: Vec<PreparedMaterial>,
     params: WorldParams,
-    kernel: Kernel,
-    friction: bool,
+    /// The force evaluation's configuration and scratch.
+    pipeline: Pipeline,
     repulsion: bool,
-    has_fixed: bool,
     /// Something may have set particles rotating (initial spin, external
     /// torques, direct state edits): the divergence check reads frames.
     may_rotate: bool,
-    neighbours: Option<NeighbourList>,
     integrator: Integrator,
     accumulator: ExternalAccumulator,
-    scratch: ForceScratch,
     forces: Vec<Vec3>,
     torques: Vec<Vec3>,
     prev_positions: Vec<Point3>,
@@ -273,22 +269,23 @@ impl World {
         });
         let n = particles.len();
         Ok(World {
-            materials: prepared,
-            kernel,
-            friction,
+            pipeline: Pipeline {
+                kernel,
+                materials: prepared,
+                friction,
+                has_fixed: particles.flags().iter().any(|f| {
+                    f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)
+                }),
+                neighbours,
+                scratch: ForceScratch::default(),
+            },
             repulsion,
-            has_fixed: particles
-                .flags()
-                .iter()
-                .any(|f| f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)),
             may_rotate: particles
                 .angular_velocities()
                 .iter()
                 .any(|w| *w != Vec3::zeros()),
-            neighbours,
             integrator: Integrator::new(params.scheme),
             accumulator: ExternalAccumulator::new(n),
-            scratch: ForceScratch::default(),
             forces: vec![Vec3::zeros(); n],
             torques: vec![Vec3::zeros(); n],
             prev_positions: particles.positions().to_vec(),
@@ -322,30 +319,30 @@ impl World {
 
     /// The prepared materials.
     pub fn materials(&self) -> &[PreparedMaterial] {
-        &self.materials
+        &self.pipeline.materials
     }
 
     /// The pair kernel chosen from the enabled terms.
     pub fn kernel(&self) -> Kernel {
-        self.kernel
+        self.pipeline.kernel
     }
 
     /// The neighbour list, if any interaction is enabled.
     pub fn neighbours(&self) -> Option<&NeighbourList> {
-        self.neighbours.as_ref()
+        self.pipeline.neighbours.as_ref()
     }
 
     /// Names of what this world evaluates: the kernel, each enabled
     /// interaction term of the materials in use, and the external actions.
     pub fn enabled(&self) -> Vec<String> {
-        let mut out = vec![format!("kernel:{:?}", self.kernel).to_lowercase()];
+        let mut out = vec![format!("kernel:{:?}", self.pipeline.kernel).to_lowercase()];
         let mut terms: Vec<&'static str> = Vec::new();
-        let mut seen = vec![false; self.materials.len()];
+        let mut seen = vec![false; self.pipeline.materials.len()];
         self.particles
             .materials()
             .iter()
             .for_each(|&m| seen[m as usize] = true);
-        for (m, s) in self.materials.iter().zip(seen) {
+        for (m, s) in self.pipeline.materials.iter().zip(seen) {
             if s {
                 for t in m.enabled_terms() {
                     if (t != "repulsion" || self.repulsion) && !terms.contains(&t) {
@@ -355,7 +352,7 @@ impl World {
             }
         }
         out.extend(terms.iter().map(|t| format!("term:{t}")));
-        if self.friction {
+        if self.pipeline.friction {
             out.push("friction".into());
         }
         let e = &self.params.external;
@@ -452,7 +449,7 @@ impl World {
     fn step_by(&mut self, dt: Real, clipped: bool) -> Result<&StepReport, Divergence> {
         let mut report = StepReport::default();
         let clock = std::time::Instant::now();
-        if let Some(list) = self.neighbours.as_mut() {
+        if let Some(list) = self.pipeline.neighbours.as_mut() {
             if self.params.neighbours.reorder && list.needs_rebuild(self.particles.positions()) {
                 let order = spatial_order(self.particles.positions(), list.cutoff() + list.skin());
                 self.particles.permute(&order);
@@ -467,26 +464,18 @@ impl World {
         report.seconds[Stage::Reorder as usize] = clock.elapsed().as_secs_f64();
 
         let clock = std::time::Instant::now();
-        let neighbour_before = self.scratch.neighbour_seconds;
+        let neighbour_before = self.pipeline.scratch.neighbour_seconds;
         // Spacing-only worlds that nothing set spinning never rotate.
-        let rotating = self.kernel == Kernel::Oriented || self.may_rotate;
+        let rotating = self.pipeline.kernel == Kernel::Oriented || self.may_rotate;
         self.integrator.set_translation_only(!rotating);
         let (state, bodies, attributes) = self.particles.split();
-        let mut ctx = ForceContext {
-            kernel: self.kernel,
-            attributes,
-            materials: &self.materials,
-            friction: self.friction,
-            has_fixed: self.has_fixed,
-            neighbours: self.neighbours.as_mut(),
-            external: &self.params.external,
-            accumulator: &self.accumulator,
-            scratch: &mut self.scratch,
-        };
+        let mut ctx = self
+            .pipeline
+            .context(attributes, &self.params.external, &self.accumulator);
         let info = self
             .integrator
             .step(&mut ctx, &bodies, self.time, dt, state);
-        let neighbour_seconds = self.scratch.neighbour_seconds - neighbour_before;
+        let neighbour_seconds = self.pipeline.scratch.neighbour_seconds - neighbour_before;
         report.seconds[Stage::Neighbours as usize] = neighbour_seconds;
         report.seconds[Stage::Integrate as usize] =
             clock.elapsed().as_secs_f64() - neighbour_seconds;
@@ -516,7 +505,7 @@ impl World {
         let vmax2 = self.params.divergence.max_speed.powi(2);
         // Without torques (spacing kernel, no pending torque) and without
         // initial spin, orientations cannot change: skip reading them.
-        let rotating = self.kernel == Kernel::Oriented || self.may_rotate;
+        let rotating = self.pipeline.kernel == Kernel::Oriented || self.may_rotate;
         let bad = (0..p.len()).find_map(|i| {
             let finite = p.positions()[i].iter().all(|c| c.is_finite())
                 && p.velocities()[i].iter().all(|c| c.is_finite())
@@ -557,19 +546,11 @@ impl World {
     pub fn evaluate_forces(&mut self) -> (&[Vec3], &[Vec3], Real) {
         let state = self.particles.state();
         let attributes = self.particles.attributes();
-        let mut ctx = ForceContext {
-            kernel: self.kernel,
-            attributes,
-            materials: &self.materials,
-            friction: self.friction,
-            has_fixed: self.has_fixed,
-            neighbours: self.neighbours.as_mut(),
-            external: &self.params.external,
-            accumulator: &self.accumulator,
-            scratch: &mut self.scratch,
-        };
+        let mut ctx = self
+            .pipeline
+            .context(attributes, &self.params.external, &self.accumulator);
         ctx.evaluate(self.time, state, &mut self.forces, &mut self.torques);
-        (&self.forces, &self.torques, self.scratch.potential)
+        (&self.forces, &self.torques, self.pipeline.scratch.potential)
     }
 
     /// Energies, momenta and the oscillation measure at the current state
@@ -585,6 +566,6 @@ impl World {
 
     /// Forces evaluated so far (all stages of all steps).
     pub fn force_evaluations(&self) -> u64 {
-        self.scratch.evaluations
+        self.pipeline.scratch.evaluations
     }
 }
