@@ -441,6 +441,7 @@ impl SpiralRecipe {
             materials,
             objects: vec![self.object("spiral", "memory", shape, &units)],
             forces: self.end_forces("spiral", shape, &units),
+            tools: Vec::new(),
             outputs: Outputs {
                 particles: ParticleOutput::Discs,
                 ..Outputs::default()

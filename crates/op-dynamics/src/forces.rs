@@ -28,6 +28,7 @@ use crate::interactions::{
 use crate::math::{Real, Vec3};
 use crate::neighbours::NeighbourList;
 use crate::particles::Attributes;
+use crate::tools::Tools;
 
 /// Which pair kernel a world runs, fixed when the world is built.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -82,6 +83,7 @@ pub(crate) struct ForceContext<'a> {
     pub neighbours: Option<&'a mut NeighbourList>,
     pub external: &'a ExternalParams,
     pub accumulator: &'a ExternalAccumulator,
+    pub tools: &'a Tools,
     pub scratch: &'a mut ForceScratch,
 }
 
@@ -94,6 +96,8 @@ pub(crate) struct Pipeline {
     /// Some particle has a fixed position or orientation.
     pub has_fixed: bool,
     pub neighbours: Option<NeighbourList>,
+    /// Tools acting on the particles (empty: no tool stage).
+    pub tools: Tools,
     pub scratch: ForceScratch,
 }
 
@@ -115,6 +119,7 @@ impl Pipeline {
             neighbours: self.neighbours.as_mut(),
             external,
             accumulator,
+            tools: &self.tools,
             scratch: &mut self.scratch,
         }
     }
@@ -199,6 +204,10 @@ impl ForceContext<'_> {
                     accumulate::<true, _, _>(list, sources, oriented_pairs, serial, pair, out);
                 }
             }
+        }
+        if !self.tools.is_empty() {
+            self.tools
+                .add(t, s, &self.attributes, forces, &mut energies[..]);
         }
         *potential = energies.iter().sum();
         self.add_external(t, s, forces, torques);

@@ -23,6 +23,7 @@ pub mod interactions;
 pub mod math;
 pub mod neighbours;
 pub mod particles;
+pub mod tools;
 pub mod world;
 
 pub use diagnostics::Diagnostics;
@@ -34,4 +35,5 @@ pub use interactions::Material;
 pub use math::{Mat3, Point3, Quat, Real, Vec3};
 pub use neighbours::NeighbourBackend;
 pub use particles::{ParticleDesc, ParticleType, Particles};
+pub use tools::{Keyframe, Path, Role, Tool, ToolParams, ToolShape};
 pub use world::{Divergence, NeighbourParams, World, WorldError, WorldParams};

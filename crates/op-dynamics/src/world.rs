@@ -13,6 +13,7 @@ use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
 use crate::neighbours::{spatial_order, NeighbourBackend, NeighbourList};
 use crate::particles::{ParticleType, Particles};
+use crate::tools::{Role, Tool, ToolParams, Tools};
 
 /// Neighbour-list settings (seed 000 §4.2, DESIGN §3 "Neighbours").
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -72,6 +73,8 @@ pub struct WorldParams {
     pub external: ExternalParams,
     /// Divergence detection.
     pub divergence: DivergenceParams,
+    /// Tools acting on the particles (seed 000 §6). Default: none.
+    pub tools: Vec<ToolParams>,
 }
 
 impl Default for WorldParams {
@@ -82,6 +85,7 @@ impl Default for WorldParams {
             neighbours: NeighbourParams::default(),
             external: ExternalParams::default(),
             divergence: DivergenceParams::default(),
+            tools: Vec::new(),
         }
     }
 }
@@ -102,7 +106,11 @@ impl WorldParams {
         }
         self.external
             .validate(particle_count)
-            .map_err(|e| e.within("external"))
+            .map_err(|e| e.within("external"))?;
+        self.tools
+            .iter()
+            .enumerate()
+            .try_for_each(|(k, t)| t.validate().map_err(|e| e.within(&format!("tools[{k}]"))))
     }
 }
 
@@ -277,6 +285,7 @@ impl World {
                     f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)
                 }),
                 neighbours,
+                tools: Tools::new(&params.tools, &particles)?,
                 scratch: ForceScratch::default(),
             },
             repulsion,
@@ -365,7 +374,20 @@ impl World {
         if !e.forces.is_empty() {
             out.push("force_windows".into());
         }
+        for t in self.pipeline.tools.tools() {
+            let role = match t.params().role {
+                Role::Obstacle { .. } => "obstacle",
+                Role::Attractor { .. } => "attractor",
+                Role::Mover { .. } => "mover",
+            };
+            out.push(format!("tool:{role}"));
+        }
         out
+    }
+
+    /// The tools acting on the particles.
+    pub fn tools(&self) -> &[Tool] {
+        self.pipeline.tools.tools()
     }
 
     /// Current simulation time.

@@ -46,6 +46,6 @@ pub use implicit_contact::{
     deform, Bulge, ContactPair, ContactSample, DeformedField, ImplicitContactParams, PairReactions,
 };
 pub use kernel::{iso_radius, ISO};
-pub use polygonize::{polygonize, polygonize_field, Mesh, PolygonizeParams};
+pub use polygonize::{polygonize, polygonize_field, polygonize_region, Mesh, PolygonizeParams};
 pub use primitives::{PosedPrimitive, Primitive, Shape};
 pub use skin::Skin;

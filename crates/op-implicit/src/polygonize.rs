@@ -160,13 +160,33 @@ pub fn polygonize_field<F: ScalarField + ?Sized>(
     field: &F,
     params: &PolygonizeParams,
 ) -> Result<Mesh, PolygonizeError> {
+    polygonize_region(field, params, None)
+}
+
+/// As [`polygonize_field`], over the part of the skin's region inside the
+/// box `clip = (lo, hi)` only (the whole region when `None`). The mesh is
+/// open where the box cuts the skin; its vertices sample the skin there
+/// (contact sampling near a collider). A box that misses the skin gives an
+/// empty mesh.
+pub fn polygonize_region<F: ScalarField + ?Sized>(
+    field: &F,
+    params: &PolygonizeParams,
+    clip: Option<(Point3, Point3)>,
+) -> Result<Mesh, PolygonizeError> {
     let h = params.cell_size;
     if !(h.is_finite() && h > 0.0) {
         return Err(PolygonizeError::InvalidCellSize(h));
     }
-    let Some((lo, hi)) = field.support_box() else {
+    let Some((mut lo, mut hi)) = field.support_box() else {
         return Ok(Mesh::default());
     };
+    if let Some((clo, chi)) = clip {
+        lo = lo.sup(&clo);
+        hi = hi.inf(&chi);
+        if (0..3).any(|k| lo[k].partial_cmp(&hi[k]) != Some(std::cmp::Ordering::Less)) {
+            return Ok(Mesh::default());
+        }
+    }
     let lo = lo - Vec3::repeat(h);
     let dims = [0, 1, 2].map(|k| ((hi[k] + h - lo[k]) / h).ceil() as usize + 1);
     let n = dims.into_iter().max().unwrap_or(2).max(2);

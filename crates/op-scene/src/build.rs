@@ -9,14 +9,14 @@ use op_dynamics::neighbours::{search, PairList};
 use op_dynamics::world::DivergenceParams;
 use op_dynamics::{
     ExternalParams, Flags, ForceWindow, Material, NeighbourBackend, ParticleDesc, Particles,
-    Point3, Real, Vec3, World, WorldParams,
+    Point3, Real, Role, Tool, ToolParams, Vec3, World, WorldParams,
 };
 
 use crate::built::{BuiltObject, BuiltScene};
 use crate::error::SceneError;
 use crate::schema::validate::object_path;
 use crate::schema::{ObjectSpec, Override, Scene};
-use crate::skins::{BuiltSkin, ContactStats};
+use crate::skins::{BuiltSkin, ContactStats, SkinTool};
 
 impl Scene {
     /// Validates the scene ([`Scene::validate`]; points files relative to
@@ -153,6 +153,7 @@ impl Scene {
             })
             .collect();
         let w = &self.world;
+        let (tools, skin_tool_params) = self.tool_params();
         let params = WorldParams {
             scheme: w.integrator,
             dt: w.dt,
@@ -166,6 +167,7 @@ impl Scene {
             divergence: DivergenceParams {
                 max_speed: w.divergence.max_speed,
             },
+            tools,
         };
         let world = World::new(particles, &materials, params).map_err(|e| {
             let mut message = format!("building the world: {e}");
@@ -190,8 +192,27 @@ impl Scene {
                 })?;
             skins.push(skin);
         }
+        let skin_tools = skin_tool_params
+            .into_iter()
+            .map(|(k, params, objects, stiffness)| {
+                let tool = Tool::new(&params, world.particles())
+                    .map_err(|e| SceneError::param(file, &format!("tools[{k}]"), e))?;
+                let skins = skins
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, s)| objects.contains(&s.object))
+                    .map(|(i, _)| i)
+                    .collect();
+                Ok(SkinTool {
+                    tool,
+                    skins,
+                    stiffness,
+                })
+            })
+            .collect::<Result<Vec<_>, SceneError>>()?;
         Ok(BuiltScene {
             skins,
+            skin_tools,
             contact: ContactStats::default(),
             name: self.name.clone(),
             source,
@@ -204,6 +225,59 @@ impl Scene {
             outputs: self.outputs.clone(),
             energy_growth: w.divergence.energy_growth,
         })
+    }
+}
+
+/// One tool met by skins: (scene index, shifted params, skinned objects,
+/// stiffness).
+type SkinToolParams = (usize, ToolParams, Vec<usize>, Real);
+
+impl Scene {
+    /// The world's tools and the obstacle tools skins meet. Keyframe times
+    /// and a mover's release shift by the settle phase (they count in
+    /// scene time). An obstacle acts on the particles of the unskinned
+    /// objects it selects and on the skins of the skinned ones; a tool
+    /// left with no particle to act on is not given to the world.
+    fn tool_params(&self) -> (Vec<ToolParams>, Vec<SkinToolParams>) {
+        let settle = self.world.settle;
+        let mut world_tools = Vec::new();
+        let mut skin_tools = Vec::new();
+        for (k, t) in self.tools.iter().enumerate() {
+            let selected: Vec<usize> = match &t.objects {
+                None => (0..self.objects.len()).collect(),
+                Some(names) => (0..self.objects.len())
+                    .filter(|&o| names.contains(&self.objects[o].name))
+                    .collect(),
+            };
+            let mut path = t.path.clone();
+            for f in &mut path.keyframes {
+                f.time += settle;
+            }
+            let mut role = t.role.clone();
+            if let Role::Mover { release, .. } = &mut role {
+                *release += settle;
+            }
+            let (skinned, bare): (Vec<usize>, Vec<usize>) = match role {
+                Role::Obstacle { .. } => selected
+                    .into_iter()
+                    .partition(|&o| self.objects[o].skin.is_some()),
+                _ => (Vec::new(), selected),
+            };
+            let params = ToolParams {
+                name: t.name.clone(),
+                shape: t.shape.clone(),
+                path,
+                role,
+                objects: Some(bare.iter().map(|&o| o as u32).collect()),
+            };
+            if let (false, Role::Obstacle { stiffness, .. }) = (skinned.is_empty(), &params.role) {
+                skin_tools.push((k, params.clone(), skinned, *stiffness));
+            }
+            if !bare.is_empty() {
+                world_tools.push(params);
+            }
+        }
+        (world_tools, skin_tools)
     }
 }
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use op_dynamics::{Divergence, Point3, Real, World};
 
 use crate::outputs::{Outputs, ParticleOutput};
-use crate::skins::{contact_step, BuiltSkin, ContactStats};
+use crate::skins::{contact_step, BuiltSkin, ContactStats, SkinTool};
 
 /// One object of a built scene.
 #[derive(Clone, Debug)]
@@ -53,6 +53,9 @@ pub struct BuiltScene {
     /// The implicit skins of the skinned objects, in scene order (empty
     /// when no object has a skin: nothing of op-implicit is built).
     pub skins: Vec<BuiltSkin>,
+    /// Obstacle tools met by skins (empty when no skinned object meets an
+    /// obstacle).
+    pub skin_tools: Vec<SkinTool>,
     /// Contact figures accumulated by [`BuiltScene::advance_to`].
     pub contact: ContactStats,
 }
@@ -108,9 +111,10 @@ impl BuiltScene {
         stages
     }
 
-    /// Whether skins are in implicit contact (two or more skinned objects).
+    /// Whether skins are in contact: implicit contact (two or more skinned
+    /// objects) or contact with obstacle tools.
     pub fn has_contact(&self) -> bool {
-        self.skins.len() >= 2
+        self.skins.len() >= 2 || !self.skin_tools.is_empty()
     }
 
     /// Advances the world to world time `t_end`. Without contact this is
@@ -138,6 +142,7 @@ impl BuiltScene {
                 contact_step(
                     &mut self.world,
                     &mut self.skins,
+                    &self.skin_tools,
                     &self.objects,
                     h,
                     &mut self.contact,

@@ -137,6 +137,8 @@ impl SceneError {
 pub(crate) fn join(prefix: &str, field: &str) -> String {
     if prefix.is_empty() {
         field.to_string()
+    } else if field.starts_with('[') {
+        format!("{prefix}{field}")
     } else {
         format!("{prefix}.{field}")
     }

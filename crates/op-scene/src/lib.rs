@@ -16,7 +16,7 @@ pub mod skins;
 pub use built::{BuiltObject, BuiltScene};
 pub use outputs::{Outputs, ParticleOutput};
 pub use run::{run, RunError, RunOptions, Summary};
-pub use skins::{BuiltSkin, ContactStats, SkinPrimitive, SkinSpec};
+pub use skins::{BuiltSkin, ContactStats, SkinPrimitive, SkinSpec, SkinTool};
 
 pub mod build;
 pub mod error;
@@ -28,5 +28,5 @@ pub use error::SceneError;
 pub use generators::{CurvatureLaw, Generator};
 pub use load::{build_scene_file, load_scene, parse_scene, Format};
 pub use schema::{
-    DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, WorldSettings,
+    DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, ToolSpec, WorldSettings,
 };

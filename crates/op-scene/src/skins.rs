@@ -31,10 +31,11 @@
 //! `e / |grad f_A| + e / |grad f_B|` (how deep each undeformed skin reaches
 //! past the contact surface, summed).
 
-use op_dynamics::{Point3, Real, World};
+use op_dynamics::tools::{parry_pose, signed_distance};
+use op_dynamics::{Point3, Real, Tool, Vec3, World};
 use op_implicit::{
-    polygonize, polygonize_field, ContactPair, ImplicitContactParams, Mesh, PolygonizeParams,
-    Primitive, Skin,
+    collider_reactions, polygonize, polygonize_field, polygonize_region, ContactPair,
+    ContactParams, ImplicitContactParams, Mesh, PolygonizeParams, Primitive, Skin,
 };
 use serde::{Deserialize, Serialize};
 
@@ -196,18 +197,75 @@ fn boxes_overlap(a: Option<(Point3, Point3)>, b: Option<(Point3, Point3)>) -> bo
 /// Contact figures of a run (module doc): `summary.json` `contact`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct ContactStats {
-    /// Largest overlap of two undeformed skins, in units of r0.
+    /// Largest overlap of two undeformed skins, or depth of a skin inside
+    /// an obstacle tool, in units of r0.
     pub max_penetration: Real,
     /// Sum over steps of `|F| dt` on the second object of each pair.
     pub total_impulse: Real,
 }
 
+/// An obstacle tool that skinned objects meet through their skins: the
+/// skin is sampled where it may touch the tool (its polygonization
+/// clipped to the tool's bounding box, a cell wider), and every sample
+/// inside the tool gets the reaction `stiffness x depth` along the tool's
+/// outward normal ([`op_implicit::collider_reactions`]; seed 002 §6 with
+/// only the skin compressed).
+#[derive(Clone, Debug)]
+pub struct SkinTool {
+    /// The tool (shape and path; its role is an obstacle).
+    pub tool: Tool,
+    /// Indices in [`crate::BuiltScene::skins`] of the skins it touches.
+    pub skins: Vec<usize>,
+    /// Reaction per unit depth, per sample.
+    pub stiffness: Real,
+}
+
+impl SkinTool {
+    /// Adds the reactions on skin `skin` at world time `t` to `world` and
+    /// returns (total reaction force, deepest sample depth).
+    fn react(&self, world: &mut World, skin: &BuiltSkin, t: Real) -> Result<(Vec3, Real), String> {
+        let pose = self.tool.pose(t);
+        let frame = parry_pose(&pose.position, &pose.rotation);
+        let shape = self.tool.shape();
+        let aabb = shape.compute_aabb(&frame);
+        let h = skin.cell_size;
+        let lo = Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - Vec3::repeat(h);
+        let hi = Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + Vec3::repeat(h);
+        let params = PolygonizeParams::with_cell_size(h);
+        let samples = polygonize_region(skin.skin.field(), &params, Some((lo, hi)))
+            .map_err(|e| format!("sampling skin {}: {e}", skin.name))?;
+        let r = collider_reactions(
+            skin.skin.field(),
+            samples.positions(),
+            shape,
+            &frame,
+            &ContactParams {
+                stiffness: self.stiffness,
+            },
+        );
+        let mut depth: Real = 0.0;
+        if r.samples_in_contact() > 0 {
+            for p in samples.positions() {
+                if let Some((s, _)) = signed_distance(shape, &frame, &p.coords) {
+                    depth = depth.max(-s);
+                }
+            }
+        }
+        r.apply(world);
+        Ok((r.total_force(), depth))
+    }
+}
+
 /// Re-poses `skins` on `world`, computes the contact reactions of every
-/// pair, adds them to `world` for its next step (of length `dt`) and
-/// updates `stats`. `objects` gives the rest spacings (r0).
+/// pair of skins and of every skin against the obstacle tools in `tools`,
+/// adds them to `world` for its next step (of length `dt`) and updates
+/// `stats`. `objects` gives the rest spacings (r0). Against a tool,
+/// `max_penetration` is the depth of the deepest skin sample inside it and
+/// `total_impulse` adds the reaction on the skin.
 pub fn contact_step(
     world: &mut World,
     skins: &mut [BuiltSkin],
+    tools: &[SkinTool],
     objects: &[BuiltObject],
     dt: Real,
     stats: &mut ContactStats,
@@ -216,6 +274,16 @@ pub fn contact_step(
         s.skin
             .repose(world)
             .map_err(|e| format!("posing skin {}: {e}", s.name))?;
+    }
+    let t = world.time();
+    for tool in tools {
+        for &k in &tool.skins {
+            let skin = &skins[k];
+            let (force, depth) = tool.react(world, skin, t)?;
+            let r0 = objects[skin.object].rest_spacing.max(Real::MIN_POSITIVE);
+            stats.max_penetration = stats.max_penetration.max(depth / r0);
+            stats.total_impulse += force.norm() * dt;
+        }
     }
     for i in 0..skins.len() {
         for j in i + 1..skins.len() {

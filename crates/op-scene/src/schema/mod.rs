@@ -57,6 +57,7 @@ pub use validate::{MAX_COHESION_ALPHA_R0_SQUARED, MAX_COHESION_CUTOFF_OVER_R0};
 
 use std::collections::BTreeMap;
 
+use op_dynamics::tools::{Path, Role, ToolShape};
 use op_dynamics::world::NeighbourParams;
 use op_dynamics::{Material, ParticleType, Real, Scheme};
 use serde::{Deserialize, Serialize};
@@ -88,6 +89,11 @@ pub struct Scene {
     /// Forces on particle sets over time windows. Default: none.
     #[serde(default)]
     pub forces: Vec<ForceSpec>,
+    /// Tools: parry shapes with scripted motion acting as obstacles,
+    /// attractors or movers (seed 000 §6). Skinned objects meet obstacle
+    /// tools through their skins (seed 002 §6). Default: none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tools: Vec<ToolSpec>,
     /// What the runner writes. Default: [`Outputs::default`].
     #[serde(default)]
     pub outputs: Outputs,
@@ -413,4 +419,31 @@ pub struct ForceSpec {
     /// Default: 0 (a step load).
     #[serde(default)]
     pub ramp: Real,
+}
+
+/// A tool (seed 000 §6): a parry shape with scripted motion and a role.
+/// Keyframe times and a mover's `release` count from the end of the settle
+/// phase, like force windows. An obstacle acts on the particles of the
+/// objects without a skin, and on the skins of skinned objects (their skin
+/// samples inside the shape get a reaction `stiffness x depth` along its
+/// normal, seed 002 §6); attractors and movers act on particles.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolSpec {
+    /// Name, for messages. Default: empty.
+    #[serde(default)]
+    pub name: String,
+    /// Shape in the tool frame (`Plane`, `Ball`, `Cuboid`, `Cylinder`,
+    /// `ConvexHull`, `TriMesh`).
+    pub shape: ToolShape,
+    /// Keyframes `(time, position, rotation)`, rotation as a rotation
+    /// vector. Default: still at the origin.
+    #[serde(default)]
+    pub path: Path,
+    /// `Obstacle(stiffness, margin, damping)`, `Attractor(strength, reach)`
+    /// or `Mover(stiffness, damping, release)`.
+    pub role: Role,
+    /// Names of the objects it acts on. Default: all.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub objects: Option<Vec<String>>,
 }

@@ -9,7 +9,7 @@ use op_dynamics::interactions::Spacing;
 use op_dynamics::{Material, Real};
 
 use super::checks::{self, direction, finite, finite3, non_negative, positive, positive3};
-use super::{ForceSpec, ObjectSpec, Scene};
+use super::{ForceSpec, ObjectSpec, Scene, ToolSpec};
 use crate::error::SceneError;
 use crate::generators::MAX_PARTICLES;
 
@@ -122,7 +122,38 @@ impl Scene {
         for (k, f) in self.forces.iter().enumerate() {
             self.validate_force(k, f, &counts)?;
         }
+        for (k, t) in self.tools.iter().enumerate() {
+            self.validate_tool(k, t)?;
+        }
         Ok(counts)
+    }
+
+    fn validate_tool(&self, k: usize, t: &ToolSpec) -> Result<(), SceneError> {
+        let file = self.origin();
+        let path = format!("tools[{k}]");
+        t.shape
+            .build()
+            .map_err(|e| SceneError::param(file, &format!("{path}.shape"), e))?;
+        t.path
+            .validate()
+            .map_err(|e| SceneError::param(file, &format!("{path}.path"), e))?;
+        t.role
+            .validate()
+            .map_err(|e| SceneError::param(file, &format!("{path}.role"), e))?;
+        for (j, name) in t.objects.iter().flatten().enumerate() {
+            if !self.objects.iter().any(|o| &o.name == name) {
+                return Err(SceneError::value(
+                    file,
+                    format!("{path}.objects[{j}]"),
+                    format!("{name:?}"),
+                    &format!(
+                        "unknown object (defined objects: {})",
+                        quoted(self.objects.iter().map(|o| &o.name))
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     fn validate_header(&self, file: &str) -> Result<(), SceneError> {

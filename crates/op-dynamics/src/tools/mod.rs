@@ -1,0 +1,283 @@
+//! Tools (seed 000 §6, DESIGN §4): rigid parry shapes with scripted motion
+//! that act on the particles near them — solid obstacles, attractors and
+//! movers. Each acts through a potential energy of the particle position
+//! ([`roles`]); the world adds the tool forces and energies in every force
+//! evaluation, at the evaluation's time, so every integrator (including
+//! the stages of Runge-Kutta schemes) sees the tool where it is.
+//!
+//! Only worlds with tools pay for them: without tools the force pass has
+//! no tool stage. Tools act at particle centres (forces, no torques).
+//! Skinned objects meet tools through their skins instead (op-implicit);
+//! [`ToolParams::objects`] restricts a tool to some objects.
+
+pub mod path;
+pub mod roles;
+pub mod shape;
+
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
+use parry3d_f64::math::Vector;
+use parry3d_f64::shape::{Shape, SharedShape};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::ParamError;
+use crate::integrators::StateRef;
+use crate::math::{Real, Vec3};
+use crate::particles::{Attributes, Particles};
+
+pub use path::{Keyframe, Path, ToolPose};
+pub use roles::Role;
+pub use shape::{parry_pose, ToolShape};
+
+/// A tool's description.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolParams {
+    /// Name (for messages and outputs). Default: empty.
+    #[serde(default)]
+    pub name: String,
+    /// Shape in the tool frame.
+    pub shape: ToolShape,
+    /// Motion of the tool frame. Default: still at the origin.
+    #[serde(default)]
+    pub path: Path,
+    /// What the tool does.
+    pub role: Role,
+    /// Object ids the tool acts on. Default (`None`): every object.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub objects: Option<Vec<u32>>,
+}
+
+impl ToolParams {
+    /// Checks the path and role (the shape is checked when built).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        self.path.validate().map_err(|e| e.within("path"))?;
+        self.role.validate().map_err(|e| e.within("role"))
+    }
+}
+
+/// A tool ready to act: its collider and, for a mover, the particles it
+/// holds (stable id and position in the tool frame).
+#[derive(Clone)]
+pub struct Tool {
+    params: ToolParams,
+    shape: SharedShape,
+    grabbed: Vec<(u32, Vec3)>,
+}
+
+impl std::fmt::Debug for Tool {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tool")
+            .field("params", &self.params)
+            .field("grabbed", &self.grabbed.len())
+            .finish()
+    }
+}
+
+fn to_parry(p: &Vec3) -> Vector {
+    Vector::new(p.x, p.y, p.z)
+}
+
+fn from_parry(p: Vector) -> Vec3 {
+    Vec3::new(p.x, p.y, p.z)
+}
+
+/// Signed distance from `p` to the surface of `shape` at `pose` (positive
+/// outside) and the outward unit normal at the closest surface point;
+/// `None` exactly on the surface, where the normal is not defined by the
+/// projection (every role's force is zero or bounded there).
+pub fn signed_distance(
+    shape: &dyn Shape,
+    pose: &parry3d_f64::math::Pose,
+    p: &Vec3,
+) -> Option<(Real, Vec3)> {
+    let proj = shape.project_point(pose, to_parry(p), false);
+    let d = p - from_parry(proj.point);
+    let len = d.norm();
+    if len == 0.0 || !len.is_finite() {
+        return None;
+    }
+    if proj.is_inside {
+        Some((-len, -d / len))
+    } else {
+        Some((len, d / len))
+    }
+}
+
+impl Tool {
+    /// Builds the tool; a mover grabs the particles inside it at time 0.
+    pub fn new(params: &ToolParams, particles: &Particles) -> Result<Tool, ParamError> {
+        params.validate()?;
+        let shape = params.shape.build().map_err(|e| e.within("shape"))?;
+        let mut tool = Tool {
+            params: params.clone(),
+            shape,
+            grabbed: Vec::new(),
+        };
+        if let Role::Mover { .. } = params.role {
+            let pose = params.path.pose(0.0);
+            let frame = parry_pose(&pose.position, &pose.rotation);
+            let objects = particles.objects();
+            for (slot, x) in particles.positions().iter().enumerate() {
+                if !tool.acts_on(objects[slot]) {
+                    continue;
+                }
+                if tool.shape.contains_point(&frame, to_parry(&x.coords)) {
+                    let local = pose.rotation.inverse() * (x.coords - pose.position);
+                    tool.grabbed.push((particles.ids()[slot], local));
+                }
+            }
+            tool.grabbed.sort_by_key(|g| g.0);
+        }
+        Ok(tool)
+    }
+
+    /// The description.
+    pub fn params(&self) -> &ToolParams {
+        &self.params
+    }
+
+    /// The collider in the tool frame.
+    pub fn shape(&self) -> &dyn Shape {
+        self.shape.as_ref()
+    }
+
+    /// Pose and velocity at time `t`.
+    pub fn pose(&self, t: Real) -> ToolPose {
+        self.params.path.pose(t)
+    }
+
+    /// Stable ids of the particles a mover holds (empty for other roles).
+    pub fn grabbed(&self) -> impl Iterator<Item = u32> + '_ {
+        self.grabbed.iter().map(|g| g.0)
+    }
+
+    /// Whether the tool acts on particles of object `object`.
+    pub fn acts_on(&self, object: u32) -> bool {
+        self.params
+            .objects
+            .as_ref()
+            .is_none_or(|list| list.contains(&object))
+    }
+
+    /// Adds this tool's forces to `forces` and energies to `energies` (by
+    /// slot) for the state `s` at time `t`.
+    fn add(
+        &self,
+        t: Real,
+        s: StateRef<'_>,
+        a: &Attributes<'_>,
+        forces: &mut [Vec3],
+        energies: &mut [Real],
+    ) {
+        let pose = self.pose(t);
+        match self.params.role {
+            Role::Mover {
+                stiffness,
+                damping,
+                release,
+            } => {
+                if t >= release {
+                    return;
+                }
+                // Few particles, each by id: serial, in id order.
+                for &(id, local) in &self.grabbed {
+                    let i = a.slot_of[id as usize] as usize;
+                    let target = pose.position + pose.rotation * local;
+                    let stretch = s.positions[i].coords - target;
+                    energies[i] += 0.5 * stiffness * stretch.norm_squared();
+                    let relative = s.velocities[i] - pose.velocity_at(&target);
+                    forces[i] -= stiffness * stretch + damping * relative;
+                }
+            }
+            Role::Obstacle { .. } | Role::Attractor { .. } => {
+                let frame = parry_pose(&pose.position, &pose.rotation);
+                let reach = self.params.role.reach();
+                let bound: Option<Aabb> = (!self.params.shape.is_unbounded())
+                    .then(|| self.shape.compute_aabb(&frame).loosened(reach));
+                let role = &self.params.role;
+                let shape = self.shape.as_ref();
+                forces
+                    .par_iter_mut()
+                    .zip(energies.par_iter_mut())
+                    .enumerate()
+                    .for_each(|(i, (f, e))| {
+                        if !self.acts_on(a.objects[i]) {
+                            return;
+                        }
+                        let x = s.positions[i].coords;
+                        if bound.is_some_and(|b| !b.contains_local_point(to_parry(&x))) {
+                            return;
+                        }
+                        let Some((sd, n)) = signed_distance(shape, &frame, &x) else {
+                            return;
+                        };
+                        let (energy, push) = match *role {
+                            Role::Obstacle {
+                                stiffness,
+                                margin,
+                                damping,
+                            } => {
+                                let (energy, push) = roles::obstacle(stiffness, margin, sd);
+                                if push == 0.0 {
+                                    return;
+                                }
+                                let closing = (s.velocities[i] - pose.velocity_at(&x)).dot(&n);
+                                (energy, push - damping * closing)
+                            }
+                            Role::Attractor { strength, reach } => {
+                                roles::attractor(strength, reach, sd)
+                            }
+                            Role::Mover { .. } => unreachable!("handled above"),
+                        };
+                        *e += energy;
+                        *f += push * n;
+                    });
+            }
+        }
+    }
+}
+
+/// The tools of a world.
+#[derive(Clone, Debug, Default)]
+pub struct Tools {
+    tools: Vec<Tool>,
+}
+
+impl Tools {
+    /// Builds every tool (errors name the tool's index).
+    pub fn new(params: &[ToolParams], particles: &Particles) -> Result<Tools, ParamError> {
+        let tools = params
+            .iter()
+            .enumerate()
+            .map(|(k, p)| Tool::new(p, particles).map_err(|e| e.within(&format!("tools[{k}]"))))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Tools { tools })
+    }
+
+    /// The tools, in the order given.
+    pub fn tools(&self) -> &[Tool] {
+        &self.tools
+    }
+
+    /// Whether there is no tool.
+    pub fn is_empty(&self) -> bool {
+        self.tools.is_empty()
+    }
+
+    /// Adds every tool's forces and energies (by slot) at state `s`, time
+    /// `t`, tool after tool (the same bits at any thread count: each
+    /// particle's sum is formed in tool order).
+    pub(crate) fn add(
+        &self,
+        t: Real,
+        s: StateRef<'_>,
+        a: &Attributes<'_>,
+        forces: &mut [Vec3],
+        energies: &mut [Real],
+    ) {
+        for tool in &self.tools {
+            tool.add(t, s, a, forces, energies);
+        }
+    }
+}

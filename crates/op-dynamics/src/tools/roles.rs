@@ -1,0 +1,180 @@
+//! What a tool does to the particles near it (seed 000 §6): each role is
+//! a potential energy of the particle's position relative to the tool's
+//! surface or frame, and the force is its negative gradient (checked
+//! against finite differences in the tests). Optional damping terms are
+//! dissipative by design and say so.
+//!
+//! With `s` the signed distance from the particle to the tool's surface
+//! (positive outside) and `n` the outward normal at the closest surface
+//! point, `∇s = n` away from the medial axis, so a role energy `E(s)` gives
+//! the force `-E'(s) n`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{self, ParamError};
+use crate::math::Real;
+
+/// A tool's role.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Role {
+    /// A solid obstacle: a penalty `E = k d² / 2` on the penetration
+    /// `d = max(0, margin - s)`, so the force `k d n` pushes the particle
+    /// out along the outward normal, growing with depth.
+    Obstacle {
+        /// Penalty stiffness `k`, > 0 (force per unit depth).
+        stiffness: Real,
+        /// Contact offset from the surface (a particle radius), >= 0.
+        /// Default: 0.
+        #[serde(default)]
+        margin: Real,
+        /// Damping of the normal relative velocity while in contact,
+        /// `-c ((v - v_tool) · n) n`, >= 0 (dissipative, not from an
+        /// energy). Default: 0.
+        #[serde(default)]
+        damping: Real,
+    },
+    /// An attractor (seed 000 §6: "attract particles to its surface"): a
+    /// smooth well of depth `k R² / 2` and width `R` on both sides of the
+    /// surface, `E = -(k R² / 2) (1 - s²/R²)²` for `|s| < R`, zero beyond;
+    /// force `-2 k s (1 - s²/R²) n`, zero at the surface and at the reach.
+    Attractor {
+        /// Strength `k`, > 0 (the well's stiffness at the surface is `2k`).
+        strength: Real,
+        /// Reach `R`, > 0.
+        reach: Real,
+    },
+    /// A mover (seed 000 §6: grabs the particles inside it and carries
+    /// them): every particle inside the tool when the world is built is
+    /// tied to its point in the tool frame by a spring `E = k |x - T(t) x_0|²
+    /// / 2` until `release`.
+    Mover {
+        /// Spring stiffness `k`, > 0.
+        stiffness: Real,
+        /// Damping of the velocity relative to the carried point, >= 0
+        /// (dissipative). Default: 0.
+        #[serde(default)]
+        damping: Real,
+        /// Time the tool lets go. Default: never.
+        #[serde(default = "infinity", skip_serializing_if = "is_infinite")]
+        release: Real,
+    },
+}
+
+fn infinity() -> Real {
+    Real::INFINITY
+}
+fn is_infinite(v: &Real) -> bool {
+    *v == Real::INFINITY
+}
+
+impl Role {
+    /// Checks the parameters.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        match self {
+            Role::Obstacle {
+                stiffness,
+                margin,
+                damping,
+            } => {
+                error::positive("Obstacle.stiffness", *stiffness)?;
+                error::non_negative("Obstacle.margin", *margin)?;
+                error::non_negative("Obstacle.damping", *damping)
+            }
+            Role::Attractor { strength, reach } => {
+                error::positive("Attractor.strength", *strength)?;
+                error::positive("Attractor.reach", *reach)
+            }
+            Role::Mover {
+                stiffness,
+                damping,
+                release,
+            } => {
+                error::positive("Mover.stiffness", *stiffness)?;
+                error::non_negative("Mover.damping", *damping)?;
+                error::check(
+                    "Mover.release",
+                    *release,
+                    !release.is_nan(),
+                    "must be a time (or infinite)",
+                )
+            }
+        }
+    }
+
+    /// How far outside the surface the role acts (particles farther away
+    /// are skipped by a bounding-box test). Movers act on their grabbed
+    /// particles wherever they are.
+    pub fn reach(&self) -> Real {
+        match self {
+            Role::Obstacle { margin, .. } => *margin,
+            Role::Attractor { reach, .. } => *reach,
+            Role::Mover { .. } => Real::INFINITY,
+        }
+    }
+}
+
+/// Obstacle penalty: energy and `-dE/ds` (the force magnitude along `n`)
+/// at signed distance `s`.
+pub fn obstacle(stiffness: Real, margin: Real, s: Real) -> (Real, Real) {
+    let d = margin - s;
+    if d <= 0.0 {
+        return (0.0, 0.0);
+    }
+    (0.5 * stiffness * d * d, stiffness * d)
+}
+
+/// Attractor well: energy and `-dE/ds` at signed distance `s`.
+pub fn attractor(strength: Real, reach: Real, s: Real) -> (Real, Real) {
+    if s.abs() >= reach {
+        return (0.0, 0.0);
+    }
+    let u = 1.0 - s * s / (reach * reach);
+    (
+        -0.5 * strength * reach * reach * u * u,
+        -2.0 * strength * s * u,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_derivative(f: impl Fn(Real) -> (Real, Real), samples: &[Real]) {
+        let h = 1e-6;
+        for &s in samples {
+            let fd = -(f(s + h).0 - f(s - h).0) / (2.0 * h);
+            let (_, force) = f(s);
+            assert!(
+                (fd - force).abs() <= 1e-6 * (1.0 + force.abs()),
+                "s = {s}: fd {fd} vs {force}"
+            );
+        }
+    }
+
+    #[test]
+    fn obstacle_force_is_minus_the_energy_slope() {
+        check_derivative(
+            |s| obstacle(50.0, 0.2, s),
+            &[-1.0, -0.1, 0.0, 0.1, 0.19, 0.5],
+        );
+        assert_eq!(obstacle(50.0, 0.2, 0.3), (0.0, 0.0));
+        assert!(
+            obstacle(50.0, 0.0, -0.1).1 > 0.0,
+            "pushes outward when inside"
+        );
+    }
+
+    #[test]
+    fn attractor_force_is_minus_the_energy_slope_and_pulls_to_the_surface() {
+        check_derivative(
+            |s| attractor(3.0, 0.5, s),
+            &[-0.4, -0.1, 0.0, 0.1, 0.3, 0.49],
+        );
+        assert!(attractor(3.0, 0.5, 0.2).1 < 0.0, "pulled in from outside");
+        assert!(attractor(3.0, 0.5, -0.2).1 > 0.0, "pushed out from inside");
+        assert_eq!(attractor(3.0, 0.5, 0.6), (0.0, 0.0));
+        // C1 at the reach: the force vanishes there.
+        assert!(attractor(3.0, 0.5, 0.5 - 1e-9).1.abs() < 1e-7);
+    }
+}
