@@ -196,6 +196,9 @@ pub struct World {
     torques: Vec<Vec3>,
     prev_positions: Vec<Point3>,
     time: Real,
+    /// Pending external forces are held until this time (see
+    /// [`World::hold_external_forces_until`]).
+    hold_until: Real,
     steps: u64,
     dt_next: Real,
     report: StepReport,
@@ -299,6 +302,7 @@ impl World {
             torques: vec![Vec3::zeros(); n],
             prev_positions: particles.positions().to_vec(),
             time: 0.0,
+            hold_until: Real::NEG_INFINITY,
             steps: 0,
             dt_next: params.dt,
             report: StepReport::default(),
@@ -429,6 +433,16 @@ impl World {
         self.accumulator.add(id, force, torque);
     }
 
+    /// Holds the pending external forces ([`World::add_external_force`])
+    /// over every step until the world time reaches `t`, instead of the
+    /// next step only: an explicit coupling evaluated once per interval
+    /// `[now, t]` (op-scene's skin contact) then acts over all of it, also
+    /// when an adaptive scheme covers the interval in several steps. They
+    /// are cleared after the step that reaches `t`.
+    pub fn hold_external_forces_until(&mut self, t: Real) {
+        self.hold_until = t;
+    }
+
     /// Advances by one step: the configured `dt`, or the adaptive
     /// controller's suggestion (at most `dt`).
     ///
@@ -509,7 +523,8 @@ impl World {
         if !clipped || info.dt_taken < dt {
             self.dt_next = info.dt_next;
         }
-        if self.accumulator.is_active() {
+        let held = self.time < self.hold_until - 1e-12 * self.params.dt;
+        if self.accumulator.is_active() && !held {
             self.accumulator.clear();
             self.integrator.invalidate();
         }

@@ -318,3 +318,24 @@ fn tools_are_deterministic_across_thread_counts() {
     };
     assert_eq!(run(1), run(2));
 }
+
+/// A held external force acts over every step of its interval, also when
+/// the adaptive scheme takes several, and is cleared after it.
+#[test]
+fn held_external_forces_act_over_the_whole_interval() {
+    let params = WorldParams {
+        scheme: Scheme::Adaptive(op_dynamics::AdaptiveParams::default()),
+        dt: 0.05,
+        ..WorldParams::default()
+    };
+    let p = particles(&[Point3::origin()], |_| 0);
+    let mut w = World::new(p, &[Material::empty()], params).unwrap();
+    w.add_external_force(0, Vec3::new(2.0, 0.0, 0.0), Vec3::zeros());
+    w.hold_external_forces_until(1.0);
+    w.advance_to(1.0).unwrap();
+    assert!(w.steps() >= 20);
+    let v = w.particles().velocities()[0];
+    assert!((v - Vec3::new(2.0, 0.0, 0.0)).norm() < 1e-12, "{v}");
+    w.advance_to(2.0).unwrap();
+    assert_eq!(w.particles().velocities()[0], v);
+}

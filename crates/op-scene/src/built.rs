@@ -118,9 +118,9 @@ impl BuiltScene {
     }
 
     /// Advances the world to world time `t_end`. Without contact this is
-    /// [`World::advance_to`]; with contact the world advances one step at a
-    /// time, the contact reactions computed before each step and applied
-    /// during it, and [`BuiltScene::contact`] is updated (see
+    /// [`World::advance_to`]; with contact the world advances by intervals
+    /// of `dt`, the contact reactions computed at the start of each and
+    /// held over it (over every step of it with the adaptive scheme), and [`BuiltScene::contact`] is updated (see
     /// [`crate::skins`]). Skins are re-posed at `t_end` either way.
     ///
     /// # Errors
@@ -148,6 +148,7 @@ impl BuiltScene {
                     &mut self.contact,
                 )?;
                 let target = self.world.time() + h;
+                self.world.hold_external_forces_until(target);
                 self.world.advance_to(target).map_err(|d| d.to_string())?;
             }
         } else {

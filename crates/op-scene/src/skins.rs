@@ -6,15 +6,17 @@
 //! [`BuiltSkin`] (an op-implicit [`Skin`]). Nothing of op-implicit is built
 //! for a scene without skins (see [`crate::BuiltScene::stages`]).
 //!
-//! **Runner.** Before every world step of the simulated duration (not the
-//! settle phase, during which skins are neither posed nor in contact) the
-//! skins are re-posed on the particles and, for every pair of skinned
-//! objects, [`ContactPair::reactions`] (Gascuel's exact contact surface,
-//! no bulge) is computed and applied to the world for that step
-//! ([`op_implicit::PairReactions::apply`]): contact is explicit, one
-//! evaluation per world step. With contact the world is therefore advanced
-//! one step of `dt` at a time (with the adaptive scheme a step of `dt` may
-//! be split; the reactions then act on its first sub-step only). Each
+//! **Runner.** Before every interval of `dt` of the simulated duration
+//! (not the settle phase, during which skins are neither posed nor in
+//! contact) the skins are re-posed on the particles and, for every pair of
+//! skinned objects, [`ContactPair::reactions`] (Gascuel's exact contact
+//! surface, no bulge) and, for every obstacle tool a skin meets,
+//! [`op_implicit::collider_reactions`] are computed and applied to the
+//! world, held over the interval ([`World::hold_external_forces_until`];
+//! with the adaptive scheme an interval may take several steps and the
+//! reactions act on all of them): contact is explicit, one evaluation per
+//! interval, so contact scenes are first order in `dt` whatever the
+//! scheme. Each
 //! written frame holds each skin polygonized as an extra OBJ object
 //! `<object>_skin` with vertex normals from the analytic field gradient;
 //! where two skins' supports overlap, the exported field is the deformed

@@ -1,0 +1,89 @@
+//! A skinned sheet falling onto a rigid box and onto a rigid sphere (seed
+//! 002 §6 contact against parry colliders; `scenes/sheet_on_box.ron`,
+//! `scenes/sheet_on_sphere.ron`): the skin meets the collider, carries the
+//! sheet on it without sinking through, the unsupported part bends down,
+//! and the frames hold the skin.
+
+use std::path::{Path, PathBuf};
+
+use oriented_particles::op_dynamics::{Point3, Real};
+use oriented_particles::op_scene::{self, load_scene, RunOptions, Summary};
+
+/// Runs the scene for `duration` into a fresh directory; returns the
+/// summary, the final particle positions and the output directory.
+fn run(name: &str, duration: Real) -> (Summary, Vec<Point3>, PathBuf) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.ron"));
+    let mut scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    scene.world.duration = duration;
+    let mut built = scene.build(None, None).expect("builds");
+    assert!(built.stages().iter().any(|s| s == "contact"));
+    assert!(
+        !built.stages().iter().any(|s| s.starts_with("tool:")),
+        "the sheet is skinned: the box acts on its skin, not its particles"
+    );
+    let out = std::env::temp_dir().join(format!("opsim-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let opts = RunOptions {
+        out_dir: out.clone(),
+        frames: None,
+    };
+    let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
+    let positions = built.world.particles().positions().to_vec();
+    (summary, positions, out)
+}
+
+fn last_frame(out: &Path) -> String {
+    let mut frames: Vec<_> = std::fs::read_dir(out.join("frames"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    frames.sort();
+    std::fs::read_to_string(frames.last().unwrap()).unwrap()
+}
+
+#[test]
+fn sheet_lands_on_the_box_and_its_overhang_bends_down() {
+    let (summary, p, out) = run("sheet_on_box", 3.0);
+    let contact = summary.contact.expect("contact figures");
+    println!("{contact:?}");
+    assert!(!summary.diverged);
+    assert!(contact.total_impulse > 0.0, "{contact:?}");
+    assert!(contact.max_penetration < 0.25, "{contact:?}");
+    // The box's top face is z = 0 for |x| <= 3, |y| <= 5; the skin's
+    // half-thickness is 0.4 (iso radius of the 0.8 kernel).
+    let supported: Vec<&Point3> = p.iter().filter(|q| q.x.abs() < 2.5).collect();
+    assert!(!supported.is_empty());
+    for q in &supported {
+        assert!(q.z > 0.15 && q.z < 1.0, "supported particle at {q:?}");
+    }
+    let overhang: Vec<&Point3> = p.iter().filter(|q| q.x > 5.0).collect();
+    assert!(!overhang.is_empty());
+    let low = overhang.iter().map(|q| q.z).fold(Real::MAX, Real::min);
+    assert!(low < -0.5, "the free edge bends down: lowest {low}");
+    assert!(last_frame(&out).contains("o sheet_skin"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn sheet_drapes_over_the_sphere_without_entering_it() {
+    let (summary, p, out) = run("sheet_on_sphere", 3.0);
+    let contact = summary.contact.expect("contact figures");
+    println!("{contact:?}");
+    assert!(!summary.diverged);
+    assert!(contact.total_impulse > 0.0, "{contact:?}");
+    assert!(contact.max_penetration < 0.25, "{contact:?}");
+    // Sphere of radius 2 at the origin: particles stay outside it (their
+    // skin is 0.4 thick), the centre rests on top, the rim hangs lower.
+    let closest = p.iter().map(|q| q.coords.norm()).fold(Real::MAX, Real::min);
+    assert!(closest > 2.15, "a particle is {closest} from the centre");
+    let top = p
+        .iter()
+        .filter(|q| q.x.hypot(q.y) < 1.0)
+        .map(|q| q.z)
+        .fold(Real::MIN, Real::max);
+    assert!(top > 2.2 && top < 3.0, "top of the sheet at {top}");
+    let rim = p.iter().map(|q| q.z).fold(Real::MAX, Real::min);
+    assert!(rim < top - 1.0, "rim at {rim}, top at {top}");
+    assert!(last_frame(&out).contains("o sheet_skin"));
+    let _ = std::fs::remove_dir_all(&out);
+}
