@@ -24,8 +24,8 @@ pub struct Method {
 }
 
 impl Method {
-    /// A fixed-step method, or the adaptive scheme with
-    /// [`AdaptiveParams::with_tolerance`]`(tol)` and largest step `dt`.
+    /// `scheme` with step `dt` (the largest step, for an adaptive scheme
+    /// whose tolerances are in its parameters).
     pub fn new(scheme: Scheme, dt: Real) -> Method {
         Method { scheme, dt }
     }
@@ -106,7 +106,10 @@ pub struct CaseEntry {
     pub tolerances: Vec<Real>,
     /// Largest step of the adaptive scheme.
     pub adaptive_dt_max: Real,
-    /// The reference method (checked against [`Method::refined`]).
+    /// The coarser of the two reference runs: the finer one
+    /// ([`Method::refined`], half the step) is the reference the runs are
+    /// measured against, and the difference between the two bounds its
+    /// error (see [`super::sweep::sweep_case`]).
     pub reference: Method,
 }
 
