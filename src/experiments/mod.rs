@@ -3,10 +3,12 @@
 //! integration tests (`tests/shape_memory.rs`, `tests/cohesion_vs_lj.rs`)
 //! and the report generator (`examples/shape_memory_report.rs`).
 
+pub mod accuracy;
 pub mod matching;
 pub mod membership;
 pub mod oscillation;
 pub mod plot;
+pub mod plot_loglog;
 pub mod scaling;
 pub mod spiral;
 pub mod triangle;
