@@ -568,17 +568,11 @@ fn findings(sweeps: &[CaseSweep]) -> String {
         if let Some((m, e)) = adaptive {
             let _ = writeln!(
                 s,
-                "- **Bug (op-scene / op-dynamics, not fixed here): contact with the adaptive \
-                 scheme acts only during the first sub-step.** `World::add_external_force` \
-                 holds a force \"during the next step and then cleared\"; \
-                 `BuiltScene::advance_to` adds the contact reactions and then calls \
-                 `World::advance_to(t + dt)`, which the adaptive scheme may cover in several \
-                 internal steps: the reactions act during the first one only and are lost for \
-                 the rest of the interval. Measured: {} has an RMS position error of {e:.2} \
-                 r0 on `ball_vs_spiral`, against {} for RK4 at dt=0.005. Until it is fixed \
-                 (keep the contact force for the whole interval, or take one world step per \
-                 contact evaluation), contact scenes need a fixed-step scheme; this case runs \
-                 the adaptive scheme at one tolerance only, to show it.\n",
+                "- **Contact with the adaptive scheme.** The reactions computed at the start \
+                 of an interval of `dt` are held over every step the adaptive scheme takes in \
+                 it (`World::hold_external_forces_until`). Measured: {} has an RMS position \
+                 error of {e:.2e} r0 on `ball_vs_spiral`, against {} for RK4 at dt=0.005: \
+                 with contact, the interval `dt`, not the tolerance, sets the accuracy.\n",
                 m.label(),
                 fmt_opt(fixed)
             );
@@ -587,12 +581,7 @@ fn findings(sweeps: &[CaseSweep]) -> String {
     s.push_str(
         "- **Round-off floor.** On the spiral RK4 and the adaptive scheme level off near \
          1e-11 r0: the accumulated round-off of hundreds of thousands of steps (the \
-         reference check difference is of the same size).\n\
-         - **Not included: the 400-particle sheet draping over a parry sphere.** Its scene \
-         (`scenes/drape_sphere.ron`, with the rigid-obstacle tool) was not on this branch \
-         when the report was generated; adding it is one `CaseEntry` in \
-         `src/experiments/accuracy/case.rs` (`SceneSource::File(\"scenes/drape_sphere.ron\")`, its \
-         sample times, steps and reference).\n",
+         reference check difference is of the same size).\n",
     );
     s
 }
