@@ -153,7 +153,7 @@ impl Scene {
             })
             .collect();
         let w = &self.world;
-        let (tools, skin_tool_params) = self.tool_params();
+        let (tools, skin_tool_params, all_tools) = self.tool_params();
         let params = WorldParams {
             scheme: w.integrator,
             dt: w.dt,
@@ -210,9 +210,18 @@ impl Scene {
                 })
             })
             .collect::<Result<Vec<_>, SceneError>>()?;
+        let tools = all_tools
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                Tool::new(p, world.particles())
+                    .map_err(|e| SceneError::param(file, &format!("tools[{k}]"), e))
+            })
+            .collect::<Result<Vec<_>, SceneError>>()?;
         Ok(BuiltScene {
             skins,
             skin_tools,
+            tools,
             contact: ContactStats::default(),
             name: self.name.clone(),
             source,
@@ -233,15 +242,17 @@ impl Scene {
 type SkinToolParams = (usize, ToolParams, Vec<usize>, Real);
 
 impl Scene {
-    /// The world's tools and the obstacle tools skins meet. Keyframe times
+    /// The world's tools, the obstacle tools skins meet, and every tool (for
+    /// output). Keyframe times
     /// and a mover's release shift by the settle phase (they count in
     /// scene time). An obstacle acts on the particles of the unskinned
     /// objects it selects and on the skins of the skinned ones; a tool
     /// left with no particle to act on is not given to the world.
-    fn tool_params(&self) -> (Vec<ToolParams>, Vec<SkinToolParams>) {
+    fn tool_params(&self) -> (Vec<ToolParams>, Vec<SkinToolParams>, Vec<ToolParams>) {
         let settle = self.world.settle;
         let mut world_tools = Vec::new();
         let mut skin_tools = Vec::new();
+        let mut all = Vec::new();
         for (k, t) in self.tools.iter().enumerate() {
             let selected: Vec<usize> = match &t.objects {
                 None => (0..self.objects.len()).collect(),
@@ -273,11 +284,15 @@ impl Scene {
             if let (false, Role::Obstacle { stiffness, .. }) = (skinned.is_empty(), &params.role) {
                 skin_tools.push((k, params.clone(), skinned, *stiffness));
             }
+            all.push(ToolParams {
+                objects: None,
+                ..params.clone()
+            });
             if !bare.is_empty() {
                 world_tools.push(params);
             }
         }
-        (world_tools, skin_tools)
+        (world_tools, skin_tools, all)
     }
 }
 

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use op_dynamics::{Divergence, Point3, Real, World};
+use op_dynamics::{Divergence, Point3, Real, Tool, World};
 
 use crate::outputs::{Outputs, ParticleOutput};
 use crate::skins::{contact_step, BuiltSkin, ContactStats, SkinTool};
@@ -53,6 +53,10 @@ pub struct BuiltScene {
     /// The implicit skins of the skinned objects, in scene order (empty
     /// when no object has a skin: nothing of op-implicit is built).
     pub skins: Vec<BuiltSkin>,
+    /// Every tool of the scene, in scene order (drawn in the frames as
+    /// `tool_<name>`; the world and [`BuiltScene::skin_tools`] hold the
+    /// ones that act).
+    pub tools: Vec<Tool>,
     /// Obstacle tools met by skins (empty when no skinned object meets an
     /// obstacle).
     pub skin_tools: Vec<SkinTool>,

@@ -11,7 +11,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use obj_exporter::{Geometry, ObjSet, Object, Primitive, Shape, Vertex};
-use op_dynamics::{Real, Vec3, World};
+use op_dynamics::{Real, Tool, Vec3, World};
 use op_implicit::Mesh;
 
 use crate::built::BuiltObject;
@@ -160,14 +160,52 @@ pub fn mesh_geometry(name: &str, mesh: &Mesh) -> Object {
     }
 }
 
+/// The OBJ object `tool_<name>` (`tool_<k>` when unnamed) of tool `k` at
+/// world time `t`: flat-shaded triangles (three vertices and the face
+/// normal each). Planes are drawn as a square of half side 10.
+pub fn tool_geometry(k: usize, tool: &Tool, t: Real) -> Object {
+    let (v, tris) = tool.surface_mesh(t, 10.0);
+    let name = match tool.params().name.as_str() {
+        "" => format!("tool_{k}"),
+        n => format!("tool_{n}"),
+    };
+    let mut vertices = Vec::with_capacity(3 * tris.len());
+    let mut normals = Vec::with_capacity(tris.len());
+    let mut shapes = Vec::with_capacity(tris.len());
+    for (f, tri) in tris.iter().enumerate() {
+        let [a, b, c] = tri.map(|i| v[i as usize].coords);
+        normals.push(vertex(
+            (b - a)
+                .cross(&(c - a))
+                .try_normalize(0.0)
+                .unwrap_or_default(),
+        ));
+        vertices.extend([a, b, c].map(vertex));
+        let corner = |j: usize| (3 * f + j, None, Some(f));
+        shapes.push(shape(Primitive::Triangle(corner(0), corner(1), corner(2))));
+    }
+    Object {
+        name,
+        vertices,
+        tex_vertices: Vec::new(),
+        normals,
+        geometry: vec![Geometry {
+            material_name: None,
+            shapes,
+        }],
+    }
+}
+
 /// Writes one OBJ frame holding every object of the scene, then every
 /// skin (polygonized at its current pose, deformed where it touches another
-/// skin) as an object `<object>_skin`.
+/// skin) as an object `<object>_skin`, then every tool at its current pose
+/// as `tool_<name>`.
 pub fn write_frame(
     path: &Path,
     world: &World,
     objects: &[BuiltObject],
     skins: &[BuiltSkin],
+    tools: &[Tool],
     outputs: &Outputs,
 ) -> std::io::Result<()> {
     let mut objects: Vec<Object> = objects
@@ -177,6 +215,9 @@ pub fn write_frame(
     for s in skins {
         let mesh = s.mesh_in(skins).map_err(std::io::Error::other)?;
         objects.push(mesh_geometry(&s.name, &mesh));
+    }
+    for (k, tool) in tools.iter().enumerate() {
+        objects.push(tool_geometry(k, tool, world.time()));
     }
     let set = ObjSet {
         material_library: None,

@@ -212,6 +212,7 @@ pub fn run(
                 &scene.world,
                 &scene.objects,
                 &scene.skins,
+                &scene.tools,
                 &scene.outputs,
             )
             .map_err(io(&path))?;

@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::ParamError;
 use crate::integrators::StateRef;
-use crate::math::{Real, Vec3};
+use crate::math::{Point3, Real, Vec3};
 use crate::particles::{Attributes, Particles};
 
 pub use path::{Keyframe, Path, ToolPose};
@@ -145,6 +145,59 @@ impl Tool {
     /// Pose and velocity at time `t`.
     pub fn pose(&self, t: Real) -> ToolPose {
         self.params.path.pose(t)
+    }
+
+    /// A triangle mesh of the tool's surface at time `t`, for output:
+    /// vertices (world frame) and triangles counter-clockwise seen from
+    /// outside. Balls and cylinders are tessellated (24 x 12 and 32
+    /// segments); a plane is drawn as a square of half side `plane_extent`
+    /// about the tool origin.
+    pub fn surface_mesh(&self, t: Real, plane_extent: Real) -> (Vec<Point3>, Vec<[u32; 3]>) {
+        let s = self.shape.as_ref();
+        let (local, triangles, convex): (Vec<Vec3>, Vec<[u32; 3]>, bool) =
+            if let ToolShape::Plane { normal } = &self.params.shape {
+                let n = Vec3::from(*normal).normalize();
+                let u = crate::math::tangent_axis(&n) * plane_extent;
+                let v = n.cross(&u);
+                let corners = vec![-u - v, u - v, u + v, -u + v];
+                (corners, vec![[0, 1, 2], [0, 2, 3]], false)
+            } else {
+                let (v, t, convex) = if let Some(b) = s.as_ball() {
+                    let (v, t) = b.to_trimesh(24, 12);
+                    (v, t, true)
+                } else if let Some(c) = s.as_cuboid() {
+                    let (v, t) = c.to_trimesh();
+                    (v, t, true)
+                } else if let Some(c) = s.as_cylinder() {
+                    let (v, t) = c.to_trimesh(32);
+                    (v, t, true)
+                } else if let Some(c) = s.as_convex_polyhedron() {
+                    let (v, t) = c.to_trimesh();
+                    (v, t, true)
+                } else if let Some(m) = s.as_trimesh() {
+                    (m.vertices().to_vec(), m.indices().to_vec(), false)
+                } else {
+                    (Vec::new(), Vec::new(), false)
+                };
+                (v.into_iter().map(from_parry).collect(), t, convex)
+            };
+        let mut triangles = triangles;
+        if convex {
+            // Orient every face away from the centre of the convex shape.
+            let centre = local.iter().sum::<Vec3>() / local.len().max(1) as Real;
+            for tri in &mut triangles {
+                let [a, b, c] = tri.map(|k| local[k as usize]);
+                if (b - a).cross(&(c - a)).dot(&(a - centre)) < 0.0 {
+                    tri.swap(1, 2);
+                }
+            }
+        }
+        let pose = self.pose(t);
+        let world = local
+            .iter()
+            .map(|x| Point3::from(pose.position + pose.rotation * x))
+            .collect();
+        (world, triangles)
     }
 
     /// Stable ids of the particles a mover holds (empty for other roles).
@@ -278,6 +331,73 @@ impl Tools {
     ) {
         for tool in &self.tools {
             tool.add(t, s, a, forces, energies);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::particles::ParticleDesc;
+
+    /// Every shape's output mesh is closed where the shape is, outward
+    /// oriented (positive signed volume close to the shape's), and posed.
+    #[test]
+    fn surface_meshes_are_outward_and_posed() {
+        let particles = {
+            let mut p = Particles::new();
+            p.push(ParticleDesc::at(Point3::new(9.0, 9.0, 9.0)))
+                .unwrap();
+            p
+        };
+        let shapes = [
+            (
+                ToolShape::Ball { radius: 1.0 },
+                4.0 / 3.0 * std::f64::consts::PI,
+            ),
+            (
+                ToolShape::Cuboid {
+                    half_extents: [1.0, 2.0, 0.5],
+                },
+                8.0,
+            ),
+            (
+                ToolShape::Cylinder {
+                    half_height: 1.0,
+                    radius: 0.5,
+                },
+                std::f64::consts::PI * 0.25 * 2.0,
+            ),
+        ];
+        for (shape, volume) in shapes {
+            let tool = Tool::new(
+                &ToolParams {
+                    name: String::new(),
+                    shape: shape.clone(),
+                    path: Path::fixed([1.0, 2.0, 3.0]),
+                    role: Role::Obstacle {
+                        stiffness: 1.0,
+                        margin: 0.0,
+                        damping: 0.0,
+                    },
+                    objects: None,
+                },
+                &particles,
+            )
+            .unwrap();
+            let (v, t) = tool.surface_mesh(0.0, 1.0);
+            let centre = Vec3::new(1.0, 2.0, 3.0);
+            let signed: Real = t
+                .iter()
+                .map(|tri| {
+                    let [a, b, c] = tri.map(|k| v[k as usize].coords - centre);
+                    a.dot(&b.cross(&c)) / 6.0
+                })
+                .sum();
+            assert!(
+                signed > 0.0 && (signed - volume).abs() < 0.1 * volume,
+                "{shape:?}: {signed} vs {volume}"
+            );
         }
     }
 }
