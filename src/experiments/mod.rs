@@ -9,6 +9,7 @@ pub mod oscillation;
 pub mod plot;
 pub mod scaling;
 pub mod spiral;
+pub mod stability;
 pub mod triangle;
 
 /// Runs `f` on a local pool of one worker thread. The experiments step
