@@ -98,6 +98,7 @@ impl Default for SearchSettings {
 }
 
 /// The largest step with which `probe` does not diverge under `scheme`
+/// (a broken bond is not a divergence: see [`super::probe`])
 /// (within the search's resolution), found by doubling or halving from
 /// `start / sqrt(λ)` until the outcome changes, then bisecting in `log dt`.
 /// `None` if no step in `[1e-6, 1e3] / sqrt(λ)` is stable or all are.
