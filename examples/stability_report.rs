@@ -330,10 +330,13 @@ fn extreme_section(root: &Path) -> Res<String> {
         s,
         "Each scene of `scenes/extreme/` runs through the op-scene runner (what `opsim run` \
          does) into a temporary directory, as written (velocity Verlet, dt 1e-3, linear damping \
-         1, unit masses, cohesion E 200, r0 1, α 16, cut-off 1.5), then once more with the \
+         1, unit masses, cohesion E 200, r0 1, α 16, cut-off 1.5; every scene without external \
+         force opts in to the runner's energy-gain check, `divergence: (energy_gain: 1e-6)`: a \
+         damped, unforced scene whose total energy rises between frames by more than 1e-6 of \
+         its initial energy scale is declared diverged), then once more with the \
          adaptive integrator (rtol 1e-6) where that takes seconds. Outcome (see \
-         `src/experiments/stability/extreme.rs`): **diverged** when the runner reports it (exit \
-         3, `summary.json` says `diverged: true`); **broke apart** when some particle ends with \
+         `src/experiments/stability/extreme.rs`): **diverged** when the runner reports it (NaN, \
+         speed, runaway energy or energy gain; exit 3, `summary.json` says `diverged: true`); **broke apart** when some particle ends with \
          no other within the cut-off (the object exploded, seed 002 footnote 4; the runner does \
          not flag it, tearing being physics); **converged** when at rest (last step's O < 1e-6 \
          √N) with every nearest neighbour within 1% of r0; **settled elsewhere** at rest in \
@@ -412,7 +415,7 @@ fn extreme_section(root: &Path) -> Res<String> {
     let _ = writeln!(
         s,
         "\nAdaptive runs left out for their cost (measured once, on this machine, while other \
-         jobs shared it): `tight_curvature` took about 600 000 steps and 190 s (with `opsim run` \
+         jobs shared it): `tight_curvature` (before its energy-gain check was set) took about 600 000 steps and 190 s (with `opsim run` \
          on a copy of the scene) and ended settled, the chain torn into four pairs each held about \
          1e-4 r0 apart; `mass_ratio` advanced about 45 s of wall time per unit of simulated time \
          (12 time units in 627 s, no divergence, kinetic energy decaying): the light particles' \
