@@ -237,10 +237,17 @@ fn sweep_section(dir: &Path) -> Res<(String, Vec<StableSteps>)> {
          factor 4 apart), the largest dt with which the probe does not diverge within {} steps: \
          doubling or halving from {} / sqrt(λ) until the outcome changes, then {} bisections in \
          log dt (1% resolution). The adaptive scheme is left out (its controller shrinks the step \
-         as needed: it did not diverge in any cell of §1). Dashed: the linear stability limit of \
+         as needed: it diverged in {} of its {} cells of §1). Dashed: the linear stability limit of \
          velocity Verlet and symplectic Euler on an undamped oscillator, dt = 2 sqrt(m/k) = \
          2/sqrt(λ) (slope -1/2).\n",
-        search.steps, search.start, search.bisections
+        search.steps,
+        search.start,
+        search.bisections,
+        cells
+            .iter()
+            .filter(|c| c.scheme == "adaptive" && c.outcome.diverged())
+            .count(),
+        cells.iter().filter(|c| c.scheme == "adaptive").count()
     );
     let mut all = Vec::new();
     let mut slope_rows = String::new();
