@@ -11,6 +11,7 @@ pub mod plot;
 pub mod plot_loglog;
 pub mod scaling;
 pub mod spiral;
+pub mod stability;
 pub mod triangle;
 
 /// Runs `f` on a local pool of one worker thread. The experiments step

@@ -31,6 +31,8 @@ pub struct LinePlot {
     pub y_label: String,
     /// Logarithmic y axis (non-positive values are dropped).
     pub log_y: bool,
+    /// Logarithmic x axis (non-positive values are dropped).
+    pub log_x: bool,
     /// The curves.
     pub series: Vec<Series>,
     /// Shaded x intervals with a label (e.g. load phases).
@@ -54,6 +56,7 @@ impl LinePlot {
             x_label: x_label.into(),
             y_label: y_label.into(),
             log_y: false,
+            log_x: false,
             series: Vec::new(),
             bands: Vec::new(),
             hlines: Vec::new(),
@@ -79,9 +82,14 @@ impl LinePlot {
         let (w, h) = (self.width, self.height);
         let (left, right, top, bottom) = (70.0, 20.0, 36.0, 50.0);
         let ty = |y: Real| if self.log_y { y.log10() } else { y };
+        let tx = |x: Real| if self.log_x { x.log10() } else { x };
         let in_range = |y: Real| self.y_range.is_none_or(|(a, b)| y >= a && y <= b);
         let usable = |&(x, y): &(Real, Real)| {
-            x.is_finite() && y.is_finite() && (!self.log_y || y > 0.0) && in_range(y)
+            x.is_finite()
+                && y.is_finite()
+                && (!self.log_y || y > 0.0)
+                && (!self.log_x || x > 0.0)
+                && in_range(y)
         };
         let pts = self
             .series
@@ -94,8 +102,8 @@ impl LinePlot {
             Real::NEG_INFINITY,
         );
         for &(x, y) in pts {
-            x0 = x0.min(x);
-            x1 = x1.max(x);
+            x0 = x0.min(tx(x));
+            x1 = x1.max(tx(x));
             y0 = y0.min(ty(y));
             y1 = y1.max(ty(y));
         }
@@ -114,7 +122,12 @@ impl LinePlot {
         if x1 <= x0 {
             x1 = x0 + 1.0;
         }
-        let (xt, x0, x1) = ticks(x0, x1);
+        let (xt, x0, x1) = if self.log_x {
+            let (a, b) = (x0.floor(), x1.ceil().max(x0.floor() + 1.0));
+            (((a as i64)..=(b as i64)).map(|k| k as Real).collect(), a, b)
+        } else {
+            ticks(x0, x1)
+        };
         let (yt, y0, y1) = if let (Some(_), false) = (self.y_range, self.log_y) {
             let (t, _, _) = ticks(y0, y1);
             (
@@ -134,7 +147,8 @@ impl LinePlot {
             ticks(y0, y1)
         };
         let (pw, ph) = (w - left - right, h - top - bottom);
-        let sx = |x: Real| left + (x - x0) / (x1 - x0) * pw;
+        let sx = |x: Real| left + (tx(x) - x0) / (x1 - x0) * pw;
+        let sxt = |t: Real| left + (t - x0) / (x1 - x0) * pw;
         let sy = |y: Real| top + (1.0 - (ty(y) - y0) / (y1 - y0)) * ph;
         let syt = |t: Real| top + (1.0 - (t - y0) / (y1 - y0)) * ph;
         let mut s = header(w, h);
@@ -147,6 +161,7 @@ impl LinePlot {
         let bands: Vec<(Real, Real, &String)> = self
             .bands
             .iter()
+            .filter(|_| !self.log_x)
             .map(|(a, b, l)| (a.max(x0), b.min(x1), l))
             .filter(|(a, b, _)| b > a)
             .collect();
@@ -159,13 +174,18 @@ impl LinePlot {
             );
         }
         for &t in &xt {
+            let label = if self.log_x {
+                format!("1e{}", t as i64)
+            } else {
+                fmt_tick(t)
+            };
             let _ = writeln!(
                 s,
                 r##"<line x1="{0:.1}" y1="{top}" x2="{0:.1}" y2="{1}" stroke="#ddd"/><text x="{0:.1}" y="{2}" text-anchor="middle" font-size="11">{3}</text>"##,
-                sx(t),
+                sxt(t),
                 top + ph,
                 top + ph + 16.0,
-                fmt_tick(t)
+                label
             );
         }
         for &t in &yt {
@@ -476,6 +496,14 @@ mod tests {
         let s = p.svg();
         assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
         assert!(s.contains("<path") && s.contains("1e-5") && !s.contains("NaN"));
+        let p = LinePlot {
+            log_x: true,
+            log_y: true,
+            ..LinePlot::new("dt(k)", "k", "dt")
+        }
+        .line("a", "red", vec![(-1.0, 1.0), (10.0, 0.3), (1e4, 1e-2)]);
+        let s = p.svg();
+        assert!(s.contains("1e4") && s.contains("1e1") && s.contains("1e-2") && !s.contains("NaN"));
         let d = downsample(
             &(0..1000)
                 .map(|k| (k as Real, (k % 7) as Real))

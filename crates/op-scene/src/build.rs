@@ -233,6 +233,7 @@ impl Scene {
             frame_rate: w.frame_rate,
             outputs: self.outputs.clone(),
             energy_growth: w.divergence.energy_growth,
+            energy_gain: w.divergence.energy_gain,
         })
     }
 }

@@ -50,6 +50,12 @@ pub struct BuiltScene {
     /// scale (|kinetic| + |potential| at t = 0, at least 1e-12 per
     /// particle). Default 1e6; infinity disables the check.
     pub energy_growth: Real,
+    /// Energy-gain threshold of passive scenes (no force window, zero
+    /// gravity, no contact): the run is declared diverged when a frame's
+    /// total energy exceeds the lowest earlier one by more than
+    /// `energy_gain` times the initial energy scale. Infinity (the
+    /// default) disables the check.
+    pub energy_gain: Real,
     /// The implicit skins of the skinned objects, in scene order (empty
     /// when no object has a skin: nothing of op-implicit is built).
     pub skins: Vec<BuiltSkin>,

@@ -222,6 +222,17 @@ pub struct DivergenceSettings {
     /// Default: 1e6.
     #[serde(default = "million")]
     pub energy_growth: Real,
+    /// Opt-in check for passive scenes (no force window, zero gravity, no
+    /// implicit contact: damping can only remove energy): the run is
+    /// declared diverged when the total energy at a frame exceeds the
+    /// lowest total energy of the earlier frames by more than this
+    /// fraction of the initial energy scale (see
+    /// [`crate::BuiltScene::energy_gain`]): the integrator put the energy
+    /// in. Catches bounded instabilities that never reach NaN, a speed
+    /// limit or runaway energy (`scenes/extreme/tight_curvature.ron`), > 0.
+    /// Default: infinity (off; JSON: omit it).
+    #[serde(default = "infinity", skip_serializing_if = "is_infinite")]
+    pub energy_gain: Real,
 }
 
 impl Default for DivergenceSettings {
@@ -229,6 +240,7 @@ impl Default for DivergenceSettings {
         DivergenceSettings {
             max_speed: infinity(),
             energy_growth: million(),
+            energy_gain: infinity(),
         }
     }
 }

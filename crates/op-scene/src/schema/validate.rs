@@ -186,6 +186,7 @@ impl Scene {
         for (field, v) in [
             ("world.divergence.max_speed", w.divergence.max_speed),
             ("world.divergence.energy_growth", w.divergence.energy_growth),
+            ("world.divergence.energy_gain", w.divergence.energy_gain),
         ] {
             if v.is_nan() || v <= 0.0 {
                 return Err(SceneError::value(
