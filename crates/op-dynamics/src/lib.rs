@@ -23,6 +23,7 @@ pub mod interactions;
 pub mod math;
 pub mod neighbours;
 pub mod particles;
+pub mod triangulation;
 pub mod world;
 
 pub use diagnostics::Diagnostics;
