@@ -13,6 +13,7 @@
 //! [`World::add_external_force`].
 #![warn(missing_docs)]
 
+pub mod creation;
 pub mod diagnostics;
 pub mod error;
 pub mod external;
