@@ -13,6 +13,7 @@ use op_dynamics::{
 };
 
 use crate::built::{BuiltObject, BuiltScene};
+use crate::creation::CreationState;
 use crate::error::SceneError;
 use crate::schema::validate::object_path;
 use crate::schema::{ObjectSpec, Override, Scene};
@@ -124,6 +125,7 @@ impl Scene {
                 ids,
                 rest,
                 rest_spacing,
+                created: Vec::new(),
             });
         }
 
@@ -190,6 +192,10 @@ impl Scene {
                 })?;
             skins.push(skin);
         }
+        let creation = self.creation.as_ref().map(|c| CreationState {
+            params: c.params(objects.first().map_or(1.0, |o| o.rest_spacing)),
+            next_step: 0,
+        });
         Ok(BuiltScene {
             skins,
             contact: ContactStats::default(),
@@ -203,6 +209,7 @@ impl Scene {
             frame_rate: w.frame_rate,
             outputs: self.outputs.clone(),
             energy_growth: w.divergence.energy_growth,
+            creation,
         })
     }
 }

@@ -33,11 +33,13 @@ pub struct RunOptions {
 pub struct ObjectSummary {
     /// Object name.
     pub name: String,
-    /// Number of particles.
+    /// Number of particles at the end of the run (created ones included).
     pub particles: usize,
     /// Rest shape error at the last frame: RMS distance to the rest shape
     /// after the best rigid alignment (Kabsch), divided by the object's
-    /// mean rest spacing.
+    /// mean rest spacing. Measured over the object's original particles
+    /// (particles added by the creation rules have no rest position; see
+    /// [`crate::creation`]).
     pub rest_shape_error_final: Real,
     /// Largest rest shape error over the frames.
     pub rest_shape_error_max: Real,
@@ -129,7 +131,8 @@ pub fn run(
 ) -> Result<Summary, RunError> {
     let clock = Instant::now();
     let frames_dir = opts.out_dir.join("frames");
-    let write_frames = scene.outputs.particles != ParticleOutput::None;
+    let write_frames =
+        scene.outputs.particles != ParticleOutput::None || scene.outputs.triangulation;
     if write_frames {
         fs::create_dir_all(&frames_dir).map_err(io(&frames_dir))?;
     } else {
@@ -251,7 +254,10 @@ pub fn run(
             .enumerate()
             .map(|(o, obj)| ObjectSummary {
                 name: obj.name.clone(),
-                particles: obj.ids.len(),
+                particles: obj
+                    .all_ids()
+                    .filter(|&id| scene.world.particles().slot_of(id).is_some())
+                    .count(),
                 rest_shape_error_final: last_err[o],
                 rest_shape_error_max: max_err[o],
             })

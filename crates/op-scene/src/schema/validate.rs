@@ -122,6 +122,24 @@ impl Scene {
         for (k, f) in self.forces.iter().enumerate() {
             self.validate_force(k, f, &counts)?;
         }
+        if let Some(c) = &self.creation {
+            c.validate(file)?;
+            if let Some((k, o)) = self
+                .objects
+                .iter()
+                .enumerate()
+                .find(|(_, o)| o.skin.is_some())
+            {
+                return Err(SceneError::invalid(
+                    file,
+                    "creation",
+                    format!(
+                        "cannot be combined with skins ({}.skin is set): skins are made for the particles at build time",
+                        object_path(k, &o.name)
+                    ),
+                ));
+            }
+        }
         Ok(counts)
     }
 
@@ -165,7 +183,12 @@ impl Scene {
                 ));
             }
         }
-        positive(file, "outputs.glyph_size", self.outputs.glyph_size)
+        positive(file, "outputs.glyph_size", self.outputs.glyph_size)?;
+        positive(
+            file,
+            "outputs.triangulation_radius",
+            self.outputs.triangulation_radius,
+        )
     }
 
     /// Checks one object; returns its particle count.
