@@ -179,11 +179,19 @@ pub fn run(
             break;
         }
         let d = scene.world.diagnostics();
-        let scale = *energy_scale.get_or_insert_with(|| {
-            (d.kinetic_translational + d.kinetic_rotational).abs()
-                + d.potential.abs()
-                + 1e-12 * scene.world.particles().len() as Real
-        });
+        let count = scene.world.particles().len();
+        let here = (d.kinetic_translational + d.kinetic_rotational).abs()
+            + d.potential.abs()
+            + 1e-12 * count as Real;
+        // The scale is taken at frame 0, and again (keeping the larger)
+        // whenever the creation rules changed the particle count: new
+        // particles bring energy the first frame did not hold.
+        let scale = match energy_scale {
+            Some((s, c)) if c == count => s,
+            Some((s, _)) => Real::max(s, here),
+            None => here,
+        };
+        energy_scale = Some((scale, count));
         let kinetic = d.kinetic_translational + d.kinetic_rotational;
         if !d.total.is_finite() || kinetic > scene.energy_growth * scale {
             let p = scene.world.particles();
