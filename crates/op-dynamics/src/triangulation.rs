@@ -31,12 +31,17 @@
 //! surface sampled finely with respect to its curvature (the paper's
 //! condition) is close to its particles' tangent planes.
 //!
-//! **Inside** means strictly inside: `|x - c|^2 < R^2 (1 - 1e-9)`. Four
-//! exactly co-circular particles (a perfect square grid) therefore keep both
-//! diagonals; [`Triangulation::is_manifold`] reports the resulting edges with
-//! three or more triangles. Simulated particles are generic and do not hit
-//! that case in practice. Degenerate triangles (collinear, non-finite
-//! circumradius) are never kept.
+//! **Inside** means `|x - c|^2 < R^2 (1 - 1e-9)`. A particle *on* the
+//! sphere (within a relative `1e-9` of `R^2`: co-circular particles, as in a
+//! square grid or between the symmetric rings of a generated torus) is a
+//! tie, broken by rank (particle id) so that exactly one triangulation of
+//! the co-circular set survives, the fan from its smallest id: the tie
+//! counts as inside when its rank is below the triangle's smallest, or when
+//! it lies (in the triangle's plane) across the edge opposite the
+//! triangle's smallest-rank corner. Keeping all ties outside would keep
+//! both diagonals of a co-circular quadrilateral (edges in three
+//! triangles); keeping them all inside would leave a hole. Degenerate
+//! triangles (collinear, non-finite circumradius) are never kept.
 //!
 //! **Orientation**: each triangle is wound so that its geometric normal
 //! `(p_b - p_a) x (p_c - p_a)` points along the sum of its three particle
@@ -99,9 +104,10 @@ impl TriangulationParams {
     }
 }
 
-/// Relative margin of the emptiness test: a particle counts as inside the
-/// sphere when `|x - c|^2 < R^2 (1 - INSIDE_MARGIN)`.
-const INSIDE_MARGIN: Real = 1e-9;
+/// Relative width of the tie band of the emptiness test: a particle is
+/// inside the sphere when `|x - c|^2 < R^2 (1 - TIE)`, on it (a tie, broken
+/// by rank) up to `R^2 (1 + TIE)`.
+const TIE: Real = 1e-9;
 
 /// A triangulation of particles, triangles as particle ids.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -119,7 +125,7 @@ pub fn triangulate(
     params: &TriangulationParams,
 ) -> Result<Triangulation, ParamError> {
     let normals: Vec<Vec3> = (0..particles.len()).map(|s| particles.normal(s)).collect();
-    let slots = triangulate_points(particles.positions(), &normals, params)?;
+    let slots = triangulate_ranked(particles.positions(), &normals, particles.ids(), params)?;
     let ids = particles.ids();
     let mut triangles: Vec<[u32; 3]> = slots
         .into_iter()
@@ -130,7 +136,8 @@ pub fn triangulate(
 }
 
 /// The same rule on bare points with normals: triangles as indices into
-/// `positions`, wound along `normals`, smallest index first, sorted.
+/// `positions`, wound along `normals`, smallest index first, sorted. Ties
+/// (co-circular points) are broken by index.
 ///
 /// # Errors
 /// When the radius is not finite and positive, or `normals` does not have
@@ -138,6 +145,18 @@ pub fn triangulate(
 pub fn triangulate_points(
     positions: &[Point3],
     normals: &[Vec3],
+    params: &TriangulationParams,
+) -> Result<Vec<[u32; 3]>, ParamError> {
+    let ranks: Vec<u32> = (0..positions.len() as u32).collect();
+    triangulate_ranked(positions, normals, &ranks, params)
+}
+
+/// [`triangulate_points`] with ties broken by `ranks` (one per position,
+/// distinct).
+fn triangulate_ranked(
+    positions: &[Point3],
+    normals: &[Vec3],
+    ranks: &[u32],
     params: &TriangulationParams,
 ) -> Result<Vec<[u32; 3]>, ParamError> {
     params.validate()?;
@@ -180,6 +199,7 @@ pub fn triangulate_points(
         cos_tilt: params.max_tilt.cos(),
         tree: tree.as_ref(),
         index: &index,
+        ranks,
     };
     let per: Vec<Vec<[u32; 3]>> = (0..n)
         .into_par_iter()
@@ -210,6 +230,7 @@ struct Ctx<'a> {
     cos_tilt: Real,
     tree: Option<&'a ImmutableKdTree<Real, 3>>,
     index: &'a [u32],
+    ranks: &'a [u32],
 }
 
 impl Ctx<'_> {
@@ -255,11 +276,17 @@ impl Ctx<'_> {
         r2.is_finite().then_some((a + off, r2))
     }
 
-    /// No particle other than the triangle's strictly inside the sphere.
+    /// No particle other than the triangle's inside the sphere (ties on
+    /// the sphere broken by rank).
     fn is_empty(&self, t: [u32; 3], c: &Point3, r2: Real) -> bool {
-        let limit = r2 * (1.0 - INSIDE_MARGIN);
-        let inside =
-            |m: u32| !t.contains(&m) && (self.positions[m as usize] - c).norm_squared() < limit;
+        let (lo, hi) = (r2 * (1.0 - TIE), r2 * (1.0 + TIE));
+        let inside = |m: u32| {
+            if t.contains(&m) {
+                return false;
+            }
+            let d2 = (self.positions[m as usize] - c).norm_squared();
+            d2 < lo || (d2 <= hi && self.tie_inside(t, m))
+        };
         // A particle inside is within 2R of every vertex: when 2R fits in
         // the neighbour radius, the first vertex's neighbours are all the
         // candidates.
@@ -282,6 +309,22 @@ impl Ctx<'_> {
                 }
             });
         empty
+    }
+
+    /// Whether `m`, on the sphere of `t`, counts as inside: its rank is
+    /// below all of `t`'s, or it lies (in `t`'s plane) across the edge
+    /// opposite `t`'s smallest-rank corner.
+    fn tie_inside(&self, t: [u32; 3], m: u32) -> bool {
+        let rank = |k: u32| self.ranks[k as usize];
+        let k0 = (0..3).min_by_key(|&k| rank(t[k])).unwrap_or(0);
+        if rank(m) < rank(t[k0]) {
+            return true;
+        }
+        let p = |k: u32| self.positions[k as usize];
+        let (a, b, c) = (p(t[k0]), p(t[(k0 + 1) % 3]), p(t[(k0 + 2) % 3]));
+        let normal = (b - a).cross(&(c - a));
+        let side = |x: Point3| (c - b).cross(&(x - b)).dot(&normal);
+        side(a) * side(p(m)) < 0.0
     }
 
     /// `t` wound so its geometric normal points along the sum of the

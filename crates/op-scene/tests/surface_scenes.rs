@@ -142,3 +142,35 @@ fn stretching_in_a_scene_fills_the_gaps_deterministically() {
         assert!(a == b, "frame {k} differs between 1 and 2 threads");
     }
 }
+
+/// The generators' closed shells, triangulated as written in frame 0:
+/// a sphere has Euler characteristic 2, a torus 0 (seed 000 §5 on the
+/// shapes the scenes use).
+#[test]
+fn generated_shells_triangulate_with_their_euler_characteristic() {
+    for (generator, chi) in [
+        ("SphereShell(radius: 3, spacing: 1)", 2),
+        ("TorusShell(major: 6, minor: 2.5, spacing: 1)", 0),
+        ("TorusShell(major: 4, minor: 1.5, spacing: 0.5)", 0),
+    ] {
+        let text = format!(
+            r#"(
+                name: "shell",
+                materials: {{"m": (spacing: Cohesion((cutoff: 1.5)))}},
+                objects: [(name: "shell", material: "m", generator: {generator})],
+                outputs: (particles: None, triangulation: true, metrics: false),
+            )"#
+        );
+        let scene = parse_scene(&text, Format::Ron, "<shell>").unwrap();
+        let out = temp_dir("shell");
+        run_scene(&scene, &out, 1);
+        let data = frame(&out, 0);
+        let surface = object(&data, "shell_surface");
+        let t = topology(surface);
+        assert_eq!(t.vertices().len(), surface.vertices().len(), "{generator}");
+        assert_eq!(t.boundary_loops(), 0, "{generator}");
+        assert!(t.is_manifold(), "{generator}");
+        assert!(t.is_consistently_oriented(), "{generator}");
+        assert_eq!(t.euler_characteristic(), chi, "{generator}");
+    }
+}

@@ -292,3 +292,31 @@ fn particles_give_ids_and_bad_input_is_an_error() {
     );
     assert_eq!(t.unwrap(), Vec::<[u32; 3]>::new());
 }
+
+/// A square grid: every cell's four corners are co-circular. The tie
+/// rule keeps exactly one diagonal per cell (two triangles), so the
+/// result is a manifold disc, the same for any input order.
+#[test]
+fn cocircular_square_grid_keeps_one_diagonal_per_cell() {
+    let n = 6;
+    let p: Vec<Point3> = (0..n * n)
+        .map(|k| Point3::new((k % n) as Real, (k / n) as Real, 0.0))
+        .collect();
+    let normals = vec![Vec3::z(); p.len()];
+    let t = tri(&p, &normals, 1.5);
+    assert_eq!(t.len(), 2 * (n - 1) * (n - 1));
+    assert!(t.is_manifold() && t.is_consistently_oriented());
+    assert_eq!(t.euler_characteristic(), 1);
+    assert_eq!(t.boundary_loops(), 1);
+    // Particles keep their ids whatever their slots: the same triangles.
+    let mut store = Particles::new();
+    for &q in &p {
+        store.push(ParticleDesc::at(q)).unwrap();
+    }
+    let direct = triangulate(&store, &TriangulationParams::with_radius(1.5)).unwrap();
+    let order: Vec<u32> = (0..(n * n) as u32).rev().collect();
+    store.permute(&order);
+    let permuted = triangulate(&store, &TriangulationParams::with_radius(1.5)).unwrap();
+    assert_eq!(direct, permuted);
+    assert_eq!(direct, t);
+}
