@@ -446,6 +446,7 @@ impl SpiralRecipe {
                 particles: ParticleOutput::Discs,
                 ..Outputs::default()
             },
+            creation: None,
             origin: String::new(),
         }
     }

@@ -161,6 +161,15 @@ impl ExternalAccumulator {
         self.active = true;
     }
 
+    /// Grows the tables to hold ids `0..n` (new ids start with nothing
+    /// pending; existing entries are kept).
+    pub fn grow(&mut self, n: usize) {
+        if n > self.forces.len() {
+            self.forces.resize(n, Vec3::zeros());
+            self.torques.resize(n, Vec3::zeros());
+        }
+    }
+
     /// True when something was added since the last clear.
     pub fn is_active(&self) -> bool {
         self.active

@@ -72,6 +72,15 @@ pub(crate) struct ForceScratch {
     pub neighbour_seconds: f64,
 }
 
+impl ForceScratch {
+    /// Forgets the pair sources cached for the current neighbour list (the
+    /// world replaced the list: its rebuild count starts again).
+    pub(crate) fn forget_list(&mut self) {
+        self.sources.clear();
+        self.sources_for = u64::MAX;
+    }
+}
+
 /// Everything the internal force evaluation reads besides the state.
 pub(crate) struct ForceContext<'a> {
     pub kernel: Kernel,
@@ -242,7 +251,12 @@ impl ForceContext<'_> {
             if k != 0.0 {
                 let fw = k * Vec3::from(w.force);
                 for &id in &w.particles {
-                    forces[a.slot_of[id as usize] as usize] += fw;
+                    // Removed particles (World::remove_particles) are skipped.
+                    if let Some(&slot) = a.slot_of.get(id as usize) {
+                        if slot != crate::particles::Particles::REMOVED {
+                            forces[slot as usize] += fw;
+                        }
+                    }
                 }
             }
         }

@@ -11,8 +11,16 @@
 //! [`World::step`] advances it; [`World::diagnostics`] reports energies,
 //! momenta and the oscillation measure. Other crates act on particles through
 //! [`World::add_external_force`].
+//!
+//! Surface modeling (seed 000 §5, §7): [`World::insert_particles`] and
+//! [`World::remove_particles`] edit the particle set between steps (ids stay
+//! stable); [`creation`] holds the stretching and growing rules that decide
+//! which particles to add; [`triangulation`] turns particles into triangles
+//! for rendering, with topology checks (Euler characteristic, boundary
+//! loops, manifold).
 #![warn(missing_docs)]
 
+pub mod creation;
 pub mod diagnostics;
 pub mod error;
 pub mod external;
@@ -24,6 +32,7 @@ pub mod math;
 pub mod neighbours;
 pub mod particles;
 pub mod tools;
+pub mod triangulation;
 pub mod world;
 
 pub use diagnostics::Diagnostics;

@@ -6,9 +6,11 @@
 //! inertia, a body-frame normal axis `a` (world normal `n = R(q) a`), flags,
 //! object id, type (standard(k) / hinge), material index and rest curvature.
 //!
-//! Particles keep a stable *id* (their insertion index) while their storage
-//! *slot* may change: the world re-sorts particles in spatial order when it
-//! rebuilds neighbour lists, because memory order dominates speed.
+//! Particles keep a stable *id* (their insertion index: ids are never
+//! reused, so removing particles leaves gaps) while their storage *slot* may
+//! change: the world re-sorts particles in spatial order when it rebuilds
+//! neighbour lists, because memory order dominates speed, and removal
+//! compacts the survivors (keeping their relative slot order).
 
 use serde::{Deserialize, Serialize};
 
@@ -149,7 +151,8 @@ impl ParticleDesc {
 pub struct Attributes<'a> {
     /// Stable ids, by slot.
     pub ids: &'a [u32],
-    /// Slot of each id (the inverse permutation of `ids`).
+    /// Slot of each id (the inverse permutation of `ids`), indexed by id;
+    /// [`Particles::REMOVED`] for ids whose particle was removed.
     pub slot_of: &'a [u32],
     /// Body-frame normal axes.
     pub normal_axes: &'a [Vec3],
@@ -241,18 +244,34 @@ impl Particles {
         self.positions.is_empty()
     }
 
-    /// Adds a particle after validating it; returns its stable id.
+    /// The `slot_of` entry of a removed id.
+    pub const REMOVED: u32 = u32::MAX;
+
+    /// One past the largest id ever given: the length of the id-indexed
+    /// tables ([`Attributes::slot_of`], the world's external accumulator).
+    /// Equal to [`len`](Self::len) until a particle is removed.
+    #[inline]
+    pub fn id_bound(&self) -> usize {
+        self.statics.slot_of.len()
+    }
+
+    /// Adds a particle after validating it; returns its stable id (the
+    /// next unused id: ids of removed particles are not reused).
     pub fn push(&mut self, d: ParticleDesc) -> Result<u32, ParamError> {
         d.validate()?;
-        let id = u32::try_from(self.len()).map_err(|_| ParamError::Invalid {
-            field: "particles".into(),
-            message: "at most 2^32 - 1 particles".into(),
-        })?;
+        let id = u32::try_from(self.id_bound())
+            .ok()
+            .filter(|&id| id < Self::REMOVED)
+            .ok_or_else(|| ParamError::Invalid {
+                field: "particles".into(),
+                message: "at most 2^32 - 2 particle ids".into(),
+            })?;
+        let slot = self.len() as u32;
         let fixed_pos = d.flags.contains(Flags::FIXED_POSITION);
         let fixed_rot = d.flags.contains(Flags::FIXED_ORIENTATION);
         let a = d.normal_axis.normalize();
         self.statics.ids.push(id);
-        self.statics.slot_of.push(id);
+        self.statics.slot_of.push(slot);
         self.positions.push(d.position);
         self.velocities
             .push(if fixed_pos { Vec3::zeros() } else { d.velocity });
@@ -314,10 +333,15 @@ impl Particles {
         curvatures: Real,
     }
 
-    /// The slot currently holding particle `id`, if any.
+    /// The slot currently holding particle `id`, if any (`None` for ids
+    /// never given or removed).
     #[inline]
     pub fn slot_of(&self, id: u32) -> Option<usize> {
-        self.statics.slot_of.get(id as usize).map(|&s| s as usize)
+        self.statics
+            .slot_of
+            .get(id as usize)
+            .filter(|&&s| s != Self::REMOVED)
+            .map(|&s| s as usize)
     }
 
     /// World normal `n = R(q) a` of the particle in `slot`.
@@ -387,6 +411,36 @@ impl Particles {
     /// in slot `order[s]`. `order` must be a permutation of `0..len`.
     pub fn permute(&mut self, order: &[u32]) {
         assert_eq!(order.len(), self.len(), "permutation length");
+        self.select(order);
+    }
+
+    /// Removes the particles with the given ids; the survivors keep their
+    /// ids and their relative slot order. Unknown or already removed ids,
+    /// and repeated ids, are ignored. Returns the slots (before removal) of
+    /// the survivors, in their new order.
+    pub fn remove(&mut self, ids: &[u32]) -> Vec<u32> {
+        let mut gone = vec![false; self.len()];
+        for &id in ids {
+            if let Some(s) = self.slot_of(id) {
+                gone[s] = true;
+            }
+        }
+        let keep: Vec<u32> = (0..self.len() as u32)
+            .filter(|&s| !gone[s as usize])
+            .collect();
+        for (s, g) in gone.iter().enumerate() {
+            if *g {
+                let id = self.statics.ids[s] as usize;
+                self.statics.slot_of[id] = Self::REMOVED;
+            }
+        }
+        self.select(&keep);
+        keep
+    }
+
+    /// Keeps only the slots in `order`, new slot `s` holding old slot
+    /// `order[s]` (distinct, in range), and updates `slot_of` for them.
+    fn select(&mut self, order: &[u32]) {
         fn apply<T: Clone>(v: &mut Vec<T>, order: &[u32]) {
             let new: Vec<T> = order.iter().map(|&o| v[o as usize].clone()).collect();
             *v = new;
@@ -477,6 +531,30 @@ mod tests {
             assert_eq!(p.positions()[s].x, id as Real);
             assert_eq!(p.curvatures()[s], id as Real);
         }
+    }
+
+    #[test]
+    fn remove_keeps_survivor_ids_and_never_reuses_ids() {
+        let mut p = Particles::new();
+        for k in 0..5 {
+            let mut d = ParticleDesc::at(Point3::new(k as Real, 0.0, 0.0));
+            d.curvature = k as Real;
+            p.push(d).unwrap();
+        }
+        p.permute(&[4, 2, 0, 1, 3]);
+        let keep = p.remove(&[2, 2, 9, 0]);
+        assert_eq!(keep, vec![0, 3, 4]);
+        assert_eq!(p.ids(), &[4, 1, 3]);
+        assert_eq!(p.slot_of(2), None);
+        assert_eq!(p.slot_of(0), None);
+        for id in [1u32, 3, 4] {
+            let s = p.slot_of(id).unwrap();
+            assert_eq!(p.positions()[s].x, id as Real);
+            assert_eq!(p.curvatures()[s], id as Real);
+        }
+        assert_eq!(p.push(ParticleDesc::at(Point3::origin())).unwrap(), 5);
+        assert_eq!((p.len(), p.id_bound()), (4, 6));
+        assert_eq!(p.slot_of(5), Some(3));
     }
 
     #[test]

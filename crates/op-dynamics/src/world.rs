@@ -15,6 +15,8 @@ use crate::neighbours::{spatial_order, NeighbourBackend, NeighbourList};
 use crate::particles::{ParticleType, Particles};
 use crate::tools::{Role, Tool, ToolParams, Tools};
 
+mod editing;
+
 /// Neighbour-list settings (seed 000 §4.2, DESIGN §3 "Neighbours").
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -170,7 +172,7 @@ pub struct StepReport {
 /// of seed 002 §5 can act and its cut-off counts for the neighbour radius.
 fn may_repel(p: &Particles) -> bool {
     let objects = p.objects();
-    if objects.iter().any(|&o| o != objects[0]) {
+    if objects.iter().any(|&o| Some(&o) != objects.first()) {
         return true;
     }
     let kinds = p.kinds();
@@ -178,6 +180,75 @@ fn may_repel(p: &Particles) -> bool {
     let mut standard = kinds.iter().filter(|k| **k != ParticleType::Hinge);
     let first = standard.next();
     hinges >= 2 || standard.any(|k| Some(k) != first)
+}
+
+/// What the particle set and the materials enable (fixed when the world is
+/// built, recomputed when particles are inserted or removed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Config {
+    kernel: Kernel,
+    /// Largest cut-off among the enabled terms of the materials in use.
+    cutoff: Real,
+    friction: bool,
+    has_fixed: bool,
+    repulsion: bool,
+}
+
+impl Config {
+    /// The configuration of `particles` with these (prepared) materials;
+    /// every particle's material index must exist.
+    fn of(particles: &Particles, prepared: &[PreparedMaterial]) -> Config {
+        let used: Vec<&PreparedMaterial> = {
+            let mut seen = vec![false; prepared.len()];
+            particles
+                .materials()
+                .iter()
+                .for_each(|&m| seen[m as usize] = true);
+            prepared
+                .iter()
+                .zip(seen)
+                .filter(|(_, s)| *s)
+                .map(|(m, _)| m)
+                .collect()
+        };
+        let repulsion = may_repel(particles);
+        let cutoff = used
+            .iter()
+            .map(|m| {
+                let c = m.spacing_cutoff().max(m.orientation_cutoff());
+                if repulsion {
+                    c.max(m.repulsion_cutoff())
+                } else {
+                    c
+                }
+            })
+            .fold(0.0, Real::max);
+        let friction = used.iter().any(|m| m.friction() > 0.0);
+        let oriented = used.iter().any(|m| m.has_orientation_terms());
+        let kernel = if cutoff <= 0.0 || particles.len() < 2 {
+            Kernel::None
+        } else if oriented || friction {
+            Kernel::Oriented
+        } else {
+            Kernel::Spacing
+        };
+        Config {
+            kernel,
+            cutoff,
+            friction,
+            has_fixed: particles
+                .flags()
+                .iter()
+                .any(|f| f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)),
+            repulsion,
+        }
+    }
+
+    /// The neighbour list this configuration needs (none without a kernel).
+    fn neighbour_list(&self, params: &NeighbourParams) -> Option<NeighbourList> {
+        (self.kernel != Kernel::None)
+            .then(|| NeighbourList::new(params.backend, self.cutoff, self.cutoff * params.skin))
+    }
 }
 
 /// An oriented particle world.
@@ -237,67 +308,26 @@ impl World {
             }
             .into());
         }
-        let used: Vec<&PreparedMaterial> = {
-            let mut seen = vec![false; prepared.len()];
-            particles
-                .materials()
-                .iter()
-                .for_each(|&m| seen[m as usize] = true);
-            prepared
-                .iter()
-                .zip(seen)
-                .filter(|(_, s)| *s)
-                .map(|(m, _)| m)
-                .collect()
-        };
-        let repulsion = may_repel(&particles);
-        let cutoff = used
-            .iter()
-            .map(|m| {
-                let c = m.spacing_cutoff().max(m.orientation_cutoff());
-                if repulsion {
-                    c.max(m.repulsion_cutoff())
-                } else {
-                    c
-                }
-            })
-            .fold(0.0, Real::max);
-        let friction = used.iter().any(|m| m.friction() > 0.0);
-        let oriented = used.iter().any(|m| m.has_orientation_terms());
-        let kernel = if cutoff <= 0.0 || particles.len() < 2 {
-            Kernel::None
-        } else if oriented || friction {
-            Kernel::Oriented
-        } else {
-            Kernel::Spacing
-        };
-        let neighbours = (kernel != Kernel::None).then(|| {
-            NeighbourList::new(
-                params.neighbours.backend,
-                cutoff,
-                cutoff * params.neighbours.skin,
-            )
-        });
+        let config = Config::of(&particles, &prepared);
+        let neighbours = config.neighbour_list(&params.neighbours);
         let n = particles.len();
         Ok(World {
             pipeline: Pipeline {
-                kernel,
+                kernel: config.kernel,
                 materials: prepared,
-                friction,
-                has_fixed: particles.flags().iter().any(|f| {
-                    f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)
-                }),
+                friction: config.friction,
+                has_fixed: config.has_fixed,
                 neighbours,
                 tools: Tools::new(&params.tools, &particles)?,
                 scratch: ForceScratch::default(),
             },
-            repulsion,
+            repulsion: config.repulsion,
             may_rotate: particles
                 .angular_velocities()
                 .iter()
                 .any(|w| *w != Vec3::zeros()),
             integrator: Integrator::new(params.scheme),
-            accumulator: ExternalAccumulator::new(n),
+            accumulator: ExternalAccumulator::new(particles.id_bound()),
             forces: vec![Vec3::zeros(); n],
             torques: vec![Vec3::zeros(); n],
             prev_positions: particles.positions().to_vec(),

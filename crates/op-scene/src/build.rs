@@ -13,6 +13,7 @@ use op_dynamics::{
 };
 
 use crate::built::{BuiltObject, BuiltScene};
+use crate::creation::CreationState;
 use crate::error::SceneError;
 use crate::schema::validate::object_path;
 use crate::schema::{ObjectSpec, Override, Scene};
@@ -124,6 +125,7 @@ impl Scene {
                 ids,
                 rest,
                 rest_spacing,
+                created: Vec::new(),
             });
         }
 
@@ -218,6 +220,10 @@ impl Scene {
                     .map_err(|e| SceneError::param(file, &format!("tools[{k}]"), e))
             })
             .collect::<Result<Vec<_>, SceneError>>()?;
+        let creation = self.creation.as_ref().map(|c| CreationState {
+            params: c.params(objects.first().map_or(1.0, |o| o.rest_spacing)),
+            next_step: 0,
+        });
         Ok(BuiltScene {
             skins,
             skin_tools,
@@ -234,6 +240,7 @@ impl Scene {
             outputs: self.outputs.clone(),
             energy_growth: w.divergence.energy_growth,
             energy_gain: w.divergence.energy_gain,
+            creation,
         })
     }
 }

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use op_dynamics::{Divergence, Point3, Real, Tool, World};
 
+use crate::creation::CreationState;
 use crate::outputs::{Outputs, ParticleOutput};
 use crate::skins::{contact_step, BuiltSkin, ContactStats, SkinTool};
 
@@ -21,6 +22,18 @@ pub struct BuiltObject {
     /// Mean nearest-neighbour distance of `rest`: the `r0` that divides
     /// the rest shape error (DESIGN §6).
     pub rest_spacing: Real,
+    /// Ids of the particles the creation rules added to the object, in
+    /// creation order (see [`crate::creation`]); they have no rest
+    /// position and do not count in the rest shape error.
+    pub created: Vec<u32>,
+}
+
+impl BuiltObject {
+    /// Every particle id of the object: the original ones, then the
+    /// created ones.
+    pub fn all_ids(&self) -> impl Iterator<Item = u32> + '_ {
+        self.ids.iter().chain(&self.created).copied()
+    }
 }
 
 /// A validated scene built into a world containing only what it enables.
@@ -68,6 +81,9 @@ pub struct BuiltScene {
     pub skin_tools: Vec<SkinTool>,
     /// Contact figures accumulated by [`BuiltScene::advance_to`].
     pub contact: ContactStats,
+    /// The creation rules, when the scene has some (see
+    /// [`crate::creation`]).
+    pub creation: Option<CreationState>,
 }
 
 impl BuiltScene {
@@ -118,6 +134,12 @@ impl BuiltScene {
         if self.has_contact() {
             stages.push("contact".into());
         }
+        if self.creation.is_some() {
+            stages.push("creation".into());
+        }
+        if self.outputs.triangulation {
+            stages.push("triangulation".into());
+        }
         stages
     }
 
@@ -161,6 +183,8 @@ impl BuiltScene {
                 self.world.hold_external_forces_until(target);
                 self.world.advance_to(target).map_err(|d| d.to_string())?;
             }
+        } else if self.creation.is_some() {
+            self.advance_creating(t_end)?;
         } else {
             self.world.advance_to(t_end).map_err(|d| d.to_string())?;
         }
@@ -172,6 +196,47 @@ impl BuiltScene {
         Ok(())
     }
 
+    /// [`BuiltScene::advance_to`] with creation rules: advances at most to
+    /// the step where the rules act next, applies them there, and repeats
+    /// until `t_end`.
+    fn advance_creating(&mut self, t_end: Real) -> Result<(), String> {
+        let dt = self.world.params().dt;
+        loop {
+            let remaining = t_end - self.world.time();
+            if remaining <= 1e-12 * dt {
+                return Ok(());
+            }
+            let Some(state) = self.creation.as_mut() else {
+                return self.world.advance_to(t_end).map_err(|d| d.to_string());
+            };
+            if self.world.steps() >= state.next_step {
+                state.next_step = self.world.steps() + state.params.interval;
+                let descs = state
+                    .params
+                    .candidates(self.world.particles())
+                    .map_err(|e| format!("creation: {e}"))?;
+                let ids = self
+                    .world
+                    .insert_particles(&descs)
+                    .map_err(|e| format!("creation: {e}"))?;
+                for (d, id) in descs.iter().zip(ids) {
+                    if let Some(o) = self.objects.get_mut(d.object as usize) {
+                        o.created.push(id);
+                    }
+                }
+            }
+            // Step by step up to the next application (or t_end).
+            let steps_left = state_steps_left(self.creation.as_ref(), self.world.steps());
+            let target = (self.world.time() + steps_left as Real * dt).min(t_end);
+            let target = if t_end - target <= 1e-12 * dt {
+                t_end
+            } else {
+                target
+            };
+            self.world.advance_to(target).map_err(|d| d.to_string())?;
+        }
+    }
+
     /// Scene time: the world's time minus the settle phase once it ran
     /// (frame 0 is at scene time 0; force windows are in scene time).
     pub fn scene_time(&self) -> Real {
@@ -181,4 +246,9 @@ impl BuiltScene {
             self.world.time()
         }
     }
+}
+
+/// Steps until the creation rules act next (at least 1).
+fn state_steps_left(state: Option<&CreationState>, steps: u64) -> u64 {
+    state.map_or(1, |s| s.next_step.saturating_sub(steps).max(1))
 }

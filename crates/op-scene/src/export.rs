@@ -1,7 +1,9 @@
 //! OBJ frames (DESIGN §6): one named OBJ object per scene object, particle
 //! geometry as asked by [`Outputs`], vertex normals from the particle
-//! frames, skins as triangle meshes with vertex normals, each file written atomically (temp file + rename) so a frame on
-//! disk is always complete.
+//! frames, skins as triangle meshes with vertex normals, the particle
+//! triangulations (seed 000 §5) as `<object>_surface` meshes when
+//! [`Outputs::triangulation`] is set, each file written atomically (temp
+//! file + rename) so a frame on disk is always complete.
 //!
 //! obj-exporter prints fixed 6 decimals: coordinates below 1e-6 scene units
 //! are lost, so keep scenes in sensible units (r0 ~ 1).
@@ -11,6 +13,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use obj_exporter::{Geometry, ObjSet, Object, Primitive, Shape, Vertex};
+use op_dynamics::triangulation::{triangulate_points, TriangulationParams};
 use op_dynamics::{Real, Tool, Vec3, World};
 use op_implicit::Mesh;
 
@@ -78,7 +81,7 @@ pub fn object_geometry(world: &World, object: &BuiltObject, outputs: &Outputs) -
     let mut vertices = Vec::new();
     let mut normals = Vec::new();
     let mut shapes = Vec::new();
-    for &id in &object.ids {
+    for id in object.all_ids() {
         let Some(s) = p.slot_of(id) else { continue };
         let x = p.positions()[s].coords;
         let q = p.orientations()[s];
@@ -196,10 +199,42 @@ pub fn tool_geometry(k: usize, tool: &Tool, t: Real) -> Object {
     }
 }
 
+/// The OBJ object `<object>_surface`: the object's live particles (original
+/// then created) as vertices with their normals as `vn` of the same rank,
+/// and the triangles of [`op_dynamics::triangulation`] over them (mutual
+/// neighbours within `triangulation_radius` rest spacings, wound along the
+/// particle normals).
+pub fn surface_geometry(world: &World, object: &BuiltObject, outputs: &Outputs) -> Object {
+    let p = world.particles();
+    let slots: Vec<usize> = object.all_ids().filter_map(|id| p.slot_of(id)).collect();
+    let positions: Vec<_> = slots.iter().map(|&s| p.positions()[s]).collect();
+    let normals: Vec<Vec3> = slots.iter().map(|&s| p.normal(s)).collect();
+    let params =
+        TriangulationParams::with_radius(outputs.triangulation_radius * object.rest_spacing);
+    // The radius is validated with the scene; a non-finite spacing leaves
+    // the surface without triangles rather than failing the frame.
+    let triangles = triangulate_points(&positions, &normals, &params).unwrap_or_default();
+    let c = |k: u32| (k as usize, None, Some(k as usize));
+    Object {
+        name: format!("{}_surface", object.name),
+        vertices: positions.iter().map(|q| vertex(q.coords)).collect(),
+        tex_vertices: Vec::new(),
+        normals: normals.iter().map(|&n| vertex(n)).collect(),
+        geometry: vec![Geometry {
+            material_name: None,
+            shapes: triangles
+                .iter()
+                .map(|t| shape(Primitive::Triangle(c(t[0]), c(t[1]), c(t[2]))))
+                .collect(),
+        }],
+    }
+}
+
 /// Writes one OBJ frame holding every object of the scene, then every
 /// skin (polygonized at its current pose, deformed where it touches another
-/// skin) as an object `<object>_skin`, then every tool at its current pose
-/// as `tool_<name>`.
+/// skin) as an object `<object>_skin`, then, when asked, every object's
+/// triangulation as `<object>_surface`, then every tool at its current
+/// pose as `tool_<name>`.
 pub fn write_frame(
     path: &Path,
     world: &World,
@@ -208,6 +243,7 @@ pub fn write_frame(
     tools: &[Tool],
     outputs: &Outputs,
 ) -> std::io::Result<()> {
+    let scene_objects = objects;
     let mut objects: Vec<Object> = objects
         .iter()
         .map(|o| object_geometry(world, o, outputs))
@@ -215,6 +251,13 @@ pub fn write_frame(
     for s in skins {
         let mesh = s.mesh_in(skins).map_err(std::io::Error::other)?;
         objects.push(mesh_geometry(&s.name, &mesh));
+    }
+    if outputs.triangulation {
+        objects.extend(
+            scene_objects
+                .iter()
+                .map(|o| surface_geometry(world, o, outputs)),
+        );
     }
     for (k, tool) in tools.iter().enumerate() {
         objects.push(tool_geometry(k, tool, world.time()));

@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 
 pub mod built;
+pub mod creation;
 pub mod export;
 pub mod outputs;
 pub mod render;
@@ -14,6 +15,7 @@ pub mod run;
 pub mod skins;
 
 pub use built::{BuiltObject, BuiltScene};
+pub use creation::CreationSettings;
 pub use outputs::{Outputs, ParticleOutput};
 pub use run::{run, RunError, RunOptions, Summary};
 pub use skins::{BuiltSkin, ContactStats, SkinPrimitive, SkinSpec, SkinTool};

@@ -30,6 +30,14 @@ pub struct Outputs {
     /// Write `metrics.csv` (energies, oscillation, max speed per frame).
     /// Default: true.
     pub metrics: bool,
+    /// Write each object's triangulation (seed 000 §5,
+    /// [`op_dynamics::triangulation`]) in the OBJ frames as an extra object
+    /// `<object>_surface`: its particles as vertices with their normals,
+    /// `f` elements wound along the normals. Default: false.
+    pub triangulation: bool,
+    /// Mutual-neighbour distance of the triangulation as a fraction of the
+    /// object's rest spacing, > 0. Default: 1.7.
+    pub triangulation_radius: f64,
 }
 
 impl Default for Outputs {
@@ -38,6 +46,8 @@ impl Default for Outputs {
             particles: ParticleOutput::Points,
             glyph_size: 0.4,
             metrics: true,
+            triangulation: false,
+            triangulation_radius: 1.7,
         }
     }
 }

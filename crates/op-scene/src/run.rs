@@ -33,11 +33,13 @@ pub struct RunOptions {
 pub struct ObjectSummary {
     /// Object name.
     pub name: String,
-    /// Number of particles.
+    /// Number of particles at the end of the run (created ones included).
     pub particles: usize,
     /// Rest shape error at the last frame: RMS distance to the rest shape
     /// after the best rigid alignment (Kabsch), divided by the object's
-    /// mean rest spacing.
+    /// mean rest spacing. Measured over the object's original particles
+    /// (particles added by the creation rules have no rest position; see
+    /// [`crate::creation`]).
     pub rest_shape_error_final: Real,
     /// Largest rest shape error over the frames.
     pub rest_shape_error_max: Real,
@@ -129,7 +131,8 @@ pub fn run(
 ) -> Result<Summary, RunError> {
     let clock = Instant::now();
     let frames_dir = opts.out_dir.join("frames");
-    let write_frames = scene.outputs.particles != ParticleOutput::None;
+    let write_frames =
+        scene.outputs.particles != ParticleOutput::None || scene.outputs.triangulation;
     if write_frames {
         fs::create_dir_all(&frames_dir).map_err(io(&frames_dir))?;
     } else {
@@ -182,11 +185,19 @@ pub fn run(
             break;
         }
         let d = scene.world.diagnostics();
-        let scale = *energy_scale.get_or_insert_with(|| {
-            (d.kinetic_translational + d.kinetic_rotational).abs()
-                + d.potential.abs()
-                + 1e-12 * scene.world.particles().len() as Real
-        });
+        let count = scene.world.particles().len();
+        let here = (d.kinetic_translational + d.kinetic_rotational).abs()
+            + d.potential.abs()
+            + 1e-12 * count as Real;
+        // The scale is taken at frame 0, and again (keeping the larger)
+        // whenever the creation rules changed the particle count: new
+        // particles bring energy the first frame did not hold.
+        let scale = match energy_scale {
+            Some((s, c)) if c == count => s,
+            Some((s, _)) => Real::max(s, here),
+            None => here,
+        };
+        energy_scale = Some((scale, count));
         let kinetic = d.kinetic_translational + d.kinetic_rotational;
         if !d.total.is_finite() || kinetic > scene.energy_growth * scale {
             let p = scene.world.particles();
@@ -274,7 +285,10 @@ pub fn run(
             .enumerate()
             .map(|(o, obj)| ObjectSummary {
                 name: obj.name.clone(),
-                particles: obj.ids.len(),
+                particles: obj
+                    .all_ids()
+                    .filter(|&id| scene.world.particles().slot_of(id).is_some())
+                    .count(),
                 rest_shape_error_final: last_err[o],
                 rest_shape_error_max: max_err[o],
             })

@@ -346,6 +346,7 @@ mod tests {
                     ids: vec![k],
                     rest: vec![Point3::origin()],
                     rest_spacing: 1.0,
+                    created: Vec::new(),
                 };
                 BuiltSkin::new(&world, k as usize, &object, &spec, [0.0, 0.0, 1.0]).unwrap()
             })

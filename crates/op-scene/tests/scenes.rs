@@ -872,6 +872,51 @@ const BAD_SCENES: &[(&str, Expect, &[&str])] = &[
         Expect::Invalid,
         &["world.settle = -2: must be finite and >= 0"],
     ),
+    (
+        "creation_d_max.ron",
+        Expect::Invalid,
+        &["creation.stretching.d_max = 1.5", ">= d_min"],
+    ),
+    (
+        "creation_no_rule.ron",
+        Expect::Invalid,
+        &["creation", "enables no rule"],
+    ),
+    (
+        "creation_interval.ron",
+        Expect::Invalid,
+        &["creation.interval", ">= 1"],
+    ),
+    (
+        "creation_gap.ron",
+        Expect::Invalid,
+        &["creation.growing.min_gap = 7", "(0, 2π]"],
+    ),
+    (
+        "creation_spacing.ron",
+        Expect::Invalid,
+        &["creation.spacing = -1", "> 0"],
+    ),
+    (
+        "creation_unknown_field.ron",
+        Expect::Parse(5, 44),
+        &["d_mid", "d_min"],
+    ),
+    (
+        "creation_with_skin.ron",
+        Expect::Invalid,
+        &["creation", "skins", "objects[0] \"a\".skin"],
+    ),
+    (
+        "triangulation_radius.ron",
+        Expect::Invalid,
+        &["outputs.triangulation_radius = 0", "> 0"],
+    ),
+    (
+        "triangulation_not_bool.ron",
+        Expect::Parse(5, 30),
+        &["Expected boolean"],
+    ),
 ];
 
 fn bad_dir() -> PathBuf {

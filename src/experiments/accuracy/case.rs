@@ -251,6 +251,7 @@ pub fn triangle_scene(p: Real) -> Scene {
         }],
         forces: Vec::new(),
         tools: Vec::new(),
+        creation: None,
         outputs: Default::default(),
         origin: "<triangle>".into(),
     }

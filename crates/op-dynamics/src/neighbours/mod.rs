@@ -194,6 +194,13 @@ impl NeighbourList {
         !self.built || positions.len() != self.reference.len() || self.moved_too_far(positions)
     }
 
+    /// Marks the list stale: the next [`update`](Self::update) rebuilds it
+    /// (the world calls this when particles are inserted or removed, since
+    /// slots then no longer match the reference positions).
+    pub fn invalidate(&mut self) {
+        self.built = false;
+    }
+
     /// Rebuilds the list unconditionally, taking `positions` as the new
     /// reference positions.
     pub fn rebuild(&mut self, positions: &[Point3]) {

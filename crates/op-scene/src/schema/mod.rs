@@ -62,6 +62,7 @@ use op_dynamics::world::NeighbourParams;
 use op_dynamics::{Material, ParticleType, Real, Scheme};
 use serde::{Deserialize, Serialize};
 
+use crate::creation::CreationSettings;
 pub use crate::generators::{Generator, ListParticle};
 use crate::outputs::Outputs;
 use crate::skins::SkinSpec;
@@ -97,6 +98,10 @@ pub struct Scene {
     /// What the runner writes. Default: [`Outputs::default`].
     #[serde(default)]
     pub outputs: Outputs,
+    /// Particle creation rules (seed 000 §7; see [`crate::creation`]).
+    /// Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub creation: Option<CreationSettings>,
     /// Where the scene came from (file path or a label such as
     /// `<demo>`), used in error messages. Not part of the file: set by
     /// [`crate::load_scene`] / [`crate::parse_scene`]. Default: empty

@@ -125,6 +125,24 @@ impl Scene {
         for (k, t) in self.tools.iter().enumerate() {
             self.validate_tool(k, t)?;
         }
+        if let Some(c) = &self.creation {
+            c.validate(file)?;
+            if let Some((k, o)) = self
+                .objects
+                .iter()
+                .enumerate()
+                .find(|(_, o)| o.skin.is_some())
+            {
+                return Err(SceneError::invalid(
+                    file,
+                    "creation",
+                    format!(
+                        "cannot be combined with skins ({}.skin is set): skins are made for the particles at build time",
+                        object_path(k, &o.name)
+                    ),
+                ));
+            }
+        }
         Ok(counts)
     }
 
@@ -197,7 +215,12 @@ impl Scene {
                 ));
             }
         }
-        positive(file, "outputs.glyph_size", self.outputs.glyph_size)
+        positive(file, "outputs.glyph_size", self.outputs.glyph_size)?;
+        positive(
+            file,
+            "outputs.triangulation_radius",
+            self.outputs.triangulation_radius,
+        )
     }
 
     /// Checks one object; returns its particle count.

@@ -1,0 +1,185 @@
+//! The stretching rule (seed 000 §7, first rule; figure 9).
+//!
+//! Two particles of the same object `d` apart with `d_min <= d <= d_max`
+//! (typically 2.0 and 2.5 `r0`) give a candidate at their midpoint `m`,
+//! kept when no particle lies strictly within `d_min / 2` of `m`. The new
+//! particle's position and frame are weighted averages over the particles
+//! of the object within `reach` of `m`, with the compact weight
+//! `w = (1 - |p_k - m|^2 / reach^2)^2`:
+//!
+//! - normal: the weighted mean of their world normals, renormalised;
+//! - position: `m` moved along that normal onto the weighted mean
+//!   position, `m + n (n . (p_mean - m))`. Only the normal component is
+//!   averaged, so the candidate stays in the empty ball around `m` while
+//!   following the surface across a curved gap (the chord's midpoint lies
+//!   inside a convex surface);
+//! - frame: built from the averaged normal and the weighted mean of their
+//!   world tangents ("local x"), projected on the tangent plane;
+//! - velocity and angular velocity: weighted means.
+//!
+//! Static attributes (mass, material, type, curvature, ...) are copied from
+//! the pair's particle with the smaller id; fixed flags are not copied.
+//! Candidates are accepted in the order of their pair ids `(min, max)`,
+//! each dropped when within `d_min / 2` of one accepted before it.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use super::{child_of, world_tangent, Accepted};
+use crate::error::{self, ParamError};
+use crate::math::{Point3, Real, Vec3};
+use crate::neighbours::{search, NeighbourBackend, PairList};
+use crate::particles::{ParticleDesc, Particles};
+
+/// Parameters of the stretching rule, lengths as fractions of `r0`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StretchingParams {
+    /// Smallest pair distance that opens a gap, > 0. Default: 2.0.
+    pub d_min: Real,
+    /// Largest pair distance considered, >= `d_min`. Default: 2.5.
+    pub d_max: Real,
+    /// Radius around the midpoint of the particles averaged for the new
+    /// particle's position and frame, > `d_max / 2` (so the pair itself
+    /// always counts). Default: 1.5.
+    pub reach: Real,
+}
+
+impl Default for StretchingParams {
+    fn default() -> Self {
+        StretchingParams {
+            d_min: 2.0,
+            d_max: 2.5,
+            reach: 1.5,
+        }
+    }
+}
+
+impl StretchingParams {
+    /// Checks `0 < d_min <= d_max` and `reach > d_max / 2`, all finite.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        error::positive("d_min", self.d_min)?;
+        error::positive("d_max", self.d_max)?;
+        error::check(
+            "d_max",
+            self.d_max,
+            self.d_max >= self.d_min,
+            "must be >= d_min",
+        )?;
+        error::positive("reach", self.reach)?;
+        error::check(
+            "reach",
+            self.reach,
+            self.reach > 0.5 * self.d_max,
+            "must be > d_max / 2 (the pair itself must be averaged)",
+        )
+    }
+}
+
+/// Offers the stretching candidates of `p` to `accepted`, in pair-id order.
+pub(crate) fn candidates(
+    p: &Particles,
+    r0: Real,
+    params: &StretchingParams,
+    accepted: &mut Accepted,
+) {
+    let (d_min, d_max, reach) = (params.d_min * r0, params.d_max * r0, params.reach * r0);
+    let pos = p.positions();
+    let radius = d_max.max(reach + 0.5 * d_max);
+    let mut half = PairList::new();
+    search(NeighbourBackend::CellList, pos, radius, &mut half);
+    let full = full_rows(&half, p.len());
+    let ids = p.ids();
+    let mut found: Vec<((u32, u32), ParticleDesc)> = (0..p.len())
+        .into_par_iter()
+        .flat_map_iter(|i| {
+            let mut out = Vec::new();
+            for &j in half.row(i) {
+                let j = j as usize;
+                let d2 = (pos[j] - pos[i]).norm_squared();
+                if d2 < d_min * d_min || d2 > d_max * d_max || p.objects()[i] != p.objects()[j] {
+                    continue;
+                }
+                let m = Point3::from((pos[i].coords + pos[j].coords) * 0.5);
+                // Anything within d_min/2 of m is within d_max of i.
+                let occupied = full[i].iter().any(|&k| {
+                    let k = k as usize;
+                    k != j && (pos[k] - m).norm_squared() < 0.25 * d_min * d_min
+                });
+                if occupied {
+                    continue;
+                }
+                let (a, b) = if ids[i] < ids[j] { (i, j) } else { (j, i) };
+                if let Some(d) = averaged(p, &full[a], a, m, reach) {
+                    out.push(((ids[a], ids[b]), d));
+                }
+            }
+            out
+        })
+        .collect();
+    found.sort_by_key(|(key, _)| *key);
+    for (_, d) in found {
+        accepted.offer(d, 0.5 * d_min);
+    }
+}
+
+/// The new particle at midpoint `m`, averaged over the particles of
+/// `parent`'s object within `reach` of `m` (candidates: `parent` and its
+/// neighbours `near`), summed in id order so the result does not depend on
+/// slots. None when the averaged normal vanishes.
+fn averaged(
+    p: &Particles,
+    near: &[u32],
+    parent: usize,
+    m: Point3,
+    reach: Real,
+) -> Option<ParticleDesc> {
+    let object = p.objects()[parent];
+    let mut around: Vec<(u32, usize, Real)> = std::iter::once(parent)
+        .chain(near.iter().map(|&k| k as usize))
+        .filter_map(|k| {
+            let r2 = (p.positions()[k] - m).norm_squared();
+            (p.objects()[k] == object && r2 < reach * reach).then_some((p.ids()[k], k, r2))
+        })
+        .collect();
+    around.sort_unstable_by_key(|a| a.0);
+    let (mut wsum, mut pm, mut n, mut t, mut v, mut w) = (
+        0.0,
+        Vec3::zeros(),
+        Vec3::zeros(),
+        Vec3::zeros(),
+        Vec3::zeros(),
+        Vec3::zeros(),
+    );
+    for (_, k, r2) in around {
+        let wk = (1.0 - r2 / (reach * reach)).powi(2);
+        wsum += wk;
+        pm += wk * p.positions()[k].coords;
+        n += wk * p.normal(k);
+        t += wk * world_tangent(p, k);
+        v += wk * p.velocities()[k];
+        w += wk * p.angular_velocities()[k];
+    }
+    let nn = n.norm();
+    if wsum <= 0.0 || nn.is_nan() || nn < 1e-9 * wsum {
+        return None;
+    }
+    let n = n / nn;
+    let pm = pm / wsum;
+    let position = m + n * n.dot(&(pm - m.coords));
+    let mut d = child_of(p, parent, position, &n, &t);
+    d.velocity = v / wsum;
+    d.angular_velocity = w / wsum;
+    Some(d)
+}
+
+/// Full neighbour rows (both directions, ascending) from a half list.
+pub(crate) fn full_rows(half: &PairList, n: usize) -> Vec<Vec<u32>> {
+    let mut rows = vec![Vec::new(); n];
+    for (i, j) in half.iter_pairs() {
+        rows[i].push(j as u32);
+        rows[j].push(i as u32);
+    }
+    rows.iter_mut().for_each(|r| r.sort_unstable());
+    rows
+}

@@ -1,0 +1,483 @@
+//! Triangulation of an oriented particle surface for rendering (seed 000
+//! §5, DESIGN §4).
+//!
+//! **Rule** (seed 000 §5): a triangle of *mutual neighbours* (every pair
+//! of its three particles within [`TriangulationParams::radius`]) is kept
+//! when the smallest sphere through its three particles holds no other
+//! particle: the 2-D Delaunay empty-circle test carried to 3-D.
+//!
+//! **The sphere.** Every sphere through three points has its centre on the
+//! line through the triangle's circumcentre perpendicular to its plane; the
+//! smallest is centred at the circumcentre, with the circumradius. This is
+//! the sphere the paper names ("the smallest sphere circumscribing each
+//! triangle") and it is used for every triangle, acute or obtuse. For an
+//! obtuse triangle the circumcentre lies outside the triangle and the
+//! sphere is larger than the smallest sphere *enclosing* the triangle (the
+//! one on its longest edge): we keep the circumscribing sphere because it
+//! is what makes the test the Delaunay one (a flat patch gets its Delaunay
+//! triangulation, and of two triangles sharing an edge across a convex
+//! quadrilateral exactly one survives), whereas the enclosing sphere would
+//! keep both diagonals of a flat quadrilateral with one obtuse triangle.
+//!
+//! **Tilt** (our addition, using the particles' orientation): a triangle
+//! whose plane is tilted by more than [`TriangulationParams::max_tilt`]
+//! from the mean of its three particle normals is dropped. Three nearly
+//! collinear mutual neighbours (a sliver along a curved surface, e.g. on a
+//! sphere or a torus) have a circumsphere centred far away in an almost
+//! arbitrary plane; when that plane stands across the surface the sphere
+//! can miss every other particle, and the sliver would be kept across
+//! genuine triangles (edges with three triangles). Such a sliver's plane
+//! is far from tangent, whereas the plane of a genuine triangle of a
+//! surface sampled finely with respect to its curvature (the paper's
+//! condition) is close to its particles' tangent planes.
+//!
+//! **Inside** means `|x - c|^2 < R^2 (1 - 1e-9)`. A particle *on* the
+//! sphere (within a relative `1e-9` of `R^2`: co-circular particles, as in a
+//! square grid or between the symmetric rings of a generated torus) is a
+//! tie, broken by rank (particle id) so that exactly one triangulation of
+//! the co-circular set survives, the fan from its smallest id: the tie
+//! counts as inside when its rank is below the triangle's smallest, or when
+//! it lies (in the triangle's plane) across the edge opposite the
+//! triangle's smallest-rank corner. Keeping all ties outside would keep
+//! both diagonals of a co-circular quadrilateral (edges in three
+//! triangles); keeping them all inside would leave a hole. Degenerate
+//! triangles (collinear, non-finite circumradius) are never kept.
+//!
+//! **Orientation**: each triangle is wound so that its geometric normal
+//! `(p_b - p_a) x (p_c - p_a)` points along the sum of its three particle
+//! normals `n = R(q) a` (on a closed surface with outward normals the faces
+//! face outward).
+//!
+//! **Output** is deterministic at any thread count: triangles as particle
+//! *ids*, each rotated so its smallest id comes first, sorted.
+//!
+//! Helpers: [`Triangulation::euler_characteristic`] (`V - E + F`),
+//! [`Triangulation::boundary_loops`], [`Triangulation::is_manifold`],
+//! [`Triangulation::is_consistently_oriented`].
+
+use std::collections::BTreeMap;
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+
+use crate::error::{self, ParamError};
+use crate::math::{Point3, Real, Vec3};
+use crate::neighbours::{search, NeighbourBackend, PairList};
+use crate::particles::Particles;
+
+/// Settings of [`triangulate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TriangulationParams {
+    /// Mutual-neighbour distance (absolute length), finite and > 0: a
+    /// triangle's three edges must be at most this long. Around 1.5-1.8
+    /// times the rest spacing `r0` (long enough for the edges of a
+    /// stretched sheet, short enough to skip second neighbours).
+    pub radius: Real,
+    /// Largest angle (radians) between a triangle's plane normal and the
+    /// mean of its particle normals, in (0, pi/2]. Default: pi/3 (60°).
+    pub max_tilt: Real,
+}
+
+impl TriangulationParams {
+    /// Parameters with `radius = factor * r0` and the default tilt.
+    pub fn from_spacing(r0: Real, factor: Real) -> Self {
+        Self::with_radius(r0 * factor)
+    }
+
+    /// Parameters with this mutual-neighbour radius and the default tilt.
+    pub fn with_radius(radius: Real) -> Self {
+        TriangulationParams {
+            radius,
+            max_tilt: std::f64::consts::FRAC_PI_3,
+        }
+    }
+
+    /// Checks that the radius is finite and > 0 and the tilt in (0, pi/2].
+    pub fn validate(&self) -> Result<(), ParamError> {
+        error::positive("radius", self.radius)?;
+        error::check(
+            "max_tilt",
+            self.max_tilt,
+            self.max_tilt > 0.0 && self.max_tilt <= std::f64::consts::FRAC_PI_2,
+            "must be in (0, pi/2] radians",
+        )
+    }
+}
+
+/// Relative width of the tie band of the emptiness test: a particle is
+/// inside the sphere when `|x - c|^2 < R^2 (1 - TIE)`, on it (a tie, broken
+/// by rank) up to `R^2 (1 + TIE)`.
+const TIE: Real = 1e-9;
+
+/// A triangulation of particles, triangles as particle ids.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Triangulation {
+    /// Triangles `[a, b, c]` (particle ids), wound along the particle
+    /// normals, smallest id first, sorted.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// Triangulates the particles of `particles` (seed 000 §5; see the module
+/// documentation for the rule). Particles with a non-finite position take no
+/// part.
+pub fn triangulate(
+    particles: &Particles,
+    params: &TriangulationParams,
+) -> Result<Triangulation, ParamError> {
+    let normals: Vec<Vec3> = (0..particles.len()).map(|s| particles.normal(s)).collect();
+    let slots = triangulate_ranked(particles.positions(), &normals, particles.ids(), params)?;
+    let ids = particles.ids();
+    let mut triangles: Vec<[u32; 3]> = slots
+        .into_iter()
+        .map(|t| canonical([ids[t[0] as usize], ids[t[1] as usize], ids[t[2] as usize]]))
+        .collect();
+    triangles.sort_unstable();
+    Ok(Triangulation { triangles })
+}
+
+/// The same rule on bare points with normals: triangles as indices into
+/// `positions`, wound along `normals`, smallest index first, sorted. Ties
+/// (co-circular points) are broken by index.
+///
+/// # Errors
+/// When the radius is not finite and positive, or `normals` does not have
+/// one entry per position.
+pub fn triangulate_points(
+    positions: &[Point3],
+    normals: &[Vec3],
+    params: &TriangulationParams,
+) -> Result<Vec<[u32; 3]>, ParamError> {
+    let ranks: Vec<u32> = (0..positions.len() as u32).collect();
+    triangulate_ranked(positions, normals, &ranks, params)
+}
+
+/// [`triangulate_points`] with ties broken by `ranks` (one per position,
+/// distinct).
+fn triangulate_ranked(
+    positions: &[Point3],
+    normals: &[Vec3],
+    ranks: &[u32],
+    params: &TriangulationParams,
+) -> Result<Vec<[u32; 3]>, ParamError> {
+    params.validate()?;
+    if normals.len() != positions.len() {
+        return Err(ParamError::Invalid {
+            field: "normals".into(),
+            message: format!(
+                "{} normals for {} positions (one per position needed)",
+                normals.len(),
+                positions.len()
+            ),
+        });
+    }
+    let n = positions.len();
+    let mut half = PairList::new();
+    search(
+        NeighbourBackend::CellList,
+        positions,
+        params.radius,
+        &mut half,
+    );
+    let full = full_rows(&half, n);
+    let finite: Vec<[Real; 3]> = positions
+        .iter()
+        .filter(|p| p.iter().all(|c| c.is_finite()))
+        .map(|p| [p.x, p.y, p.z])
+        .collect();
+    let index: Vec<u32> = (0..n as u32)
+        .filter(|&i| positions[i as usize].iter().all(|c| c.is_finite()))
+        .collect();
+    let tree = (finite.len() >= 2)
+        .then(|| ImmutableKdTree::<Real, 3>::new_from_slice(&finite).ok())
+        .flatten();
+    let ctx = Ctx {
+        positions,
+        normals,
+        half: &half,
+        full: &full,
+        radius: params.radius,
+        cos_tilt: params.max_tilt.cos(),
+        tree: tree.as_ref(),
+        index: &index,
+        ranks,
+    };
+    let per: Vec<Vec<[u32; 3]>> = (0..n)
+        .into_par_iter()
+        .map(|i| ctx.triangles_of(i))
+        .collect();
+    let mut out: Vec<[u32; 3]> = per.into_iter().flatten().map(canonical).collect();
+    out.sort_unstable();
+    Ok(out)
+}
+
+/// Full neighbour rows (both directions, ascending) from a half list.
+fn full_rows(half: &PairList, n: usize) -> Vec<Vec<u32>> {
+    let mut rows = vec![Vec::new(); n];
+    for (i, j) in half.iter_pairs() {
+        rows[i].push(j as u32);
+        rows[j].push(i as u32);
+    }
+    rows.iter_mut().for_each(|r| r.sort_unstable());
+    rows
+}
+
+struct Ctx<'a> {
+    positions: &'a [Point3],
+    normals: &'a [Vec3],
+    half: &'a PairList,
+    full: &'a [Vec<u32>],
+    radius: Real,
+    cos_tilt: Real,
+    tree: Option<&'a ImmutableKdTree<Real, 3>>,
+    index: &'a [u32],
+    ranks: &'a [u32],
+}
+
+impl Ctx<'_> {
+    /// Kept triangles `(i, j, k)` with `i < j < k`, wound along the normals.
+    fn triangles_of(&self, i: usize) -> Vec<[u32; 3]> {
+        let mut out = Vec::new();
+        let row = self.half.row(i);
+        for (a, &j) in row.iter().enumerate() {
+            for &k in &row[a + 1..] {
+                // Mutual: j and k neighbours too (rows ascending, k > j).
+                if self.half.row(j as usize).binary_search(&k).is_err() {
+                    continue;
+                }
+                let t = [i as u32, j, k];
+                let Some(wound) = self.wound(t) else {
+                    continue;
+                };
+                if let Some((c, r2)) = self.circumsphere(t) {
+                    if self.is_empty(t, &c, r2) {
+                        out.push(wound);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Centre and squared radius of the smallest sphere through the three
+    /// points (centred at the circumcentre, in the triangle's plane); None
+    /// for degenerate triangles.
+    fn circumsphere(&self, t: [u32; 3]) -> Option<(Point3, Real)> {
+        let a = self.positions[t[0] as usize];
+        let u = self.positions[t[1] as usize] - a;
+        let v = self.positions[t[2] as usize] - a;
+        let w = u.cross(&v);
+        let w2 = w.norm_squared();
+        if w2 <= 1e-24 * u.norm_squared() * v.norm_squared() || !w2.is_finite() {
+            return None;
+        }
+        // Circumcentre offset from a: (|u|^2 v - |v|^2 u) x w / (2 |w|^2).
+        let off = (u.norm_squared() * v - v.norm_squared() * u).cross(&w) / (2.0 * w2);
+        let r2 = off.norm_squared();
+        r2.is_finite().then_some((a + off, r2))
+    }
+
+    /// No particle other than the triangle's inside the sphere (ties on
+    /// the sphere broken by rank).
+    fn is_empty(&self, t: [u32; 3], c: &Point3, r2: Real) -> bool {
+        let (lo, hi) = (r2 * (1.0 - TIE), r2 * (1.0 + TIE));
+        let inside = |m: u32| {
+            if t.contains(&m) {
+                return false;
+            }
+            let d2 = (self.positions[m as usize] - c).norm_squared();
+            d2 < lo || (d2 <= hi && self.tie_inside(t, m))
+        };
+        // A particle inside is within 2R of every vertex: when 2R fits in
+        // the neighbour radius, the first vertex's neighbours are all the
+        // candidates.
+        if self.full[t[0] as usize].iter().any(|&m| inside(m)) {
+            return false;
+        }
+        if 4.0 * r2 <= self.radius * self.radius {
+            return true;
+        }
+        let Some(tree) = self.tree else {
+            return true;
+        };
+        let mut empty = true;
+        tree.query(&[c.x, c.y, c.z])
+            .within::<SquaredEuclidean<Real>>(r2 * (1.0 + 1e-6))
+            .unsorted()
+            .visit(|res| {
+                if inside(self.index[res.item as usize]) {
+                    empty = false;
+                }
+            });
+        empty
+    }
+
+    /// Whether `m`, on the sphere of `t`, counts as inside: its rank is
+    /// below all of `t`'s, or it lies (in `t`'s plane) across the edge
+    /// opposite `t`'s smallest-rank corner.
+    fn tie_inside(&self, t: [u32; 3], m: u32) -> bool {
+        let rank = |k: u32| self.ranks[k as usize];
+        let k0 = (0..3).min_by_key(|&k| rank(t[k])).unwrap_or(0);
+        if rank(m) < rank(t[k0]) {
+            return true;
+        }
+        let p = |k: u32| self.positions[k as usize];
+        let (a, b, c) = (p(t[k0]), p(t[(k0 + 1) % 3]), p(t[(k0 + 2) % 3]));
+        let normal = (b - a).cross(&(c - a));
+        let side = |x: Point3| (c - b).cross(&(x - b)).dot(&normal);
+        side(a) * side(p(m)) < 0.0
+    }
+
+    /// `t` wound so its geometric normal points along the sum of the
+    /// particle normals, or None when its plane is tilted by more than the
+    /// largest tilt from that sum (or the normals cancel out).
+    fn wound(&self, t: [u32; 3]) -> Option<[u32; 3]> {
+        let p = |k: usize| self.positions[t[k] as usize];
+        let face = (p(1) - p(0)).cross(&(p(2) - p(0)));
+        let ns: Vec3 = t.iter().map(|&m| self.normals[m as usize]).sum();
+        let dot = face.dot(&ns);
+        let scale = face.norm() * ns.norm();
+        if scale.is_nan() || scale <= 0.0 || dot.abs() < self.cos_tilt * scale {
+            return None;
+        }
+        Some(if dot < 0.0 { [t[0], t[2], t[1]] } else { t })
+    }
+}
+
+/// Rotates a triangle so its smallest entry comes first (winding kept).
+fn canonical(t: [u32; 3]) -> [u32; 3] {
+    let m = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+    [t[m], t[(m + 1) % 3], t[(m + 2) % 3]]
+}
+
+impl Triangulation {
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// True when there is no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// The distinct vertices (particle ids) used by the triangles, ascending.
+    pub fn vertices(&self) -> Vec<u32> {
+        let mut v: Vec<u32> = self.triangles.iter().flatten().copied().collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+
+    /// Each undirected edge `(a, b)`, `a < b`, with the number of triangles
+    /// holding it.
+    pub fn edges(&self) -> BTreeMap<(u32, u32), usize> {
+        let mut e = BTreeMap::new();
+        for t in &self.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *e.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        e
+    }
+
+    /// Euler characteristic `V - E + F` of the triangles (V counts the
+    /// vertices used by some triangle): 2 for a sphere, 0 for a torus, 1
+    /// for a disc.
+    pub fn euler_characteristic(&self) -> i64 {
+        self.vertices().len() as i64 - self.edges().len() as i64 + self.triangles.len() as i64
+    }
+
+    /// Number of boundary loops: connected components of the edges held by
+    /// exactly one triangle (0 for a closed surface, 1 for a disc).
+    pub fn boundary_loops(&self) -> usize {
+        let boundary: Vec<(u32, u32)> = self
+            .edges()
+            .into_iter()
+            .filter(|(_, c)| *c == 1)
+            .map(|(e, _)| e)
+            .collect();
+        let mut verts: Vec<u32> = boundary.iter().flat_map(|&(a, b)| [a, b]).collect();
+        verts.sort_unstable();
+        verts.dedup();
+        let at = |v: u32| verts.binary_search(&v).unwrap_or(0);
+        let mut parent: Vec<usize> = (0..verts.len()).collect();
+        fn root(parent: &mut [usize], mut x: usize) -> usize {
+            while parent[x] != x {
+                parent[x] = parent[parent[x]];
+                x = parent[x];
+            }
+            x
+        }
+        let mut components = verts.len();
+        for &(a, b) in &boundary {
+            let (ra, rb) = (root(&mut parent, at(a)), root(&mut parent, at(b)));
+            if ra != rb {
+                parent[ra] = rb;
+                components -= 1;
+            }
+        }
+        components
+    }
+
+    /// True when the triangles form a 2-manifold (with boundary): every
+    /// edge in one or two triangles, and around every vertex the triangles
+    /// form a single fan (the link of the vertex is one path or one cycle).
+    pub fn is_manifold(&self) -> bool {
+        if self.edges().values().any(|&c| c > 2) {
+            return false;
+        }
+        // Link of each vertex: the edges opposite to it.
+        let mut links: BTreeMap<u32, Vec<(u32, u32)>> = BTreeMap::new();
+        for t in &self.triangles {
+            for k in 0..3 {
+                links
+                    .entry(t[k])
+                    .or_default()
+                    .push((t[(k + 1) % 3], t[(k + 2) % 3]));
+            }
+        }
+        links.values().all(|link| is_single_fan(link))
+    }
+
+    /// True when every edge held by two triangles is traversed in opposite
+    /// directions by them (a consistent orientation).
+    pub fn is_consistently_oriented(&self) -> bool {
+        let mut directed: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+        for t in &self.triangles {
+            for k in 0..3 {
+                *directed.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        directed.values().all(|&c| c == 1)
+    }
+}
+
+/// True when the link edges form one connected path or cycle.
+fn is_single_fan(link: &[(u32, u32)]) -> bool {
+    let mut degree: BTreeMap<u32, usize> = BTreeMap::new();
+    for &(a, b) in link {
+        *degree.entry(a).or_insert(0) += 1;
+        *degree.entry(b).or_insert(0) += 1;
+    }
+    if degree.values().any(|&d| d > 2) {
+        return false;
+    }
+    // Connected: walk from the first vertex over the link edges.
+    let mut seen = vec![link[0].0];
+    let mut frontier = vec![link[0].0];
+    while let Some(v) = frontier.pop() {
+        for &(a, b) in link {
+            for (x, y) in [(a, b), (b, a)] {
+                if x == v && !seen.contains(&y) {
+                    seen.push(y);
+                    frontier.push(y);
+                }
+            }
+        }
+    }
+    seen.len() == degree.len()
+}
+
+#[cfg(test)]
+mod tests;

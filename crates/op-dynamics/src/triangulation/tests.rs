@@ -1,0 +1,322 @@
+use super::*;
+use crate::particles::ParticleDesc;
+
+/// SplitMix64 for seeded jitter.
+struct Rng(u64);
+
+impl Rng {
+    fn uniform(&mut self, lo: Real, hi: Real) -> Real {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        lo + (hi - lo) * ((z >> 11) as Real / (1u64 << 53) as Real)
+    }
+}
+
+fn hex_sheet(nx: usize, ny: usize) -> Vec<Point3> {
+    let mut v = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            let x = i as Real + 0.5 * (j % 2) as Real;
+            v.push(Point3::new(x, j as Real * 3f64.sqrt() / 2.0, 0.0));
+        }
+    }
+    v
+}
+
+/// Fibonacci sphere of radius `r` with about one particle per hexagonal
+/// cell of side `spacing`; outward normals.
+fn sphere(r: Real, spacing: Real) -> (Vec<Point3>, Vec<Vec3>) {
+    let n = (4.0 * std::f64::consts::PI * r * r / (3f64.sqrt() / 2.0 * spacing * spacing)).round()
+        as usize;
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let normals: Vec<Vec3> = (0..n)
+        .map(|k| {
+            let z = 1.0 - (2 * k + 1) as Real / n as Real;
+            let s = (1.0 - z * z).sqrt();
+            let phi = golden * k as Real;
+            Vec3::new(s * phi.cos(), s * phi.sin(), z)
+        })
+        .collect();
+    (
+        normals.iter().map(|n| Point3::from(r * n)).collect(),
+        normals,
+    )
+}
+
+/// Ring torus about z: rings of constant tube angle, alternate rings
+/// shifted half a step, a little seeded jitter; outward normals.
+fn torus(major: Real, minor: Real, spacing: Real, rng: &mut Rng) -> (Vec<Point3>, Vec<Vec3>) {
+    let rings =
+        (2.0 * std::f64::consts::PI * minor / (spacing * 3f64.sqrt() / 2.0)).round() as usize;
+    let (mut p, mut nrm) = (Vec::new(), Vec::new());
+    for ring in 0..rings {
+        let v = 2.0 * std::f64::consts::PI * ring as Real / rings as Real;
+        let rho = major + minor * v.cos();
+        let count = (2.0 * std::f64::consts::PI * rho / spacing).round() as usize;
+        for k in 0..count {
+            let u =
+                2.0 * std::f64::consts::PI * (k as Real + 0.5 * (ring % 2) as Real) / count as Real;
+            let n = Vec3::new(v.cos() * u.cos(), v.cos() * u.sin(), v.sin());
+            let c = Vec3::new(major * u.cos(), major * u.sin(), 0.0);
+            let j = 0.02 * spacing;
+            let jitter = Vec3::new(rng.uniform(-j, j), rng.uniform(-j, j), rng.uniform(-j, j));
+            p.push(Point3::from(c + minor * n + jitter));
+            nrm.push(n);
+        }
+    }
+    (p, nrm)
+}
+
+fn tri(points: &[Point3], normals: &[Vec3], radius: Real) -> Triangulation {
+    Triangulation {
+        triangles: triangulate_points(points, normals, &TriangulationParams::with_radius(radius))
+            .unwrap(),
+    }
+}
+
+/// The rule by brute force: every mutual-neighbour triple whose smallest
+/// circumscribing sphere holds no other point (strictly inside).
+fn oracle(points: &[Point3], radius: Real) -> Vec<[u32; 3]> {
+    let n = points.len();
+    let near = |a: usize, b: usize| (points[a] - points[b]).norm_squared() <= radius * radius;
+    let mut out = Vec::new();
+    for i in 0..n {
+        for j in i + 1..n {
+            for k in j + 1..n {
+                if !(near(i, j) && near(j, k) && near(i, k)) {
+                    continue;
+                }
+                let (a, u, v) = (points[i], points[j] - points[i], points[k] - points[i]);
+                let w = u.cross(&v);
+                // Normals are +z here: the tilt limit of 60 degrees.
+                if w.norm_squared() < 1e-20 || w.z.abs() < 0.5 * w.norm() {
+                    continue;
+                }
+                let c = a
+                    + (u.norm_squared() * v - v.norm_squared() * u).cross(&w)
+                        / (2.0 * w.norm_squared());
+                let r2 = (a - c).norm_squared();
+                if (0..n).all(|m| {
+                    m == i
+                        || m == j
+                        || m == k
+                        || (points[m] - c).norm_squared() >= r2 * (1.0 - 1e-9)
+                }) {
+                    out.push([i as u32, j as u32, k as u32]);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn flat_hex_sheet_triangulates_every_cell() {
+    let (nx, ny) = (12, 10);
+    let p = hex_sheet(nx, ny);
+    let normals = vec![Vec3::z(); p.len()];
+    let t = tri(&p, &normals, 1.5);
+    assert_eq!(t.len(), 2 * (nx - 1) * (ny - 1), "every interior cell");
+    assert_eq!(t.vertices().len(), nx * ny);
+    assert_eq!(t.euler_characteristic(), 1);
+    assert_eq!(t.boundary_loops(), 1);
+    assert!(t.is_manifold());
+    assert!(t.is_consistently_oriented());
+    for f in &t.triangles {
+        let q = |k: usize| p[f[k] as usize];
+        assert!(
+            (q(1) - q(0)).cross(&(q(2) - q(0))).z > 0.0,
+            "wound along +z"
+        );
+        assert!(f[0] < f[1] && f[0] < f[2], "smallest id first");
+    }
+    // Flipped normals flip every triangle.
+    let flipped = tri(&p, &vec![-Vec3::z(); p.len()], 1.5);
+    let mut back: Vec<[u32; 3]> = flipped
+        .triangles
+        .iter()
+        .map(|t| canonical([t[0], t[2], t[1]]))
+        .collect();
+    back.sort_unstable();
+    assert_eq!(back, t.triangles);
+}
+
+#[test]
+fn sphere_shell_is_closed_and_faces_outward() {
+    let (p, normals) = sphere(5.0, 1.0);
+    let t = tri(&p, &normals, 1.8);
+    assert_eq!(t.vertices().len(), p.len());
+    assert_eq!(t.boundary_loops(), 0, "closed");
+    assert_eq!(t.euler_characteristic(), 2);
+    assert!(t.is_manifold());
+    assert!(t.is_consistently_oriented());
+    for f in &t.triangles {
+        let q = |k: usize| p[f[k] as usize];
+        let centroid = (q(0).coords + q(1).coords + q(2).coords) / 3.0;
+        assert!(
+            (q(1) - q(0)).cross(&(q(2) - q(0))).dot(&centroid) > 0.0,
+            "outward"
+        );
+    }
+}
+
+#[test]
+fn torus_has_euler_characteristic_zero() {
+    let (p, normals) = torus(4.0, 1.6, 0.45, &mut Rng(5));
+    let t = tri(&p, &normals, 1.7 * 0.45);
+    assert_eq!(t.vertices().len(), p.len());
+    assert_eq!(t.boundary_loops(), 0);
+    assert!(t.is_manifold());
+    assert!(t.is_consistently_oriented());
+    assert_eq!(t.euler_characteristic(), 0);
+}
+
+/// The fast path (neighbour rows, k-d tree for large spheres) keeps
+/// exactly the triangles of the brute-force rule, on a noisy curved patch
+/// where some kept triangles are obtuse.
+#[test]
+fn matches_the_brute_force_rule_and_holds_no_particle_in_its_spheres() {
+    let mut rng = Rng(11);
+    let p: Vec<Point3> = hex_sheet(9, 8)
+        .into_iter()
+        .map(|q| {
+            let z = 0.08 * (q.x * q.x + q.y * q.y) * 0.1;
+            Point3::new(
+                q.x + rng.uniform(-0.2, 0.2),
+                q.y + rng.uniform(-0.2, 0.2),
+                z + rng.uniform(-0.1, 0.1),
+            )
+        })
+        .collect();
+    let normals = vec![Vec3::z(); p.len()];
+    for radius in [1.5, 1.8, 2.6] {
+        let t = tri(&p, &normals, radius);
+        let mut fast: Vec<[u32; 3]> = t
+            .triangles
+            .iter()
+            .map(|f| {
+                let mut s = *f;
+                s.sort_unstable();
+                s
+            })
+            .collect();
+        fast.sort_unstable();
+        assert_eq!(fast, oracle(&p, radius), "radius {radius}");
+        let obtuse = fast
+            .iter()
+            .filter(|f| {
+                (0..3).any(|k| {
+                    let q = |m: usize| p[f[(k + m) % 3] as usize];
+                    (q(1) - q(0)).dot(&(q(2) - q(0))) < 0.0
+                })
+            })
+            .count();
+        assert!(
+            obtuse > 0,
+            "radius {radius}: some kept triangles are obtuse"
+        );
+    }
+}
+
+#[test]
+fn same_triangles_at_any_thread_count_and_input_order() {
+    let (p, normals) = sphere(4.0, 1.0);
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| tri(&p, &normals, 1.8))
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    // Reversed input: the same triangles through the index map.
+    let n = p.len() as u32;
+    let rp: Vec<Point3> = p.iter().rev().copied().collect();
+    let rn: Vec<Vec3> = normals.iter().rev().copied().collect();
+    let mut mapped: Vec<[u32; 3]> = tri(&rp, &rn, 1.8)
+        .triangles
+        .iter()
+        .map(|t| canonical(t.map(|k| n - 1 - k)))
+        .collect();
+    mapped.sort_unstable();
+    assert_eq!(mapped, one.triangles);
+}
+
+#[test]
+fn particles_give_ids_and_bad_input_is_an_error() {
+    let mut store = Particles::new();
+    for q in hex_sheet(4, 4) {
+        store
+            .push(ParticleDesc::at(q).with_normal(-Vec3::z()))
+            .unwrap();
+    }
+    store.remove(&[0]);
+    let t = triangulate(&store, &TriangulationParams::with_radius(1.5)).unwrap();
+    assert!(t.vertices().iter().all(|&id| (1..16).contains(&id)));
+    assert_eq!(t.len(), 2 * 3 * 3 - 1);
+    for f in &t.triangles {
+        let q = |k: usize| store.positions()[store.slot_of(f[k]).unwrap()];
+        assert!(
+            (q(1) - q(0)).cross(&(q(2) - q(0))).z < 0.0,
+            "wound along -z"
+        );
+    }
+    let bad = TriangulationParams::with_radius(Real::NAN);
+    assert!(triangulate(&store, &bad)
+        .unwrap_err()
+        .to_string()
+        .contains("radius"));
+    let e = triangulate_points(
+        &[Point3::origin()],
+        &[],
+        &TriangulationParams::with_radius(1.0),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("normals"), "{e}");
+    // Non-finite positions take no part; collinear points make nothing.
+    let line = [
+        Point3::origin(),
+        Point3::new(1.0, 0.0, 0.0),
+        Point3::new(2.0, 0.0, 0.0),
+        Point3::new(Real::NAN, 0.0, 0.0),
+    ];
+    let t = triangulate_points(
+        &line,
+        &[Vec3::z(); 4],
+        &TriangulationParams::with_radius(3.0),
+    );
+    assert_eq!(t.unwrap(), Vec::<[u32; 3]>::new());
+}
+
+/// A square grid: every cell's four corners are co-circular. The tie
+/// rule keeps exactly one diagonal per cell (two triangles), so the
+/// result is a manifold disc, the same for any input order.
+#[test]
+fn cocircular_square_grid_keeps_one_diagonal_per_cell() {
+    let n = 6;
+    let p: Vec<Point3> = (0..n * n)
+        .map(|k| Point3::new((k % n) as Real, (k / n) as Real, 0.0))
+        .collect();
+    let normals = vec![Vec3::z(); p.len()];
+    let t = tri(&p, &normals, 1.5);
+    assert_eq!(t.len(), 2 * (n - 1) * (n - 1));
+    assert!(t.is_manifold() && t.is_consistently_oriented());
+    assert_eq!(t.euler_characteristic(), 1);
+    assert_eq!(t.boundary_loops(), 1);
+    // Particles keep their ids whatever their slots: the same triangles.
+    let mut store = Particles::new();
+    for &q in &p {
+        store.push(ParticleDesc::at(q)).unwrap();
+    }
+    let direct = triangulate(&store, &TriangulationParams::with_radius(1.5)).unwrap();
+    let order: Vec<u32> = (0..(n * n) as u32).rev().collect();
+    store.permute(&order);
+    let permuted = triangulate(&store, &TriangulationParams::with_radius(1.5)).unwrap();
+    assert_eq!(direct, permuted);
+    assert_eq!(direct, t);
+}
