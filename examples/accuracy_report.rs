@@ -13,6 +13,7 @@
 //! Every run steps a small world on one worker thread
 //! ([`oriented_particles::experiments::single_threaded`]).
 
+use oriented_particles::experiments::machine;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -102,42 +103,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
 /// The facts of the machine the report was measured on.
 fn machine(total: f64) -> String {
-    let run = |cmd: &str, args: &[&str]| {
-        std::process::Command::new(cmd)
-            .args(args)
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-            .unwrap_or_else(|| "unknown".into())
-    };
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|c| {
-            c.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into());
-    format!(
-        "| machine | |\n|---|---|\n| date (UTC) | {} |\n| CPU | {cpu} |\n| logical CPUs (nproc) | {} |\n\
-         | OS | {} |\n| rustc | {} |\n| profile | {} |\n| worker threads per run | 1 |\n\
-         | timed runs per method | {REPEATS} |\n| report wall time | {total:.0} s |\n\n\
-         The machine is shared with other jobs (2 cores): timings carry that noise, which the \
+    let mut s = machine::table(&[
+        ("worker threads per run", "1".into()),
+        ("timed runs per method", REPEATS.to_string()),
+        ("report wall time", format!("{total:.0} s")),
+    ]);
+    s.push_str(
+        "\nThe machine is shared with other jobs (2 cores): timings carry that noise, which the \
          min-max spread shows within one method; the load also changes between methods \
          measured minutes apart, so ratios of wall times (the headline) move from one \
          generation of this report to the next, while the force-evaluation counts do not.\n\n",
-        run("date", &["-u", "+%Y-%m-%d %H:%M"]),
-        run("nproc", &[]),
-        run("uname", &["-sr"]),
-        run("rustc", &["--version"]),
-        if cfg!(debug_assertions) {
-            "debug (use --release)"
-        } else {
-            "release"
-        },
-    )
+    );
+    s
 }
 
 fn method_section(sweeps: &[CaseSweep]) -> String {

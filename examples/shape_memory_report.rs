@@ -11,6 +11,7 @@
 //! ([`oriented_particles::experiments::single_threaded`]); the whole report
 //! takes well under a minute.
 
+use oriented_particles::experiments::machine;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -80,34 +81,13 @@ type Res<T> = Result<T, Box<dyn std::error::Error + Send + Sync>>;
 
 /// The facts of the machine the report was measured on.
 fn machine(_elapsed: f64) -> String {
-    let run = |cmd: &str, args: &[&str]| {
-        std::process::Command::new(cmd)
-            .args(args)
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-            .unwrap_or_else(|| "unknown".into())
-    };
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|c| {
-            c.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into());
-    let threads = std::thread::available_parallelism().map_or(0, |n| n.get());
-    format!(
-        "| machine | |\n|---|---|\n| date (UTC) | {} |\n| CPU | {cpu} |\n| logical CPUs (nproc) | {threads} |\n\
-         | OS | {} |\n| rustc | {} |\n| profile | {} |\n| worker threads used | 1 (tiny worlds; results are the same at any count) |\n\
-         | report wall time | TOTAL_SECONDS s |\n",
-        run("date", &["-u", "+%Y-%m-%d %H:%M"]),
-        run("uname", &["-sr"]),
-        run("rustc", &["--version"]),
-        if cfg!(debug_assertions) { "debug (use --release)" } else { "release" },
-    )
+    machine::table(&[
+        (
+            "worker threads used",
+            "1 (tiny worlds; results are the same at any count)".into(),
+        ),
+        ("report wall time", "TOTAL_SECONDS s".into()),
+    ])
 }
 
 fn save(dir: &Path, name: &str, svg: &str) -> Res<String> {

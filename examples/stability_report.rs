@@ -13,6 +13,7 @@
 //! scenes run through the op-scene runner on the default pool (the
 //! thousand-particle cloud is the expensive part). About two minutes.
 
+use oriented_particles::experiments::machine;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -91,40 +92,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
+/// The facts of the machine the report was measured on.
 fn machine() -> String {
-    let run = |cmd: &str, args: &[&str]| {
-        std::process::Command::new(cmd)
-            .args(args)
-            .output()
-            .ok()
-            .filter(|o| o.status.success())
-            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-            .unwrap_or_else(|| "unknown".into())
-    };
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|c| {
-            c.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|s| s.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".into());
-    format!(
-        "| machine | |\n|---|---|\n| date (UTC) | {} |\n| CPU | {cpu} |\n| logical CPUs (nproc) | {} |\n\
-         | OS | {} |\n| rustc | {} |\n| profile | {} |\n| worker threads | sweep: 1; extreme scenes: {} |\n\
-         | report wall time | TOTAL_SECONDS s (sweep SWEEP_SECONDS s) |\n",
-        run("date", &["-u", "+%Y-%m-%d %H:%M"]),
-        run("nproc", &[]),
-        run("uname", &["-sr"]),
-        run("rustc", &["--version"]),
-        if cfg!(debug_assertions) {
-            "debug (use --release)"
-        } else {
-            "release"
-        },
-        rayon_threads(),
-    )
+    machine::table(&[
+        (
+            "worker threads",
+            format!("sweep: 1; extreme scenes: {}", rayon_threads()),
+        ),
+        (
+            "report wall time",
+            "TOTAL_SECONDS s (sweep SWEEP_SECONDS s)".into(),
+        ),
+    ])
 }
 
 fn rayon_threads() -> usize {

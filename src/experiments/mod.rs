@@ -4,6 +4,7 @@
 //! and the report generator (`examples/shape_memory_report.rs`).
 
 pub mod accuracy;
+pub mod machine;
 pub mod matching;
 pub mod membership;
 pub mod oscillation;

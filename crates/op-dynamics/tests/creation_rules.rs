@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{hex_sheet, spacing_material, Rng};
+use common::{hex_sheet, in_pool, spacing_material, Rng};
 use op_dynamics::creation::{self, CreationParams, GrowingParams, StretchingParams};
 use op_dynamics::{Flags, ParticleDesc, Particles, Point3, Real, Vec3, World, WorldParams};
 
@@ -39,14 +39,6 @@ fn min_distance(points: &[Point3]) -> Real {
         }
     }
     m
-}
-
-fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(f)
 }
 
 /// A sheet scaled by 2.2 (every neighbour pair 2.2 r0 apart, in

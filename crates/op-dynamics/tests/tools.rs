@@ -5,20 +5,12 @@
 
 mod common;
 
-use common::spacing_material;
+use common::{in_pool, spacing_material};
 use op_dynamics::tools::{Keyframe, Path, Role, ToolParams, ToolShape};
 use op_dynamics::{
     ExternalParams, Material, ParticleDesc, Particles, Point3, Real, Scheme, Vec3, World,
     WorldParams,
 };
-
-fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(f)
-}
 
 fn particles(points: &[Point3], object: impl Fn(usize) -> u32) -> Particles {
     let mut p = Particles::new();

@@ -4,20 +4,12 @@
 
 mod common;
 
-use common::{full_material, noisy_sheet, random_cluster, spacing_material, Rng};
+use common::{full_material, in_pool, noisy_sheet, random_cluster, spacing_material, Rng};
 use op_dynamics::interactions::{LennardJonesParams, Spacing};
 use op_dynamics::{
     ExternalParams, Material, NeighbourBackend, NeighbourParams, Particles, Point3, Real, Scheme,
     Vec3, World, WorldParams,
 };
-
-fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(f)
-}
 
 /// Positions, orientations and velocities by particle id.
 fn snapshot(w: &World) -> Vec<[u64; 10]> {

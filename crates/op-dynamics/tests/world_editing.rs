@@ -5,19 +5,11 @@
 
 mod common;
 
-use common::{full_material, noisy_sheet, spacing_material, Rng};
+use common::{full_material, in_pool, noisy_sheet, spacing_material, Rng};
 use op_dynamics::{
     ExternalParams, ForceWindow, Material, ParticleDesc, Particles, Point3, Scheme, Vec3, World,
     WorldParams,
 };
-
-fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(f)
-}
 
 /// The description of the particle in `slot`, current state included.
 fn desc_of(p: &Particles, slot: usize) -> ParticleDesc {

@@ -119,3 +119,12 @@ pub fn noisy_sheet(rng: &mut Rng, nx: usize, ny: usize, noise: Real) -> Particle
     }
     p
 }
+
+/// Runs `f` on a local pool of `threads` workers.
+pub fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
