@@ -331,3 +331,23 @@ fn held_external_forces_act_over_the_whole_interval() {
     w.advance_to(2.0).unwrap();
     assert_eq!(w.particles().velocities()[0], v);
 }
+
+/// Obstacle damping slows a separating particle's push but never pulls it
+/// back: the normal force stays >= 0.
+#[test]
+fn obstacle_damping_never_pulls() {
+    let params = WorldParams {
+        tools: vec![floor(100.0, 100.0)],
+        ..WorldParams::default()
+    };
+    let mut p = Particles::new();
+    let mut d = ParticleDesc::at(Point3::new(0.0, 0.0, -0.01));
+    d.velocity = Vec3::new(0.0, 0.0, 10.0);
+    p.push(d).unwrap();
+    let mut w = World::new(p, &[Material::empty()], params).unwrap();
+    assert_eq!(w.evaluate_forces().0[0], Vec3::zeros());
+    // Approaching, the damping adds to the penalty push.
+    w.particles_mut().set_velocity(0, Vec3::new(0.0, 0.0, -0.1));
+    let f = w.evaluate_forces().0[0];
+    assert!((f.z - (100.0 * 0.01 + 100.0 * 0.1)).abs() < 1e-12, "{f}");
+}

@@ -233,9 +233,16 @@ impl Tool {
                 if t >= release {
                     return;
                 }
-                // Few particles, each by id: serial, in id order.
+                // Few particles, each by id: serial, in id order. Removed
+                // particles (World::remove_particles) are skipped.
                 for &(id, local) in &self.grabbed {
-                    let i = a.slot_of[id as usize] as usize;
+                    let Some(&slot) = a.slot_of.get(id as usize) else {
+                        continue;
+                    };
+                    if slot == Particles::REMOVED {
+                        continue;
+                    }
+                    let i = slot as usize;
                     let target = pose.position + pose.rotation * local;
                     let stretch = s.positions[i].coords - target;
                     energies[i] += 0.5 * stiffness * stretch.norm_squared();
@@ -275,8 +282,10 @@ impl Tool {
                                 if push == 0.0 {
                                     return;
                                 }
+                                // Damping may slow a separation but never
+                                // pulls: contact only pushes.
                                 let closing = (s.velocities[i] - pose.velocity_at(&x)).dot(&n);
-                                (energy, push - damping * closing)
+                                (energy, (push - damping * closing).max(0.0))
                             }
                             Role::Attractor { strength, reach } => {
                                 roles::attractor(strength, reach, sd)

@@ -30,7 +30,8 @@ pub enum Role {
         margin: Real,
         /// Damping of the normal relative velocity while in contact,
         /// `-c ((v - v_tool) · n) n`, >= 0 (dissipative, not from an
-        /// energy). Default: 0.
+        /// energy; the total normal force is kept >= 0: contact never
+        /// pulls). Default: 0.
         #[serde(default)]
         damping: Real,
     },
