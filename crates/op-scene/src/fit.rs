@@ -374,7 +374,7 @@ fn median_nearest_distance(points: &[Point3]) -> Result<Real, FitError> {
         |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
     );
     let diagonal = (hi - lo).norm();
-    if !(diagonal > 0.0) {
+    if diagonal.is_nan() || diagonal <= 0.0 {
         return Err(FitError::Input(
             "all samples coincide: no spacing can be estimated".into(),
         ));
@@ -690,7 +690,7 @@ pub fn point_triangle_distance(p: &Point3, a: &Point3, b: &Point3, c: &Point3) -
         return (p - (b + (c - b) * w)).norm();
     }
     let denom = va + vb + vc;
-    if !(denom.abs() > 0.0) {
+    if denom == 0.0 || denom.is_nan() {
         // Degenerate triangle: the nearest of its edges' end points.
         return ap.norm().min(bp.norm()).min(cp.norm());
     }

@@ -109,7 +109,7 @@ fn number(field: &str, file: &str, line: usize) -> Result<Real, PointSetError> {
 }
 
 fn unit(n: Vec3, file: &str, line: Option<usize>) -> Result<Vec3, PointSetError> {
-    if !(n.norm() > 1e-12) {
+    if n.norm().is_nan() || n.norm() <= 1e-12 {
         return Err(format_err(
             file,
             line,
@@ -148,14 +148,16 @@ pub fn parse_xyz(text: &str, file: &str) -> Result<PointSet, PointSetError> {
         }
         match columns {
             None => columns = Some(fields.len()),
-            Some(c) if c != fields.len() => return Err(format_err(
-                file,
-                Some(line),
-                format!(
+            Some(c) if c != fields.len() => {
+                return Err(format_err(
+                    file,
+                    Some(line),
+                    format!(
                     "{} numbers where earlier lines have {c}: give normals for every point or none",
                     fields.len()
                 ),
-            )),
+                ))
+            }
             Some(_) => {}
         }
         let v = fields
@@ -410,7 +412,7 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
                             }
                             let n = count_type.read_le(data);
                             data = &data[count_type.size()..];
-                            if !(n >= 0.0) {
+                            if n < 0.0 {
                                 return Err(format_err(file, None, "negative list length"));
                             }
                             n as usize
