@@ -22,10 +22,14 @@
 //! 3. *Seeds and filling* (seed 000 §7): one particle per sample, position
 //!    and orientation fixed. Closed data: the stretching rule and the
 //!    growing rule (interior gaps only: `max_gap` 170°, so nothing grows
-//!    past an edge) add particles between the samples; open data
-//!    (`--open`): stretching only, and a candidate is kept only within
-//!    `d_max / 2` of a sample, so every gap up to the search range `d_max`
-//!    closes and a gap wider than it keeps a hole. Rounds of creation
+//!    past an edge) add particles between the samples, each kept only
+//!    within `d_max / √3` of a sample (the farthest a point of a triangle
+//!    of samples at most `d_max` apart lies from its corners: growth never
+//!    runs away from the data) and within `h / 2` of that sample's tangent
+//!    plane (nor off it); open data (`--open`): stretching only, and
+//!    a candidate is kept only within `d_max / 2` of a sample, so every gap
+//!    up to the search range `d_max` closes and a gap wider than it keeps
+//!    a hole. Rounds of creation
 //!    alternate with short relaxations of the new (free) particles until a
 //!    round creates nothing (at most [`FitParams::max_rounds`]).
 //! 4. *Release*: every particle is freed and the whole set relaxes for
@@ -264,13 +268,20 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
         });
     }
     creation.max_particles = 20 * seeds.len() + 1000;
-    let seed_grid = Grid::new(&seeds, 0.5 * params.d_max * rest);
+    // Every created particle stays near the data: within d_max / 2 of a
+    // sample for open data (holes wider than d_max keep a hole), within
+    // d_max / √3 for closed data (the farthest a point of a triangle of
+    // samples at most d_max apart lies from its corners), and within half
+    // a spacing of that sample's tangent plane.
+    let reach = params.d_max * rest * if params.open { 0.5 } else { 1.0 / 3f64.sqrt() };
+    let seed_grid = Grid::new(&seeds, reach);
     for _ in 0..params.max_rounds {
         let mut descs = creation.candidates(world.particles())?;
-        if params.open {
-            let reach = 0.5 * params.d_max * rest;
-            descs.retain(|d| seed_grid.nearest_within(&d.position, reach).is_some());
-        }
+        descs.retain(|d| {
+            seed_grid
+                .nearest_within(&d.position, reach)
+                .is_some_and(|s| seed_normals[s].dot(&(d.position - seeds[s])).abs() <= 0.5 * rest)
+        });
         if descs.is_empty() {
             break;
         }
@@ -541,7 +552,8 @@ impl PartialOrd for Edge {
 /// A hash grid of points for "is there one within `cell`" queries.
 struct Grid {
     cell: Real,
-    map: HashMap<[i64; 3], Vec<Point3>>,
+    map: HashMap<[i64; 3], Vec<(Point3, usize)>>,
+    len: usize,
 }
 
 impl Grid {
@@ -549,6 +561,7 @@ impl Grid {
         let mut g = Grid {
             cell,
             map: HashMap::new(),
+            len: 0,
         };
         points.iter().for_each(|p| g.insert(*p));
         g
@@ -558,25 +571,28 @@ impl Grid {
         [p.x, p.y, p.z].map(|c| (c / self.cell).floor() as i64)
     }
 
+    /// Inserts `p` with the next index (0, 1, ...).
     fn insert(&mut self, p: Point3) {
         let k = self.key(&p);
-        self.map.entry(k).or_default().push(p);
+        self.map.entry(k).or_default().push((p, self.len));
+        self.len += 1;
     }
 
-    /// Some point within `dist` (at most the cell size) of `p`.
-    fn nearest_within(&self, p: &Point3, dist: Real) -> Option<Point3> {
+    /// The index of the nearest point within `dist` (at most the cell
+    /// size) of `p` (the smallest index among equals).
+    fn nearest_within(&self, p: &Point3, dist: Real) -> Option<usize> {
         let k = self.key(p);
-        let mut best: Option<(Real, Point3)> = None;
+        let mut best: Option<(Real, usize)> = None;
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
                     let Some(v) = self.map.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
                         continue;
                     };
-                    for q in v {
+                    for &(q, i) in v {
                         let d = (q - p).norm();
-                        if d <= dist && best.is_none_or(|(b, _)| d < b) {
-                            best = Some((d, *q));
+                        if d <= dist && best.is_none_or(|(b, j)| d < b || (d == b && i < j)) {
+                            best = Some((d, i));
                         }
                     }
                 }
