@@ -195,8 +195,15 @@ fn run_fit(points: &Path, out: &Path, spacing: Option<f64>, open: bool) -> Resul
         open,
         ..Default::default()
     };
-    let fit = op_scene::fit::fit(&data, &params)
-        .with_context(|| format!("cannot fit {}", points.display()))?;
+    let fit = op_scene::fit::fit(&data, &params).map_err(|e| Failure {
+        // A relaxation that diverged is a simulation failure (exit 3).
+        code: if matches!(e, op_scene::fit::FitError::World(_)) {
+            3
+        } else {
+            2
+        },
+        error: anyhow!(e).context(format!("cannot fit {}", points.display())),
+    })?;
     op_scene::fit::write_obj(out, &fit)
         .with_context(|| format!("cannot write {}", out.display()))?;
     let number = |x: f64| {

@@ -24,7 +24,7 @@ pub struct PointSet {
 #[non_exhaustive]
 pub enum PointSetError {
     /// The file could not be opened or read. Fix: check the path.
-    #[error("{file}: cannot read: {source}")]
+    #[error("{file}: cannot read")]
     Io {
         /// The file.
         file: String,
