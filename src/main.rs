@@ -49,6 +49,23 @@ enum Command {
         /// Scene file (.ron or .json).
         scene: PathBuf,
     },
+    /// Fit a particle surface to a point set (seed 000 §7) and write its
+    /// triangle mesh; prints one JSON line of figures.
+    Fit {
+        /// Samples: .xyz (`x y z [nx ny nz]` per line), .ply (ascii or
+        /// binary_little_endian) or .obj (`v`, optional `vn`).
+        points: PathBuf,
+        /// Output mesh (.obj), written atomically.
+        #[arg(long)]
+        out: PathBuf,
+        /// Sample spacing. Default: the median nearest-sample distance.
+        #[arg(long)]
+        spacing: Option<f64>,
+        /// Open data: stretching only, so holes wider than the search range
+        /// (2.5 spacings) stay open.
+        #[arg(long)]
+        open: bool,
+    },
     /// Render an OBJ frame, or a contact sheet of a run directory, to PNG.
     Render {
         /// An .obj file, or a run directory (its frames/ are used).
@@ -138,6 +155,12 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             print_check(&scene, &built);
             Ok(())
         }
+        Some(Command::Fit {
+            points,
+            out,
+            spacing,
+            open,
+        }) => run_fit(&points, &out, spacing, open),
         Some(Command::Render {
             input,
             out,
@@ -162,6 +185,46 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             Ok(())
         }
     }
+}
+
+/// `opsim fit`: read, fit, write the mesh, print the figures as JSON.
+fn run_fit(points: &Path, out: &Path, spacing: Option<f64>, open: bool) -> Result<(), Failure> {
+    let data = op_scene::pointsets::read_point_set(points)?;
+    let params = op_scene::fit::FitParams {
+        spacing,
+        open,
+        ..Default::default()
+    };
+    let fit = op_scene::fit::fit(&data, &params).map_err(|e| Failure {
+        // A relaxation that diverged is a simulation failure (exit 3).
+        code: if matches!(e, op_scene::fit::FitError::World(_)) {
+            3
+        } else {
+            2
+        },
+        error: anyhow!(e).context(format!("cannot fit {}", points.display())),
+    })?;
+    op_scene::fit::write_obj(out, &fit)
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    let number = |x: f64| {
+        if x.is_finite() {
+            format!("{x}")
+        } else {
+            "null".to_string()
+        }
+    };
+    println!(
+        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}}}",
+        fit.particles,
+        fit.vertices.len(),
+        fit.faces.len(),
+        fit.euler_characteristic,
+        fit.boundary_loops,
+        number(fit.rms_distance),
+        number(fit.max_distance),
+        number(fit.spacing)
+    );
+    Ok(())
 }
 
 fn load(path: &Path) -> Result<BuiltScene> {

@@ -9,7 +9,9 @@
 pub mod built;
 pub mod creation;
 pub mod export;
+pub mod fit;
 pub mod outputs;
+pub mod pointsets;
 pub mod render;
 pub mod run;
 pub mod skins;

@@ -1,0 +1,613 @@
+//! Point sets read from files for point-set interpolation (seed 000 §7,
+//! DESIGN §6 `opsim fit`): `.xyz` text, `.ply` (ascii and
+//! binary_little_endian) and `.obj` (`v` and `vn` lines).
+//!
+//! Entry points: [`read_point_set`] (by extension) and the parsers
+//! [`parse_xyz`], [`parse_ply`], [`parse_obj`]. Every error names the file,
+//! the line for text input, and what is wrong; nothing panics on bad input.
+
+use std::path::Path;
+
+use op_dynamics::{Point3, Real, Vec3};
+
+/// Samples of a surface, with normals when the file gives them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointSet {
+    /// Sample positions.
+    pub positions: Vec<Point3>,
+    /// Unit normals, one per position, or `None` when the file has none.
+    pub normals: Option<Vec<Vec3>>,
+}
+
+/// A point-set file could not be read.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PointSetError {
+    /// The file could not be opened or read. Fix: check the path.
+    #[error("{file}: cannot read")]
+    Io {
+        /// The file.
+        file: String,
+        /// The system error.
+        source: std::io::Error,
+    },
+    /// The file's content is malformed. Fix: edit that line (or the
+    /// header) of the file.
+    #[error("{file}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Format {
+        /// The file.
+        file: String,
+        /// 1-based line for text content, `None` for binary data or the
+        /// file as a whole.
+        line: Option<usize>,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+fn format_err(file: &str, line: Option<usize>, message: impl Into<String>) -> PointSetError {
+    PointSetError::Format {
+        file: file.to_string(),
+        line,
+        message: message.into(),
+    }
+}
+
+/// Reads a point set, the format chosen by the extension (`xyz`, `ply`,
+/// `obj`, case-insensitive).
+///
+/// # Errors
+/// An unreadable file, an unknown extension, malformed content, no point,
+/// or a non-finite value.
+pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
+    let file = path.display().to_string();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if !matches!(ext.as_str(), "xyz" | "ply" | "obj") {
+        return Err(format_err(
+            &file,
+            None,
+            format!("unknown point-set format `.{ext}`: use .xyz, .ply or .obj"),
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|source| PointSetError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    let set = match ext.as_str() {
+        "ply" => parse_ply(&bytes, &file)?,
+        _ => {
+            let text = std::str::from_utf8(&bytes)
+                .map_err(|e| format_err(&file, None, format!("not UTF-8 text: {e}")))?;
+            if ext == "xyz" {
+                parse_xyz(text, &file)?
+            } else {
+                parse_obj(text, &file)?
+            }
+        }
+    };
+    if set.positions.is_empty() {
+        return Err(format_err(&file, None, "no point in the file"));
+    }
+    Ok(set)
+}
+
+fn number(field: &str, file: &str, line: usize) -> Result<Real, PointSetError> {
+    let x: Real = field
+        .parse()
+        .map_err(|_| format_err(file, Some(line), format!("`{field}` is not a number")))?;
+    if !x.is_finite() {
+        return Err(format_err(
+            file,
+            Some(line),
+            format!("`{field}` is not finite"),
+        ));
+    }
+    Ok(x)
+}
+
+fn unit(n: Vec3, file: &str, line: Option<usize>) -> Result<Vec3, PointSetError> {
+    if n.norm().is_nan() || n.norm() <= 1e-12 {
+        return Err(format_err(
+            file,
+            line,
+            format!("normal ({}, {}, {}) is zero or not finite", n.x, n.y, n.z),
+        ));
+    }
+    Ok(n.normalize())
+}
+
+/// Parses `.xyz` text: `x y z` or `x y z nx ny nz` per line (whitespace or
+/// commas between numbers), `#` starts a comment, blank lines skipped.
+/// Either every point has a normal or none has.
+pub fn parse_xyz(text: &str, file: &str) -> Result<PointSet, PointSetError> {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut columns = None;
+    for (k, raw) in text.lines().enumerate() {
+        let line = k + 1;
+        let content = raw.split('#').next().unwrap_or("");
+        let fields: Vec<&str> = content
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|s| !s.is_empty())
+            .collect();
+        if fields.is_empty() {
+            continue;
+        }
+        if fields.len() != 3 && fields.len() != 6 {
+            return Err(format_err(
+                file,
+                Some(line),
+                format!(
+                    "expected 3 numbers (x y z) or 6 (x y z nx ny nz), found {}",
+                    fields.len()
+                ),
+            ));
+        }
+        match columns {
+            None => columns = Some(fields.len()),
+            Some(c) if c != fields.len() => {
+                return Err(format_err(
+                    file,
+                    Some(line),
+                    format!(
+                    "{} numbers where earlier lines have {c}: give normals for every point or none",
+                    fields.len()
+                ),
+                ))
+            }
+            Some(_) => {}
+        }
+        let v = fields
+            .iter()
+            .map(|f| number(f, file, line))
+            .collect::<Result<Vec<_>, _>>()?;
+        positions.push(Point3::new(v[0], v[1], v[2]));
+        if v.len() == 6 {
+            normals.push(unit(Vec3::new(v[3], v[4], v[5]), file, Some(line))?);
+        }
+    }
+    let has_normals = columns == Some(6);
+    Ok(PointSet {
+        positions,
+        normals: has_normals.then_some(normals),
+    })
+}
+
+/// Parses `.obj` text: `v x y z [w]` lines are the points; `vn` lines, when
+/// there are exactly as many as `v` lines, their normals (in order). Other
+/// lines (faces, groups, ...) are ignored.
+pub fn parse_obj(text: &str, file: &str) -> Result<PointSet, PointSetError> {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    for (k, raw) in text.lines().enumerate() {
+        let line = k + 1;
+        let content = raw.split('#').next().unwrap_or("");
+        let mut fields = content.split_whitespace();
+        let tag = fields.next();
+        if tag != Some("v") && tag != Some("vn") {
+            continue;
+        }
+        let v: Vec<&str> = fields.collect();
+        let wanted = if tag == Some("v") { 3..=4 } else { 3..=3 };
+        if !wanted.contains(&v.len()) {
+            return Err(format_err(
+                file,
+                Some(line),
+                format!(
+                    "`{}` needs 3 numbers, found {}",
+                    tag.unwrap_or_default(),
+                    v.len()
+                ),
+            ));
+        }
+        let x = [
+            number(v[0], file, line)?,
+            number(v[1], file, line)?,
+            number(v[2], file, line)?,
+        ];
+        if tag == Some("v") {
+            positions.push(Point3::new(x[0], x[1], x[2]));
+        } else {
+            normals.push(unit(Vec3::new(x[0], x[1], x[2]), file, Some(line))?);
+        }
+    }
+    let has_normals = !normals.is_empty() && normals.len() == positions.len();
+    Ok(PointSet {
+        positions,
+        normals: has_normals.then_some(normals),
+    })
+}
+
+/// A PLY scalar type.
+#[derive(Clone, Copy, Debug)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(name: &str) -> Option<Scalar> {
+        Some(match name {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    /// The little-endian value at the start of `b` (`b.len() >= size`).
+    fn read_le(self, b: &[u8]) -> Real {
+        match self {
+            Scalar::I8 => b[0] as i8 as Real,
+            Scalar::U8 => b[0] as Real,
+            Scalar::I16 => i16::from_le_bytes([b[0], b[1]]) as Real,
+            Scalar::U16 => u16::from_le_bytes([b[0], b[1]]) as Real,
+            Scalar::I32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as Real,
+            Scalar::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as Real,
+            Scalar::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as Real,
+            Scalar::F64 => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
+        }
+    }
+}
+
+/// A PLY property: a scalar, or a list (count type, item type).
+#[derive(Clone, Debug)]
+struct Property {
+    name: String,
+    scalar: Scalar,
+    list: Option<Scalar>,
+}
+
+#[derive(Clone, Debug)]
+struct Element {
+    name: String,
+    count: usize,
+    properties: Vec<Property>,
+}
+
+/// Parses a `.ply` file, `ascii 1.0` or `binary_little_endian 1.0`: the
+/// `vertex` element's `x y z` (any numeric type) are the points, `nx ny nz`
+/// their normals when all three are present. Other elements (faces, ...)
+/// are skipped.
+pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
+    // Header: text lines up to `end_header`.
+    let mut pos = 0;
+    let mut line_no = 0;
+    let mut format = None;
+    let mut elements: Vec<Element> = Vec::new();
+    loop {
+        let Some(end) = bytes[pos..].iter().position(|&b| b == b'\n') else {
+            return Err(format_err(
+                file,
+                None,
+                "the header has no `end_header` line",
+            ));
+        };
+        line_no += 1;
+        let raw = String::from_utf8_lossy(&bytes[pos..pos + end]);
+        pos += end + 1;
+        let fields: Vec<&str> = raw.split_whitespace().collect();
+        let err = |m: String| format_err(file, Some(line_no), m);
+        if line_no == 1 {
+            if fields != ["ply"] {
+                return Err(err("the first line must be `ply`".into()));
+            }
+            continue;
+        }
+        match fields.first().copied() {
+            None | Some("comment") | Some("obj_info") => {}
+            Some("format") => {
+                format = match fields.get(1).copied() {
+                    Some("ascii") => Some(false),
+                    Some("binary_little_endian") => Some(true),
+                    other => {
+                        return Err(err(format!(
+                            "format {} is not supported: use ascii or binary_little_endian",
+                            other.unwrap_or("(missing)")
+                        )))
+                    }
+                }
+            }
+            Some("element") => {
+                let (Some(name), Some(count)) = (fields.get(1), fields.get(2)) else {
+                    return Err(err("`element` needs a name and a count".into()));
+                };
+                let count = count
+                    .parse()
+                    .map_err(|_| err(format!("element count `{count}` is not a count")))?;
+                elements.push(Element {
+                    name: name.to_string(),
+                    count,
+                    properties: Vec::new(),
+                });
+            }
+            Some("property") => {
+                let Some(element) = elements.last_mut() else {
+                    return Err(err("`property` before any `element`".into()));
+                };
+                let ty = |k: usize| {
+                    fields
+                        .get(k)
+                        .and_then(|t| Scalar::parse(t))
+                        .ok_or_else(|| err(format!("unknown property type in `{}`", raw.trim())))
+                };
+                let property = if fields.get(1) == Some(&"list") {
+                    Property {
+                        list: Some(ty(2)?),
+                        scalar: ty(3)?,
+                        name: fields.get(4).unwrap_or(&"").to_string(),
+                    }
+                } else {
+                    Property {
+                        scalar: ty(1)?,
+                        list: None,
+                        name: fields.get(2).unwrap_or(&"").to_string(),
+                    }
+                };
+                element.properties.push(property);
+            }
+            Some("end_header") => break,
+            Some(other) => return Err(err(format!("unknown header keyword `{other}`"))),
+        }
+    }
+    let Some(binary) = format else {
+        return Err(format_err(file, None, "the header has no `format` line"));
+    };
+    let Some(vertex_index) = elements.iter().position(|e| e.name == "vertex") else {
+        return Err(format_err(file, None, "no `vertex` element"));
+    };
+    let vertex = &elements[vertex_index];
+    let find = |n: &str| {
+        vertex
+            .properties
+            .iter()
+            .position(|p| p.name == n && p.list.is_none())
+    };
+    let (Some(ix), Some(iy), Some(iz)) = (find("x"), find("y"), find("z")) else {
+        return Err(format_err(
+            file,
+            None,
+            "the `vertex` element needs scalar properties x, y and z",
+        ));
+    };
+    let normal_ix = match (find("nx"), find("ny"), find("nz")) {
+        (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+        _ => None,
+    };
+    let mut rows: Vec<Vec<Real>> = Vec::with_capacity(vertex.count.min(1 << 24));
+    if binary {
+        let mut data = &bytes[pos..];
+        let truncated = || format_err(file, None, "binary data ends early");
+        for (k, element) in elements.iter().enumerate().take(vertex_index + 1) {
+            for _ in 0..element.count {
+                let mut row = Vec::with_capacity(element.properties.len());
+                for p in &element.properties {
+                    let items = match p.list {
+                        Some(count_type) => {
+                            if data.len() < count_type.size() {
+                                return Err(truncated());
+                            }
+                            let n = count_type.read_le(data);
+                            data = &data[count_type.size()..];
+                            if n < 0.0 {
+                                return Err(format_err(file, None, "negative list length"));
+                            }
+                            n as usize
+                        }
+                        None => 1,
+                    };
+                    let need = items.checked_mul(p.scalar.size()).ok_or_else(truncated)?;
+                    if data.len() < need {
+                        return Err(truncated());
+                    }
+                    if p.list.is_none() {
+                        row.push(p.scalar.read_le(data));
+                    }
+                    data = &data[need..];
+                }
+                if k == vertex_index {
+                    rows.push(row);
+                }
+            }
+        }
+    } else {
+        let text = String::from_utf8_lossy(&bytes[pos..]);
+        let mut lines = text.lines().map(|l| {
+            line_no += 1;
+            (line_no, l)
+        });
+        for (k, element) in elements.iter().enumerate().take(vertex_index + 1) {
+            for _ in 0..element.count {
+                let Some((line, l)) = lines.next() else {
+                    return Err(format_err(
+                        file,
+                        None,
+                        format!(
+                            "the file ends before its {} `{}` rows",
+                            element.count, element.name
+                        ),
+                    ));
+                };
+                if k != vertex_index {
+                    continue;
+                }
+                let fields: Vec<&str> = l.split_whitespace().collect();
+                if vertex.properties.iter().any(|p| p.list.is_some()) {
+                    return Err(format_err(
+                        file,
+                        Some(line),
+                        "list properties in `vertex` are not supported in ascii PLY",
+                    ));
+                }
+                if fields.len() != vertex.properties.len() {
+                    return Err(format_err(
+                        file,
+                        Some(line),
+                        format!(
+                            "expected {} values, found {}",
+                            vertex.properties.len(),
+                            fields.len()
+                        ),
+                    ));
+                }
+                rows.push(
+                    fields
+                        .iter()
+                        .map(|f| number(f, file, line))
+                        .collect::<Result<Vec<_>, _>>()?,
+                );
+            }
+        }
+    }
+    // Map property positions to row positions (lists are not in rows).
+    let scalar_pos = |i: usize| {
+        vertex.properties[..i]
+            .iter()
+            .filter(|p| p.list.is_none())
+            .count()
+    };
+    let (ix, iy, iz) = (scalar_pos(ix), scalar_pos(iy), scalar_pos(iz));
+    let mut positions = Vec::with_capacity(rows.len());
+    let mut normals = Vec::new();
+    for (k, row) in rows.iter().enumerate() {
+        let p = Point3::new(row[ix], row[iy], row[iz]);
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(format_err(
+                file,
+                None,
+                format!("vertex {k} has a non-finite coordinate"),
+            ));
+        }
+        positions.push(p);
+        if let Some(n) = normal_ix {
+            let n = n.map(scalar_pos);
+            let v = Vec3::new(row[n[0]], row[n[1]], row[n[2]]);
+            normals.push(unit(v, file, None).map_err(|_| {
+                format_err(
+                    file,
+                    None,
+                    format!("vertex {k} has a zero or non-finite normal"),
+                )
+            })?);
+        }
+    }
+    Ok(PointSet {
+        positions,
+        normals: normal_ix.map(|_| normals),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn xyz_with_and_without_normals() {
+        let s = parse_xyz("# c\n0 0 0\n1, 2, 3\n\n", "a.xyz").unwrap();
+        assert_eq!(s.positions.len(), 2);
+        assert!(s.normals.is_none());
+        let s = parse_xyz("0 0 0 0 0 2\n1 0 0 1 0 0\n", "a.xyz").unwrap();
+        assert_eq!(s.normals.unwrap()[0], Vec3::z());
+    }
+
+    #[test]
+    fn xyz_errors_name_file_and_line() {
+        let e = parse_xyz("0 0 0\n1 2\n", "bad.xyz")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("bad.xyz:2:"), "{e}");
+        let e = parse_xyz("0 0 0\n1 2 x\n", "bad.xyz")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bad.xyz:2") && e.contains("`x`"), "{e}");
+        let e = parse_xyz("0 0 0\n1 2 3 0 0 1\n", "m.xyz")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("m.xyz:2"), "{e}");
+        let e = parse_xyz("0 0 0 0 0 0\n", "z.xyz").unwrap_err().to_string();
+        assert!(e.contains("z.xyz:1") && e.contains("zero"), "{e}");
+    }
+
+    #[test]
+    fn obj_vertices_and_normals() {
+        let text = "# c\nv 0 0 0\nv 1 0 0\nvn 0 0 1\nvn 0 0 1\nf 1 2 1\n";
+        let s = parse_obj(text, "a.obj").unwrap();
+        assert_eq!(s.positions[1], Point3::new(1.0, 0.0, 0.0));
+        assert_eq!(s.normals.unwrap().len(), 2);
+        let e = parse_obj("v 0 0\n", "b.obj").unwrap_err().to_string();
+        assert!(e.starts_with("b.obj:1:"), "{e}");
+    }
+
+    #[test]
+    fn ascii_ply_skips_faces_and_reads_normals() {
+        let text = "ply\nformat ascii 1.0\ncomment x\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n";
+        let s = parse_ply(text.as_bytes(), "a.ply").unwrap();
+        assert_eq!(s.positions.len(), 3);
+        assert_eq!(s.positions[2], Point3::new(0.0, 1.0, 0.0));
+        assert_eq!(s.normals.unwrap()[1], Vec3::z());
+        let bad = text.replace("1 0 0 0 0 1", "1 0 0 0 1");
+        let e = parse_ply(bad.as_bytes(), "b.ply").unwrap_err().to_string();
+        assert!(e.starts_with("b.ply:15:"), "{e}");
+    }
+
+    #[test]
+    fn binary_ply_written_here_reads_back() {
+        // A face element first (skipped), then vertices: double x y z and
+        // an unused uchar, no normals.
+        let mut bytes = b"ply\nformat binary_little_endian 1.0\nelement face 1\nproperty list uchar int vertex_indices\nelement vertex 2\nproperty double x\nproperty double y\nproperty double z\nproperty uchar red\nend_header\n".to_vec();
+        bytes.push(3);
+        for i in [0i32, 1, 1] {
+            bytes.extend_from_slice(&i.to_le_bytes());
+        }
+        for p in [[1.5f64, -2.0, 3.25], [0.0, 0.5, 1e3]] {
+            for c in p {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+            bytes.push(255);
+        }
+        let s = parse_ply(&bytes, "b.ply").unwrap();
+        assert_eq!(
+            s.positions,
+            vec![Point3::new(1.5, -2.0, 3.25), Point3::new(0.0, 0.5, 1e3)]
+        );
+        assert!(s.normals.is_none());
+        let e = parse_ply(&bytes[..bytes.len() - 3], "b.ply")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("b.ply") && e.contains("ends early"), "{e}");
+        let big = String::from_utf8_lossy(&bytes).replace("little", "big");
+        let e = parse_ply(big.as_bytes(), "c.ply").unwrap_err().to_string();
+        assert!(e.starts_with("c.ply:2:"), "{e}");
+    }
+
+    #[test]
+    fn unknown_extension_is_an_error() {
+        let e = read_point_set(Path::new("points.txt"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("points.txt") && e.contains(".xyz"), "{e}");
+    }
+}
