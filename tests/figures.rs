@@ -137,6 +137,65 @@ fn fig_08_unoriented_row_makes_a_sharp_crease() {
     );
 }
 
+/// Fig. 9: a ball pushing up through a sheet with the stretching rule
+/// stretches it until particles are created in the gaps; at the end every
+/// particle's nearest neighbour is within `[d_min/2, d_max]`.
+///
+/// Ignored: the run breaks the claim through a bug of the stretching rule
+/// (op-dynamics `creation/stretching.rs`): a candidate is accepted when no
+/// particle lies within `d_min/2` of the pair's midpoint, but is then moved
+/// along the averaged normal onto the mean position of its neighbours, and
+/// that move can put it next to an existing particle (over the ball at
+/// t = 7.27: candidates 0.43 and 0.53 r0 from particles 120 and 75). The
+/// Lennard-Jones repulsion of such a pair ejects both at thousands of r0
+/// per time unit. Until then (t < 7.2) the sheet stretches over the ball,
+/// 196 -> about 250 particles, nearest neighbours in [0.91, 1.28] r0.
+#[test]
+#[ignore = "stretching rule places candidates closer than d_min/2 (see doc comment)"]
+fn fig_09_ball_stretches_the_sheet_and_particles_are_created() {
+    let scene = load("fig_09_stretching");
+    let stretching = scene
+        .creation
+        .as_ref()
+        .and_then(|c| c.stretching.clone())
+        .expect("the stretching rule is on");
+    let (built, summary) = run(&scene, "stretch");
+    let initial = built.objects[0].ids.len();
+    let created = built.objects[0].created.len();
+    let p = built.world.particles();
+    let points = p.positions();
+    let nearest: Vec<Real> = (0..points.len())
+        .map(|i| {
+            (0..points.len())
+                .filter(|&j| j != i)
+                .map(|j| (points[i] - points[j]).norm())
+                .fold(Real::INFINITY, Real::min)
+        })
+        .collect();
+    let (lo, hi) = nearest
+        .iter()
+        .fold((Real::INFINITY, 0.0 as Real), |(a, b), &d| {
+            (a.min(d), b.max(d))
+        });
+    let top = points.iter().map(|x| x.z).fold(Real::MIN, Real::max);
+    println!(
+        "particles {initial} -> {} ({created} created); nearest-neighbour distance in \
+         [{lo:.3}, {hi:.3}] r0, median {:.3}; highest particle z = {top:.2}",
+        p.len(),
+        median(nearest.clone())
+    );
+    assert_eq!(summary.objects[0].particles, p.len());
+    assert!(created > 0, "no particle created");
+    assert_eq!(p.len(), initial + created);
+    assert!(top > 3.0, "the ball lifted the sheet to {top}");
+    assert!(
+        lo >= 0.5 * stretching.d_min && hi <= stretching.d_max,
+        "nearest-neighbour distances [{lo}, {hi}] outside [{}, {}]",
+        0.5 * stretching.d_min,
+        stretching.d_max
+    );
+}
+
 /// Fig. 15: the spin torque (seed 000 eq. 15) turns the local x axes to
 /// the direction of smallest absolute curvature: along the axis of a
 /// cylinder, along the meridians of a prolate spheroid. Particles near the
