@@ -294,3 +294,31 @@ fn fig_07_eraser_cuts_the_sheet_in_two() {
     assert_eq!(sizes.len(), 2, "{sizes:?}");
     assert_eq!(sizes, vec![left, p.len() - left]);
 }
+
+/// Fig. 5: two chains hanging from fixed ends swing under gravity and link
+/// into one: their free ends end as neighbours and every particle is
+/// connected to every other through neighbours (1.5 r0, the cut-off).
+#[test]
+fn fig_05_two_swinging_chains_link_into_one() {
+    let scene = load("fig_05_chain_linking");
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let start = scene.build(Some(&base), None).expect("builds");
+    let x0 = positions(&start, &start.objects[0].ids);
+    assert_eq!(
+        components(&x0, 1.5).len(),
+        2,
+        "two separate chains at first"
+    );
+    let (built, _) = run(&scene, "chains");
+    let ids = &built.objects[0].ids;
+    let x = positions(&built, ids);
+    // Free ends: the last particle of each chain.
+    let ends = (x[7] - x[15]).norm();
+    let sizes = components(&x, 1.5);
+    let lowest = x.iter().map(|p| p.z).fold(Real::INFINITY, Real::min);
+    println!("free ends {ends:.3} r0 apart; components {sizes:?}; lowest z {lowest:.2}");
+    assert!(ends < 1.5, "free ends {ends} apart");
+    assert_eq!(sizes, vec![ids.len()]);
+    // It hangs (a trapeze below the anchors), not a straight bar.
+    assert!(lowest < -2.0, "lowest particle at z = {lowest}");
+}
