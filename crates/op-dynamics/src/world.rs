@@ -165,6 +165,9 @@ pub struct StepReport {
     pub reordered: bool,
     /// Seconds per stage, indexed like [`Stage`].
     pub seconds: [f64; 4],
+    /// Stable ids of the particles eraser tools removed at the end of the
+    /// step (seed 000 fig. 7), in increasing order.
+    pub erased: Vec<u32>,
 }
 
 /// True when some pair of particles does not interact completely (several
@@ -413,6 +416,7 @@ impl World {
                 Role::Obstacle { .. } => "obstacle",
                 Role::Attractor { .. } => "attractor",
                 Role::Mover { .. } => "mover",
+                Role::Eraser => "eraser",
             };
             out.push(format!("tool:{role}"));
         }
@@ -557,6 +561,15 @@ impl World {
         if self.accumulator.is_active() && !held {
             self.accumulator.clear();
             self.integrator.invalidate();
+        }
+        // Erasers act on the state at the end of the step (before the
+        // divergence check, which then sees only the survivors).
+        if self.pipeline.tools.has_eraser() {
+            let erased = self.pipeline.tools.erase(self.time, &self.particles);
+            if !erased.is_empty() {
+                self.remove_live(&erased);
+            }
+            report.erased = erased;
         }
 
         let clock = std::time::Instant::now();

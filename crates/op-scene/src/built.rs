@@ -105,10 +105,13 @@ impl BuiltScene {
         self.settled = true;
         let p = self.world.particles();
         for o in &mut self.objects {
+            // Eraser tools may have removed particles while settling: the
+            // reference holds the survivors.
+            o.ids.retain(|&id| p.slot_of(id).is_some());
             o.rest = o
                 .ids
                 .iter()
-                .map(|&id| p.positions()[p.slot_of(id).expect("id of the scene")])
+                .filter_map(|&id| p.slot_of(id).map(|s| p.positions()[s]))
                 .collect();
             // Particles cannot coincide after a finite, non-divergent settle
             // phase unless the material lets them; keep the built spacing then.

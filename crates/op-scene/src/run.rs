@@ -111,15 +111,17 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
     }
 }
 
-/// Rest shape error of `object` in the world's current state.
+/// Rest shape error of `object` in the world's current state, over its
+/// original particles that still exist (eraser tools remove particles).
 pub fn rest_shape_error(scene: &BuiltScene, object: &BuiltObject) -> Real {
     let p = scene.world.particles();
-    let current: Vec<Point3> = object
+    let (rest, current): (Vec<Point3>, Vec<Point3>) = object
         .ids
         .iter()
-        .map(|&id| p.positions()[p.slot_of(id).expect("id of the scene")])
-        .collect();
-    rest_shape_rms(&object.rest, &current) / object.rest_spacing.max(Real::MIN_POSITIVE)
+        .zip(&object.rest)
+        .filter_map(|(&id, r)| p.slot_of(id).map(|s| (*r, p.positions()[s])))
+        .unzip();
+    rest_shape_rms(&rest, &current) / object.rest_spacing.max(Real::MIN_POSITIVE)
 }
 
 /// Runs `scene`, writing into `opts.out_dir`; `on_frame(k, total)` is

@@ -5,6 +5,9 @@
 //! evaluation, at the evaluation's time, so every integrator (including
 //! the stages of Runge-Kutta schemes) sees the tool where it is.
 //!
+//! Erasers ([`Role::Eraser`]) exert no force: after each step the world
+//! removes the particles inside them ([`Tools::erase`]).
+//!
 //! Only worlds with tools pay for them: without tools the force pass has
 //! no tool stage. Tools act at particle centres (forces, no torques).
 //! Skinned objects meet tools through their skins instead (op-implicit);
@@ -213,6 +216,30 @@ impl Tool {
             .is_none_or(|list| list.contains(&object))
     }
 
+    /// Stable ids, in increasing order, of the particles (of the objects
+    /// the tool acts on) strictly inside the tool's shape at time `t`; empty
+    /// unless the tool is an eraser.
+    pub fn erased(&self, t: Real, particles: &Particles) -> Vec<u32> {
+        if self.params.role != Role::Eraser {
+            return Vec::new();
+        }
+        let pose = self.pose(t);
+        let frame = parry_pose(&pose.position, &pose.rotation);
+        let objects = particles.objects();
+        let mut ids: Vec<u32> = particles
+            .positions()
+            .iter()
+            .enumerate()
+            .filter(|&(slot, x)| {
+                self.acts_on(objects[slot])
+                    && self.shape.contains_point(&frame, to_parry(&x.coords))
+            })
+            .map(|(slot, _)| particles.ids()[slot])
+            .collect();
+        ids.sort_unstable();
+        ids
+    }
+
     /// Adds this tool's forces to `forces` and energies to `energies` (by
     /// slot) for the state `s` at time `t`.
     fn add(
@@ -250,6 +277,7 @@ impl Tool {
                     forces[i] -= stiffness * stretch + damping * relative;
                 }
             }
+            Role::Eraser => {}
             Role::Obstacle { .. } | Role::Attractor { .. } => {
                 let frame = parry_pose(&pose.position, &pose.rotation);
                 let reach = self.params.role.reach();
@@ -290,7 +318,7 @@ impl Tool {
                             Role::Attractor { strength, reach } => {
                                 roles::attractor(strength, reach, sd)
                             }
-                            Role::Mover { .. } => unreachable!("handled above"),
+                            Role::Mover { .. } | Role::Eraser => return,
                         };
                         *e += energy;
                         *f += push * n;
@@ -327,6 +355,31 @@ impl Tools {
         self.tools.is_empty()
     }
 
+    /// Whether some tool is an eraser.
+    pub fn has_eraser(&self) -> bool {
+        self.tools.iter().any(|t| t.params.role == Role::Eraser)
+    }
+
+    /// Ids, in increasing order and without repeats, of the particles
+    /// inside any eraser at time `t` (see [`Role::Eraser`]); movers forget
+    /// the ones they held. The caller removes them from the world. The
+    /// result depends only on the positions, not on the thread count.
+    pub fn erase(&mut self, t: Real, particles: &Particles) -> Vec<u32> {
+        let mut ids: Vec<u32> = self
+            .tools
+            .iter()
+            .flat_map(|tool| tool.erased(t, particles))
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        if !ids.is_empty() {
+            for tool in &mut self.tools {
+                tool.grabbed.retain(|g| ids.binary_search(&g.0).is_err());
+            }
+        }
+        ids
+    }
+
     /// Adds every tool's forces and energies (by slot) at state `s`, time
     /// `t`, tool after tool (the same bits at any thread count: each
     /// particle's sum is formed in tool order).
@@ -348,6 +401,95 @@ impl Tools {
 mod tests {
     use super::*;
     use crate::particles::ParticleDesc;
+
+    /// An eraser ball sweeping along a row of still particles removes each
+    /// one when its centre is inside, exactly those, in any thread count;
+    /// a mover forgets the particles erased from its grip; survivors keep
+    /// their ids.
+    #[test]
+    fn eraser_removes_the_particles_it_passes_over() {
+        use crate::{Material, World, WorldParams};
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let mut p = Particles::new();
+                    for k in 0..10 {
+                        p.push(ParticleDesc::at(Point3::new(k as Real, 0.0, 0.0)))
+                            .unwrap();
+                    }
+                    // Sweeps x from -1 to 4.5 over t in [0, 1]; radius 0.6
+                    // reaches x <= 5.1 at the end: particles 0..=5.
+                    let eraser = ToolParams {
+                        name: "eraser".into(),
+                        shape: ToolShape::Ball { radius: 0.6 },
+                        path: Path {
+                            keyframes: vec![
+                                Keyframe {
+                                    time: 0.0,
+                                    position: [-1.0, 0.0, 0.0],
+                                    rotation: [0.0; 3],
+                                },
+                                Keyframe {
+                                    time: 1.0,
+                                    position: [4.5, 0.0, 0.0],
+                                    rotation: [0.0; 3],
+                                },
+                            ],
+                        },
+                        role: Role::Eraser,
+                        objects: None,
+                    };
+                    // Holds particles 1 and 8 in place.
+                    let holder = |x: Real| ToolParams {
+                        name: "holder".into(),
+                        shape: ToolShape::Ball { radius: 0.1 },
+                        path: Path::fixed([x, 0.0, 0.0]),
+                        role: Role::Mover {
+                            stiffness: 10.0,
+                            damping: 0.0,
+                            release: Real::INFINITY,
+                        },
+                        objects: None,
+                    };
+                    let params = WorldParams {
+                        dt: 0.01,
+                        tools: vec![eraser, holder(1.0), holder(8.0)],
+                        ..WorldParams::default()
+                    };
+                    let mut w = World::new(p, &[Material::empty()], params).unwrap();
+                    assert!(w.enabled().contains(&"tool:eraser".to_string()));
+                    let mut erased = Vec::new();
+                    let mut count_when_first_erased = None;
+                    while w.time() < 1.5 {
+                        let now = w.step().unwrap().erased.clone();
+                        if !now.is_empty() && count_when_first_erased.is_none() {
+                            count_when_first_erased = Some(w.time());
+                        }
+                        erased.extend(now);
+                    }
+                    let grabbed: Vec<Vec<u32>> =
+                        w.tools().iter().map(|t| t.grabbed().collect()).collect();
+                    (
+                        erased,
+                        w.particles().ids().to_vec(),
+                        grabbed,
+                        count_when_first_erased,
+                    )
+                })
+        };
+        let (erased, mut ids, grabbed, first) = run(1);
+        assert_eq!(erased, vec![0, 1, 2, 3, 4, 5]);
+        ids.sort_unstable();
+        assert_eq!(ids, vec![6, 7, 8, 9]);
+        // The ball's surface reaches x = 0 at t = 0.4/5.5.
+        let first = first.expect("something was erased");
+        assert!((first - 0.4 / 5.5).abs() <= 0.011, "{first}");
+        assert_eq!(grabbed, vec![vec![], vec![], vec![8]]);
+        assert_eq!(run(2), run(1));
+    }
 
     /// Every shape's output mesh is closed where the shape is, outward
     /// oriented (positive signed volume close to the shape's), and posed.

@@ -60,6 +60,13 @@ pub enum Role {
         #[serde(default = "infinity", skip_serializing_if = "is_infinite")]
         release: Real,
     },
+    /// An eraser (seed 000 §6, fig. 7: tools that cut a surface; here the
+    /// cut removes material): every particle inside the tool's shape at the
+    /// end of a step is deleted from the world
+    /// ([`crate::World::remove_particles`]). No force and no energy: the
+    /// removal is an edit of the particle set between steps, not a
+    /// potential, so energy is not conserved across it.
+    Eraser,
 }
 
 fn infinity() -> Real {
@@ -100,17 +107,19 @@ impl Role {
                     "must be a time (or infinite)",
                 )
             }
+            Role::Eraser => Ok(()),
         }
     }
 
     /// How far outside the surface the role acts (particles farther away
     /// are skipped by a bounding-box test). Movers act on their grabbed
-    /// particles wherever they are.
+    /// particles wherever they are; erasers exert no force (0).
     pub fn reach(&self) -> Real {
         match self {
             Role::Obstacle { margin, .. } => *margin,
             Role::Attractor { reach, .. } => *reach,
             Role::Mover { .. } => Real::INFINITY,
+            Role::Eraser => 0.0,
         }
     }
 }

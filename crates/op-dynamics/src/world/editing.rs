@@ -71,6 +71,12 @@ impl World {
             }
             .into());
         }
+        Ok(self.remove_live(ids))
+    }
+
+    /// [`World::remove_particles`] for ids known to name live particles
+    /// (the eraser tools' hook in [`World::step`]).
+    pub(super) fn remove_live(&mut self, ids: &[u32]) -> usize {
         let before = self.particles.len();
         let keep = self.particles.remove(ids);
         let prev: Vec<_> = keep
@@ -79,7 +85,7 @@ impl World {
             .collect();
         self.prev_positions = prev;
         self.after_edit();
-        Ok(before - self.particles.len())
+        before - self.particles.len()
     }
 
     /// Re-derives what depends on the particle set after an edit.
