@@ -277,3 +277,24 @@ fn apply_acts_at_its_interval_and_bad_parameters_are_errors() {
     capped.max_particles = 2;
     assert_eq!(capped.candidates(w.particles()).unwrap().len(), 0);
 }
+
+/// A candidate is moved off the pair's midpoint along the averaged normal
+/// onto its neighbours' mean position; it must then also keep `d_min / 2`
+/// from every particle there. Here the midpoint's ball is empty (the third
+/// particle is 1.05 from it), but the neighbours' mean lifts the candidate
+/// to 0.65 from the third particle: no candidate. Without the third
+/// particle the midpoint is taken.
+#[test]
+fn stretching_checks_the_shifted_candidate_too() {
+    let pair = [Point3::new(0.0, 0.0, 0.0), Point3::new(2.2, 0.0, 0.0)];
+    let alone = stretching().candidates(&store(&pair)).unwrap();
+    assert_eq!(alone.len(), 1);
+    assert!((alone[0].position - Point3::new(1.1, 0.0, 0.0)).norm() < 1e-12);
+    let crowded = [pair[0], pair[1], Point3::new(1.1, 0.0, 1.05)];
+    let found = stretching().candidates(&store(&crowded)).unwrap();
+    assert!(
+        found.is_empty(),
+        "{:?}",
+        found.iter().map(|d| d.position).collect::<Vec<_>>()
+    );
+}

@@ -9,8 +9,9 @@
 //!
 //! - normal: the weighted mean of their world normals, renormalised;
 //! - position: `m` moved along that normal onto the weighted mean
-//!   position, `m + n (n . (p_mean - m))`. Only the normal component is
-//!   averaged, so the candidate stays in the empty ball around `m` while
+//!   position, `m + n (n . (p_mean - m))`, and kept only if the ball of
+//!   `d_min / 2` around that final position is empty too. Only the normal
+//!   component is averaged, so the candidate stays near `m` while
 //!   following the surface across a curved gap (the chord's midpoint lies
 //!   inside a convex surface);
 //! - frame: built from the averaged normal and the weighted mean of their
@@ -110,7 +111,17 @@ pub(crate) fn candidates(
                     continue;
                 }
                 let (a, b) = if ids[i] < ids[j] { (i, j) } else { (j, i) };
-                if let Some(d) = averaged(p, &full[a], a, m, reach) {
+                let Some(d) = averaged(p, &full[a], a, m, reach) else {
+                    continue;
+                };
+                // The averaged position left the midpoint along the normal:
+                // its own ball of d_min/2 must be empty too.
+                let crowded = full[i]
+                    .iter()
+                    .map(|&k| k as usize)
+                    .chain([i, j])
+                    .any(|k| (pos[k] - d.position).norm_squared() < 0.25 * d_min * d_min);
+                if !crowded {
                     out.push(((ids[a], ids[b]), d));
                 }
             }
