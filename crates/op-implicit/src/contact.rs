@@ -25,7 +25,8 @@ use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::shape::Shape;
 use rayon::prelude::*;
 
-use crate::field::Field;
+use crate::field::{Field, ScalarField, ValueGradient};
+use crate::kernel::ISO;
 
 /// Parameters of [`collider_reactions`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -112,6 +113,78 @@ pub fn collider_reactions(
         acc.add(field, &p, force);
     }
     acc.finish()
+}
+
+/// A skin pressed against rigid colliders, deformed so that it lies on
+/// their surfaces where it would enter them (Gascuel with only the
+/// deformable skin compressed, DESIGN §5): the exported skin of an object
+/// on an obstacle. With `s_k` the signed distance to collider `k`
+/// (positive outside) and `g` a slope,
+/// `f'(p) = min(f(p), min_k (ISO + g s_k(p)))`: continuous, equal to `f`
+/// wherever `f < ISO + g s_k` (everywhere away from the colliders), below
+/// the iso value inside them, so its iso-surface is the skin clipped
+/// exactly at the collider surfaces, with the colliders' normals there.
+pub struct ClippedField<'a, F: ScalarField + ?Sized> {
+    field: &'a F,
+    colliders: Vec<(&'a dyn Shape, Pose)>,
+    slope: Real,
+}
+
+impl<'a, F: ScalarField + ?Sized> ClippedField<'a, F> {
+    /// `field` clipped by `colliders` (shape, pose) with slope `slope`
+    /// (> 0; `ISO / cell_size` makes the clip one cell thick).
+    pub fn new(field: &'a F, colliders: Vec<(&'a dyn Shape, Pose)>, slope: Real) -> Self {
+        ClippedField {
+            field,
+            colliders,
+            slope,
+        }
+    }
+
+    /// The smallest `ISO + g s_k` and its gradient, if any collider is
+    /// near enough to matter at `p` (the clip only bites where it is below
+    /// the field's largest value, 1).
+    fn clip(&self, p: &Point3) -> Option<(Real, Vec3)> {
+        let mut best: Option<(Real, Vec3)> = None;
+        for (shape, pose) in &self.colliders {
+            let proj = shape.project_point(pose, to_parry(p), false);
+            let d = p.coords - Vec3::new(proj.point.x, proj.point.y, proj.point.z);
+            let len = d.norm();
+            let (s, n) = match (proj.is_inside, len > 0.0) {
+                (_, false) => (0.0, Vec3::zeros()),
+                (true, true) => (-len, -d / len),
+                (false, true) => (len, d / len),
+            };
+            let v = ISO + self.slope * s;
+            if best.is_none_or(|(b, _)| v < b) {
+                best = Some((v, self.slope * n));
+            }
+        }
+        best
+    }
+}
+
+impl<F: ScalarField + ?Sized> ScalarField for ClippedField<'_, F> {
+    fn value(&self, p: &Point3) -> Real {
+        let f = self.field.value(p);
+        match self.clip(p) {
+            Some((c, _)) => f.min(c),
+            None => f,
+        }
+    }
+
+    fn value_and_gradient(&self, p: &Point3) -> ValueGradient {
+        let (f, g) = self.field.value_and_gradient(p);
+        match self.clip(p) {
+            Some((c, gc)) if c < f => (c, gc),
+            _ => (f, g),
+        }
+    }
+
+    /// The field's own support box: clipping only lowers the field.
+    fn support_box(&self) -> Option<(Point3, Point3)> {
+        self.field.support_box()
+    }
 }
 
 /// Serial accumulator of sample reactions into per-particle (force,
@@ -208,6 +281,42 @@ mod tests {
     }
 
     const PARAMS: ContactParams = ContactParams { stiffness: 10.0 };
+
+    /// A ball skin sunk into a floor, clipped by it: the mesh stays
+    /// closed and outward, no vertex is below the floor's top face, the
+    /// vertices on it lie on the plane with the floor's downward-facing
+    /// (skin-outward) normal, and away from the floor the skin is unchanged.
+    #[test]
+    fn clipped_skin_lies_on_the_collider_surface() {
+        let centre = Point3::new(0.0, 0.0, 0.3);
+        let field = Field::new(vec![Primitive::point(Vec3::zeros(), 2.0).posed(
+            0,
+            &centre,
+            &op_dynamics::Quat::identity(),
+        )]);
+        let (floor, pose) = floor();
+        let h = 0.05;
+        let clipped = ClippedField::new(&field, vec![(&floor as &dyn Shape, pose)], ISO / h);
+        let params = crate::polygonize::PolygonizeParams::with_cell_size(h);
+        let mesh = crate::polygonize::polygonize_field(&clipped, &params).unwrap();
+        assert!(mesh.is_closed_oriented_manifold());
+        assert!(mesh.signed_volume() > 0.0);
+        let r = crate::kernel::iso_radius(2.0);
+        let mut on_floor = 0;
+        // Vertices come through the crate's f32 unit cube: 1e-5 is its
+        // rounding at this box size.
+        for (p, n) in mesh.positions().iter().zip(mesh.normals()) {
+            assert!(p.z > -1e-5, "vertex below the floor: {p:?}");
+            if p.z < 1e-5 {
+                on_floor += 1;
+                assert!(n.z < -0.99, "normal on the floor: {n:?}");
+            } else if p.z > 0.5 {
+                // Above the contact region: the undeformed sphere.
+                assert!(((p - centre).norm() - r).abs() < 0.1 * h, "{p:?}");
+            }
+        }
+        assert!(on_floor > 20, "{on_floor} vertices on the floor");
+    }
 
     #[test]
     fn ball_pressed_on_floor_is_pushed_up_without_spin() {

@@ -39,7 +39,7 @@ pub mod skin;
 #[cfg(test)]
 mod test_util;
 
-pub use contact::{collider_reactions, ContactParams, Reaction, Reactions};
+pub use contact::{collider_reactions, ClippedField, ContactParams, Reaction, Reactions};
 pub use error::{PolygonizeError, SkinError};
 pub use field::{Field, ScalarField};
 pub use implicit_contact::{

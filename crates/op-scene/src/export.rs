@@ -19,7 +19,7 @@ use op_implicit::Mesh;
 
 use crate::built::BuiltObject;
 use crate::outputs::{Outputs, ParticleOutput};
-use crate::skins::BuiltSkin;
+use crate::skins::{BuiltSkin, SkinTool};
 
 /// Writes `bytes_fn`'s output to `path` atomically: a temporary file in the
 /// same directory, flushed and synced, then renamed over `path`.
@@ -232,7 +232,7 @@ pub fn surface_geometry(world: &World, object: &BuiltObject, outputs: &Outputs) 
 
 /// Writes one OBJ frame holding every object of the scene, then every
 /// skin (polygonized at its current pose, deformed where it touches another
-/// skin) as an object `<object>_skin`, then, when asked, every object's
+/// skin and clipped where it presses on an obstacle tool) as an object `<object>_skin`, then, when asked, every object's
 /// triangulation as `<object>_surface`, then every tool at its current
 /// pose as `tool_<name>`.
 pub fn write_frame(
@@ -240,6 +240,7 @@ pub fn write_frame(
     world: &World,
     objects: &[BuiltObject],
     skins: &[BuiltSkin],
+    skin_tools: &[SkinTool],
     tools: &[Tool],
     outputs: &Outputs,
 ) -> std::io::Result<()> {
@@ -249,7 +250,9 @@ pub fn write_frame(
         .map(|o| object_geometry(world, o, outputs))
         .collect();
     for s in skins {
-        let mesh = s.mesh_in(skins).map_err(std::io::Error::other)?;
+        let mesh = s
+            .mesh_in(skins, skin_tools, world.time())
+            .map_err(std::io::Error::other)?;
         objects.push(mesh_geometry(&s.name, &mesh));
     }
     if outputs.triangulation {

@@ -247,6 +247,7 @@ pub fn run(
                 &scene.world,
                 &scene.objects,
                 &scene.skins,
+                &scene.skin_tools,
                 &scene.tools,
                 &scene.outputs,
             )

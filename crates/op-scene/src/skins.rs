@@ -36,9 +36,11 @@
 use op_dynamics::tools::{parry_pose, signed_distance};
 use op_dynamics::{Point3, Real, Tool, Vec3, World};
 use op_implicit::{
-    collider_reactions, polygonize, polygonize_field, polygonize_region, ContactPair,
+    collider_reactions, polygonize, polygonize_field, polygonize_region, ClippedField, ContactPair,
     ContactParams, ImplicitContactParams, Mesh, PolygonizeParams, Primitive, Skin,
 };
+use parry3d_f64::math::Pose;
+use parry3d_f64::shape::Shape;
 use serde::{Deserialize, Serialize};
 
 use crate::built::BuiltObject;
@@ -168,20 +170,47 @@ impl BuiltSkin {
     /// The skin's mesh at its current pose, deformed by contact (Gascuel,
     /// DESIGN §5): when another skin of `skins` overlaps its support, the
     /// exported surface is the deformed field's, so two skins in contact
-    /// meet on one contact surface (no gap, no overlap). With several
-    /// overlapping skins, the first one in scene order deforms it.
-    pub fn mesh_in(&self, skins: &[BuiltSkin]) -> Result<Mesh, op_implicit::PolygonizeError> {
+    /// meet on one contact surface (no gap, no overlap); with several
+    /// overlapping skins, the first one in scene order deforms it. Then
+    /// the obstacle tools of `tools` that touch this skin at world time `t`
+    /// clip it ([`op_implicit::ClippedField`]): a skin pressed on a rigid
+    /// collider is exported lying on its surface.
+    pub fn mesh_in(
+        &self,
+        skins: &[BuiltSkin],
+        tools: &[SkinTool],
+        t: Real,
+    ) -> Result<Mesh, op_implicit::PolygonizeError> {
         let own = self.skin.field();
         let params = PolygonizeParams::with_cell_size(self.cell_size);
+        let index = skins.iter().position(|s| s.object == self.object);
+        let poses: Vec<(&Tool, Pose)> = tools
+            .iter()
+            .filter(|tool| index.is_some_and(|i| tool.skins.contains(&i)))
+            .map(|tool| {
+                let pose = tool.tool.pose(t);
+                (&tool.tool, parry_pose(&pose.position, &pose.rotation))
+            })
+            .collect();
+        let colliders: Vec<(&dyn Shape, Pose)> = poses
+            .iter()
+            .map(|(tool, pose)| (tool.shape(), *pose))
+            .collect();
+        let slope = op_implicit::ISO / self.cell_size;
         let other = skins.iter().find(|o| {
             o.object != self.object
                 && boxes_overlap(own.support_box(), o.skin.field().support_box())
         });
-        match other {
-            Some(o) => {
+        match (other, colliders.is_empty()) {
+            (Some(o), true) => {
                 polygonize_field(&ContactPair::new(own, o.skin.field()).deformed_a(), &params)
             }
-            None => polygonize(own, &params),
+            (Some(o), false) => {
+                let deformed = ContactPair::new(own, o.skin.field()).deformed_a();
+                polygonize_field(&ClippedField::new(&deformed, colliders, slope), &params)
+            }
+            (None, true) => polygonize(own, &params),
+            (None, false) => polygonize_field(&ClippedField::new(own, colliders, slope), &params),
         }
     }
 }
@@ -362,11 +391,11 @@ mod tests {
     fn skins_in_contact_export_the_deformed_surface() {
         let (_, apart) = pair(5.0);
         let plain = apart[0].mesh().unwrap();
-        let exported = apart[0].mesh_in(&apart).unwrap();
+        let exported = apart[0].mesh_in(&apart, &[], 0.0).unwrap();
         assert_eq!(plain.positions().len(), exported.positions().len());
         let (_, touching) = pair(1.5);
         let plain = touching[0].mesh().unwrap();
-        let deformed = touching[0].mesh_in(&touching).unwrap();
+        let deformed = touching[0].mesh_in(&touching, &[], 0.0).unwrap();
         let max_x = |m: &Mesh| m.positions().iter().map(|p| p.x).fold(Real::MIN, Real::max);
         // Undeformed skin of radius 1 at x = 0 reaches x = 1, past the
         // mid-plane x = 0.75; the deformed one stops at the contact plane.
@@ -376,7 +405,7 @@ mod tests {
             "{}",
             max_x(&deformed)
         );
-        let other = touching[1].mesh_in(&touching).unwrap();
+        let other = touching[1].mesh_in(&touching, &[], 0.0).unwrap();
         let min_x = other
             .positions()
             .iter()
