@@ -113,6 +113,10 @@ fn fig_12c_pulled_sheet_tears_beyond_the_cutoff() {
         let (built, _) = run(scene, tag);
         let p = built.world.particles();
         assert_eq!(p.len(), built.objects[0].ids.len(), "no particle lost");
+        let widest = nearest_distances(p.positions())
+            .into_iter()
+            .fold(0.0, Real::max);
+        println!("{tag}: largest nearest-neighbour distance {widest:.3} r0");
         components(p.positions(), cutoff)
     };
     let torn = pieces(&scene, "torn");
