@@ -151,3 +151,45 @@ fn fig_12c_pulled_sheet_tears_beyond_the_cutoff() {
         None => println!("tears between a pull of 5 and 6 per side"),
     }
 }
+
+/// Fig. 6: two sheets of one object carried edge to edge by movers weld
+/// into one seamless surface: one component of the neighbour graph within
+/// the cut-off (1.5 r0) and every nearest-neighbour distance, across the
+/// seam too, within 10% of r0.
+#[test]
+fn fig_06_two_sheets_weld_into_one() {
+    let scene = load("fig_06_weld");
+    let start = build(&scene);
+    let x0 = start.world.particles().positions().to_vec();
+    assert_eq!(components(&x0, 1.5), vec![36, 36], "two sheets at first");
+    let (built, _) = run(&scene, "weld");
+    let p = built.world.particles();
+    let x = p.positions();
+    let sizes = components(x, 1.5);
+    let nearest = nearest_distances(x);
+    let (lo, hi) = nearest
+        .iter()
+        .fold((Real::INFINITY, 0.0 as Real), |(a, b), &d| {
+            (a.min(d), b.max(d))
+        });
+    // The seam: the facing edge columns (the last of the left sheet, the
+    // first of the right one).
+    let seam: Vec<Real> = (0..6)
+        .flat_map(|row| [row * 6 + 5, 36 + row * 6])
+        .map(|i| nearest[i])
+        .collect();
+    let (seam_lo, seam_hi) = seam
+        .iter()
+        .fold((Real::INFINITY, 0.0 as Real), |(a, b), &d| {
+            (a.min(d), b.max(d))
+        });
+    let gap = (0..6)
+        .map(|row| (x[36 + row * 6] - x[row * 6 + 5]).norm())
+        .fold(0.0, Real::max);
+    println!(
+        "components {sizes:?}; nearest-neighbour distance in [{lo:.3}, {hi:.3}] r0; at the \
+         seam in [{seam_lo:.3}, {seam_hi:.3}]; widest edge-to-edge pair across it {gap:.3}"
+    );
+    assert_eq!(sizes, vec![72]);
+    assert!(lo >= 0.9 && hi <= 1.1, "[{lo}, {hi}]");
+}
