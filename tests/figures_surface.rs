@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use oriented_particles::op_dynamics::{Point3, Real};
+use oriented_particles::op_dynamics::{Point3, Real, Role, ToolShape};
 use oriented_particles::op_scene::{self, load_scene, BuiltScene, RunOptions, Scene, Summary};
 
 /// Loads `scenes/<name>.ron`.
@@ -192,4 +192,55 @@ fn fig_06_two_sheets_weld_into_one() {
     );
     assert_eq!(sizes, vec![72]);
     assert!(lo >= 0.9 && hi <= 1.1, "[{lo}, {hi}]");
+}
+
+/// Fig. 12a (`scenes/drape_sphere.ron`): a cloth dropped on a sphere rests
+/// on it and hangs down around it. At the end no particle is inside the
+/// sphere grown by the contact margin (beyond a small penalty depth), the
+/// highest particles rest at about radius + margin above the centre, and
+/// the lowest hang below the sphere's equator.
+///
+/// Not reproduced by the scene as it stands: at t = 12 the cloth hangs
+/// around the sphere (lowest particle 2.5 below the centre) but is not at
+/// rest (fastest particle at speed 6), particles bunch up above the top of
+/// the sphere (highest 6.3 above the centre, contact radius 4.5; 7.7 at
+/// t = 30) and some are pushed 0.2 into the contact margin. Ignored until
+/// the scene is revised; run it with `--ignored` to see the numbers.
+#[test]
+#[ignore = "scenes/drape_sphere.ron does not settle on the sphere (see the doc comment)"]
+fn fig_12a_cloth_drapes_over_the_sphere() {
+    let scene = load("drape_sphere");
+    let (radius, margin) = match (&scene.tools[0].shape, &scene.tools[0].role) {
+        (ToolShape::Ball { radius }, Role::Obstacle { margin, .. }) => (*radius, *margin),
+        other => panic!("the sphere is a ball obstacle: {other:?}"),
+    };
+    let centre = Point3::from(
+        scene.tools[0]
+            .path
+            .keyframes
+            .first()
+            .map_or([0.0; 3], |k| k.position),
+    );
+    let (built, _) = run(&scene, "drape");
+    let x = built.world.particles().positions();
+    let closest = x
+        .iter()
+        .map(|p| (p - centre).norm())
+        .fold(Real::INFINITY, Real::min);
+    let top = x.iter().map(|p| p.z - centre.z).fold(Real::MIN, Real::max);
+    let lowest = x
+        .iter()
+        .map(|p| p.z - centre.z)
+        .fold(Real::INFINITY, Real::min);
+    println!(
+        "contact radius {:.2}: closest particle {closest:.3} from the centre; highest {top:.3}, \
+         lowest {lowest:.3} above it",
+        radius + margin
+    );
+    // Resting on the sphere: a penalty contact lets particles in by
+    // load / stiffness only.
+    assert!(closest > radius + margin - 0.1, "{closest}");
+    assert!((top - (radius + margin)).abs() < 0.1, "{top}");
+    // Hanging around it, not lying flat on top.
+    assert!(lowest < 0.0, "{lowest}");
 }
