@@ -244,3 +244,52 @@ fn fig_12a_cloth_drapes_over_the_sphere() {
     // Hanging around it, not lying flat on top.
     assert!(lowest < 0.0, "{lowest}");
 }
+
+/// Fig. 12b: a shell without shape memory (Lennard-Jones + co-planarity)
+/// dented by a mover that then lets go keeps the dent: its rest shape
+/// error at the end is close to its maximum. The same dent in a
+/// shape-memory shell (cohesion + form with rest curvature 1/radius, seed
+/// 002) springs back: its final error is a small part of its maximum.
+///
+/// Not reproduced by these scenes: the Lennard-Jones shell keeps its dent
+/// (rest shape error max 0.433, final 0.356 after the settle phase), but
+/// so does the shape-memory shell (max 0.714, final 0.702; the pushed cap
+/// stays inverted, at rest, top particle at z = 0.96 instead of 3.84).
+/// A shallower push (1 unit instead of 3, not in the scene) gave a partial
+/// recovery of the memory shell (0.269 -> 0.153). The Lennard-Jones shell
+/// also crumples during the settle phase (distances to the centre from
+/// 1.2 to 4.6): co-planarity and Lennard-Jones do not hold a sphere.
+/// Ignored until the scenes are revised; run it with `--ignored`.
+#[test]
+#[ignore = "the shape-memory shell keeps the dent too (see the doc comment)"]
+fn fig_12b_shell_without_memory_keeps_its_dent() {
+    let error = |name: &str| {
+        let (built, summary) = run(&load(name), "dent");
+        let o = &summary.objects[0];
+        assert_eq!(built.world.particles().len(), built.objects[0].ids.len());
+        println!(
+            "{name}: rest shape error max {:.3}, final {:.3} (ratio {:.2})",
+            o.rest_shape_error_max,
+            o.rest_shape_error_final,
+            o.rest_shape_error_final / o.rest_shape_error_max
+        );
+        (o.rest_shape_error_max, o.rest_shape_error_final)
+    };
+    let (plastic_max, plastic_end) = error("fig_12_plastic");
+    let (memory_max, memory_end) = error("fig_12_plastic_memory");
+    // Both were dented comparably (the same push).
+    assert!(
+        plastic_max > 0.1 && memory_max > 0.1,
+        "{plastic_max} {memory_max}"
+    );
+    // Plastic: most of the deformation stays.
+    assert!(
+        plastic_end > 0.7 * plastic_max,
+        "{plastic_end} vs {plastic_max}"
+    );
+    // Shape memory: most of it is recovered.
+    assert!(
+        memory_end < 0.25 * memory_max,
+        "{memory_end} vs {memory_max}"
+    );
+}
