@@ -204,8 +204,15 @@ fn fig_06_two_sheets_weld_into_one() {
 /// around the sphere (lowest particle 2.5 below the centre) but is not at
 /// rest (fastest particle at speed 6), particles bunch up above the top of
 /// the sphere (highest 6.3 above the centre, contact radius 4.5; 7.7 at
-/// t = 30) and some are pushed 0.2 into the contact margin. Ignored until
-/// the scene is revised; run it with `--ignored` to see the numbers.
+/// t = 30) and some are pushed 0.2 into the contact margin. The energy
+/// record (`outputs.metrics`) shows why: from t = 6 the potential falls
+/// (-11210 to -14090 at t = 12) and the kinetic energy rises (79 to 1628)
+/// while the total falls: where the cloth folds over the sphere, layers of
+/// the same object come within the cut-off and bind (isotropic weight,
+/// `K = 1`), so the cloth condenses into a clump on top instead of
+/// draping. Halving `dt` changes nothing (not a step-size instability).
+/// Ignored until the scene is revised; run it with `--ignored` to see the
+/// numbers.
 #[test]
 #[ignore = "scenes/drape_sphere.ron does not settle on the sphere (see the doc comment)"]
 fn fig_12a_cloth_drapes_over_the_sphere() {
