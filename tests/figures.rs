@@ -3,99 +3,12 @@
 //! with a check of what the figure claims rather than only that it ran.
 //! Durations are the scenes' own unless said otherwise.
 
-use std::path::Path;
+mod figure_support;
 
-use oriented_particles::op_dynamics::{Mat3, Point3, Real, Vec3};
-use oriented_particles::op_scene::{self, load_scene, BuiltScene, RunOptions, Scene, Summary};
+use oriented_particles::op_dynamics::{Real, Vec3};
+use oriented_particles::op_scene::{BuiltScene, Scene};
 
-/// Loads `scenes/<name>.ron`.
-fn load(name: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.ron"));
-    load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// Builds and runs `scene` through the runner into a fresh directory
-/// (`tag` tells runs of the same scene apart); returns the built scene in
-/// its final state and the summary.
-fn run(scene: &Scene, tag: &str) -> (BuiltScene, Summary) {
-    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut built = scene.build(Some(&base), None).expect("builds");
-    let out = std::env::temp_dir().join(format!(
-        "opsim-fig-{}-{tag}-{}",
-        scene.name,
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&out);
-    let opts = RunOptions {
-        out_dir: out.clone(),
-        frames: None,
-    };
-    let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
-    assert!(!summary.diverged);
-    let _ = std::fs::remove_dir_all(&out);
-    (built, summary)
-}
-
-/// Current positions of the particles with the given ids (all alive).
-fn positions(built: &BuiltScene, ids: &[u32]) -> Vec<Point3> {
-    let p = built.world.particles();
-    ids.iter()
-        .map(|&id| p.positions()[p.slot_of(id).expect("alive")])
-        .collect()
-}
-
-/// Best-fit plane of `points`: unit normal and RMS distance to the plane.
-fn plane_fit(points: &[Point3]) -> (Vec3, Real) {
-    let n = points.len() as Real;
-    let c = points.iter().map(|p| p.coords).sum::<Vec3>() / n;
-    let cov = points
-        .iter()
-        .map(|p| (p.coords - c) * (p.coords - c).transpose())
-        .fold(Mat3::zeros(), |a, b| a + b);
-    let eig = cov.symmetric_eigen();
-    let k = eig.eigenvalues.imin();
-    let normal = eig.eigenvectors.column(k).into_owned();
-    let rms = (points
-        .iter()
-        .map(|p| (p.coords - c).dot(&normal).powi(2))
-        .sum::<Real>()
-        / n)
-        .sqrt();
-    (normal, rms)
-}
-
-/// Sizes, largest first, of the connected components of the graph joining
-/// points closer than `radius` (brute force: the figures are small).
-fn components(points: &[Point3], radius: Real) -> Vec<usize> {
-    let mut parent: Vec<usize> = (0..points.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for i in 0..points.len() {
-        for j in i + 1..points.len() {
-            if (points[i] - points[j]).norm() < radius {
-                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
-    let mut sizes = vec![0; points.len()];
-    for i in 0..points.len() {
-        sizes[root(&mut parent, i)] += 1;
-    }
-    let mut sizes: Vec<usize> = sizes.into_iter().filter(|&s| s > 0).collect();
-    sizes.sort_unstable_by(|a, b| b.cmp(a));
-    sizes
-}
-
-fn median(mut v: Vec<Real>) -> Real {
-    v.sort_by(Real::total_cmp);
-    v[v.len() / 2]
-}
+use figure_support::*;
 
 /// Fig. 8: a sheet folded a quarter turn with its centre row unoriented
 /// creases along that row: both halves stay flat while the fold is sharp.
@@ -154,14 +67,7 @@ fn fig_09_ball_stretches_the_sheet_and_particles_are_created() {
     let created = built.objects[0].created.len();
     let p = built.world.particles();
     let points = p.positions();
-    let nearest: Vec<Real> = (0..points.len())
-        .map(|i| {
-            (0..points.len())
-                .filter(|&j| j != i)
-                .map(|j| (points[i] - points[j]).norm())
-                .fold(Real::INFINITY, Real::min)
-        })
-        .collect();
+    let nearest = nearest_distances(points);
     let (lo, hi) = nearest
         .iter()
         .fold((Real::INFINITY, 0.0 as Real), |(a, b), &d| {
@@ -209,8 +115,7 @@ fn spin_alignment(name: &str, axis: Vec3, keep_within: Real) -> (Real, Real) {
             })
             .collect::<Vec<_>>()
     };
-    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let before = angles(&scene.build(Some(&base), None).expect("builds"));
+    let before = angles(&build(&scene));
     let (built, _) = run(&scene, "spin");
     let after = angles(&built);
     assert_eq!(before.len(), after.len());
@@ -244,11 +149,10 @@ fn fig_15_spin_aligns_x_with_the_spheroid_meridians() {
 #[test]
 fn fig_07_eraser_cuts_the_sheet_in_two() {
     let scene = load("fig_07_cut");
-    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     // The slab's half width across the cut.
     let half_width = 0.9;
     let in_path = {
-        let built = scene.build(Some(&base), None).expect("builds");
+        let built = build(&scene);
         let p = built.world.particles();
         let mut ids: Vec<u32> = (0..p.len())
             .filter(|&s| p.positions()[s].x.abs() < half_width)
@@ -290,8 +194,7 @@ fn fig_07_eraser_cuts_the_sheet_in_two() {
 #[test]
 fn fig_05_two_swinging_chains_link_into_one() {
     let scene = load("fig_05_chain_linking");
-    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let start = scene.build(Some(&base), None).expect("builds");
+    let start = build(&scene);
     let x0 = positions(&start, &start.objects[0].ids);
     assert_eq!(
         components(&x0, 1.5).len(),

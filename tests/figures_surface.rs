@@ -5,83 +5,12 @@
 //! check of what the figure claims. Durations are the scenes' own unless
 //! said otherwise.
 
-use std::path::Path;
+mod figure_support;
 
 use oriented_particles::op_dynamics::{Point3, Real, Role, ToolShape};
-use oriented_particles::op_scene::{self, load_scene, BuiltScene, RunOptions, Scene, Summary};
+use oriented_particles::op_scene::Scene;
 
-/// Loads `scenes/<name>.ron`.
-fn load(name: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.ron"));
-    load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// Builds `scene` without running it.
-fn build(scene: &Scene) -> BuiltScene {
-    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    scene.build(Some(&base), None).expect("builds")
-}
-
-/// Builds and runs `scene` through the runner into a fresh directory
-/// (`tag` tells runs of the same scene apart); returns the built scene in
-/// its final state and the summary.
-fn run(scene: &Scene, tag: &str) -> (BuiltScene, Summary) {
-    let mut built = build(scene);
-    let out = std::env::temp_dir().join(format!(
-        "opsim-figsurf-{}-{tag}-{}",
-        scene.name,
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&out);
-    let opts = RunOptions {
-        out_dir: out.clone(),
-        frames: None,
-    };
-    let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
-    assert!(!summary.diverged);
-    let _ = std::fs::remove_dir_all(&out);
-    (built, summary)
-}
-
-/// Sizes, largest first, of the connected components of the graph joining
-/// points closer than `radius` (brute force: the figures are small).
-fn components(points: &[Point3], radius: Real) -> Vec<usize> {
-    let mut parent: Vec<usize> = (0..points.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for i in 0..points.len() {
-        for j in i + 1..points.len() {
-            if (points[i] - points[j]).norm() < radius {
-                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
-    let mut sizes = vec![0; points.len()];
-    for i in 0..points.len() {
-        sizes[root(&mut parent, i)] += 1;
-    }
-    let mut sizes: Vec<usize> = sizes.into_iter().filter(|&s| s > 0).collect();
-    sizes.sort_unstable_by(|a, b| b.cmp(a));
-    sizes
-}
-
-/// Distance from each point to its nearest other point.
-fn nearest_distances(points: &[Point3]) -> Vec<Real> {
-    (0..points.len())
-        .map(|i| {
-            (0..points.len())
-                .filter(|&j| j != i)
-                .map(|j| (points[i] - points[j]).norm())
-                .fold(Real::INFINITY, Real::min)
-        })
-        .collect()
-}
+use figure_support::*;
 
 /// The tearing scene with each hand carried `pull` units outward (the
 /// scene's own pull is 6).
