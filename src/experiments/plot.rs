@@ -213,23 +213,7 @@ impl LinePlot {
                 esc(label)
             );
         }
-        let _ = writeln!(
-            s,
-            r##"<rect x="{left}" y="{top}" width="{pw}" height="{ph}" fill="none" stroke="#333"/>"##
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="middle" font-size="13">{}</text>"#,
-            left + pw / 2.0,
-            h - 12.0,
-            esc(&self.x_label)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text transform="translate(18,{}) rotate(-90)" text-anchor="middle" font-size="13">{}</text>"#,
-            top + ph / 2.0,
-            esc(&self.y_label)
-        );
+        frame(&mut s, [left, top, pw, ph], h, &self.x_label, &self.y_label);
         for (y, label) in &self.hlines {
             if !self.log_y || *y > 0.0 {
                 let _ = writeln!(
@@ -297,13 +281,39 @@ impl LinePlot {
     }
 }
 
-fn header(w: Real, h: Real) -> String {
+/// The plot area's border (`[left, top, width, height]`) and the axis
+/// labels, centred below it and along its left side, in a picture of
+/// height `h`.
+pub(crate) fn frame(s: &mut String, area: [Real; 4], h: Real, x_label: &str, y_label: &str) {
+    let [left, top, pw, ph] = area;
+    let _ = writeln!(
+        s,
+        r##"<rect x="{left}" y="{top}" width="{pw}" height="{ph}" fill="none" stroke="#333"/>"##
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="{}" text-anchor="middle" font-size="13">{}</text>"#,
+        left + pw / 2.0,
+        h - 12.0,
+        esc(x_label)
+    );
+    let _ = writeln!(
+        s,
+        r#"<text transform="translate(18,{}) rotate(-90)" text-anchor="middle" font-size="13">{}</text>"#,
+        top + ph / 2.0,
+        esc(y_label)
+    );
+}
+
+/// The SVG opening tag and white background of a `w` x `h` picture.
+pub(crate) fn header(w: Real, h: Real) -> String {
     format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n"
     )
 }
 
-fn esc(t: &str) -> String {
+/// `t` escaped for SVG text.
+pub(crate) fn esc(t: &str) -> String {
     t.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")

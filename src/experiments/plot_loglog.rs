@@ -9,6 +9,8 @@ use std::fmt::Write;
 
 use op_dynamics::Real;
 
+use super::plot::{esc, frame, header};
+
 /// One point of a [`LogLogSeries`].
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct LogLogPoint {
@@ -108,9 +110,7 @@ impl LogLogPlot {
         let (pw, ph) = (w - left - right, h - top - bottom);
         let sx = |x: Real| left + (x.log10() - x0) / (x1 - x0) * pw;
         let sy = |y: Real| top + (1.0 - (y.log10() - y0) / (y1 - y0)) * ph;
-        let mut s = format!(
-            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\">\n<rect width=\"{w}\" height=\"{h}\" fill=\"white\"/>\n"
-        );
+        let mut s = header(w, h);
         let _ = writeln!(
             s,
             r#"<text x="{}" y="22" text-anchor="middle" font-size="15">{}</text>"#,
@@ -139,23 +139,7 @@ impl LogLogPlot {
                 y + 4.0
             );
         }
-        let _ = writeln!(
-            s,
-            r##"<rect x="{left}" y="{top}" width="{pw}" height="{ph}" fill="none" stroke="#333"/>"##
-        );
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="{}" text-anchor="middle" font-size="13">{}</text>"#,
-            left + pw / 2.0,
-            h - 12.0,
-            esc(&self.x_label)
-        );
-        let _ = writeln!(
-            s,
-            r#"<text transform="translate(18,{}) rotate(-90)" text-anchor="middle" font-size="13">{}</text>"#,
-            top + ph / 2.0,
-            esc(&self.y_label)
-        );
+        frame(&mut s, [left, top, pw, ph], h, &self.x_label, &self.y_label);
         for (y, label) in &self.hlines {
             if ok(*y) {
                 let _ = writeln!(
@@ -240,12 +224,6 @@ impl LogLogPlot {
         s.push_str("</svg>\n");
         s
     }
-}
-
-fn esc(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
 
 #[cfg(test)]
