@@ -20,6 +20,7 @@
 
 use std::collections::BTreeMap;
 
+use op_dynamics::tools::signed_distance;
 use op_dynamics::{Point3, Real, Vec3, World};
 use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::shape::Shape;
@@ -53,6 +54,7 @@ pub struct Reactions {
     reactions: Vec<Reaction>,
     samples_in_contact: usize,
     total_force: Vec3,
+    max_depth: Real,
 }
 
 impl Reactions {
@@ -71,6 +73,13 @@ impl Reactions {
     /// forces).
     pub fn total_force(&self) -> Vec3 {
         self.total_force
+    }
+
+    /// Depth of the deepest sample inside the collider
+    /// ([`collider_reactions`]; 0 for implicit contact, which measures
+    /// its overlap per sample, see [`crate::ContactSample`]).
+    pub fn max_depth(&self) -> Real {
+        self.max_depth
     }
 
     /// Adds every reaction to `world` for its next step
@@ -95,7 +104,7 @@ pub fn collider_reactions(
     pose: &Pose,
     params: &ContactParams,
 ) -> Reactions {
-    let hits: Vec<Option<(Point3, Vec3)>> = samples
+    let hits: Vec<Option<(Point3, Vec3, Real)>> = samples
         .par_iter()
         .map(|p| {
             let proj = collider.project_point(pose, to_parry(p), false);
@@ -105,14 +114,19 @@ pub fn collider_reactions(
             let surface = Vec3::new(proj.point.x, proj.point.y, proj.point.z);
             let out = surface - p.coords;
             let depth = out.norm();
-            (depth > 0.0).then(|| (*p, out * params.stiffness))
+            (depth > 0.0).then(|| (*p, out * params.stiffness, depth))
         })
         .collect();
     let mut acc = ReactionAccumulator::default();
-    for (p, force) in hits.into_iter().flatten() {
+    let mut max_depth: Real = 0.0;
+    for (p, force, depth) in hits.into_iter().flatten() {
         acc.add(field, &p, force);
+        max_depth = max_depth.max(depth);
     }
-    acc.finish()
+    Reactions {
+        max_depth,
+        ..acc.finish()
+    }
 }
 
 /// A skin pressed against rigid colliders, deformed so that it lies on
@@ -147,14 +161,8 @@ impl<'a, F: ScalarField + ?Sized> ClippedField<'a, F> {
     fn clip(&self, p: &Point3) -> Option<(Real, Vec3)> {
         let mut best: Option<(Real, Vec3)> = None;
         for (shape, pose) in &self.colliders {
-            let proj = shape.project_point(pose, to_parry(p), false);
-            let d = p.coords - Vec3::new(proj.point.x, proj.point.y, proj.point.z);
-            let len = d.norm();
-            let (s, n) = match (proj.is_inside, len > 0.0) {
-                (_, false) => (0.0, Vec3::zeros()),
-                (true, true) => (-len, -d / len),
-                (false, true) => (len, d / len),
-            };
+            // Exactly on the surface the normal is undefined: s = 0 there.
+            let (s, n) = signed_distance(*shape, pose, &p.coords).unwrap_or((0.0, Vec3::zeros()));
             let v = ISO + self.slope * s;
             if best.is_none_or(|(b, _)| v < b) {
                 best = Some((v, self.slope * n));
@@ -241,6 +249,7 @@ impl ReactionAccumulator {
                 .collect(),
             samples_in_contact: self.samples,
             total_force: self.total_force,
+            max_depth: 0.0,
         }
     }
 }

@@ -33,7 +33,7 @@
 //! `e / |grad f_A| + e / |grad f_B|` (how deep each undeformed skin reaches
 //! past the contact surface, summed).
 
-use op_dynamics::tools::{parry_pose, signed_distance};
+use op_dynamics::tools::parry_pose;
 use op_dynamics::{Point3, Real, Tool, Vec3, World};
 use op_implicit::{
     collider_reactions, polygonize, polygonize_field, polygonize_region, ClippedField, ContactPair,
@@ -274,16 +274,8 @@ impl SkinTool {
                 stiffness: self.stiffness,
             },
         );
-        let mut depth: Real = 0.0;
-        if r.samples_in_contact() > 0 {
-            for p in samples.positions() {
-                if let Some((s, _)) = signed_distance(shape, &frame, &p.coords) {
-                    depth = depth.max(-s);
-                }
-            }
-        }
         r.apply(world);
-        Ok((r.total_force(), depth))
+        Ok((r.total_force(), r.max_depth()))
     }
 }
 
