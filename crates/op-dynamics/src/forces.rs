@@ -21,9 +21,11 @@ use rayon::prelude::*;
 
 use crate::external::{ExternalAccumulator, ExternalParams};
 use crate::flags::Flags;
+use crate::heat::pair_strength;
 use crate::integrators::StateRef;
 use crate::interactions::{
-    evaluate_pair, evaluate_spacing, Coupling, ParticleView, PreparedMaterial,
+    evaluate_pair, evaluate_pair_weakened, evaluate_spacing, evaluate_spacing_weakened, Coupling,
+    ParticleView, PreparedMaterial,
 };
 use crate::math::{Real, Vec3};
 use crate::neighbours::NeighbourList;
@@ -87,6 +89,9 @@ pub(crate) struct ForceContext<'a> {
     pub attributes: Attributes<'a>,
     pub materials: &'a [PreparedMaterial],
     pub friction: bool,
+    /// Some material in use weakens with heat ([`crate::heat`]): complete
+    /// pairs read the temperatures.
+    pub heated: bool,
     /// Some particle has a fixed position or orientation.
     pub has_fixed: bool,
     pub neighbours: Option<&'a mut NeighbourList>,
@@ -102,6 +107,8 @@ pub(crate) struct Pipeline {
     pub kernel: Kernel,
     pub materials: Vec<PreparedMaterial>,
     pub friction: bool,
+    /// Some material in use weakens with heat.
+    pub heated: bool,
     /// Some particle has a fixed position or orientation.
     pub has_fixed: bool,
     pub neighbours: Option<NeighbourList>,
@@ -124,6 +131,7 @@ impl Pipeline {
             attributes,
             materials: &self.materials,
             friction: self.friction,
+            heated: self.heated,
             has_fixed: self.has_fixed,
             neighbours: self.neighbours.as_mut(),
             external,
@@ -192,15 +200,17 @@ impl ForceContext<'_> {
                     torques,
                     energies,
                 };
+                let heated = self.heated;
                 if kernel == Kernel::Spacing {
-                    if uniform_spacing(a) {
+                    if uniform_spacing(a) && !heated {
                         // One material, every pair complete: the dedicated
                         // spacing loop, small enough to be inlined whole.
                         let (m0, p) = (&m[0], s.positions);
                         let pair = |i: usize, j: usize| uniform_spacing_pair(m0, cutoff2, p, i, j);
                         accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
                     } else {
-                        let pair = |i: usize, j: usize| spacing_pair(a, m, cutoff2, s, i, j);
+                        let pair =
+                            |i: usize, j: usize| spacing_pair(a, m, heated, cutoff2, s, i, j);
                         accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
                     }
                 } else {
@@ -208,7 +218,7 @@ impl ForceContext<'_> {
                     let (normals, tangents) = (&*normals, &*tangents);
                     let friction = self.friction;
                     let pair = |i: usize, j: usize| {
-                        oriented_pair(a, m, friction, cutoff2, normals, tangents, s, i, j)
+                        oriented_pair(a, m, friction, heated, cutoff2, normals, tangents, s, i, j)
                     };
                     accumulate::<true, _, _>(list, sources, oriented_pairs, serial, pair, out);
                 }
@@ -493,12 +503,37 @@ fn uniform_spacing_pair(
     Some(SpacingPair { force_j, energy })
 }
 
-/// The spacing kernel's pair: spacing potential for complete pairs, the
-/// typing repulsion otherwise; zero beyond the cut-off.
+/// The heat strength of the pair `(i, j)` when the world is `heated`
+/// ([`crate::heat::pair_strength`]), else 1.
+#[inline]
+fn strength(
+    a: &Attributes<'_>,
+    mi: &PreparedMaterial,
+    mj: &PreparedMaterial,
+    heated: bool,
+    i: usize,
+    j: usize,
+) -> Real {
+    if heated {
+        pair_strength(
+            mi.heat_response(),
+            mj.heat_response(),
+            a.temperatures[i],
+            a.temperatures[j],
+        )
+    } else {
+        1.0
+    }
+}
+
+/// The spacing kernel's pair: spacing potential for complete pairs
+/// (weakened by heat when `heated`), the typing repulsion otherwise; zero
+/// beyond the cut-off.
 #[inline]
 fn spacing_pair(
     a: &Attributes<'_>,
     materials: &[PreparedMaterial],
+    heated: bool,
     cutoff2: Real,
     s: StateRef<'_>,
     i: usize,
@@ -516,7 +551,14 @@ fn spacing_pair(
         &materials[a.materials[j] as usize],
     );
     let (energy, force_j) = match coupling(a, i, j) {
-        Coupling::Complete { .. } => evaluate_spacing(mi, mj, &r, dist),
+        Coupling::Complete { .. } => {
+            let st = strength(a, mi, mj, heated, i, j);
+            if st < 1.0 {
+                evaluate_spacing_weakened(mi, mj, &r, dist, st)
+            } else {
+                evaluate_spacing(mi, mj, &r, dist)
+            }
+        }
         Coupling::RepulsionOnly => {
             let res = evaluate_pair(
                 &view(p[i], Vec3::zeros(), Vec3::zeros(), 0.0, mi),
@@ -547,13 +589,15 @@ fn view(
 }
 
 /// The oriented kernel's pair: the full interaction of the pair's coupling
-/// plus inter-particle friction; zero beyond the cut-off.
+/// (weakened by heat when `heated`) plus inter-particle friction; zero
+/// beyond the cut-off.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn oriented_pair(
     a: &Attributes<'_>,
     materials: &[PreparedMaterial],
     friction: bool,
+    heated: bool,
     cutoff2: Real,
     normals: &[Vec3],
     tangents: &[Vec3],
@@ -572,11 +616,15 @@ fn oriented_pair(
         &materials[a.materials[j] as usize],
     );
     let c = coupling(a, i, j);
-    let res = evaluate_pair(
-        &view(p[i], normals[i], tangents[i], a.curvatures[i], mi),
-        &view(p[j], normals[j], tangents[j], a.curvatures[j], mj),
-        c,
+    let (vi, vj) = (
+        view(p[i], normals[i], tangents[i], a.curvatures[i], mi),
+        view(p[j], normals[j], tangents[j], a.curvatures[j], mj),
     );
+    let res = if heated && matches!(c, Coupling::Complete { .. }) {
+        evaluate_pair_weakened(&vi, &vj, c, strength(a, mi, mj, heated, i, j))
+    } else {
+        evaluate_pair(&vi, &vj, c)
+    };
     let mut force_j = res.force_j;
     if friction && matches!(c, Coupling::Complete { .. }) {
         let v_rel = s.velocities[j] - s.velocities[i];

@@ -82,6 +82,8 @@ pub struct ParticleDesc {
     /// Rest curvature `kappa = 1/R` of the form interaction (seed 002 §4).
     /// Default: 0 (flat).
     pub curvature: Real,
+    /// Temperature (seed 000 §6, §8; [`crate::heat`]). Default: 0.
+    pub temperature: Real,
 }
 
 impl ParticleDesc {
@@ -100,6 +102,7 @@ impl ParticleDesc {
             kind: ParticleType::default(),
             material: 0,
             curvature: 0.0,
+            temperature: 0.0,
         }
     }
 
@@ -135,6 +138,7 @@ impl ParticleDesc {
             "must be a non-zero vector",
         )?;
         error::finite("curvature", self.curvature)?;
+        error::finite("temperature", self.temperature)?;
         let q = self.orientation.quaternion();
         error::check(
             "orientation",
@@ -168,6 +172,8 @@ pub struct Attributes<'a> {
     pub materials: &'a [u16],
     /// Rest curvatures.
     pub curvatures: &'a [Real],
+    /// Temperatures ([`crate::heat`]).
+    pub temperatures: &'a [Real],
     /// Masses.
     pub masses: &'a [Real],
 }
@@ -198,6 +204,7 @@ struct Statics {
     kinds: Vec<ParticleType>,
     materials: Vec<u16>,
     curvatures: Vec<Real>,
+    temperatures: Vec<Real>,
 }
 
 impl Statics {
@@ -212,6 +219,7 @@ impl Statics {
             kinds: &self.kinds,
             materials: &self.materials,
             curvatures: &self.curvatures,
+            temperatures: &self.temperatures,
             masses: &self.masses,
         }
     }
@@ -294,6 +302,7 @@ impl Particles {
         self.statics.kinds.push(d.kind);
         self.statics.materials.push(d.material);
         self.statics.curvatures.push(d.curvature);
+        self.statics.temperatures.push(d.temperature);
         Ok(id)
     }
 
@@ -331,6 +340,8 @@ impl Particles {
         materials: u16,
         /// Rest curvatures.
         curvatures: Real,
+        /// Temperatures ([`crate::heat`]).
+        temperatures: Real,
     }
 
     /// The slot currently holding particle `id`, if any (`None` for ids
@@ -371,6 +382,21 @@ impl Particles {
     /// Sets the rest curvature of the particle in `slot`.
     pub fn set_curvature(&mut self, slot: usize, kappa: Real) {
         self.statics.curvatures[slot] = kappa;
+    }
+
+    /// Sets the temperature of the particle in `slot`.
+    pub fn set_temperature(&mut self, slot: usize, temperature: Real) {
+        self.statics.temperatures[slot] = temperature;
+    }
+
+    /// Positions and object ids to read beside the temperatures to write
+    /// (the heat update of [`crate::heat`]), by slot.
+    pub(crate) fn heat_view(&mut self) -> (&[Point3], &[u32], &mut [Real]) {
+        (
+            &self.positions,
+            &self.statics.objects,
+            &mut self.statics.temperatures,
+        )
     }
 
     /// The state seen by the integrator.
@@ -460,6 +486,7 @@ impl Particles {
         apply(&mut self.statics.kinds, order);
         apply(&mut self.statics.materials, order);
         apply(&mut self.statics.curvatures, order);
+        apply(&mut self.statics.temperatures, order);
         for (slot, &id) in self.statics.ids.iter().enumerate() {
             self.statics.slot_of[id as usize] = slot as u32;
         }

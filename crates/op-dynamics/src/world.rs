@@ -8,6 +8,7 @@ use crate::error::{self, ParamError};
 use crate::external::{ExternalAccumulator, ExternalParams};
 use crate::flags::Flags;
 use crate::forces::{ForceScratch, Kernel, Pipeline};
+use crate::heat::{self, HeatParams};
 use crate::integrators::{Integrator, Scheme};
 use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
@@ -77,6 +78,11 @@ pub struct WorldParams {
     pub divergence: DivergenceParams,
     /// Tools acting on the particles (seed 000 §6). Default: none.
     pub tools: Vec<ToolParams>,
+    /// Heat conduction and cooling ([`crate::heat`]), or `None` for
+    /// constant temperatures. Required by heater and knife tools.
+    /// Default: `None`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heat: Option<HeatParams>,
 }
 
 impl Default for WorldParams {
@@ -88,6 +94,7 @@ impl Default for WorldParams {
             external: ExternalParams::default(),
             divergence: DivergenceParams::default(),
             tools: Vec::new(),
+            heat: None,
         }
     }
 }
@@ -109,10 +116,21 @@ impl WorldParams {
         self.external
             .validate(particle_count)
             .map_err(|e| e.within("external"))?;
-        self.tools
-            .iter()
-            .enumerate()
-            .try_for_each(|(k, t)| t.validate().map_err(|e| e.within(&format!("tools[{k}]"))))
+        if let Some(h) = &self.heat {
+            h.validate().map_err(|e| e.within("heat"))?;
+        }
+        self.tools.iter().enumerate().try_for_each(|(k, t)| {
+            t.validate().map_err(|e| e.within(&format!("tools[{k}]")))?;
+            if t.role.heating().is_some() && self.heat.is_none() {
+                return Err(ParamError::Invalid {
+                    field: format!("tools[{k}].role"),
+                    message: "a heater or knife needs the world's heat settings \
+                              (heat: conduction, cooling, ambient)"
+                        .into(),
+                });
+            }
+            Ok(())
+        })
     }
 }
 
@@ -193,6 +211,8 @@ struct Config {
     /// Largest cut-off among the enabled terms of the materials in use.
     cutoff: Real,
     friction: bool,
+    /// Some material in use weakens with heat.
+    heated: bool,
     has_fixed: bool,
     repulsion: bool,
 }
@@ -227,6 +247,7 @@ impl Config {
             })
             .fold(0.0, Real::max);
         let friction = used.iter().any(|m| m.friction() > 0.0);
+        let heated = used.iter().any(|m| m.heat_response().is_some());
         let oriented = used.iter().any(|m| m.has_orientation_terms());
         let kernel = if cutoff <= 0.0 || particles.len() < 2 {
             Kernel::None
@@ -239,6 +260,7 @@ impl Config {
             kernel,
             cutoff,
             friction,
+            heated,
             has_fixed: particles
                 .flags()
                 .iter()
@@ -276,6 +298,7 @@ pub struct World {
     steps: u64,
     dt_next: Real,
     report: StepReport,
+    heat_scratch: heat::HeatScratch,
 }
 
 impl World {
@@ -319,6 +342,7 @@ impl World {
                 kernel: config.kernel,
                 materials: prepared,
                 friction: config.friction,
+                heated: config.heated,
                 has_fixed: config.has_fixed,
                 neighbours,
                 tools: Tools::new(&params.tools, &particles)?,
@@ -339,6 +363,7 @@ impl World {
             steps: 0,
             dt_next: params.dt,
             report: StepReport::default(),
+            heat_scratch: heat::HeatScratch::default(),
             particles,
             params,
         })
@@ -401,6 +426,12 @@ impl World {
         if self.pipeline.friction {
             out.push("friction".into());
         }
+        if self.pipeline.heated {
+            out.push("heat_weakening".into());
+        }
+        if self.params.heat.is_some() {
+            out.push("heat".into());
+        }
         let e = &self.params.external;
         if e.gravity() != Vec3::zeros() {
             out.push("gravity".into());
@@ -417,6 +448,8 @@ impl World {
                 Role::Attractor { .. } => "attractor",
                 Role::Mover { .. } => "mover",
                 Role::Eraser => "eraser",
+                Role::Heater { .. } => "heater",
+                Role::Knife { .. } => "knife",
             };
             out.push(format!("tool:{role}"));
         }
@@ -562,6 +595,9 @@ impl World {
             self.accumulator.clear();
             self.integrator.invalidate();
         }
+        if self.params.heat.is_some() {
+            self.advance_heat(info.dt_taken);
+        }
         // Erasers act on the state at the end of the step (before the
         // divergence check, which then sees only the survivors).
         if self.pipeline.tools.has_eraser() {
@@ -578,6 +614,38 @@ impl World {
         self.report = report;
         check?;
         Ok(&self.report)
+    }
+
+    /// Advances the temperatures over the step just taken (sources at its
+    /// end time, conduction over the pairs within the interaction cut-off,
+    /// cooling; [`crate::heat`]). When some material weakens with heat the
+    /// integrator's cached forces are dropped: they were computed at the
+    /// old temperatures.
+    fn advance_heat(&mut self, dt: Real) {
+        let Some(params) = &self.params.heat else {
+            return;
+        };
+        let pairs = self.pipeline.neighbours.as_mut().map(|list| {
+            list.update(self.particles.positions());
+            let cutoff = list.cutoff();
+            (&*list, cutoff)
+        });
+        let pairs = pairs.map(|(l, c)| (l.pairs(), c));
+        let (positions, objects, temperatures) = self.particles.heat_view();
+        heat::advance(
+            params,
+            self.pipeline.tools.tools(),
+            self.time,
+            dt,
+            positions,
+            objects,
+            pairs,
+            temperatures,
+            &mut self.heat_scratch,
+        );
+        if self.pipeline.heated {
+            self.integrator.invalidate();
+        }
     }
 
     fn check_divergence(&self) -> Result<(), Divergence> {

@@ -25,6 +25,7 @@ fn desc_of(p: &Particles, slot: usize) -> ParticleDesc {
     d.kind = p.kinds()[slot];
     d.material = p.materials()[slot];
     d.curvature = p.curvatures()[slot];
+    d.temperature = p.temperatures()[slot];
     d
 }
 

@@ -170,6 +170,7 @@ impl Scene {
                 max_speed: w.divergence.max_speed,
             },
             tools,
+            heat: w.heat.clone(),
         };
         let world = World::new(particles, &materials, params).map_err(|e| {
             let mut message = format!("building the world: {e}");
@@ -343,6 +344,9 @@ fn apply(ov: &Override, descs: &mut [ParticleDesc]) {
         }
         if let Some(k) = ov.curvature {
             d.curvature = k;
+        }
+        if let Some(t) = ov.temperature {
+            d.temperature = t;
         }
         if let Some(m) = ov.mass {
             d.mass = m;

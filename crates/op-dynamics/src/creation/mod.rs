@@ -210,8 +210,8 @@ impl Accepted {
 }
 
 /// A new particle copying the static attributes of the particle in `slot`
-/// (mass, inertia, normal axis, object, type, material, curvature, the
-/// unoriented flag; never the fixed flags: created particles move) at
+/// (mass, inertia, normal axis, object, type, material, curvature,
+/// temperature, the unoriented flag; never the fixed flags: created particles move) at
 /// `position`, with world normal `normal` and world tangent `tangent`.
 pub(crate) fn child_of(
     p: &Particles,
@@ -228,6 +228,7 @@ pub(crate) fn child_of(
     d.kind = p.kinds()[slot];
     d.material = p.materials()[slot];
     d.curvature = p.curvatures()[slot];
+    d.temperature = p.temperatures()[slot];
     let mut flags = p.flags()[slot];
     flags.remove(Flags::FIXED_POSITION);
     flags.remove(Flags::FIXED_ORIENTATION);

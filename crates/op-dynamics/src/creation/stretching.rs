@@ -16,7 +16,12 @@
 //!   inside a convex surface);
 //! - frame: built from the averaged normal and the weighted mean of their
 //!   world tangents ("local x"), projected on the tangent plane;
-//! - velocity and angular velocity: weighted means.
+//! - velocity, angular velocity and temperature: weighted means.
+//!
+//! **Heat gating** (seed 000 §8, fig. 13: "only allowing the hot parts of
+//! the surface to deform and stretch"): with [`StretchingParams::min_temperature`]
+//! set, a pair opens a gap only when both its particles are at least that
+//! hot ([`crate::heat`]).
 //!
 //! Static attributes (mass, material, type, curvature, ...) are copied from
 //! the pair's particle with the smaller id; fixed flags are not copied.
@@ -44,6 +49,10 @@ pub struct StretchingParams {
     /// particle's position and frame, > `d_max / 2` (so the pair itself
     /// always counts). Default: 1.5.
     pub reach: Real,
+    /// Only pairs whose two particles are at least this hot stretch
+    /// (finite), or `None` for every pair. Default: `None`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_temperature: Option<Real>,
 }
 
 impl Default for StretchingParams {
@@ -52,6 +61,7 @@ impl Default for StretchingParams {
             d_min: 2.0,
             d_max: 2.5,
             reach: 1.5,
+            min_temperature: None,
         }
     }
 }
@@ -68,6 +78,9 @@ impl StretchingParams {
             "must be >= d_min",
         )?;
         error::positive("reach", self.reach)?;
+        if let Some(t) = self.min_temperature {
+            error::finite("min_temperature", t)?;
+        }
         error::check(
             "reach",
             self.reach,
@@ -91,6 +104,8 @@ pub(crate) fn candidates(
     search(NeighbourBackend::CellList, pos, radius, &mut half);
     let full = full_rows(&half, p.len());
     let ids = p.ids();
+    let temperatures = p.temperatures();
+    let hot = |k: usize| params.min_temperature.is_none_or(|t| temperatures[k] >= t);
     let mut found: Vec<((u32, u32), ParticleDesc)> = (0..p.len())
         .into_par_iter()
         .flat_map_iter(|i| {
@@ -98,7 +113,11 @@ pub(crate) fn candidates(
             for &j in half.row(i) {
                 let j = j as usize;
                 let d2 = (pos[j] - pos[i]).norm_squared();
-                if d2 < d_min * d_min || d2 > d_max * d_max || p.objects()[i] != p.objects()[j] {
+                if d2 < d_min * d_min
+                    || d2 > d_max * d_max
+                    || p.objects()[i] != p.objects()[j]
+                    || !(hot(i) && hot(j))
+                {
                     continue;
                 }
                 let m = Point3::from((pos[i].coords + pos[j].coords) * 0.5);
@@ -154,7 +173,8 @@ fn averaged(
         })
         .collect();
     around.sort_unstable_by_key(|a| a.0);
-    let (mut wsum, mut pm, mut n, mut t, mut v, mut w) = (
+    let (mut wsum, mut temperature, mut pm, mut n, mut t, mut v, mut w) = (
+        0.0,
         0.0,
         Vec3::zeros(),
         Vec3::zeros(),
@@ -165,6 +185,7 @@ fn averaged(
     for (_, k, r2) in around {
         let wk = (1.0 - r2 / (reach * reach)).powi(2);
         wsum += wk;
+        temperature += wk * p.temperatures()[k];
         pm += wk * p.positions()[k].coords;
         n += wk * p.normal(k);
         t += wk * world_tangent(p, k);
@@ -181,6 +202,7 @@ fn averaged(
     let mut d = child_of(p, parent, position, &n, &t);
     d.velocity = v / wsum;
     d.angular_velocity = w / wsum;
+    d.temperature = temperature / wsum;
     Some(d)
 }
 

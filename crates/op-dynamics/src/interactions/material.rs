@@ -18,6 +18,7 @@ use super::spacing::{Spacing, SpacingKernel};
 use super::spin::{self, SpinKind};
 use super::weight::{Weight, WeightParams};
 use crate::error::{non_negative, ParamError};
+use crate::heat::HeatResponse;
 use crate::math::Real;
 use serde::{Deserialize, Serialize};
 
@@ -52,6 +53,10 @@ pub struct Material {
     /// Inter-particle friction coefficient (>= 0; damping of relative
     /// velocity, seed 002 §5, applied by the world). Default: 0.
     pub friction: Real,
+    /// How heat weakens this material's bonds ([`crate::heat`]), or `None`
+    /// for not at all. Default: `None`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heat: Option<HeatResponse>,
 }
 
 impl Default for Material {
@@ -68,6 +73,7 @@ impl Default for Material {
             normalized: true,
             repulsion: RepulsionParams::default(),
             friction: 0.0,
+            heat: None,
         }
     }
 }
@@ -101,7 +107,11 @@ impl Material {
         self.repulsion
             .validate()
             .map_err(|e| e.within("repulsion"))?;
-        non_negative("friction", self.friction)
+        non_negative("friction", self.friction)?;
+        if let Some(h) = &self.heat {
+            h.validate().map_err(|e| e.within("heat"))?;
+        }
+        Ok(())
     }
 
     /// Validates and precomputes (weight constants, cohesion tables).
@@ -116,7 +126,9 @@ impl Material {
             || self.cocircularity > 0.0
             || self.form > 0.0
             || self.spin > 0.0;
+        let well = spacing.as_ref().map_or((0.0, 0.0), SpacingKernel::well);
         Ok(PreparedMaterial {
+            well,
             spacing,
             weight: self.weight.prepare().map_err(|e| e.within("weight"))?,
             w_p: self.coplanarity,
@@ -141,6 +153,8 @@ impl Material {
 #[derive(Clone, Debug, PartialEq)]
 pub struct PreparedMaterial {
     spacing: Option<SpacingKernel>,
+    /// Position and value of the spacing potential's minimum.
+    well: (Real, Real),
     weight: Weight,
     w_p: Real,
     w_n: Real,
@@ -242,6 +256,19 @@ impl PreparedMaterial {
             Some(s) => s.eval(dist),
             None => (0.0, 0.0),
         }
+    }
+
+    /// `(r_w, U(r_w))`, the bottom of the spacing well (`(0, 0)` without
+    /// spacing); heat weakening keeps the core below `r_w`.
+    #[inline]
+    pub fn spacing_well(&self) -> (Real, Real) {
+        self.well
+    }
+
+    /// How heat weakens this material, if it does.
+    #[inline]
+    pub fn heat_response(&self) -> Option<&HeatResponse> {
+        self.source.heat.as_ref()
     }
 
     /// This material's repulsion `(U(r), dU/dr)` (not halved).

@@ -167,6 +167,43 @@ pub fn evaluate_spacing(
 /// module docs). No allocation.
 #[inline]
 pub fn evaluate_pair(i: &ParticleView, j: &ParticleView, coupling: Coupling) -> PairResult {
+    evaluate_pair_weakened(i, j, coupling, 1.0)
+}
+
+/// The spacing part of a complete pair weakened to strength `s < 1`
+/// ([`crate::heat::weakened_spacing`] of each material's potential, then
+/// halved and summed like [`evaluate_spacing`]): energy and force on `j`.
+#[inline]
+pub fn evaluate_spacing_weakened(
+    mi: &PreparedMaterial,
+    mj: &PreparedMaterial,
+    r: &Vec3,
+    dist: Real,
+    s: Real,
+) -> (Real, Vec3) {
+    if dist.is_nan() || dist <= 0.0 {
+        return (0.0, Vec3::zeros());
+    }
+    let weak = |m: &PreparedMaterial, d: Real| {
+        let (u, du) = m.spacing_eval(d);
+        crate::heat::weakened_spacing(u, du, d, m.spacing_well(), s)
+    };
+    let (u, du) = half_sum(mi, mj, dist, weak);
+    (u, r * (-du / dist))
+}
+
+/// [`evaluate_pair`] with the complete interaction weakened by heat to
+/// strength `s` in `[0, 1]` ([`crate::heat`]): the spacing well `s` times
+/// as deep (core unchanged), the orientation terms and spin torques scaled
+/// by `s`. Repulsion-only pairs are not weakened. `s = 1` is exactly
+/// [`evaluate_pair`].
+#[inline]
+pub fn evaluate_pair_weakened(
+    i: &ParticleView,
+    j: &ParticleView,
+    coupling: Coupling,
+    s: Real,
+) -> PairResult {
     let r = j.position - i.position;
     let dist = r.norm();
     let mut out = PairResult::default();
@@ -188,7 +225,12 @@ pub fn evaluate_pair(i: &ParticleView, j: &ParticleView, coupling: Coupling) -> 
         }
         Coupling::Complete { oriented } => oriented,
     };
-    let (u, f_j) = evaluate_spacing(i.material, j.material, &r, dist);
+    let weak = s < 1.0;
+    let (u, f_j) = if weak {
+        evaluate_spacing_weakened(i.material, j.material, &r, dist, s)
+    } else {
+        evaluate_spacing(i.material, j.material, &r, dist)
+    };
     out.energy = u;
     let mut f_j = f_j;
     if oriented {
@@ -203,7 +245,7 @@ pub fn evaluate_pair(i: &ParticleView, j: &ParticleView, coupling: Coupling) -> 
                 t_i: i.tangent,
                 kappa_i: i.kappa,
             };
-            let o = mi.orientation(&g);
+            let o = weaken(mi.orientation(&g), weak, s);
             out.energy += o.energy;
             f_j -= o.d_r;
             out.torque_i += o.d_ni.cross(&i.normal) + o.spin_torque;
@@ -220,7 +262,7 @@ pub fn evaluate_pair(i: &ParticleView, j: &ParticleView, coupling: Coupling) -> 
                 t_i: j.tangent,
                 kappa_i: j.kappa,
             };
-            let o = mj.orientation(&g);
+            let o = weaken(mj.orientation(&g), weak, s);
             out.energy += o.energy;
             f_j += o.d_r;
             out.torque_j += o.d_ni.cross(&j.normal) + o.spin_torque;
@@ -230,6 +272,21 @@ pub fn evaluate_pair(i: &ParticleView, j: &ParticleView, coupling: Coupling) -> 
     out.force_j = f_j;
     out.force_i = -f_j;
     out
+}
+
+/// An orientation contribution scaled by the strength `s` when `weak`.
+#[inline]
+fn weaken(o: OrientationGrad, weak: bool, s: Real) -> OrientationGrad {
+    if !weak {
+        return o;
+    }
+    OrientationGrad {
+        energy: s * o.energy,
+        d_r: o.d_r * s,
+        d_ni: o.d_ni * s,
+        d_nj: o.d_nj * s,
+        spin_torque: o.spin_torque * s,
+    }
 }
 
 #[cfg(test)]

@@ -83,6 +83,35 @@ impl SpacingKernel {
         }
     }
 
+    /// `(r_w, U(r_w))`: position and value of the minimum of the potential
+    /// (the bottom of the well), found by bisection of `dU/dr` between the
+    /// repulsive core and the distance of maximum attraction.
+    pub fn well(&self) -> (Real, Real) {
+        let (r_m, _) = self.max_attraction();
+        let slope = |r: Real| self.eval(r).1;
+        let mut lo = 0.5 * r_m;
+        for _ in 0..64 {
+            if slope(lo) < 0.0 {
+                break;
+            }
+            lo *= 0.5;
+        }
+        let mut hi = r_m;
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if slope(mid) < 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let r = 0.5 * (lo + hi);
+        (r, self.eval(r).0)
+    }
+
     /// The name of the potential (`"lennard_jones"` or `"cohesion"`).
     pub fn name(&self) -> &'static str {
         match self {

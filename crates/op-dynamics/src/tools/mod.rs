@@ -240,6 +240,45 @@ impl Tool {
         ids
     }
 
+    /// Adds `dt` times the heating rate this tool gives each particle at
+    /// time `t` ([`crate::heat::heating_rate`] of its signed distance) to
+    /// its temperature (by slot). Nothing unless the tool is a heater or a
+    /// knife; particles of objects it does not act on are not heated.
+    pub fn add_heat(
+        &self,
+        t: Real,
+        dt: Real,
+        positions: &[Point3],
+        objects: &[u32],
+        temperatures: &mut [Real],
+    ) {
+        let Some((power, reach)) = self.params.role.heating() else {
+            return;
+        };
+        let pose = self.pose(t);
+        let frame = parry_pose(&pose.position, &pose.rotation);
+        let bound: Option<Aabb> = (!self.params.shape.is_unbounded())
+            .then(|| self.shape.compute_aabb(&frame).loosened(reach));
+        let shape = self.shape.as_ref();
+        temperatures
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(i, temp)| {
+                let x = positions[i].coords;
+                if !self.acts_on(objects[i])
+                    || bound.is_some_and(|b| !b.contains_local_point(to_parry(&x)))
+                {
+                    return;
+                }
+                // No signed distance exactly on the surface or where the
+                // projection degenerates inside (a ball's centre): both get
+                // the full power.
+                let rate = signed_distance(shape, &frame, &x)
+                    .map_or(power, |(sd, _)| crate::heat::heating_rate(power, reach, sd));
+                *temp += dt * rate;
+            });
+    }
+
     /// Adds this tool's forces to `forces` and energies to `energies` (by
     /// slot) for the state `s` at time `t`.
     fn add(
@@ -277,8 +316,8 @@ impl Tool {
                     forces[i] -= stiffness * stretch + damping * relative;
                 }
             }
-            Role::Eraser => {}
-            Role::Obstacle { .. } | Role::Attractor { .. } => {
+            Role::Eraser | Role::Heater { .. } => {}
+            Role::Obstacle { .. } | Role::Attractor { .. } | Role::Knife { .. } => {
                 let frame = parry_pose(&pose.position, &pose.rotation);
                 let reach = self.params.role.reach();
                 let bound: Option<Aabb> = (!self.params.shape.is_unbounded())
@@ -305,6 +344,12 @@ impl Tool {
                                 stiffness,
                                 margin,
                                 damping,
+                            }
+                            | Role::Knife {
+                                stiffness,
+                                margin,
+                                damping,
+                                ..
                             } => {
                                 let (energy, push) = roles::obstacle(stiffness, margin, sd);
                                 if push == 0.0 {
@@ -318,7 +363,7 @@ impl Tool {
                             Role::Attractor { strength, reach } => {
                                 roles::attractor(strength, reach, sd)
                             }
-                            Role::Mover { .. } | Role::Eraser => return,
+                            Role::Mover { .. } | Role::Eraser | Role::Heater { .. } => return,
                         };
                         *e += energy;
                         *f += push * n;

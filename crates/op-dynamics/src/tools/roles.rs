@@ -67,6 +67,35 @@ pub enum Role {
     /// removal is an edit of the particle set between steps, not a
     /// potential, so energy is not conserved across it.
     Eraser,
+    /// A heater (seed 000 §8, fig. 13: "heating the surface near the
+    /// tool"): no force; raises the temperature of the particles within
+    /// `reach` of its surface at `power (1 - max(s, 0) / reach)` per unit
+    /// time ([`crate::heat`]). Needs the world's `heat` settings.
+    Heater {
+        /// Heating rate at and inside the surface, > 0 (temperature per
+        /// unit time).
+        power: Real,
+        /// How far outside the surface it heats, > 0.
+        reach: Real,
+    },
+    /// A hot knife (seed 000 §6, fig. 7: "we use the heat of the cutting
+    /// tool to weaken the inter-particle bonds"): a solid obstacle (the
+    /// penalty of [`Role::Obstacle`]) that also heats like a
+    /// [`Role::Heater`]. Needs the world's `heat` settings.
+    Knife {
+        /// Penalty stiffness `k`, > 0.
+        stiffness: Real,
+        /// Contact offset from the surface, >= 0. Default: 0.
+        #[serde(default)]
+        margin: Real,
+        /// Normal damping in contact, >= 0. Default: 0.
+        #[serde(default)]
+        damping: Real,
+        /// Heating rate at and inside the surface, > 0.
+        power: Real,
+        /// How far outside the surface it heats, > 0.
+        reach: Real,
+    },
 }
 
 fn infinity() -> Real {
@@ -108,18 +137,46 @@ impl Role {
                 )
             }
             Role::Eraser => Ok(()),
+            Role::Heater { power, reach } => {
+                error::positive("Heater.power", *power)?;
+                error::positive("Heater.reach", *reach)
+            }
+            Role::Knife {
+                stiffness,
+                margin,
+                damping,
+                power,
+                reach,
+            } => {
+                error::positive("Knife.stiffness", *stiffness)?;
+                error::non_negative("Knife.margin", *margin)?;
+                error::non_negative("Knife.damping", *damping)?;
+                error::positive("Knife.power", *power)?;
+                error::positive("Knife.reach", *reach)
+            }
+        }
+    }
+
+    /// Heating power and reach of a heater or knife, `None` otherwise.
+    pub fn heating(&self) -> Option<(Real, Real)> {
+        match *self {
+            Role::Heater { power, reach } | Role::Knife { power, reach, .. } => {
+                Some((power, reach))
+            }
+            _ => None,
         }
     }
 
     /// How far outside the surface the role acts (particles farther away
     /// are skipped by a bounding-box test). Movers act on their grabbed
-    /// particles wherever they are; erasers exert no force (0).
+    /// particles wherever they are; erasers and heaters exert no force (0).
     pub fn reach(&self) -> Real {
         match self {
             Role::Obstacle { margin, .. } => *margin,
             Role::Attractor { reach, .. } => *reach,
             Role::Mover { .. } => Real::INFINITY,
-            Role::Eraser => 0.0,
+            Role::Eraser | Role::Heater { .. } => 0.0,
+            Role::Knife { margin, .. } => *margin,
         }
     }
 }

@@ -106,6 +106,7 @@ impl World {
         }
         self.pipeline.kernel = config.kernel;
         self.pipeline.friction = config.friction;
+        self.pipeline.heated = config.heated;
         self.pipeline.has_fixed = config.has_fixed;
         self.repulsion = config.repulsion;
         self.accumulator.grow(self.particles.id_bound());

@@ -188,6 +188,11 @@ pub struct WorldSettings {
     /// [`DivergenceSettings::default`].
     #[serde(default)]
     pub divergence: DivergenceSettings,
+    /// Heat conduction and cooling (op-dynamics [`op_dynamics::HeatParams`],
+    /// seed 000 §6, §8), needed by heater and knife tools. Default: none
+    /// (temperatures stay as set).
+    #[serde(default)]
+    pub heat: Option<op_dynamics::HeatParams>,
 }
 
 fn default_scheme() -> Scheme {
@@ -207,6 +212,7 @@ impl Default for WorldSettings {
             linear_damping: 0.0,
             angular_damping: 0.0,
             divergence: DivergenceSettings::default(),
+            heat: None,
         }
     }
 }
@@ -409,6 +415,10 @@ pub struct Override {
     /// Set their rest curvature (finite). Default: unchanged.
     #[serde(default)]
     pub curvature: Option<Real>,
+    /// Set their temperature (finite; heat, seed 000 §6, §8). Default:
+    /// unchanged (0).
+    #[serde(default)]
+    pub temperature: Option<Real>,
     /// Set their mass (> 0). Default: unchanged.
     #[serde(default)]
     pub mass: Option<Real>,

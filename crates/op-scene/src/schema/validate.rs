@@ -158,6 +158,15 @@ impl Scene {
         t.role
             .validate()
             .map_err(|e| SceneError::param(file, &format!("{path}.role"), e))?;
+        if t.role.heating().is_some() && self.world.heat.is_none() {
+            return Err(SceneError::value(
+                file,
+                format!("{path}.role"),
+                format!("{:?}", t.role),
+                "a heater or knife needs heat settings: add `heat: Some((conduction: 1, \
+                 cooling: 0.1, ambient: 0))` to `world`",
+            ));
+        }
         for (j, name) in t.objects.iter().flatten().enumerate() {
             if !self.objects.iter().any(|o| &o.name == name) {
                 return Err(SceneError::value(
@@ -214,6 +223,10 @@ impl Scene {
                     "must be > 0 (infinity disables the check)",
                 ));
             }
+        }
+        if let Some(h) = &w.heat {
+            h.validate()
+                .map_err(|e| SceneError::param(file, "world.heat", e))?;
         }
         positive(file, "outputs.glyph_size", self.outputs.glyph_size)?;
         positive(
@@ -277,6 +290,9 @@ impl Scene {
             }
             if let Some(k) = ov.curvature {
                 finite(file, &format!("{op}.curvature"), k)?;
+            }
+            if let Some(t) = ov.temperature {
+                finite(file, &format!("{op}.temperature"), t)?;
             }
         }
         Ok(count)
