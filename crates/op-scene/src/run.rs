@@ -43,6 +43,10 @@ pub struct ObjectSummary {
     pub rest_shape_error_final: Real,
     /// Largest rest shape error over the frames.
     pub rest_shape_error_max: Real,
+    /// Highest temperature of any of its particles over the frames, when
+    /// the scene has `world.heat` (seed 000 §6, §8).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub temperature_max: Option<Real>,
 }
 
 /// What `summary.json` holds.
@@ -158,6 +162,8 @@ pub fn run(
     };
     let mut max_err = vec![0.0; scene.objects.len()];
     let mut last_err = vec![0.0; scene.objects.len()];
+    let heat = scene.world.params().heat.is_some();
+    let mut hottest = vec![Real::NEG_INFINITY; scene.objects.len()];
     let mut energy_scale = None;
     // Nothing feeds energy into a passive scene: see `energy_gain`.
     let passive = {
@@ -239,6 +245,14 @@ pub fn run(
             let e = rest_shape_error(scene, obj);
             last_err[o] = e;
             max_err[o] = Real::max(max_err[o], e);
+            if heat {
+                let p = scene.world.particles();
+                hottest[o] = obj
+                    .all_ids()
+                    .filter_map(|id| p.slot_of(id))
+                    .map(|s| p.temperatures()[s])
+                    .fold(hottest[o], Real::max);
+            }
         }
         if write_frames {
             let path = frames_dir.join(frame_name(k));
@@ -294,6 +308,7 @@ pub fn run(
                     .count(),
                 rest_shape_error_final: last_err[o],
                 rest_shape_error_max: max_err[o],
+                temperature_max: (heat && hottest[o].is_finite()).then_some(hottest[o]),
             })
             .collect(),
     };
