@@ -827,6 +827,16 @@ const BAD_SCENES: &[(&str, Expect, &[&str])] = &[
         &["forces[0].end = 1", "greater than start = 2"],
     ),
     (
+        "heater_without_heat.ron",
+        Expect::Invalid,
+        &["tools[0].role", "needs heat settings", "heat: Some("],
+    ),
+    (
+        "bad_heat.ron",
+        Expect::Invalid,
+        &["world.heat", "conduction", ">= 0"],
+    ),
+    (
         "bad_material.ron",
         Expect::Invalid,
         &["materials.\"soft\".spacing.cohesion.alpha = -1", "> 0"],
