@@ -72,3 +72,60 @@ fn fig_07_hot_knife_cuts_the_sheet_in_two() {
         "the cold blade did not push the sheet: {lowest}"
     );
 }
+
+/// Fig. 13, first stage (the stem): a hot tool pulls a stem out of a
+/// sphere. Only the hot part stretches: every created particle lies along
+/// the tool's path (above the sphere's equator, z > 3), the body below the
+/// equator stays colder than the stretching threshold, and the surface
+/// stays one closed piece (one component, no boundary loop in the
+/// triangulation) with its tip where the tool took it.
+///
+/// Not reproduced (see the closing note of issue 7): the paper's contrast,
+/// "without this modification, the extruded part of the surface has a
+/// tendency to pinch off": the same pull without heat (stretching
+/// everywhere, no weakening) also extrudes a stem in one piece here; and
+/// the triangulation of the pulled shell is closed but not manifold
+/// (Euler characteristic 6 at 1.7 r0: quads on the compressed body keep
+/// both diagonals), so the handle of fig. 13 (Euler characteristic 2 -> 0)
+/// is not built.
+#[test]
+fn fig_13_hot_tool_extrudes_a_stem() {
+    use oriented_particles::op_dynamics::triangulation::{triangulate, TriangulationParams};
+    let scene = load("fig_13_stem");
+    let (built, summary) = run(&scene, "stem");
+    let p = built.world.particles();
+    let points = p.positions().to_vec();
+    let sizes = components(&points, 1.5);
+    let t = triangulate(p, &TriangulationParams::from_spacing(1.0, 1.7)).unwrap();
+    let top = points.iter().map(|x| x.z).fold(Real::MIN, Real::max);
+    let created: Vec<usize> = built.objects[0]
+        .created
+        .iter()
+        .filter_map(|&id| p.slot_of(id))
+        .collect();
+    let lowest_created = created
+        .iter()
+        .map(|&s| points[s].z)
+        .fold(Real::INFINITY, Real::min);
+    let body_hottest = (0..p.len())
+        .filter(|&s| points[s].z < 0.0)
+        .map(|s| p.temperatures()[s])
+        .fold(Real::MIN, Real::max);
+    println!(
+        "stem: particles {} -> {} ({} created, lowest at z {lowest_created:.2}), components \
+         {sizes:?}, chi {}, boundary loops {}, tip z {top:.2}, body below the equator at most \
+         {body_hottest:.3} hot, hottest {:?}",
+        built.objects[0].ids.len(),
+        p.len(),
+        created.len(),
+        t.euler_characteristic(),
+        t.boundary_loops(),
+        summary.objects[0].temperature_max
+    );
+    assert!(created.len() > 50, "{} created", created.len());
+    assert!(lowest_created > 3.0, "created at z {lowest_created}");
+    assert!(body_hottest < 1.0, "the body got hot: {body_hottest}");
+    assert_eq!(sizes.len(), 1, "{sizes:?}");
+    assert_eq!(t.boundary_loops(), 0);
+    assert!(top > 9.0, "tip at {top}");
+}
