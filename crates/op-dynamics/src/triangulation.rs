@@ -43,6 +43,18 @@
 //! triangles); keeping them all inside would leave a hole. Degenerate
 //! triangles (collinear, non-finite circumradius) are never kept.
 //!
+//! **Crossed diagonals** (our addition): on a curved surface four
+//! particles `p, q, r, s` around a quadrilateral can pass the sphere test
+//! with both diagonals, because each triangle's sphere is centred in its
+//! own plane and the fourth particle lies off that plane, outside it (the
+//! two triangles of each diagonal make edges in three triangles). Of two
+//! such pairs the one kept is the pair whose diagonal is the Delaunay one
+//! in the plane normal to the mean of the four particle normals (the
+//! empty-circle test the rule carries to 3-D, taken back to the tangent
+//! plane); an exact tie keeps the diagonal through the smallest rank, like
+//! the co-circular ties above. Applied in edge order until no crossed pair
+//! is left.
+//!
 //! **Orientation**: each triangle is wound so that its geometric normal
 //! `(p_b - p_a) x (p_c - p_a)` points along the sum of its three particle
 //! normals `n = R(q) a` (on a closed surface with outward normals the faces
@@ -159,6 +171,19 @@ fn triangulate_ranked(
     ranks: &[u32],
     params: &TriangulationParams,
 ) -> Result<Vec<[u32; 3]>, ParamError> {
+    let mut out = sphere_rule(positions, normals, ranks, params)?;
+    resolve_crossed_diagonals(&mut out, positions, normals, ranks);
+    Ok(out)
+}
+
+/// The triangles the sphere test and the tilt limit keep, before crossed
+/// diagonals are resolved: canonical, sorted.
+fn sphere_rule(
+    positions: &[Point3],
+    normals: &[Vec3],
+    ranks: &[u32],
+    params: &TriangulationParams,
+) -> Result<Vec<[u32; 3]>, ParamError> {
     params.validate()?;
     if normals.len() != positions.len() {
         return Err(ParamError::Invalid {
@@ -208,6 +233,135 @@ fn triangulate_ranked(
     let mut out: Vec<[u32; 3]> = per.into_iter().flatten().map(canonical).collect();
     out.sort_unstable();
     Ok(out)
+}
+
+/// The vertices of `t`, ascending (the key of a triangle whatever its
+/// winding).
+fn sorted(t: [u32; 3]) -> [u32; 3] {
+    let mut k = t;
+    k.sort_unstable();
+    k
+}
+
+/// Removes, of every two triangle pairs spanning the same four particles
+/// with crossing diagonals, the pair whose diagonal is not Delaunay in the
+/// tangent plane (see the module docs). `tris` stays sorted.
+fn resolve_crossed_diagonals(
+    tris: &mut Vec<[u32; 3]>,
+    positions: &[Point3],
+    normals: &[Vec3],
+    ranks: &[u32],
+) {
+    use std::collections::BTreeSet;
+    loop {
+        let keys: BTreeSet<[u32; 3]> = tris.iter().map(|&t| sorted(t)).collect();
+        let has = |a: u32, b: u32, c: u32| keys.contains(&sorted([a, b, c]));
+        // Opposite vertices of each edge held by more than two triangles.
+        let mut opposite: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
+        for t in keys.iter() {
+            for k in 0..3 {
+                let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+                opposite.entry((a.min(b), a.max(b))).or_default().push(c);
+            }
+        }
+        let mut drop: BTreeSet<[u32; 3]> = BTreeSet::new();
+        for (&(p, q), others) in opposite.iter().filter(|(_, o)| o.len() > 2) {
+            for (x, &r) in others.iter().enumerate() {
+                for &s in &others[x + 1..] {
+                    // All four faces of the tetrahedron p, q, r, s kept.
+                    if !(has(r, s, p) && has(r, s, q)) {
+                        continue;
+                    }
+                    let Some([a, b, c, d]) = crossing_diagonals([p, q, r, s], positions, normals)
+                    else {
+                        continue;
+                    };
+                    let pair =
+                        |a: u32, b: u32, c: u32, d: u32| [sorted([a, b, c]), sorted([a, b, d])];
+                    let (ab, cd) = (pair(a, b, c, d), pair(c, d, a, b));
+                    if ab.iter().chain(&cd).any(|t| drop.contains(t)) {
+                        continue;
+                    }
+                    let keep_ab = delaunay_diagonal([a, b, c, d], positions, normals, ranks);
+                    drop.extend(if keep_ab { cd } else { ab });
+                }
+            }
+        }
+        if drop.is_empty() {
+            return;
+        }
+        tris.retain(|&t| !drop.contains(&sorted(t)));
+    }
+}
+
+/// A frame `(origin, u, w)` of the plane normal to the mean of the normals
+/// of `v`, and the coordinates of a particle in it.
+fn tangent_coordinates<'a>(
+    v: &[u32],
+    positions: &'a [Point3],
+    normals: &[Vec3],
+) -> impl Fn(u32) -> (Real, Real) + use<'a> {
+    let n: Vec3 = v.iter().map(|&k| normals[k as usize]).sum();
+    let n = if n.norm() > 0.0 {
+        n.normalize()
+    } else {
+        Vec3::z()
+    };
+    let u = crate::math::tangent_axis(&n).normalize();
+    let w = n.cross(&u);
+    let origin = positions[v[0] as usize];
+    move |k: u32| {
+        let d = positions[k as usize] - origin;
+        (d.dot(&u), d.dot(&w))
+    }
+}
+
+/// The four corners reordered `[a, b, c, d]` so that `(a, b)` and `(c, d)`
+/// are the diagonals of the quadrilateral they make in the tangent plane
+/// (the two segments that cross), or None when no pairing crosses (one
+/// corner inside the triangle of the others).
+fn crossing_diagonals(v: [u32; 4], positions: &[Point3], normals: &[Vec3]) -> Option<[u32; 4]> {
+    let flat = tangent_coordinates(&v, positions, normals);
+    let side = |o: (Real, Real), a: (Real, Real), b: (Real, Real)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let cross = |a: u32, b: u32, c: u32, d: u32| {
+        let (pa, pb, pc, pd) = (flat(a), flat(b), flat(c), flat(d));
+        side(pa, pb, pc) * side(pa, pb, pd) < 0.0 && side(pc, pd, pa) * side(pc, pd, pb) < 0.0
+    };
+    let [p, q, r, s] = v;
+    [[p, q, r, s], [p, r, q, s], [p, s, q, r]]
+        .into_iter()
+        .find(|&[a, b, c, d]| cross(a, b, c, d))
+}
+
+/// True when the diagonal `(v[0], v[1])` of the quadrilateral with the
+/// other corners `v[2]`, `v[3]` is the Delaunay one in the plane normal to
+/// the mean of the four normals: `v[3]` outside the circle through
+/// `v[0], v[1], v[2]`. An exact tie keeps the diagonal through the
+/// smallest rank.
+fn delaunay_diagonal(v: [u32; 4], positions: &[Point3], normals: &[Vec3], ranks: &[u32]) -> bool {
+    let flat = tangent_coordinates(&v, positions, normals);
+    let [a, b, c, d] = v.map(flat);
+    // In-circle determinant of d against (a, b, c), signed by the
+    // orientation of (a, b, c).
+    let orient = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+    let row = |p: (Real, Real)| {
+        let (x, y) = (p.0 - d.0, p.1 - d.1);
+        (x, y, x * x + y * y)
+    };
+    let (ra, rb, rc) = (row(a), row(b), row(c));
+    let det = ra.0 * (rb.1 * rc.2 - rb.2 * rc.1) - ra.1 * (rb.0 * rc.2 - rb.2 * rc.0)
+        + ra.2 * (rb.0 * rc.1 - rb.1 * rc.0);
+    let inside = det * orient.signum();
+    let scale = [ra.2, rb.2, rc.2].iter().fold(0.0, |m: Real, x| m.max(*x));
+    if inside.abs() <= 1e-12 * scale * scale {
+        let min_rank = |x: u32, y: u32| ranks[x as usize].min(ranks[y as usize]);
+        return min_rank(v[0], v[1]) <= min_rank(v[2], v[3]);
+    }
+    // d inside the circle through a, b, c: the diagonal (c, d) is the
+    // Delaunay one.
+    inside < 0.0
 }
 
 /// Full neighbour rows (both directions, ascending) from a half list.

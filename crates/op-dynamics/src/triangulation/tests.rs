@@ -163,6 +163,48 @@ fn sphere_shell_is_closed_and_faces_outward() {
     }
 }
 
+/// Coarse, jittered spheres (about 80 particles, so each triangle's sphere
+/// test sees the curvature): the sphere test alone keeps both diagonals of
+/// some quadrilaterals (all four faces of a flat tetrahedron, edges in
+/// three triangles). Resolving them never adds such an edge, removes most
+/// of them, and wherever none is left the sphere is a closed, consistently
+/// oriented 2-manifold of Euler characteristic 2. (What remains on some
+/// seeds are other over-full edges, not crossed quadrilaterals.)
+#[test]
+fn crossed_diagonals_are_resolved_on_coarse_curved_surfaces() {
+    let over_full = |t: &Triangulation| t.edges().values().filter(|&&c| c > 2).count();
+    let (mut before, mut after) = (0, 0);
+    for seed in 1..=8u64 {
+        let (mut p, normals) = sphere(2.5, 1.0);
+        let mut rng = Rng(seed);
+        for x in &mut p {
+            *x += Vec3::new(
+                rng.uniform(-0.12, 0.12),
+                rng.uniform(-0.12, 0.12),
+                rng.uniform(-0.12, 0.12),
+            );
+        }
+        let params = TriangulationParams::with_radius(1.7);
+        let ranks: Vec<u32> = (0..p.len() as u32).collect();
+        let raw = Triangulation {
+            triangles: sphere_rule(&p, &normals, &ranks, &params).unwrap(),
+        };
+        let t = tri(&p, &normals, 1.7);
+        let (b, a) = (over_full(&raw), over_full(&t));
+        assert!(a <= b, "seed {seed}: {b} -> {a}");
+        if a == 0 {
+            assert!(t.is_manifold(), "seed {seed}");
+            assert!(t.is_consistently_oriented(), "seed {seed}");
+            assert_eq!(t.boundary_loops(), 0, "seed {seed}");
+            assert_eq!(t.euler_characteristic(), 2, "seed {seed}");
+        }
+        before += b;
+        after += a;
+    }
+    assert!(before > 0, "no seed exercised the crossed-diagonal pass");
+    assert!(2 * after < before, "{before} -> {after}");
+}
+
 #[test]
 fn torus_has_euler_characteristic_zero() {
     let (p, normals) = torus(4.0, 1.6, 0.45, &mut Rng(5));
