@@ -6,7 +6,8 @@
 //! enabled terms fixed, which is what [`super::evaluate_pair`] reads.
 //!
 //! Default: cohesion spacing, every orientation weight 0 (a scene enables
-//! the terms it uses), normalized terms, default repulsion, no friction.
+//! the terms it uses), normalized terms, default repulsion, no friction,
+//! no bonds.
 
 use super::cocircularity;
 use super::conormality;
@@ -17,6 +18,7 @@ use super::repulsion::{Repulsion, RepulsionParams};
 use super::spacing::{Spacing, SpacingKernel};
 use super::spin::{self, SpinKind};
 use super::weight::{Weight, WeightParams};
+use crate::bonds::BondParams;
 use crate::error::{non_negative, ParamError};
 use crate::math::Real;
 use serde::{Deserialize, Serialize};
@@ -52,6 +54,13 @@ pub struct Material {
     /// Inter-particle friction coefficient (>= 0; damping of relative
     /// velocity, seed 002 §5, applied by the world). Default: 0.
     pub friction: Real,
+    /// Explicit bonds ([`crate::bonds`]): pairs of one object within
+    /// `radius` when the world is built interact completely, other pairs
+    /// of the object only repel, and a bond stretched beyond
+    /// `break_length` breaks for good (seed 000 fig. 12a, 12c). `None`:
+    /// every pair of one object within the cut-off interacts completely.
+    /// Default: `None`.
+    pub bonds: Option<BondParams>,
 }
 
 impl Default for Material {
@@ -68,6 +77,7 @@ impl Default for Material {
             normalized: true,
             repulsion: RepulsionParams::default(),
             friction: 0.0,
+            bonds: None,
         }
     }
 }
@@ -101,7 +111,11 @@ impl Material {
         self.repulsion
             .validate()
             .map_err(|e| e.within("repulsion"))?;
-        non_negative("friction", self.friction)
+        non_negative("friction", self.friction)?;
+        if let Some(b) = &self.bonds {
+            b.validate().map_err(|e| e.within("bonds"))?;
+        }
+        Ok(())
     }
 
     /// Validates and precomputes (weight constants, cohesion tables).
@@ -132,6 +146,7 @@ impl Material {
                 .prepare()
                 .map_err(|e| e.within("repulsion"))?,
             friction: self.friction,
+            bonds: self.bonds,
             source: *self,
         })
     }
@@ -152,6 +167,7 @@ pub struct PreparedMaterial {
     oriented: bool,
     repulsion: Repulsion,
     friction: Real,
+    bonds: Option<BondParams>,
     source: Material,
 }
 
@@ -226,12 +242,21 @@ impl PreparedMaterial {
         if self.repulsion.is_enabled() {
             v.push("repulsion");
         }
+        if self.bonds.is_some() {
+            v.push("bonds");
+        }
         v
     }
 
     /// Inter-particle friction coefficient (applied by the world).
     pub fn friction(&self) -> Real {
         self.friction
+    }
+
+    /// The bond rule, if this material is bonded ([`crate::bonds`]).
+    #[inline]
+    pub fn bonds(&self) -> Option<&BondParams> {
+        self.bonds.as_ref()
     }
 
     /// This material's spacing potential `(U(r), dU/dr)` (not halved);
@@ -452,6 +477,16 @@ mod tests {
                     ..d
                 },
                 "`repulsion.lambda`",
+            ),
+            (
+                Material {
+                    bonds: Some(BondParams {
+                        radius: 1.2,
+                        break_length: 1.0,
+                    }),
+                    ..d
+                },
+                "`bonds.break_length` = 1",
             ),
         ];
         for (m, needle) in cases {
