@@ -60,34 +60,43 @@ pub struct BondParams {
     /// of spacing 1 bonds its six nearest neighbours, not the next ones at
     /// 1.73).
     pub radius: Real,
-    /// A bond breaks for good when its length exceeds this, > `radius`
-    /// (infinity: bonds never break). Default: infinity.
-    pub break_length: Real,
+    /// A bond breaks for good when its length exceeds this (finite,
+    /// greater than `radius`); `None`: bonds never break. Default: `None`.
+    pub break_length: Option<Real>,
 }
 
 impl Default for BondParams {
     fn default() -> Self {
         BondParams {
             radius: 1.2,
-            break_length: Real::INFINITY,
+            break_length: None,
         }
     }
 }
 
 impl BondParams {
     /// Rejects NaN and out-of-range values: `radius` finite and > 0,
-    /// `break_length` > `radius` (infinity allowed).
+    /// `break_length` finite and > `radius` (bonds formed within the
+    /// radius must not break at once).
     pub fn validate(&self) -> Result<(), ParamError> {
         error::positive("radius", self.radius)?;
-        error::check(
-            "break_length",
-            self.break_length,
-            self.break_length > self.radius,
-            &format!(
-                "must be > radius = {} (infinity: never breaks)",
-                self.radius
+        match self.break_length {
+            Some(b) => error::check(
+                "break_length",
+                b,
+                b.is_finite() && b > self.radius,
+                &format!(
+                    "must be finite and > radius = {} (omit it for bonds that never break)",
+                    self.radius
+                ),
             ),
-        )
+            None => Ok(()),
+        }
+    }
+
+    /// The break length as a number (infinity when bonds never break).
+    fn limit(&self) -> Real {
+        self.break_length.unwrap_or(Real::INFINITY)
     }
 
     /// The rule of a pair whose materials have these rules (`None`: not
@@ -96,7 +105,10 @@ impl BondParams {
         match (a, b) {
             (Some(a), Some(b)) => Some(BondParams {
                 radius: a.radius.min(b.radius),
-                break_length: a.break_length.min(b.break_length),
+                break_length: match (a.break_length, b.break_length) {
+                    (Some(x), Some(y)) => Some(x.min(y)),
+                    (x, y) => x.or(y),
+                },
             }),
             (Some(r), None) | (None, Some(r)) => Some(*r),
             (None, None) => None,
@@ -109,7 +121,8 @@ impl BondParams {
 pub struct Bonds {
     /// Live bonds `(lower id, higher id)`, sorted.
     pairs: Vec<(u32, u32)>,
-    /// Break length of each live bond (parallel to `pairs`).
+    /// Break length of each live bond (parallel to `pairs`; infinity for
+    /// bonds that never break).
     break_lengths: Vec<Real>,
     /// Partners of id `k`: `partners[offsets[k]..offsets[k + 1]]`, sorted.
     offsets: Vec<u32>,
@@ -178,7 +191,7 @@ impl Bonds {
             if let Some(rule) = rule {
                 if (p[j] - p[i]).norm_squared() <= rule.radius * rule.radius {
                     self.pairs.push((id_i.min(id_j), id_i.max(id_j)));
-                    self.break_lengths.push(rule.break_length);
+                    self.break_lengths.push(rule.limit());
                     added += 1;
                 }
             }
@@ -327,16 +340,23 @@ mod tests {
             (
                 BondParams {
                     radius: 1.2,
-                    break_length: 1.2,
+                    break_length: Some(1.2),
                 },
-                "must be > radius",
+                "must be finite and > radius",
             ),
             (
                 BondParams {
                     radius: 1.2,
-                    break_length: Real::NAN,
+                    break_length: Some(Real::NAN),
                 },
                 "`break_length` = NaN",
+            ),
+            (
+                BondParams {
+                    radius: 1.2,
+                    break_length: Some(Real::INFINITY),
+                },
+                "`break_length` = inf",
             ),
         ] {
             let e = b.validate().unwrap_err().to_string();
@@ -348,20 +368,32 @@ mod tests {
     fn pair_rule_takes_the_smaller_values() {
         let a = BondParams {
             radius: 1.2,
-            break_length: 2.0,
+            break_length: Some(2.0),
         };
         let b = BondParams {
             radius: 1.5,
-            break_length: 1.4,
+            break_length: Some(1.4),
+        };
+        let never = BondParams {
+            radius: 1.1,
+            break_length: None,
         };
         assert_eq!(
             BondParams::of_pair(Some(&a), Some(&b)),
             Some(BondParams {
                 radius: 1.2,
-                break_length: 1.4
+                break_length: Some(1.4)
+            })
+        );
+        assert_eq!(
+            BondParams::of_pair(Some(&never), Some(&b)),
+            Some(BondParams {
+                radius: 1.1,
+                break_length: Some(1.4)
             })
         );
         assert_eq!(BondParams::of_pair(None, Some(&b)), Some(b));
         assert_eq!(BondParams::of_pair(None, None), None);
+        assert_eq!(never.limit(), Real::INFINITY);
     }
 }

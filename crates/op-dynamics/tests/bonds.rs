@@ -17,7 +17,7 @@ fn bonded(m: Material, radius: Real, break_length: Real) -> Material {
     Material {
         bonds: Some(BondParams {
             radius,
-            break_length,
+            break_length: Some(break_length),
         }),
         ..m
     }

@@ -482,7 +482,7 @@ mod tests {
                 Material {
                     bonds: Some(BondParams {
                         radius: 1.2,
-                        break_length: 1.0,
+                        break_length: Some(1.0),
                     }),
                     ..d
                 },
