@@ -116,8 +116,9 @@ impl BondParams {
     }
 }
 
-/// The bonds of a world, by stable particle id.
-#[derive(Clone, Debug, Default)]
+/// The bonds of a world, by stable particle id (built by the world; read
+/// it through [`crate::World::bonds`]).
+#[derive(Clone, Debug)]
 pub struct Bonds {
     /// Live bonds `(lower id, higher id)`, sorted.
     pairs: Vec<(u32, u32)>,
@@ -148,9 +149,13 @@ impl Bonds {
     /// An empty store for these materials.
     pub(crate) fn new(materials: &[PreparedMaterial]) -> Bonds {
         Bonds {
-            governed: materials.iter().map(|m| m.bonds().is_some()).collect(),
+            pairs: Vec::new(),
+            break_lengths: Vec::new(),
             offsets: vec![0],
-            ..Bonds::default()
+            partners: Vec::new(),
+            governed: materials.iter().map(|m| m.bonds().is_some()).collect(),
+            broken: 0,
+            stretched: Vec::new(),
         }
     }
 
