@@ -15,10 +15,15 @@
 //!
 //! Two kernels are compiled and one is chosen when the world is built
 //! (pay for what you use): [`Kernel::Spacing`] touches positions only;
-//! [`Kernel::Oriented`] evaluates the full oriented interaction.
+//! [`Kernel::Oriented`] evaluates the full oriented interaction. Each is
+//! compiled for two bond lookups ([`crate::bonds`]): worlds without bonded
+//! materials run the instance whose lookup is the constant `true` (the
+//! code they ran before bonds existed, no per-pair bond work); worlds with
+//! them look each complete pair up in the bond store.
 
 use rayon::prelude::*;
 
+use crate::bonds::Bonds;
 use crate::external::{ExternalAccumulator, ExternalParams};
 use crate::flags::Flags;
 use crate::heat::pair_strength;
@@ -95,6 +100,8 @@ pub(crate) struct ForceContext<'a> {
     /// Some particle has a fixed position or orientation.
     pub has_fixed: bool,
     pub neighbours: Option<&'a mut NeighbourList>,
+    /// The bond store (`None`: no particle has a bonded material).
+    pub bonds: Option<&'a Bonds>,
     pub external: &'a ExternalParams,
     pub accumulator: &'a ExternalAccumulator,
     pub tools: &'a Tools,
@@ -112,6 +119,8 @@ pub(crate) struct Pipeline {
     /// Some particle has a fixed position or orientation.
     pub has_fixed: bool,
     pub neighbours: Option<NeighbourList>,
+    /// The bond store (`None`: no particle has a bonded material).
+    pub bonds: Option<Bonds>,
     /// Tools acting on the particles (empty: no tool stage).
     pub tools: Tools,
     pub scratch: ForceScratch,
@@ -134,6 +143,7 @@ impl Pipeline {
             heated: self.heated,
             has_fixed: self.has_fixed,
             neighbours: self.neighbours.as_mut(),
+            bonds: self.bonds.as_ref(),
             external,
             accumulator,
             tools: &self.tools,
@@ -201,7 +211,11 @@ impl ForceContext<'_> {
                     energies,
                 };
                 let heated = self.heated;
-                if kernel == Kernel::Spacing {
+                let bonds = self.bonds;
+                if let (Kernel::Spacing, Some(b)) = (kernel, bonds) {
+                    let pair = |i: usize, j: usize| spacing_pair(a, m, b, heated, cutoff2, s, i, j);
+                    accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
+                } else if kernel == Kernel::Spacing {
                     if uniform_spacing(a) && !heated {
                         // One material, every pair complete: the dedicated
                         // spacing loop, small enough to be inlined whole.
@@ -209,18 +223,28 @@ impl ForceContext<'_> {
                         let pair = |i: usize, j: usize| uniform_spacing_pair(m0, cutoff2, p, i, j);
                         accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
                     } else {
-                        let pair =
-                            |i: usize, j: usize| spacing_pair(a, m, heated, cutoff2, s, i, j);
+                        let pair = |i: usize, j: usize| {
+                            spacing_pair(a, m, &Unbonded, heated, cutoff2, s, i, j)
+                        };
                         accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
                     }
                 } else {
                     frames(normals, tangents, a, s);
                     let (normals, tangents) = (&*normals, &*tangents);
-                    let friction = self.friction;
-                    let pair = |i: usize, j: usize| {
-                        oriented_pair(a, m, friction, heated, cutoff2, normals, tangents, s, i, j)
-                    };
-                    accumulate::<true, _, _>(list, sources, oriented_pairs, serial, pair, out);
+                    let (friction, nv, tv) = (self.friction, normals, tangents);
+                    if let Some(b) = bonds {
+                        let pair = |i: usize, j: usize| {
+                            oriented_pair(a, m, b, friction, heated, cutoff2, nv, tv, s, i, j)
+                        };
+                        accumulate::<true, _, _>(list, sources, oriented_pairs, serial, pair, out);
+                    } else {
+                        let pair = |i: usize, j: usize| {
+                            oriented_pair(
+                                a, m, &Unbonded, friction, heated, cutoff2, nv, tv, s, i, j,
+                            )
+                        };
+                        accumulate::<true, _, _>(list, sources, oriented_pairs, serial, pair, out);
+                    }
                 }
             }
         }
@@ -298,11 +322,41 @@ fn refresh_sources(sources: &mut Vec<u32>, sources_for: &mut u64, list: &Neighbo
     *sources_for = list.rebuilds();
 }
 
-/// Coupling of two particles: object membership, then typing, then
-/// orientation (seed 002 §5; unoriented particles drop orientation terms).
+/// The bond lookup of the pair kernels ([`crate::bonds`]): whether a pair
+/// that membership and typing would couple completely keeps its complete
+/// interaction.
+trait BondLookup: Sync {
+    fn complete(&self, a: &Attributes<'_>, i: usize, j: usize) -> bool;
+}
+
+/// The lookup of worlds without bonded materials: every pair keeps it (a
+/// constant the compiler folds away).
+struct Unbonded;
+
+impl BondLookup for Unbonded {
+    #[inline(always)]
+    fn complete(&self, _: &Attributes<'_>, _: usize, _: usize) -> bool {
+        true
+    }
+}
+
+impl BondLookup for Bonds {
+    /// Pairs governed by bonds keep it only when bonded.
+    #[inline]
+    fn complete(&self, a: &Attributes<'_>, i: usize, j: usize) -> bool {
+        !self.governs(a.materials[i], a.materials[j]) || self.contains(a.ids[i], a.ids[j])
+    }
+}
+
+/// Coupling of two particles: object membership, then typing, then bonds,
+/// then orientation (seed 002 §5; unoriented particles drop orientation
+/// terms; bond-governed pairs that are not bonded only repel).
 #[inline]
-fn coupling(a: &Attributes<'_>, i: usize, j: usize) -> Coupling {
-    if a.objects[i] != a.objects[j] || !a.kinds[i].complete_with(a.kinds[j]) {
+fn coupling(a: &Attributes<'_>, bonds: &impl BondLookup, i: usize, j: usize) -> Coupling {
+    if a.objects[i] != a.objects[j]
+        || !a.kinds[i].complete_with(a.kinds[j])
+        || !bonds.complete(a, i, j)
+    {
         Coupling::RepulsionOnly
     } else {
         let oriented =
@@ -533,6 +587,7 @@ fn strength(
 fn spacing_pair(
     a: &Attributes<'_>,
     materials: &[PreparedMaterial],
+    bonds: &impl BondLookup,
     heated: bool,
     cutoff2: Real,
     s: StateRef<'_>,
@@ -550,7 +605,7 @@ fn spacing_pair(
         &materials[a.materials[i] as usize],
         &materials[a.materials[j] as usize],
     );
-    let (energy, force_j) = match coupling(a, i, j) {
+    let (energy, force_j) = match coupling(a, bonds, i, j) {
         Coupling::Complete { .. } => {
             let st = strength(a, mi, mj, heated, i, j);
             if st < 1.0 {
@@ -596,6 +651,7 @@ fn view(
 fn oriented_pair(
     a: &Attributes<'_>,
     materials: &[PreparedMaterial],
+    bonds: &impl BondLookup,
     friction: bool,
     heated: bool,
     cutoff2: Real,
@@ -615,7 +671,7 @@ fn oriented_pair(
         &materials[a.materials[i] as usize],
         &materials[a.materials[j] as usize],
     );
-    let c = coupling(a, i, j);
+    let c = coupling(a, bonds, i, j);
     let (vi, vj) = (
         view(p[i], normals[i], tangents[i], a.curvatures[i], mi),
         view(p[j], normals[j], tangents[j], a.curvatures[j], mj),

@@ -20,6 +20,7 @@
 //! loops, manifold).
 #![warn(missing_docs)]
 
+pub mod bonds;
 pub mod creation;
 pub mod diagnostics;
 pub mod error;

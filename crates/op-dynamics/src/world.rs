@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::bonds::Bonds;
 use crate::diagnostics::{self, Diagnostics};
 use crate::error::{self, ParamError};
 use crate::external::{ExternalAccumulator, ExternalParams};
@@ -186,6 +187,9 @@ pub struct StepReport {
     /// Stable ids of the particles eraser tools removed at the end of the
     /// step (seed 000 fig. 7), in increasing order.
     pub erased: Vec<u32>,
+    /// Bonds that broke at the end of the step, stretched beyond their
+    /// break length ([`crate::bonds`]; seed 000 fig. 12c tearing).
+    pub bonds_broken: usize,
 }
 
 /// True when some pair of particles does not interact completely (several
@@ -234,7 +238,8 @@ impl Config {
                 .map(|(m, _)| m)
                 .collect()
         };
-        let repulsion = may_repel(particles);
+        // Bond-governed pairs of one object that are not bonded repel.
+        let repulsion = may_repel(particles) || used.iter().any(|m| m.bonds().is_some());
         let cutoff = used
             .iter()
             .map(|m| {
@@ -336,6 +341,11 @@ impl World {
         }
         let config = Config::of(&particles, &prepared);
         let neighbours = config.neighbour_list(&params.neighbours);
+        let bonds = Bonds::needed(&particles, &prepared).then(|| {
+            let mut b = Bonds::new(&prepared);
+            b.form(&particles, &prepared, 0);
+            b
+        });
         let n = particles.len();
         Ok(World {
             pipeline: Pipeline {
@@ -345,6 +355,7 @@ impl World {
                 heated: config.heated,
                 has_fixed: config.has_fixed,
                 neighbours,
+                bonds,
                 tools: Tools::new(&params.tools, &particles)?,
                 scratch: ForceScratch::default(),
             },
@@ -396,6 +407,12 @@ impl World {
     /// The pair kernel chosen from the enabled terms.
     pub fn kernel(&self) -> Kernel {
         self.pipeline.kernel
+    }
+
+    /// The bonds ([`crate::bonds`]), if some particle has a bonded
+    /// material.
+    pub fn bonds(&self) -> Option<&Bonds> {
+        self.pipeline.bonds.as_ref()
     }
 
     /// The neighbour list, if any interaction is enabled.
@@ -518,8 +535,10 @@ impl World {
     /// evaluation updating the neighbour list (list-only rebuild when a
     /// stage moved particles past half the skin), running the pair kernel
     /// and gathering per particle, adding external actions; (3) clear the
-    /// pending external forces, compute the oscillation measure and check
-    /// for divergence.
+    /// pending external forces; (4) break the bonds stretched beyond their
+    /// break length ([`crate::bonds`]); (5) let erasers remove particles;
+    /// (6) check for divergence (the oscillation measure is computed on
+    /// demand from the positions before and after the step).
     pub fn step(&mut self) -> Result<&StepReport, Divergence> {
         let dt = self.dt_next.min(self.params.dt);
         self.step_by(dt, false)
@@ -597,6 +616,9 @@ impl World {
         }
         if self.params.heat.is_some() {
             self.advance_heat(info.dt_taken);
+        }
+        if let Some(bonds) = self.pipeline.bonds.as_mut() {
+            report.bonds_broken = bonds.break_stretched(&self.particles);
         }
         // Erasers act on the state at the end of the step (before the
         // divergence check, which then sees only the survivors).

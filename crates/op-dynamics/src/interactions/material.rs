@@ -6,7 +6,8 @@
 //! enabled terms fixed, which is what [`super::evaluate_pair`] reads.
 //!
 //! Default: cohesion spacing, every orientation weight 0 (a scene enables
-//! the terms it uses), normalized terms, default repulsion, no friction.
+//! the terms it uses), normalized terms, default repulsion, no friction,
+//! no bonds.
 
 use super::cocircularity;
 use super::conormality;
@@ -17,6 +18,7 @@ use super::repulsion::{Repulsion, RepulsionParams};
 use super::spacing::{Spacing, SpacingKernel};
 use super::spin::{self, SpinKind};
 use super::weight::{Weight, WeightParams};
+use crate::bonds::BondParams;
 use crate::error::{non_negative, ParamError};
 use crate::heat::HeatResponse;
 use crate::math::Real;
@@ -57,6 +59,13 @@ pub struct Material {
     /// for not at all. Default: `None`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub heat: Option<HeatResponse>,
+    /// Explicit bonds ([`crate::bonds`]): pairs of one object within
+    /// `radius` when the world is built interact completely, other pairs
+    /// of the object only repel, and a bond stretched beyond
+    /// `break_length` breaks for good (seed 000 fig. 12a, 12c). `None`:
+    /// every pair of one object within the cut-off interacts completely.
+    /// Default: `None`.
+    pub bonds: Option<BondParams>,
 }
 
 impl Default for Material {
@@ -74,6 +83,7 @@ impl Default for Material {
             repulsion: RepulsionParams::default(),
             friction: 0.0,
             heat: None,
+            bonds: None,
         }
     }
 }
@@ -111,6 +121,9 @@ impl Material {
         if let Some(h) = &self.heat {
             h.validate().map_err(|e| e.within("heat"))?;
         }
+        if let Some(b) = &self.bonds {
+            b.validate().map_err(|e| e.within("bonds"))?;
+        }
         Ok(())
     }
 
@@ -144,6 +157,7 @@ impl Material {
                 .prepare()
                 .map_err(|e| e.within("repulsion"))?,
             friction: self.friction,
+            bonds: self.bonds,
             source: *self,
         })
     }
@@ -166,6 +180,7 @@ pub struct PreparedMaterial {
     oriented: bool,
     repulsion: Repulsion,
     friction: Real,
+    bonds: Option<BondParams>,
     source: Material,
 }
 
@@ -240,12 +255,21 @@ impl PreparedMaterial {
         if self.repulsion.is_enabled() {
             v.push("repulsion");
         }
+        if self.bonds.is_some() {
+            v.push("bonds");
+        }
         v
     }
 
     /// Inter-particle friction coefficient (applied by the world).
     pub fn friction(&self) -> Real {
         self.friction
+    }
+
+    /// The bond rule, if this material is bonded ([`crate::bonds`]).
+    #[inline]
+    pub fn bonds(&self) -> Option<&BondParams> {
+        self.bonds.as_ref()
     }
 
     /// This material's spacing potential `(U(r), dU/dr)` (not halved);
@@ -479,6 +503,16 @@ mod tests {
                     ..d
                 },
                 "`repulsion.lambda`",
+            ),
+            (
+                Material {
+                    bonds: Some(BondParams {
+                        radius: 1.2,
+                        break_length: Some(1.0),
+                    }),
+                    ..d
+                },
+                "`bonds.break_length` = 1",
             ),
         ];
         for (m, needle) in cases {

@@ -14,8 +14,14 @@
 //! [`World::new`]. The result is deterministic: after an edit, stepping
 //! gives the same bits as a world built directly from the edited particle
 //! set in the same slot order (tested in `tests/world_editing.rs`).
+//!
+//! Bonds ([`crate::bonds`]): inserted particles bond to every live particle
+//! (old or inserted) within the bond radius at insertion, as at build; bonds
+//! between old particles are left as they are (broken ones stay broken).
+//! Bonds of removed particles are dropped.
 
 use super::{Config, World, WorldError};
+use crate::bonds::Bonds;
 use crate::error::ParamError;
 use crate::math::Vec3;
 use crate::particles::ParticleDesc;
@@ -49,6 +55,15 @@ impl World {
             self.may_rotate |= d.angular_velocity != Vec3::zeros()
                 && !d.flags.contains(crate::flags::Flags::FIXED_ORIENTATION);
             ids.push(self.particles.push(d.clone())?);
+        }
+        if let Some(&first) = ids.first() {
+            let (p, m) = (&self.particles, &self.pipeline.materials);
+            if self.pipeline.bonds.is_none() && Bonds::needed(p, m) {
+                self.pipeline.bonds = Some(Bonds::new(m));
+            }
+            if let Some(b) = self.pipeline.bonds.as_mut() {
+                b.form(p, m, first);
+            }
         }
         let p = self.particles.positions();
         let old = self.prev_positions.len();
@@ -84,6 +99,13 @@ impl World {
             .map(|&s| self.prev_positions[s as usize])
             .collect();
         self.prev_positions = prev;
+        if Bonds::needed(&self.particles, &self.pipeline.materials) {
+            if let Some(b) = self.pipeline.bonds.as_mut() {
+                b.retain_live(&self.particles);
+            }
+        } else {
+            self.pipeline.bonds = None;
+        }
         self.after_edit();
         before - self.particles.len()
     }
