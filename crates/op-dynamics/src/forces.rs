@@ -291,7 +291,7 @@ fn refresh_sources(sources: &mut Vec<u32>, sources_for: &mut u64, list: &Neighbo
 /// Coupling of two particles: object membership, then typing, then
 /// orientation (seed 002 §5; unoriented particles drop orientation terms).
 #[inline]
-fn coupling(a: &Attributes<'_>, i: usize, j: usize) -> Coupling {
+pub(crate) fn coupling(a: &Attributes<'_>, i: usize, j: usize) -> Coupling {
     if a.objects[i] != a.objects[j] || !a.kinds[i].complete_with(a.kinds[j]) {
         Coupling::RepulsionOnly
     } else {

@@ -18,7 +18,8 @@ use super::spacing::{Spacing, SpacingKernel};
 use super::spin::{self, SpinKind};
 use super::weight::{Weight, WeightParams};
 use crate::error::{non_negative, ParamError};
-use crate::math::Real;
+use crate::math::{Real, Vec3};
+use crate::plasticity::Plasticity;
 use serde::{Deserialize, Serialize};
 
 /// The interaction weights and parameters of a set of particles.
@@ -52,6 +53,9 @@ pub struct Material {
     /// Inter-particle friction coefficient (>= 0; damping of relative
     /// velocity, seed 002 §5, applied by the world). Default: 0.
     pub friction: Real,
+    /// Plasticity of the remembered curvature (seed 000 fig. 12b, see
+    /// [`crate::plasticity`]); needs `form > 0`. Default: none (elastic).
+    pub plasticity: Option<Plasticity>,
 }
 
 impl Default for Material {
@@ -68,6 +72,7 @@ impl Default for Material {
             normalized: true,
             repulsion: RepulsionParams::default(),
             friction: 0.0,
+            plasticity: None,
         }
     }
 }
@@ -101,7 +106,17 @@ impl Material {
         self.repulsion
             .validate()
             .map_err(|e| e.within("repulsion"))?;
-        non_negative("friction", self.friction)
+        non_negative("friction", self.friction)?;
+        if let Some(p) = &self.plasticity {
+            p.validate().map_err(|e| e.within("plasticity"))?;
+            if self.form == 0.0 {
+                return Err(ParamError::Invalid {
+                    field: "plasticity".into(),
+                    message: "acts on the form term's rest curvature: needs form > 0".into(),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Validates and precomputes (weight constants, cohesion tables).
@@ -226,7 +241,24 @@ impl PreparedMaterial {
         if self.repulsion.is_enabled() {
             v.push("repulsion");
         }
+        if self.source.plasticity.is_some() {
+            v.push("plasticity");
+        }
         v
+    }
+
+    /// Plasticity of the remembered curvature, if any.
+    #[inline]
+    pub fn plasticity(&self) -> Option<&Plasticity> {
+        self.source.plasticity.as_ref()
+    }
+
+    /// The orientation weight `ψ` (seed 000 eq. 10) this material's
+    /// particle `i` gives the pair `r = p_j - p_i` at `dist = |r| > 0`,
+    /// with `i`'s normal `n_i` (zero at and beyond the cut-off).
+    #[inline]
+    pub fn orientation_weight(&self, r: &Vec3, dist: Real, n_i: &Vec3) -> Real {
+        self.weight.eval(r, dist, n_i).psi
     }
 
     /// Inter-particle friction coefficient (applied by the world).

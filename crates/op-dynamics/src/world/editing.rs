@@ -108,6 +108,7 @@ impl World {
         self.pipeline.friction = config.friction;
         self.pipeline.has_fixed = config.has_fixed;
         self.repulsion = config.repulsion;
+        self.plastic = config.plastic;
         self.accumulator.grow(self.particles.id_bound());
         self.forces.clear();
         self.forces.resize(n, Vec3::zeros());
