@@ -44,8 +44,8 @@
 //! positions bent by 0.66 (remembered curvature 0.25): a dent was nearly
 //! invisible to it, so the memory could not yield. Letting the fitted
 //! sphere's normal tilt away from `n_i` (a three-unknown fit) did not
-//! reduce the noise on the settled shell and made the plastic shell of
-//! that scene fly apart (the memory followed the noise): not used.
+//! reduce the noise on the settled shell, and the plastic shell of that
+//! scene flew apart with it (not investigated further): not used.
 //!
 //! **Return mapping.** With `e = κ_i - κ̂_i` and the yield curvature
 //! `y >= 0`: within the band `|e| <= y` nothing changes (elastic); beyond
