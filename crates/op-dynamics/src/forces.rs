@@ -325,13 +325,13 @@ fn refresh_sources(sources: &mut Vec<u32>, sources_for: &mut u64, list: &Neighbo
 /// The bond lookup of the pair kernels ([`crate::bonds`]): whether a pair
 /// that membership and typing would couple completely keeps its complete
 /// interaction.
-trait BondLookup: Sync {
+pub(crate) trait BondLookup: Sync {
     fn complete(&self, a: &Attributes<'_>, i: usize, j: usize) -> bool;
 }
 
 /// The lookup of worlds without bonded materials: every pair keeps it (a
 /// constant the compiler folds away).
-struct Unbonded;
+pub(crate) struct Unbonded;
 
 impl BondLookup for Unbonded {
     #[inline(always)]
@@ -352,7 +352,12 @@ impl BondLookup for Bonds {
 /// then orientation (seed 002 §5; unoriented particles drop orientation
 /// terms; bond-governed pairs that are not bonded only repel).
 #[inline]
-fn coupling(a: &Attributes<'_>, bonds: &impl BondLookup, i: usize, j: usize) -> Coupling {
+pub(crate) fn coupling(
+    a: &Attributes<'_>,
+    bonds: &impl BondLookup,
+    i: usize,
+    j: usize,
+) -> Coupling {
     if a.objects[i] != a.objects[j]
         || !a.kinds[i].complete_with(a.kinds[j])
         || !bonds.complete(a, i, j)

@@ -33,6 +33,7 @@ pub mod interactions;
 pub mod math;
 pub mod neighbours;
 pub mod particles;
+pub mod plasticity;
 pub mod tools;
 pub mod triangulation;
 pub mod world;

@@ -15,6 +15,7 @@ use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
 use crate::neighbours::{spatial_order, NeighbourBackend, NeighbourList};
 use crate::particles::{ParticleType, Particles};
+use crate::plasticity::{self, PlasticScratch};
 use crate::tools::{Role, Tool, ToolParams, Tools};
 
 mod editing;
@@ -169,6 +170,9 @@ pub enum Stage {
     Integrate,
     /// Oscillation measure and divergence check.
     Check,
+    /// Plastic update of the remembered curvatures (only with plastic
+    /// materials).
+    Plasticity,
 }
 
 /// What one call of [`World::step`] did.
@@ -183,7 +187,7 @@ pub struct StepReport {
     /// Whether particles were re-sorted.
     pub reordered: bool,
     /// Seconds per stage, indexed like [`Stage`].
-    pub seconds: [f64; 4],
+    pub seconds: [f64; 5],
     /// Stable ids of the particles eraser tools removed at the end of the
     /// step (seed 000 fig. 7), in increasing order.
     pub erased: Vec<u32>,
@@ -219,6 +223,8 @@ struct Config {
     heated: bool,
     has_fixed: bool,
     repulsion: bool,
+    /// Some material in use has plasticity.
+    plastic: bool,
 }
 
 impl Config {
@@ -271,6 +277,7 @@ impl Config {
                 .iter()
                 .any(|f| f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)),
             repulsion,
+            plastic: used.iter().any(|m| m.plasticity().is_some()),
         }
     }
 
@@ -288,6 +295,9 @@ pub struct World {
     /// The force evaluation's configuration and scratch.
     pipeline: Pipeline,
     repulsion: bool,
+    /// Some material in use has plasticity: the plastic stage runs.
+    plastic: bool,
+    plastic_scratch: PlasticScratch,
     /// Something may have set particles rotating (initial spin, external
     /// torques, direct state edits): the divergence check reads frames.
     may_rotate: bool,
@@ -360,6 +370,8 @@ impl World {
                 scratch: ForceScratch::default(),
             },
             repulsion: config.repulsion,
+            plastic: config.plastic,
+            plastic_scratch: PlasticScratch::default(),
             may_rotate: particles
                 .angular_velocities()
                 .iter()
@@ -535,10 +547,14 @@ impl World {
     /// evaluation updating the neighbour list (list-only rebuild when a
     /// stage moved particles past half the skin), running the pair kernel
     /// and gathering per particle, adding external actions; (3) clear the
-    /// pending external forces; (4) break the bonds stretched beyond their
-    /// break length ([`crate::bonds`]); (5) let erasers remove particles;
-    /// (6) check for divergence (the oscillation measure is computed on
-    /// demand from the positions before and after the step).
+    /// pending external forces; (4) advance the temperatures
+    /// ([`crate::heat`], when the world has heat); (5) break the bonds
+    /// stretched beyond their break length ([`crate::bonds`]); (6) with
+    /// plastic materials only, update the remembered curvatures
+    /// ([`crate::plasticity`]; the neighbour list is brought up to date for
+    /// the new positions first); (7) erasers remove particles; (8) check
+    /// for divergence (the oscillation measure is computed on demand from
+    /// the positions before and after the step).
     pub fn step(&mut self) -> Result<&StepReport, Divergence> {
         let dt = self.dt_next.min(self.params.dt);
         self.step_by(dt, false)
@@ -619,6 +635,23 @@ impl World {
         }
         if let Some(bonds) = self.pipeline.bonds.as_mut() {
             report.bonds_broken = bonds.break_stretched(&self.particles);
+        }
+        if self.plastic {
+            let clock = std::time::Instant::now();
+            if let Some(list) = self.pipeline.neighbours.as_mut() {
+                let changed = plasticity::apply(
+                    &mut self.particles,
+                    &self.pipeline.materials,
+                    list,
+                    info.dt_taken,
+                    &mut self.plastic_scratch,
+                );
+                // Cached forces were computed with the old curvatures.
+                if changed {
+                    self.integrator.invalidate();
+                }
+            }
+            report.seconds[Stage::Plasticity as usize] = clock.elapsed().as_secs_f64();
         }
         // Erasers act on the state at the end of the step (before the
         // divergence check, which then sees only the survivors).

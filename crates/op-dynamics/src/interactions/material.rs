@@ -21,7 +21,8 @@ use super::weight::{Weight, WeightParams};
 use crate::bonds::BondParams;
 use crate::error::{non_negative, ParamError};
 use crate::heat::HeatResponse;
-use crate::math::Real;
+use crate::math::{Real, Vec3};
+use crate::plasticity::Plasticity;
 use serde::{Deserialize, Serialize};
 
 /// The interaction weights and parameters of a set of particles.
@@ -66,6 +67,9 @@ pub struct Material {
     /// every pair of one object within the cut-off interacts completely.
     /// Default: `None`.
     pub bonds: Option<BondParams>,
+    /// Plasticity of the remembered curvature (seed 000 fig. 12b, see
+    /// [`crate::plasticity`]); needs `form > 0`. Default: none (elastic).
+    pub plasticity: Option<Plasticity>,
 }
 
 impl Default for Material {
@@ -84,6 +88,7 @@ impl Default for Material {
             friction: 0.0,
             heat: None,
             bonds: None,
+            plasticity: None,
         }
     }
 }
@@ -123,6 +128,15 @@ impl Material {
         }
         if let Some(b) = &self.bonds {
             b.validate().map_err(|e| e.within("bonds"))?;
+        }
+        if let Some(p) = &self.plasticity {
+            p.validate().map_err(|e| e.within("plasticity"))?;
+            if self.form == 0.0 {
+                return Err(ParamError::Invalid {
+                    field: "plasticity".into(),
+                    message: "acts on the form term's rest curvature: needs form > 0".into(),
+                });
+            }
         }
         Ok(())
     }
@@ -258,7 +272,24 @@ impl PreparedMaterial {
         if self.bonds.is_some() {
             v.push("bonds");
         }
+        if self.source.plasticity.is_some() {
+            v.push("plasticity");
+        }
         v
+    }
+
+    /// Plasticity of the remembered curvature, if any.
+    #[inline]
+    pub fn plasticity(&self) -> Option<&Plasticity> {
+        self.source.plasticity.as_ref()
+    }
+
+    /// The orientation weight `ψ` (seed 000 eq. 10) this material's
+    /// particle `i` gives the pair `r = p_j - p_i` at `dist = |r| > 0`,
+    /// with `i`'s normal `n_i` (zero at and beyond the cut-off).
+    #[inline]
+    pub fn orientation_weight(&self, r: &Vec3, dist: Real, n_i: &Vec3) -> Real {
+        self.weight.eval(r, dist, n_i).psi
     }
 
     /// Inter-particle friction coefficient (applied by the world).

@@ -131,6 +131,7 @@ impl World {
         self.pipeline.heated = config.heated;
         self.pipeline.has_fixed = config.has_fixed;
         self.repulsion = config.repulsion;
+        self.plastic = config.plastic;
         self.accumulator.grow(self.particles.id_bound());
         self.forces.clear();
         self.forces.resize(n, Vec3::zeros());
