@@ -241,9 +241,7 @@ fn fit_is_deterministic() {
 /// Filling (seed 000 §7): sphere samples about two spacings apart (the
 /// spacing given as half the estimate) get particles grown between them;
 /// the created particles stay on the sphere and the mesh covers the
-/// samples. (The topology of such filled meshes is not asserted: at
-/// spacings of 0.5-0.6 of the sample distance a few holes wider than the
-/// triangulation radius remain; see the module docs of `op_scene::fit`.)
+/// samples. (Topology: see the next test.)
 #[test]
 fn sparse_sphere_samples_are_filled_on_the_sphere() {
     let data = PointSet {
@@ -264,6 +262,43 @@ fn sparse_sphere_samples_are_filled_on_the_sphere() {
     let rms = vertex_rms(&f, |v| v.coords.norm() - 1.0);
     assert!(rms < 0.1 * h, "vertex RMS {rms} vs spacing {h}");
     assert!(f.max_distance < h, "max sample distance {}", f.max_distance);
+}
+
+/// Filled closed data gives a closed mesh. With the triangulation radius
+/// of sheets (1.7 spacings), spacings 0.08-0.1 on these samples (median
+/// distance 0.168) left 2-6 holes (χ -4 to -2): quads whose diagonals lay
+/// between 1.7 and `d_min` = 2, which the stretching rule does not open
+/// and the growing rule's 100° `min_gap` does not fill. The default radius
+/// is now `d_min`.
+#[test]
+fn filled_sphere_is_closed_with_the_triangulation_radius_at_d_min() {
+    let data = PointSet {
+        positions: fibonacci_sphere(400, 1.0),
+        normals: None,
+    };
+    for h in [0.09, 0.1] {
+        let f = fit(
+            &data,
+            &FitParams {
+                spacing: Some(h),
+                ..FitParams::default()
+            },
+        )
+        .unwrap();
+        assert!(f.particles > 1000, "h = {h}: {} particles", f.particles);
+        assert_eq!(f.boundary_loops, 0, "h = {h}: {f:?}");
+        assert_eq!(f.euler_characteristic, 2, "h = {h}");
+        let at_sheet_radius = fit(
+            &data,
+            &FitParams {
+                spacing: Some(h),
+                triangulation_radius: 1.7,
+                ..FitParams::default()
+            },
+        )
+        .unwrap();
+        assert!(at_sheet_radius.boundary_loops > 0, "h = {h}");
+    }
 }
 
 /// The mesh file is the same, byte for byte, with 1 and 2 worker threads.

@@ -1,26 +1,23 @@
-"""Writes fig_10_blob.xyz and fig_11_saddle.xyz, the samples of
+"""Writes fig_10_sphere.xyz and fig_11_saddle.xyz, the samples of
 scenes/fig_10_interpolation.ron and scenes/fig_11_open_interpolation.ron
 (seed 000 §7, figs. 10-11): positions only (x y z per line), so the fit
 estimates the normals. Run from this directory: python3 fig_10_11_points.py"""
 import math
 
 
-def blob():
-    """A closed blob: Fibonacci directions, radius 8 (1 + 0.15 Y) with a
-    smooth bump pattern Y, 260 samples (about 2 units apart)."""
-    n = 260
+def sphere():
+    """A closed surface: 400 Fibonacci points on the sphere of radius 11
+    (median distance to the nearest sample 1.85)."""
+    n, r = 400, 11.0
     golden = math.pi * (3 - math.sqrt(5))
     out = [
-        "# Closed blob r = 8 (1 + 0.15 sin(2 theta) cos(3 phi)) sampled along 260 Fibonacci",
-        "# directions (about 2 units apart); x y z, no normals. scenes/fig_10_interpolation.ron",
-        "# (scenes/data/fig_10_11_points.py).",
+        "# Sphere of radius 11 sampled at 400 Fibonacci points (nearest sample about 1.85 units",
+        "# away); x y z, no normals. scenes/fig_10_interpolation.ron (scenes/data/fig_10_11_points.py).",
     ]
     for k in range(n):
         z = 1 - (2 * k + 1) / n
-        theta = math.acos(z)
+        s = math.sqrt(1 - z * z)
         phi = golden * k
-        r = 8 * (1 + 0.15 * math.sin(2 * theta) * math.cos(3 * phi))
-        s = math.sin(theta)
         out.append("%.9f %.9f %.9f" % (r * s * math.cos(phi), r * s * math.sin(phi), r * z))
     return out
 
@@ -45,6 +42,6 @@ def saddle():
     return out
 
 
-for name, lines in [("fig_10_blob.xyz", blob()), ("fig_11_saddle.xyz", saddle())]:
+for name, lines in [("fig_10_sphere.xyz", sphere()), ("fig_11_saddle.xyz", saddle())]:
     with open(name, "w") as f:
         f.write("\n".join(lines) + "\n")

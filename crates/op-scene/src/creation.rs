@@ -23,6 +23,10 @@
 //!   against their rest positions: created particles have no rest
 //!   position.
 //!
+//! With `fit` (point-set interpolation, [`crate::schema::fit`]) the rules
+//! act only near an object's samples and stop at the release time, when
+//! the samples are freed.
+//!
 //! Creation cannot be combined with skins (the skins' primitives are made
 //! for the particles at build time): such a scene is rejected.
 

@@ -26,13 +26,13 @@
 //!    within `d_max / √3` of a sample (the farthest a point of a triangle
 //!    of samples at most `d_max` apart lies from its corners: growth never
 //!    runs away from the data) and within `h / 2` of that sample's tangent
-//!    plane (nor off it); open data (`--open`): stretching only, and
+//!    plane (nor off it: [`DataNeighbourhood`]); open data (`--open`): stretching only, and
 //!    a candidate is kept only within `d_max / 2` of a sample, so every gap
 //!    up to the search range `d_max` closes and a gap wider than it keeps
 //!    a hole. Rounds of creation
 //!    alternate with short relaxations of the new (free) particles until a
 //!    round creates nothing (at most [`FitParams::max_rounds`]).
-//! 4. *Release*: every particle is freed and the whole set relaxes for
+//! 4. *Release* ([`release`]): the seeds are freed and the whole set relaxes for
 //!    [`FitParams::relax_time`] with damping under cohesion (seed 002 §3)
 //!    and co-circularity (seed 000 eq. 8). Co-circularity rather than
 //!    co-planarity: both vanish on a plane, but co-circularity also
@@ -40,19 +40,33 @@
 //!    cohesion rest distance is the mean distance between samples and
 //!    their first-ring neighbours (within `1.5 h`), so the data's own pairs
 //!    start at rest and the released surface does not shrink.
-//! 5. *Triangulation* (seed 000 §5, [`triangulate_points`]) with
-//!    mutual-neighbour radius [`FitParams::triangulation_radius`], and the
-//!    figures: Euler characteristic, boundary loops, RMS and largest
-//!    distance from the input samples to the mesh triangles.
+//! 5. *Triangulation* (seed 000 §5, [`SurfaceMesh`]) with
+//!    mutual-neighbour radius [`FitParams::triangulation_radius`] (`d_min`),
+//!    and the figures: Euler characteristic, boundary loops, RMS and
+//!    largest distance from the input samples to the mesh triangles.
 //!
 //! **Limits** (measured on 400 Fibonacci samples of the unit sphere,
 //! median sample distance 0.168): with the estimated spacing nothing is
-//! created and the mesh is closed (χ = 2); with `--spacing` 0.084 (samples
-//! two spacings apart) 1 768 particles, χ = 2; with 0.08, 0.09 and 0.1
-//! the filled particles stay on the sphere (sample RMS distance ~0.02 h)
-//! but 2-6 gaps wider than the triangulation radius 1.7 remain (χ -4 to
-//! -2). Longer relaxation does not close them and lets the sphere drift
-//! (sample RMS 0.0022 at `relax_time` 1, 0.018 at 10, for h = 0.08).
+//! created and the mesh is closed (χ = 2); with `--spacing` 0.084, 0.09
+//! and 0.1 (1 768, 1 628, 1 465 particles) χ = 2, the samples within
+//! 0.003 (RMS) of the mesh. With 0.08 one hole remains (χ = 0): a quad of
+//! particles with sides 1.75-1.9 h and diagonals 2.6 h, which neither rule
+//! opens (sides below `d_min`, diagonals beyond `d_max`, 90° corners below
+//! the growing rule's 100° `min_gap`). Until the triangulation radius was
+//! raised from 1.7 to `d_min` (2.0), 0.08-0.1 all left 2-6 such holes
+//! (χ -4 to -2), with diagonals between 1.7 and 2.0. Samples spread
+//! unevenly (1.5-2.6 h apart, a blob sampled along Fibonacci directions)
+//! leave holes and a few non-manifold edges: the cohesion core is soft
+//! (its repulsion vanishes as `exp(-α (r0 - r)²)` for `r` well below
+//! `r0`), so created particles squeezed between fixed seeds merge (a pair
+//! went from 0.93 to 0.07 h within 1.5 time units). Longer relaxation
+//! does not close holes and lets the sphere drift (sample RMS 0.0022 at
+//! `relax_time` 1, 0.018 at 10, for h = 0.08).
+//!
+//! **Scenes**: [`DataNeighbourhood`] and [`release`] also serve a scene's
+//! `creation.fit` ([`crate::schema::fit`]), which runs these stages
+//! frame by frame (`scenes/fig_10_interpolation.ron`); spacing, material
+//! and normals are then the scene's.
 //!
 //! Deterministic: every stage is (the creation rules and the world are
 //! deterministic at any thread count; sums here are serial).
@@ -93,7 +107,13 @@ pub struct FitParams {
     /// Relaxation time after release (unit-spacing time units, >= 0).
     /// Default: 1.
     pub relax_time: Real,
-    /// Mutual-neighbour radius of the triangulation. Default: 1.7.
+    /// Mutual-neighbour radius of the triangulation, > 0; keep it at
+    /// least `d_min`. Default: 2.0 (the default `d_min`): a pair closer
+    /// than `d_min` is no gap for the stretching rule, so nothing is
+    /// created between them and the triangulation must bridge them. With
+    /// the 1.7 of sheets, holes whose diagonals fall between 1.7 and
+    /// `d_min` (quads of sides 1.1-1.7 with 90° corners, which the growing
+    /// rule's 100° `min_gap` does not fill either) stayed open.
     pub triangulation_radius: Real,
 }
 
@@ -106,7 +126,7 @@ impl Default for FitParams {
             d_max: 2.5,
             max_rounds: 20,
             relax_time: 1.0,
-            triangulation_radius: 1.7,
+            triangulation_radius: 2.0,
         }
     }
 }
