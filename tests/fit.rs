@@ -111,8 +111,18 @@ fn patch_with_hole(size: usize, hole: f64) -> Vec<Point3> {
 
 /// RMS over the mesh vertices of `dist(vertex)`.
 fn vertex_rms(f: &Fit, dist: impl Fn(&Point3) -> f64) -> f64 {
-    let s: f64 = f.vertices.iter().map(|v| dist(v).powi(2)).sum();
-    (s / f.vertices.len() as f64).sqrt()
+    let s: f64 = f.mesh.vertices.iter().map(|v| dist(v).powi(2)).sum();
+    (s / f.mesh.vertices.len() as f64).sqrt()
+}
+
+/// [`fit`] at spacing `h` with triangulation radius `radius`.
+fn fit_at(data: &PointSet, h: f64, radius: f64) -> Fit {
+    let params = FitParams {
+        spacing: Some(h),
+        triangulation_radius: radius,
+        ..FitParams::default()
+    };
+    fit(data, &params).unwrap()
 }
 
 /// The JSON line `opsim fit` prints.
@@ -138,15 +148,20 @@ fn sphere_without_normals_is_closed_and_on_the_sphere() {
     .unwrap();
     let h = f.spacing;
     assert!(h > 0.15 && h < 0.22, "spacing {h}");
-    assert_eq!(f.euler_characteristic, 2, "{f:?}");
-    assert_eq!(f.boundary_loops, 0);
+    assert_eq!(f.mesh.euler_characteristic, 2, "{f:?}");
+    assert_eq!(f.mesh.boundary_loops, 0);
     let rms = vertex_rms(&f, |v| v.coords.norm() - 1.0);
     assert!(rms < 0.1 * h, "vertex RMS {rms} vs spacing {h}");
-    assert!(f.rms_distance < 0.1 * h, "sample RMS {}", f.rms_distance);
+    assert!(
+        f.mesh.rms_distance < 0.1 * h,
+        "sample RMS {}",
+        f.mesh.rms_distance
+    );
     assert!(f
+        .mesh
         .vertices
         .iter()
-        .zip(&f.normals)
+        .zip(&f.mesh.normals)
         .all(|(v, n)| n.dot(&v.coords) > 0.0));
 }
 
@@ -164,8 +179,8 @@ fn torus_with_normals_has_euler_characteristic_zero() {
         &FitParams::default(),
     )
     .unwrap();
-    assert_eq!(f.euler_characteristic, 0, "{f:?}");
-    assert_eq!(f.boundary_loops, 0);
+    assert_eq!(f.mesh.euler_characteristic, 0, "{f:?}");
+    assert_eq!(f.mesh.boundary_loops, 0);
     let rms = vertex_rms(&f, |v| {
         let ring = (v.x * v.x + v.y * v.y).sqrt() - big;
         (ring * ring + v.z * v.z).sqrt() - small
@@ -250,18 +265,15 @@ fn sparse_sphere_samples_are_filled_on_the_sphere() {
     };
     let estimate = fit(&data, &FitParams::default()).unwrap().spacing;
     let h = 0.5 * estimate;
-    let f = fit(
-        &data,
-        &FitParams {
-            spacing: Some(h),
-            ..FitParams::default()
-        },
-    )
-    .unwrap();
+    let f = fit_at(&data, h, FitParams::default().triangulation_radius);
     assert!(f.particles > 3 * 400, "{} particles", f.particles);
     let rms = vertex_rms(&f, |v| v.coords.norm() - 1.0);
     assert!(rms < 0.1 * h, "vertex RMS {rms} vs spacing {h}");
-    assert!(f.max_distance < h, "max sample distance {}", f.max_distance);
+    assert!(
+        f.mesh.max_distance < h,
+        "max sample distance {}",
+        f.mesh.max_distance
+    );
 }
 
 /// Filled closed data gives a closed mesh. With the triangulation radius
@@ -277,27 +289,12 @@ fn filled_sphere_is_closed_with_the_triangulation_radius_at_d_min() {
         normals: None,
     };
     for h in [0.09, 0.1] {
-        let f = fit(
-            &data,
-            &FitParams {
-                spacing: Some(h),
-                ..FitParams::default()
-            },
-        )
-        .unwrap();
+        let f = fit_at(&data, h, FitParams::default().triangulation_radius);
         assert!(f.particles > 1000, "h = {h}: {} particles", f.particles);
-        assert_eq!(f.boundary_loops, 0, "h = {h}: {f:?}");
-        assert_eq!(f.euler_characteristic, 2, "h = {h}");
-        let at_sheet_radius = fit(
-            &data,
-            &FitParams {
-                spacing: Some(h),
-                triangulation_radius: 1.7,
-                ..FitParams::default()
-            },
-        )
-        .unwrap();
-        assert!(at_sheet_radius.boundary_loops > 0, "h = {h}");
+        assert_eq!(f.mesh.boundary_loops, 0, "h = {h}: {f:?}");
+        assert_eq!(f.mesh.euler_characteristic, 2, "h = {h}");
+        let at_sheet_radius = fit_at(&data, h, 1.7);
+        assert!(at_sheet_radius.mesh.boundary_loops > 0, "h = {h}");
     }
 }
 

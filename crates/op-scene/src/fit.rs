@@ -159,20 +159,9 @@ pub struct Fit {
     pub spacing: Real,
     /// Number of particles (samples after merging, plus created ones).
     pub particles: usize,
-    /// Mesh vertices: the particles used by some triangle.
-    pub vertices: Vec<Point3>,
-    /// Unit normals of the vertices (the particle normals).
-    pub normals: Vec<Vec3>,
-    /// Triangles as indices into `vertices`, wound along the normals.
-    pub faces: Vec<[u32; 3]>,
-    /// `V - E + F` of the mesh.
-    pub euler_characteristic: i64,
-    /// Number of boundary loops of the mesh.
-    pub boundary_loops: usize,
-    /// RMS distance from the input samples to the mesh (absolute).
-    pub rms_distance: Real,
-    /// Largest distance from an input sample to the mesh (absolute).
-    pub max_distance: Real,
+    /// The triangulated particles, in data coordinates, and their
+    /// distances to the input samples (absolute).
+    pub mesh: SurfaceMesh,
 }
 
 impl FitParams {
@@ -326,13 +315,7 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
     Ok(Fit {
         spacing: h,
         particles: positions.len(),
-        vertices: mesh.vertices,
-        normals: mesh.normals,
-        faces: mesh.faces,
-        euler_characteristic: mesh.euler_characteristic,
-        boundary_loops: mesh.boundary_loops,
-        rms_distance: mesh.rms_distance,
-        max_distance: mesh.max_distance,
+        mesh,
     })
 }
 
@@ -856,21 +839,22 @@ pub fn point_triangle_distance(p: &Point3, a: &Point3, b: &Point3, c: &Point3) -
 
 /// Writes the mesh as OBJ (`v`, `vn`, `f v//vn`), atomically.
 pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
+    let mesh = &fit.mesh;
     crate::export::write_atomically(path, |w: &mut dyn Write| {
         writeln!(
             w,
             "# opsim fit: {} vertices, {} faces, spacing {}",
-            fit.vertices.len(),
-            fit.faces.len(),
+            mesh.vertices.len(),
+            mesh.faces.len(),
             fit.spacing
         )?;
-        for v in &fit.vertices {
+        for v in &mesh.vertices {
             writeln!(w, "v {} {} {}", v.x, v.y, v.z)?;
         }
-        for n in &fit.normals {
+        for n in &mesh.normals {
             writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
         }
-        for f in &fit.faces {
+        for f in &mesh.faces {
             let [a, b, c] = f.map(|k| k + 1);
             writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
         }

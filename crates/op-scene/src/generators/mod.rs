@@ -482,9 +482,7 @@ impl Generator {
     ) -> Result<bool, SceneError> {
         match self {
             Generator::Points { path: p } => {
-                let at = format!("{path}.Points.path");
-                let set = points::read_points(&resolve(base_dir, p), file, &at, p, MAX_PARTICLES)?;
-                Ok(set.normals.is_some())
+                Ok(read_points(p, base_dir, file, path)?.normals.is_some())
             }
             _ => Ok(true),
         }
@@ -557,8 +555,7 @@ impl Generator {
             } => shapes::torus_shell(*major, *minor, *spacing, center, axis),
             Generator::Points { path: p } => {
                 let at = format!("{path}.Points.path");
-                let set = points::read_points(&resolve(base_dir, p), file, &at, p, MAX_PARTICLES)?;
-                let g = points::generated(set);
+                let g = points::generated(read_points(p, base_dir, file, path)?);
                 if g.is_empty() {
                     return Err(SceneError::value(
                         file,
@@ -572,4 +569,15 @@ impl Generator {
             Generator::List { particles } => points::list(particles),
         })
     }
+}
+
+/// The points file `p` of a `Points` generator at field path `path`.
+fn read_points(
+    p: &Path,
+    base_dir: Option<&Path>,
+    file: &str,
+    path: &str,
+) -> Result<crate::pointsets::PointSet, SceneError> {
+    let at = format!("{path}.Points.path");
+    points::read_points(&resolve(base_dir, p), file, &at, p, MAX_PARTICLES)
 }
