@@ -61,7 +61,8 @@ pub struct FitSettings {
 
 impl FitSettings {
     /// Checks the section against the scene and its creation rules: a
-    /// known object, a release time within the run, and rules that can
+    /// known object, a release time within the run, no settle phase, and
+    /// rules that can
     /// fill (stretching, whose `d_max` is the search range; no growing for
     /// open data). Errors name `creation.fit.<field>` or the rule.
     pub(crate) fn validate(
@@ -92,6 +93,14 @@ impl FitSettings {
                 &format!(
                     "must be finite, >= 0 and below world.duration = {duration} (the seeds are released during the run)"
                 ),
+            ));
+        }
+        if scene.world.settle != 0.0 {
+            return Err(SceneError::value(
+                file,
+                "world.settle",
+                scene.world.settle,
+                "must be 0 with `creation.fit`: the samples stay fixed while settling, and the settle phase would replace the fitted object's rest spacing (the fit spacing) by the distance between samples",
             ));
         }
         if creation.stretching.is_none() {
