@@ -220,9 +220,19 @@ impl BuiltScene {
                 if self.world.time() >= fit.release_time - 1e-12 * dt {
                     // Seed 000 §7: the samples are freed, creation stops.
                     fit.released = true;
+                    // The surviving samples (an eraser may have removed
+                    // some) keep their rest positions under their new ids.
                     let o = &mut self.objects[fit.object];
-                    o.ids = crate::fit::release(&mut self.world, &o.ids)
+                    let p = self.world.particles();
+                    let (ids, rest): (Vec<u32>, Vec<_>) = o
+                        .ids
+                        .iter()
+                        .zip(&o.rest)
+                        .filter(|(&id, _)| p.slot_of(id).is_some())
+                        .unzip();
+                    o.ids = crate::fit::release(&mut self.world, &ids)
                         .map_err(|e| format!("releasing the fit's samples: {e}"))?;
+                    o.rest = rest;
                 } else {
                     release_time = fit.release_time;
                 }
