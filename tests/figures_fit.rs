@@ -85,6 +85,14 @@ fn fig_10_closed_interpolation_grows_a_closed_surface_through_the_samples() {
 
     let (built, summary) = run(&scene, "closed");
     let (m, r0) = mesh(&built, &data);
+    println!(
+        "fig. 10: {} particles, chi {}, {} loops, sample RMS {:.4} max {:.4} (r0 {r0})",
+        summary.objects[0].particles,
+        m.euler_characteristic,
+        m.boundary_loops,
+        m.rms_distance,
+        m.max_distance
+    );
     assert_eq!(m.boundary_loops, 0, "{} boundary loops", m.boundary_loops);
     assert_eq!(m.euler_characteristic, 2);
     assert!(
@@ -113,8 +121,16 @@ fn fig_10_closed_interpolation_grows_a_closed_surface_through_the_samples() {
 fn fig_11_open_interpolation_keeps_the_hole_and_covers_the_rest() {
     let scene = load("fig_11_open_interpolation");
     let data = samples("fig_11_saddle.xyz");
-    let (built, _) = run(&scene, "open");
+    let (built, summary) = run(&scene, "open");
     let (m, r0) = mesh(&built, &data);
+    println!(
+        "fig. 11: {} particles, chi {}, {} loops, sample RMS {:.4} max {:.4} (r0 {r0})",
+        summary.objects[0].particles,
+        m.euler_characteristic,
+        m.boundary_loops,
+        m.rms_distance,
+        m.max_distance
+    );
     assert_eq!(m.boundary_loops, 2, "{} boundary loops", m.boundary_loops);
     assert_eq!(m.euler_characteristic, 0);
     assert!(m.rms_distance < 0.1 * r0, "RMS {}", m.rms_distance);
