@@ -41,6 +41,14 @@ fn mesh(built: &BuiltScene, data: &[Point3]) -> (SurfaceMesh, Real) {
     (m, o.rest_spacing)
 }
 
+/// Prints what a figure test measured (shown with `--nocapture`).
+fn print_figures(fig: &str, particles: usize, m: &SurfaceMesh, r0: Real) {
+    println!(
+        "fig. {fig}: {particles} particles, chi {}, {} loops, sample RMS {:.4} max {:.4} (r0 {r0})",
+        m.euler_characteristic, m.boundary_loops, m.rms_distance, m.max_distance
+    );
+}
+
 /// Fig. 10: before the release the seeds sit on their samples and
 /// particles have been grown between them, none far from the data; at the
 /// end the released surface is closed (χ = 2, no boundary loop), its
@@ -85,14 +93,7 @@ fn fig_10_closed_interpolation_grows_a_closed_surface_through_the_samples() {
 
     let (built, summary) = run(&scene, "closed");
     let (m, r0) = mesh(&built, &data);
-    println!(
-        "fig. 10: {} particles, chi {}, {} loops, sample RMS {:.4} max {:.4} (r0 {r0})",
-        summary.objects[0].particles,
-        m.euler_characteristic,
-        m.boundary_loops,
-        m.rms_distance,
-        m.max_distance
-    );
+    print_figures("10", summary.objects[0].particles, &m, r0);
     assert_eq!(m.boundary_loops, 0, "{} boundary loops", m.boundary_loops);
     assert_eq!(m.euler_characteristic, 2);
     assert!(
@@ -123,14 +124,7 @@ fn fig_11_open_interpolation_keeps_the_hole_and_covers_the_rest() {
     let data = samples("fig_11_saddle.xyz");
     let (built, summary) = run(&scene, "open");
     let (m, r0) = mesh(&built, &data);
-    println!(
-        "fig. 11: {} particles, chi {}, {} loops, sample RMS {:.4} max {:.4} (r0 {r0})",
-        summary.objects[0].particles,
-        m.euler_characteristic,
-        m.boundary_loops,
-        m.rms_distance,
-        m.max_distance
-    );
+    print_figures("11", summary.objects[0].particles, &m, r0);
     assert_eq!(m.boundary_loops, 2, "{} boundary loops", m.boundary_loops);
     assert_eq!(m.euler_characteristic, 0);
     assert!(m.rms_distance < 0.1 * r0, "RMS {}", m.rms_distance);
