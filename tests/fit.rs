@@ -298,6 +298,40 @@ fn filled_sphere_is_closed_with_the_triangulation_radius_at_d_min() {
     }
 }
 
+/// Unevenly spaced samples (a blob along 260 Fibonacci directions, nearest
+/// samples 1.5-1.9 apart) filled at spacing 1: the cohesion rest distance
+/// and the rules' `r0` stay at the spacing. They were the mean of the few
+/// sample pairs closer than 1.5 (1.45), so stretching needed pairs 2.9
+/// apart and 85 particles were created (345 in all, χ -8).
+#[test]
+fn uneven_samples_below_the_spacing_ring_are_filled_at_the_spacing() {
+    let golden = PI * (3.0 - 5f64.sqrt());
+    let n = 260;
+    let positions: Vec<Point3> = (0..n)
+        .map(|k| {
+            let z = 1.0 - (2.0 * k as f64 + 1.0) / n as f64;
+            let (theta, phi) = (z.acos(), golden * k as f64);
+            let r = 8.0 * (1.0 + 0.15 * (2.0 * theta).sin() * (3.0 * phi).cos());
+            Point3::new(
+                r * theta.sin() * phi.cos(),
+                r * theta.sin() * phi.sin(),
+                r * z,
+            )
+        })
+        .collect();
+    let data = PointSet {
+        positions,
+        normals: None,
+    };
+    let f = fit_at(&data, 1.0, FitParams::default().triangulation_radius);
+    assert!(f.particles > 3 * n, "{} particles", f.particles);
+    assert!(
+        f.mesh.rms_distance < 0.1,
+        "sample RMS {}",
+        f.mesh.rms_distance
+    );
+}
+
 /// The mesh file is the same, byte for byte, with 1 and 2 worker threads.
 #[test]
 fn cli_fit_is_identical_at_one_and_two_threads() {
