@@ -216,12 +216,12 @@ fn run_fit(points: &Path, out: &Path, spacing: Option<f64>, open: bool) -> Resul
     println!(
         "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}}}",
         fit.particles,
-        fit.vertices.len(),
-        fit.faces.len(),
-        fit.euler_characteristic,
-        fit.boundary_loops,
-        number(fit.rms_distance),
-        number(fit.max_distance),
+        fit.mesh.vertices.len(),
+        fit.mesh.faces.len(),
+        fit.mesh.euler_characteristic,
+        fit.mesh.boundary_loops,
+        number(fit.mesh.rms_distance),
+        number(fit.mesh.max_distance),
         number(fit.spacing)
     );
     Ok(())

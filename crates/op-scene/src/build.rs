@@ -15,6 +15,8 @@ use op_dynamics::{
 use crate::built::{BuiltObject, BuiltScene};
 use crate::creation::CreationState;
 use crate::error::SceneError;
+use crate::fit::{DataNeighbourhood, SceneFit};
+use crate::generators::Generated;
 use crate::schema::validate::object_path;
 use crate::schema::{ObjectSpec, Override, Scene};
 use crate::skins::{BuiltSkin, ContactStats, SkinTool};
@@ -73,10 +75,17 @@ impl Scene {
         let mut particles = Particles::new();
         let mut objects = Vec::with_capacity(self.objects.len());
         let mut offsets = Vec::with_capacity(self.objects.len());
+        let fit = self.creation.as_ref().and_then(|c| c.fit.as_ref());
+        let fitted = fit.map(|f| f.object_index(self));
+        let mut seeds = None;
         for (k, o) in self.objects.iter().enumerate() {
             let path = object_path(k, &o.name);
             let generator_path = format!("{path}.generator");
-            let g = o.generator.generate(base_dir, file, &generator_path)?;
+            let mut g = o.generator.generate(base_dir, file, &generator_path)?;
+            if fitted == Some(k) {
+                let s = self.fit_seeds(&mut g, base_dir, &generator_path)?;
+                seeds = Some(s);
+            }
             if g.len() != counts[k] {
                 return Err(SceneError::Build {
                     file: file.to_string(),
@@ -102,6 +111,13 @@ impl Scene {
             for ov in &o.overrides {
                 apply(ov, &mut descs);
             }
+            if fitted == Some(k) {
+                // The samples are fixed seeds until the release.
+                for d in &mut descs {
+                    d.flags.insert(Flags::FIXED_POSITION);
+                    d.flags.insert(Flags::FIXED_ORIENTATION);
+                }
+            }
             let offset = particles.len();
             offsets.push(offset);
             let mut ids = Vec::with_capacity(descs.len());
@@ -112,6 +128,7 @@ impl Scene {
                 ids.push(id);
             }
             let rest: Vec<Point3> = particles.positions()[offset..].to_vec();
+            let fit_spacing = seeds.as_ref().filter(|_| fitted == Some(k)).map(|s| s.2);
             let rest_spacing = rest_spacing(&rest, o.generator.nominal_spacing())
                 .map_err(|(i, j)| SceneError::Build {
                     file: file.to_string(),
@@ -120,6 +137,8 @@ impl Scene {
                         rest[i].coords.as_slice()
                     ),
                 })?;
+            // A fitted object's spacing is the fit's, not the samples'.
+            let rest_spacing = fit_spacing.unwrap_or(rest_spacing);
             objects.push(BuiltObject {
                 name: o.name.clone(),
                 ids,
@@ -221,9 +240,26 @@ impl Scene {
                     .map_err(|e| SceneError::param(file, &format!("tools[{k}]"), e))
             })
             .collect::<Result<Vec<_>, SceneError>>()?;
-        let creation = self.creation.as_ref().map(|c| CreationState {
-            params: c.params(objects.first().map_or(1.0, |o| o.rest_spacing)),
-            next_step: 0,
+        let creation = self.creation.as_ref().map(|c| {
+            let default_r0 = match fitted {
+                Some(k) => objects[k].rest_spacing,
+                None => objects.first().map_or(1.0, |o| o.rest_spacing),
+            };
+            let params = c.params(default_r0);
+            let fit = c.fit.as_ref().zip(seeds.as_ref()).map(|(f, (p, n, _))| {
+                let d_max = params.stretching.as_ref().map_or(2.5, |s| s.d_max);
+                SceneFit {
+                    object: fitted.unwrap_or(0),
+                    near: DataNeighbourhood::new(p, n, params.r0, d_max, f.open),
+                    release_time: w.settle + f.release,
+                    released: false,
+                }
+            });
+            CreationState {
+                params,
+                next_step: 0,
+                fit,
+            }
         });
         Ok(BuiltScene {
             skins,
@@ -243,6 +279,42 @@ impl Scene {
             energy_gain: w.divergence.energy_gain,
             creation,
         })
+    }
+}
+
+impl Scene {
+    /// The seeds of `creation.fit` (`g` is the fitted object's generated
+    /// set): their positions, their normals (estimated as `opsim fit` does,
+    /// over 2.5 spacings, when a points file gives none; `g`'s normals are
+    /// replaced then) and the fit spacing (`creation.spacing`, else the
+    /// median nearest-sample distance).
+    fn fit_seeds(
+        &self,
+        g: &mut Generated,
+        base_dir: Option<&Path>,
+        generator_path: &str,
+    ) -> Result<(Vec<Point3>, Vec<Vec3>, Real), SceneError> {
+        let file = self.origin();
+        let k = self
+            .creation
+            .as_ref()
+            .and_then(|c| c.fit.as_ref())
+            .map_or(0, |f| f.object_index(self));
+        let fail = |e: crate::fit::FitError| SceneError::Build {
+            file: file.to_string(),
+            message: format!("{generator_path}: the samples of creation.fit: {e}"),
+        };
+        let r0 = match self.creation.as_ref().and_then(|c| c.spacing) {
+            Some(r0) => r0,
+            None => crate::fit::median_nearest_distance(&g.positions).map_err(fail)?,
+        };
+        if !self.objects[k]
+            .generator
+            .has_normals(base_dir, file, generator_path)?
+        {
+            g.normals = crate::fit::estimate_normals(&g.positions, 2.5 * r0).map_err(fail)?;
+        }
+        Ok((g.positions.clone(), g.normals.clone(), r0))
     }
 }
 

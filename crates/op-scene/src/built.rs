@@ -137,8 +137,11 @@ impl BuiltScene {
         if self.has_contact() {
             stages.push("contact".into());
         }
-        if self.creation.is_some() {
+        if let Some(c) = &self.creation {
             stages.push("creation".into());
+            if c.fit.is_some() {
+                stages.push("fit".into());
+            }
         }
         if self.outputs.triangulation {
             stages.push("triangulation".into());
@@ -212,12 +215,40 @@ impl BuiltScene {
             let Some(state) = self.creation.as_mut() else {
                 return self.world.advance_to(t_end).map_err(|d| d.to_string());
             };
+            let mut release_time = Real::INFINITY;
+            if let Some(fit) = state.fit.as_mut().filter(|f| !f.released) {
+                if self.world.time() >= fit.release_time - 1e-12 * dt {
+                    // Seed 000 §7: the samples are freed, creation stops.
+                    fit.released = true;
+                    // The surviving samples (an eraser may have removed
+                    // some) keep their rest positions under their new ids.
+                    let o = &mut self.objects[fit.object];
+                    let p = self.world.particles();
+                    let (ids, rest): (Vec<u32>, Vec<_>) = o
+                        .ids
+                        .iter()
+                        .zip(&o.rest)
+                        .filter(|(&id, _)| p.slot_of(id).is_some())
+                        .unzip();
+                    o.ids = crate::fit::release(&mut self.world, &ids)
+                        .map_err(|e| format!("releasing the fit's samples: {e}"))?;
+                    o.rest = rest;
+                } else {
+                    release_time = fit.release_time;
+                }
+            }
+            if state.fit.as_ref().is_some_and(|f| f.released) {
+                return self.world.advance_to(t_end).map_err(|d| d.to_string());
+            }
             if self.world.steps() >= state.next_step {
                 state.next_step = self.world.steps() + state.params.interval;
-                let descs = state
+                let mut descs = state
                     .params
                     .candidates(self.world.particles())
                     .map_err(|e| format!("creation: {e}"))?;
+                if let Some(fit) = &state.fit {
+                    descs.retain(|d| fit.near.contains(&d.position));
+                }
                 let ids = self
                     .world
                     .insert_particles(&descs)
@@ -230,7 +261,9 @@ impl BuiltScene {
             }
             // Step by step up to the next application (or t_end).
             let steps_left = state_steps_left(self.creation.as_ref(), self.world.steps());
-            let target = (self.world.time() + steps_left as Real * dt).min(t_end);
+            let target = (self.world.time() + steps_left as Real * dt)
+                .min(t_end)
+                .min(release_time);
             let target = if t_end - target <= 1e-12 * dt {
                 t_end
             } else {

@@ -23,6 +23,10 @@
 //!   against their rest positions: created particles have no rest
 //!   position.
 //!
+//! With `fit` (point-set interpolation, [`crate::schema::fit`]) the rules
+//! act only near an object's samples and stop at the release time, when
+//! the samples are freed.
+//!
 //! Creation cannot be combined with skins (the skins' primitives are made
 //! for the particles at build time): such a scene is rejected.
 
@@ -32,6 +36,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::SceneError;
 use crate::schema::checks::positive;
+use crate::schema::FitSettings;
 
 /// The `creation` section of a scene: which rules, every how many steps.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -56,6 +61,11 @@ pub struct CreationSettings {
     /// Default: 100 000.
     #[serde(default = "hundred_thousand")]
     pub max_particles: usize,
+    /// Point-set interpolation (seed 000 §7): an object's particles are
+    /// fixed samples, the rules fill only near them and stop at a release
+    /// time (see [`crate::schema::fit`]). Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fit: Option<FitSettings>,
 }
 
 fn ten() -> u64 {
@@ -104,4 +114,6 @@ pub struct CreationState {
     pub params: CreationParams,
     /// World step count at which the rules act next.
     pub next_step: u64,
+    /// The running fit, when the section has `fit`.
+    pub fit: Option<crate::fit::SceneFit>,
 }

@@ -26,33 +26,52 @@
 //!    within `d_max / √3` of a sample (the farthest a point of a triangle
 //!    of samples at most `d_max` apart lies from its corners: growth never
 //!    runs away from the data) and within `h / 2` of that sample's tangent
-//!    plane (nor off it); open data (`--open`): stretching only, and
+//!    plane (nor off it: [`DataNeighbourhood`]); open data (`--open`): stretching only, and
 //!    a candidate is kept only within `d_max / 2` of a sample, so every gap
 //!    up to the search range `d_max` closes and a gap wider than it keeps
 //!    a hole. Rounds of creation
 //!    alternate with short relaxations of the new (free) particles until a
 //!    round creates nothing (at most [`FitParams::max_rounds`]).
-//! 4. *Release*: every particle is freed and the whole set relaxes for
+//! 4. *Release* ([`release`]): the seeds are freed and the whole set relaxes for
 //!    [`FitParams::relax_time`] with damping under cohesion (seed 002 §3)
 //!    and co-circularity (seed 000 eq. 8). Co-circularity rather than
 //!    co-planarity: both vanish on a plane, but co-circularity also
 //!    vanishes on a sphere, so relaxing does not flatten curved data. The
 //!    cohesion rest distance is the mean distance between samples and
 //!    their first-ring neighbours (within `1.5 h`), so the data's own pairs
-//!    start at rest and the released surface does not shrink.
-//! 5. *Triangulation* (seed 000 §5, [`triangulate_points`]) with
-//!    mutual-neighbour radius [`FitParams::triangulation_radius`], and the
-//!    figures: Euler characteristic, boundary loops, RMS and largest
-//!    distance from the input samples to the mesh triangles.
+//!    start at rest and the released surface does not shrink; when fewer
+//!    than half of the samples have such a neighbour (samples farther
+//!    apart than the spacing, filled by creation), it is `h`: the few close
+//!    pairs made it up to 1.45 h on unevenly spaced samples, and the rules,
+//!    scaled by it, then created little.
+//! 5. *Triangulation* (seed 000 §5, [`SurfaceMesh`]) with
+//!    mutual-neighbour radius [`FitParams::triangulation_radius`] (`d_min`),
+//!    and the figures: Euler characteristic, boundary loops, RMS and
+//!    largest distance from the input samples to the mesh triangles.
 //!
 //! **Limits** (measured on 400 Fibonacci samples of the unit sphere,
 //! median sample distance 0.168): with the estimated spacing nothing is
-//! created and the mesh is closed (χ = 2); with `--spacing` 0.084 (samples
-//! two spacings apart) 1 768 particles, χ = 2; with 0.08, 0.09 and 0.1
-//! the filled particles stay on the sphere (sample RMS distance ~0.02 h)
-//! but 2-6 gaps wider than the triangulation radius 1.7 remain (χ -4 to
-//! -2). Longer relaxation does not close them and lets the sphere drift
-//! (sample RMS 0.0022 at `relax_time` 1, 0.018 at 10, for h = 0.08).
+//! created and the mesh is closed (χ = 2); with `--spacing` 0.084, 0.09
+//! and 0.1 (1 768, 1 628, 1 465 particles) χ = 2, the samples within
+//! 0.003 (RMS) of the mesh. With 0.08 one hole remains (χ = 0): a quad of
+//! particles with sides 1.75-1.9 h and diagonals 2.6 h, which neither rule
+//! opens (sides below `d_min`, diagonals beyond `d_max`, 90° corners below
+//! the growing rule's 100° `min_gap`). Until the triangulation radius was
+//! raised from 1.7 to `d_min` (2.0), 0.08-0.1 all left 2-6 such holes
+//! (χ -4 to -2), with diagonals between 1.7 and 2.0. Samples spread
+//! unevenly (a blob along 260 Fibonacci directions, nearest samples
+//! 1.5-1.9 h apart, `tests/fit.rs`) are filled (972 particles, sample RMS
+//! 0.07 h) but keep holes and non-manifold edges (χ 4, 2 loops): the cohesion core is soft
+//! (its repulsion vanishes as `exp(-α (r0 - r)²)` for `r` well below
+//! `r0`), so created particles squeezed between fixed seeds merge (a pair
+//! went from 0.93 to 0.07 h within 1.5 time units). Longer relaxation
+//! does not close holes and lets the sphere drift (sample RMS 0.0022 at
+//! `relax_time` 1, 0.018 at 10, for h = 0.08).
+//!
+//! **Scenes**: [`DataNeighbourhood`] and [`release`] also serve a scene's
+//! `creation.fit` ([`crate::schema::fit`]), which runs these stages
+//! frame by frame (`scenes/fig_10_interpolation.ron`); spacing, material
+//! and normals are then the scene's.
 //!
 //! Deterministic: every stage is (the creation rules and the world are
 //! deterministic at any thread count; sums here are serial).
@@ -93,7 +112,13 @@ pub struct FitParams {
     /// Relaxation time after release (unit-spacing time units, >= 0).
     /// Default: 1.
     pub relax_time: Real,
-    /// Mutual-neighbour radius of the triangulation. Default: 1.7.
+    /// Mutual-neighbour radius of the triangulation, > 0; keep it at
+    /// least `d_min`. Default: 2.0 (the default `d_min`): a pair closer
+    /// than `d_min` is no gap for the stretching rule, so nothing is
+    /// created between them and the triangulation must bridge them. With
+    /// the 1.7 of sheets, holes whose diagonals fall between 1.7 and
+    /// `d_min` (quads of sides 1.1-1.7 with 90° corners, which the growing
+    /// rule's 100° `min_gap` does not fill either) stayed open.
     pub triangulation_radius: Real,
 }
 
@@ -106,7 +131,7 @@ impl Default for FitParams {
             d_max: 2.5,
             max_rounds: 20,
             relax_time: 1.0,
-            triangulation_radius: 1.7,
+            triangulation_radius: 2.0,
         }
     }
 }
@@ -139,20 +164,9 @@ pub struct Fit {
     pub spacing: Real,
     /// Number of particles (samples after merging, plus created ones).
     pub particles: usize,
-    /// Mesh vertices: the particles used by some triangle.
-    pub vertices: Vec<Point3>,
-    /// Unit normals of the vertices (the particle normals).
-    pub normals: Vec<Vec3>,
-    /// Triangles as indices into `vertices`, wound along the normals.
-    pub faces: Vec<[u32; 3]>,
-    /// `V - E + F` of the mesh.
-    pub euler_characteristic: i64,
-    /// Number of boundary loops of the mesh.
-    pub boundary_loops: usize,
-    /// RMS distance from the input samples to the mesh (absolute).
-    pub rms_distance: Real,
-    /// Largest distance from an input sample to the mesh (absolute).
-    pub max_distance: Real,
+    /// The triangulated particles, in data coordinates, and their
+    /// distances to the input samples (absolute).
+    pub mesh: SurfaceMesh,
 }
 
 impl FitParams {
@@ -257,11 +271,7 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
         d.flags = Flags::FIXED_POSITION.union(Flags::FIXED_ORIENTATION);
         particles.push(d)?;
     }
-    let mut world = World::new(
-        particles,
-        std::slice::from_ref(&material),
-        world_params.clone(),
-    )?;
+    let mut world = World::new(particles, &[material], world_params)?;
 
     // Filling rounds (seed 000 §7).
     let mut creation = CreationParams::new(rest);
@@ -278,20 +288,10 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
         });
     }
     creation.max_particles = 20 * seeds.len() + 1000;
-    // Every created particle stays near the data: within d_max / 2 of a
-    // sample for open data (holes wider than d_max keep a hole), within
-    // d_max / √3 for closed data (the farthest a point of a triangle of
-    // samples at most d_max apart lies from its corners), and within half
-    // a spacing of that sample's tangent plane.
-    let reach = params.d_max * rest * if params.open { 0.5 } else { 1.0 / 3f64.sqrt() };
-    let seed_grid = Grid::new(&seeds, reach);
+    let near = DataNeighbourhood::new(&seeds, &seed_normals, rest, params.d_max, params.open);
     for _ in 0..params.max_rounds {
         let mut descs = creation.candidates(world.particles())?;
-        descs.retain(|d| {
-            seed_grid
-                .nearest_within(&d.position, reach)
-                .is_some_and(|s| seed_normals[s].dot(&(d.position - seeds[s])).abs() <= 0.5 * rest)
-        });
+        descs.retain(|d| near.contains(&d.position));
         if descs.is_empty() {
             break;
         }
@@ -299,67 +299,175 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
         advance(&mut world, 0.1)?;
     }
 
-    // Release and relax.
-    let released = release(world.particles())?;
-    let mut world = World::new(released, &[material], world_params)?;
+    // Release (the seeds are the first ids) and relax.
+    let seed_ids: Vec<u32> = (0..seeds.len() as u32).collect();
+    release(&mut world, &seed_ids)?;
     advance(&mut world, params.relax_time)?;
 
-    // Triangulate and measure.
+    // Triangulate and measure, back in data coordinates.
     let p = world.particles();
-    let positions: Vec<Point3> = p.positions().to_vec();
-    let pnormals: Vec<Vec3> = (0..p.len()).map(|s| p.normal(s)).collect();
-    let tri_params = TriangulationParams::with_radius(params.triangulation_radius * rest);
-    let triangles = triangulate_points(&positions, &pnormals, &tri_params)?;
-    let mesh = Triangulation {
-        triangles: triangles.clone(),
-    };
-    let euler_characteristic = mesh.euler_characteristic();
-    let boundary_loops = mesh.boundary_loops();
-    let mut index = vec![u32::MAX; positions.len()];
-    let mut vertices = Vec::new();
-    let mut normals_out = Vec::new();
-    let faces: Vec<[u32; 3]> = triangles
+    let positions: Vec<Point3> = p
+        .positions()
         .iter()
-        .map(|t| {
-            t.map(|v| {
-                let v = v as usize;
-                if index[v] == u32::MAX {
-                    index[v] = vertices.len() as u32;
-                    vertices.push(Point3::from(positions[v].coords * h + centroid));
-                    normals_out.push(pnormals[v]);
-                }
-                index[v]
-            })
-        })
+        .map(|q| Point3::from(q.coords * h + centroid))
         .collect();
-    let (rms_distance, max_distance) = distances(&data.positions, &vertices, &faces);
+    let pnormals: Vec<Vec3> = (0..p.len()).map(|s| p.normal(s)).collect();
+    let mesh = SurfaceMesh::new(
+        &positions,
+        &pnormals,
+        params.triangulation_radius * rest * h,
+        &data.positions,
+    )?;
     Ok(Fit {
         spacing: h,
         particles: positions.len(),
-        vertices,
-        normals: normals_out,
-        faces,
-        euler_characteristic,
-        boundary_loops,
-        rms_distance,
-        max_distance,
+        mesh,
     })
 }
 
-/// Advances `world` by `t` (a divergence is an error).
-fn advance(world: &mut World, t: Real) -> Result<(), FitError> {
-    let end = world.time() + t;
-    world
-        .advance_to(end)
-        .map_err(|d| FitError::World(d.to_string()))
+/// A triangulated particle surface (seed 000 §5) and its distance to the
+/// data it interpolates: what [`fit`] reports, and what the fit scenes'
+/// figure tests measure on a run's final particles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceMesh {
+    /// Mesh vertices: the particles used by some triangle.
+    pub vertices: Vec<Point3>,
+    /// Unit normals of the vertices (the particle normals).
+    pub normals: Vec<Vec3>,
+    /// Triangles as indices into `vertices`, wound along the normals.
+    pub faces: Vec<[u32; 3]>,
+    /// `V - E + F` of the mesh.
+    pub euler_characteristic: i64,
+    /// Number of boundary loops of the mesh.
+    pub boundary_loops: usize,
+    /// RMS distance from the samples to the triangles (infinite without
+    /// a triangle).
+    pub rms_distance: Real,
+    /// Largest distance from a sample to the triangles.
+    pub max_distance: Real,
 }
 
-/// The same particles with their fixed flags cleared, at rest.
-fn release(p: &Particles) -> Result<Particles, FitError> {
-    let mut out = Particles::new();
-    let mut order: Vec<usize> = (0..p.len()).collect();
-    order.sort_by_key(|&s| p.ids()[s]);
-    for s in order {
+impl SurfaceMesh {
+    /// Triangulates particles at `positions` with unit `normals`
+    /// ([`triangulate_points`], mutual-neighbour distance `radius`) and
+    /// measures the distances from `samples` to the triangles.
+    ///
+    /// # Errors
+    /// An invalid radius (not finite or not > 0).
+    pub fn new(
+        positions: &[Point3],
+        normals: &[Vec3],
+        radius: Real,
+        samples: &[Point3],
+    ) -> Result<Self, FitError> {
+        let triangles = triangulate_points(
+            positions,
+            normals,
+            &TriangulationParams::with_radius(radius),
+        )?;
+        let mesh = Triangulation {
+            triangles: triangles.clone(),
+        };
+        let mut index = vec![u32::MAX; positions.len()];
+        let mut vertices = Vec::new();
+        let mut normals_out = Vec::new();
+        let faces: Vec<[u32; 3]> = triangles
+            .iter()
+            .map(|t| {
+                t.map(|v| {
+                    let v = v as usize;
+                    if index[v] == u32::MAX {
+                        index[v] = vertices.len() as u32;
+                        vertices.push(positions[v]);
+                        normals_out.push(normals[v]);
+                    }
+                    index[v]
+                })
+            })
+            .collect();
+        let (rms_distance, max_distance) = distances(samples, &vertices, &faces);
+        Ok(SurfaceMesh {
+            euler_characteristic: mesh.euler_characteristic(),
+            boundary_loops: mesh.boundary_loops(),
+            vertices,
+            normals: normals_out,
+            faces,
+            rms_distance,
+            max_distance,
+        })
+    }
+}
+
+/// Where the filling rules of a fit may create particles (seed 000 §7):
+/// near the data, so growth never runs away from it. A candidate is kept
+/// within `reach` of a sample and within half a spacing of that sample's
+/// tangent plane; `reach` is `d_max / 2` spacings for open data (every gap
+/// up to the search range `d_max` closes, a wider one keeps a hole) and
+/// `d_max / √3` for closed data (the farthest a point of a triangle of
+/// samples at most `d_max` apart lies from its corners).
+#[derive(Clone, Debug)]
+pub struct DataNeighbourhood {
+    grid: Grid,
+    seeds: Vec<Point3>,
+    normals: Vec<Vec3>,
+    reach: Real,
+    tolerance: Real,
+}
+
+impl DataNeighbourhood {
+    /// The neighbourhood of the samples `seeds` with unit `normals`, for
+    /// spacing `r0` and a search range `d_max` (in units of `r0`).
+    pub fn new(seeds: &[Point3], normals: &[Vec3], r0: Real, d_max: Real, open: bool) -> Self {
+        let reach = d_max * r0 * if open { 0.5 } else { 1.0 / 3f64.sqrt() };
+        DataNeighbourhood {
+            grid: Grid::new(seeds, reach),
+            seeds: seeds.to_vec(),
+            normals: normals.to_vec(),
+            reach,
+            tolerance: 0.5 * r0,
+        }
+    }
+
+    /// Whether a particle may be created at `p`.
+    pub fn contains(&self, p: &Point3) -> bool {
+        self.grid
+            .nearest_within(p, self.reach)
+            .is_some_and(|s| self.normals[s].dot(&(p - self.seeds[s])).abs() <= self.tolerance)
+    }
+}
+
+/// A fit running in a scene (`creation.fit`, [`crate::schema::fit`]): the
+/// creation rules act only in [`SceneFit::near`] and only before
+/// [`SceneFit::release_time`], when the seeds are freed.
+#[derive(Clone, Debug)]
+pub struct SceneFit {
+    /// Index of the object holding the samples.
+    pub object: usize,
+    /// Where particles may be created.
+    pub near: DataNeighbourhood,
+    /// World time of the release (after the settle phase, if any).
+    pub release_time: Real,
+    /// True once the seeds were released.
+    pub released: bool,
+}
+
+/// Releases the seeds (seed 000 §7): the particles with the given ids are
+/// removed and inserted again with their fixed flags cleared, at rest, in
+/// the order given (op-dynamics fixes a particle's flags when it is
+/// inserted). Returns their new ids, in the order of `ids`.
+///
+/// # Errors
+/// An id that names no live particle (nothing is changed then).
+pub fn release(world: &mut World, ids: &[u32]) -> Result<Vec<u32>, WorldError> {
+    let p = world.particles();
+    let mut descs = Vec::with_capacity(ids.len());
+    for &id in ids {
+        let Some(s) = p.slot_of(id) else {
+            return Err(WorldError::from(ParamError::Invalid {
+                field: "ids".into(),
+                message: format!("particle id {id} does not exist"),
+            }));
+        };
         let mut d = ParticleDesc::at(p.positions()[s]);
         d.orientation = p.orientations()[s];
         d.mass = p.masses()[s];
@@ -373,9 +481,18 @@ fn release(p: &Particles) -> Result<Particles, FitError> {
         flags.remove(Flags::FIXED_POSITION);
         flags.remove(Flags::FIXED_ORIENTATION);
         d.flags = flags;
-        out.push(d)?;
+        descs.push(d);
     }
-    Ok(out)
+    world.remove_particles(ids)?;
+    world.insert_particles(&descs)
+}
+
+/// Advances `world` by `t` (a divergence is an error).
+fn advance(world: &mut World, t: Real) -> Result<(), FitError> {
+    let end = world.time() + t;
+    world
+        .advance_to(end)
+        .map_err(|d| FitError::World(d.to_string()))
 }
 
 /// Half pair list of `points` within `radius`.
@@ -386,7 +503,7 @@ fn pairs(points: &[Point3], radius: Real) -> PairList {
 }
 
 /// Median over the points of the distance to the nearest other point.
-fn median_nearest_distance(points: &[Point3]) -> Result<Real, FitError> {
+pub(crate) fn median_nearest_distance(points: &[Point3]) -> Result<Real, FitError> {
     let (lo, hi) = points.iter().fold(
         (
             Vec3::repeat(Real::INFINITY),
@@ -440,14 +557,19 @@ fn merge_close(points: &[Point3], dist: Real) -> Vec<usize> {
     kept
 }
 
-/// Mean distance between points and their neighbours within `ring`
-/// (1 when there is no such pair).
+/// Mean distance between points and their neighbours within `ring`, when
+/// at least half of the points have one; otherwise 1 (the points are
+/// farther apart than the unit spacing, and the few close pairs would bias
+/// the mean up to `ring`).
 fn first_ring_mean(points: &[Point3], ring: Real) -> Real {
     let half = pairs(points, ring);
+    let mut has = vec![false; points.len()];
     let (sum, count) = half.iter_pairs().fold((0.0, 0usize), |(s, c), (i, j)| {
+        has[i] = true;
+        has[j] = true;
         (s + (points[i] - points[j]).norm(), c + 1)
     });
-    if count == 0 {
+    if 2 * has.iter().filter(|&&h| h).count() < points.len() {
         1.0
     } else {
         sum / count as Real
@@ -456,7 +578,7 @@ fn first_ring_mean(points: &[Point3], ring: Real) -> Real {
 
 /// Unit normals by local PCA over the points within `radius`, oriented by
 /// propagation along the maximum spanning tree of `|n_i . n_j|`.
-fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, FitError> {
+pub(crate) fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, FitError> {
     let n = points.len();
     let half = pairs(points, radius);
     let mut rows: Vec<Vec<usize>> = vec![Vec::new(); n];
@@ -469,7 +591,7 @@ fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, FitErr
     for (i, row) in rows.iter().enumerate() {
         if row.len() < 2 {
             return Err(FitError::Input(format!(
-                "sample {} has {} neighbours within {radius} spacings: cannot estimate its normal (give normals in the file, or a smaller --spacing)",
+                "sample {} has {} neighbours within {radius} spacings: cannot estimate its normal (give normals in the file, or a larger spacing)",
                 i + 1,
                 row.len()
             )));
@@ -560,6 +682,7 @@ impl PartialOrd for Edge {
 }
 
 /// A hash grid of points for "is there one within `cell`" queries.
+#[derive(Clone, Debug)]
 struct Grid {
     cell: Real,
     map: HashMap<[i64; 3], Vec<(Point3, usize)>>,
@@ -727,21 +850,22 @@ pub fn point_triangle_distance(p: &Point3, a: &Point3, b: &Point3, c: &Point3) -
 
 /// Writes the mesh as OBJ (`v`, `vn`, `f v//vn`), atomically.
 pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
+    let mesh = &fit.mesh;
     crate::export::write_atomically(path, |w: &mut dyn Write| {
         writeln!(
             w,
             "# opsim fit: {} vertices, {} faces, spacing {}",
-            fit.vertices.len(),
-            fit.faces.len(),
+            mesh.vertices.len(),
+            mesh.faces.len(),
             fit.spacing
         )?;
-        for v in &fit.vertices {
+        for v in &mesh.vertices {
             writeln!(w, "v {} {} {}", v.x, v.y, v.z)?;
         }
-        for n in &fit.normals {
+        for n in &mesh.normals {
             writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
         }
-        for f in &fit.faces {
+        for f in &mesh.faces {
             let [a, b, c] = f.map(|k| k + 1);
             writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
         }

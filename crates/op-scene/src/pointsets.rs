@@ -60,6 +60,24 @@ fn format_err(file: &str, line: Option<usize>, message: impl Into<String>) -> Po
 /// An unreadable file, an unknown extension, malformed content, no point,
 /// or a non-finite value.
 pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
+    let set = read_points(path)?;
+    if set.positions.is_empty() {
+        return Err(format_err(
+            &path.display().to_string(),
+            None,
+            "no point in the file",
+        ));
+    }
+    Ok(set)
+}
+
+/// [`read_point_set`], except that a file without a point gives an empty
+/// set (the scene layer reports that against the field that reads it).
+///
+/// # Errors
+/// An unreadable file, an unknown extension, malformed content or a
+/// non-finite value.
+pub fn read_points(path: &Path) -> Result<PointSet, PointSetError> {
     let file = path.display().to_string();
     let ext = path
         .extension()
@@ -76,7 +94,7 @@ pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
         file: file.clone(),
         source,
     })?;
-    let set = match ext.as_str() {
+    Ok(match ext.as_str() {
         "ply" => parse_ply(&bytes, &file)?,
         _ => {
             let text = std::str::from_utf8(&bytes)
@@ -87,11 +105,7 @@ pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
                 parse_obj(text, &file)?
             }
         }
-    };
-    if set.positions.is_empty() {
-        return Err(format_err(&file, None, "no point in the file"));
-    }
-    Ok(set)
+    })
 }
 
 fn number(field: &str, file: &str, line: usize) -> Result<Real, PointSetError> {

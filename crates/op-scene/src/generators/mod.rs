@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::SceneError;
 use crate::schema::checks;
 
-pub use points::{parse_xyz, resolve};
+pub use points::resolve;
 
 /// Largest number of particles a scene may generate (all objects
 /// together). Larger requests are rejected before anything is allocated.
@@ -206,9 +206,12 @@ pub enum Generator {
         #[serde(default = "plus_z")]
         axis: [Real; 3],
     },
-    /// Points read from a `.xyz` text file: `x y z [nx ny nz]` per line,
-    /// `#` comments, blank lines skipped; normals default to +z, curvature
-    /// 0.
+    /// Points read from a file by [`crate::pointsets::read_point_set`]'s
+    /// reader: `.xyz` text (`x y z [nx ny nz]` per line, normals for every
+    /// point or none, `#` comments, blank lines skipped), `.ply` (ascii or
+    /// binary little-endian) or `.obj` (`v` / `vn` lines). Normals default
+    /// to +z (a fit estimates them instead: [`crate::schema::fit`]),
+    /// curvature 0.
     Points {
         /// The file, relative to the scene file's directory (or absolute).
         path: PathBuf,
@@ -468,6 +471,23 @@ impl Generator {
         })
     }
 
+    /// Whether the generated normals are the shape's own: false only for a
+    /// points file without normals (whose particles face +z). Reads the
+    /// file.
+    pub fn has_normals(
+        &self,
+        base_dir: Option<&Path>,
+        file: &str,
+        path: &str,
+    ) -> Result<bool, SceneError> {
+        match self {
+            Generator::Points { path: p } => {
+                Ok(read_points(p, base_dir, file, path)?.normals.is_some())
+            }
+            _ => Ok(true),
+        }
+    }
+
     /// Makes the particles (validates first). A points file that holds no
     /// point is an error.
     pub fn generate(
@@ -535,7 +555,7 @@ impl Generator {
             } => shapes::torus_shell(*major, *minor, *spacing, center, axis),
             Generator::Points { path: p } => {
                 let at = format!("{path}.Points.path");
-                let g = points::read_xyz(&resolve(base_dir, p), file, &at, p, MAX_PARTICLES)?;
+                let g = points::generated(read_points(p, base_dir, file, path)?);
                 if g.is_empty() {
                     return Err(SceneError::value(
                         file,
@@ -549,4 +569,15 @@ impl Generator {
             Generator::List { particles } => points::list(particles),
         })
     }
+}
+
+/// The points file `p` of a `Points` generator at field path `path`.
+fn read_points(
+    p: &Path,
+    base_dir: Option<&Path>,
+    file: &str,
+    path: &str,
+) -> Result<crate::pointsets::PointSet, SceneError> {
+    let at = format!("{path}.Points.path");
+    points::read_points(&resolve(base_dir, p), file, &at, p, MAX_PARTICLES)
 }

@@ -1,8 +1,11 @@
-//! Point sets read from `.xyz` text files, and explicit particle lists.
+//! Point sets read from files (`.xyz`, `.ply`, `.obj`, through
+//! [`crate::pointsets`]), and explicit particle lists.
 
 use std::path::{Path, PathBuf};
 
-use op_dynamics::{Point3, Real, Vec3};
+use op_dynamics::{Point3, Vec3};
+
+use crate::pointsets::{self, PointSet, PointSetError};
 
 use super::{Generated, ListParticle};
 use crate::error::SceneError;
@@ -18,99 +21,64 @@ pub fn resolve(base_dir: Option<&Path>, path: &Path) -> PathBuf {
     }
 }
 
-/// Parses `.xyz` text: one point per line, `x y z` or `x y z nx ny nz`
-/// (whitespace or commas between numbers), `#` starts a comment, blank
-/// lines are skipped. Normals default to +z. Stops with an error naming
-/// `file` and the line when a line is malformed, a value is not finite, a
-/// normal is zero, or there are more than `max` points.
-pub fn parse_xyz(text: &str, file: &str, max: usize) -> Result<Generated, SceneError> {
-    let mut out = Generated::default();
-    for (k, raw) in text.lines().enumerate() {
-        let line = k + 1;
-        let err = |message: String| SceneError::Points {
-            file: file.to_string(),
-            line,
-            message,
-        };
-        let content = raw.split('#').next().unwrap_or("");
-        let fields: Vec<&str> = content
-            .split(|c: char| c.is_whitespace() || c == ',')
-            .filter(|s| !s.is_empty())
-            .collect();
-        if fields.is_empty() {
-            continue;
-        }
-        if fields.len() != 3 && fields.len() != 6 {
-            return Err(err(format!(
-                "expected 3 numbers (x y z) or 6 (x y z nx ny nz), found {}",
-                fields.len()
-            )));
-        }
-        let mut v = [0.0; 6];
-        for (slot, f) in v.iter_mut().zip(&fields) {
-            let x: Real = f
-                .parse()
-                .map_err(|_| err(format!("`{f}` is not a number")))?;
-            if !x.is_finite() {
-                return Err(err(format!("`{f}` is not finite")));
-            }
-            *slot = x;
-        }
-        let normal = if fields.len() == 6 {
-            let n = Vec3::new(v[3], v[4], v[5]);
-            if n.norm() <= 1e-12 {
-                return Err(err(format!(
-                    "normal ({}, {}, {}) is zero; give a non-zero direction or omit it",
-                    v[3], v[4], v[5]
-                )));
-            }
-            n.normalize()
-        } else {
-            Vec3::z()
-        };
-        if out.positions.len() >= max {
-            return Err(err(format!("more than {max} points")));
-        }
-        out.positions.push(Point3::new(v[0], v[1], v[2]));
-        out.normals.push(normal);
-        out.curvatures.push(0.0);
-    }
-    Ok(out)
-}
-
-/// Reads and parses a points file; `shown` is the file name used in
-/// messages.
-pub(super) fn read_xyz(
+/// Reads a points file (`.xyz`, `.ply` or `.obj`, [`crate::pointsets`]:
+/// the one reader of `opsim fit` and the `Points` generator) at `resolved`;
+/// `shown` is the path as written in the scene, `path` the field path and
+/// `file` the scene in messages. An empty set is returned as such.
+///
+/// # Errors
+/// A missing file ([`SceneError::Invalid`] naming the field), an
+/// unreadable one ([`SceneError::Io`]), malformed content
+/// ([`SceneError::Points`]: the points file, its line, what is wrong, and
+/// which field of which scene reads it) or more than `max` points.
+pub(crate) fn read_points(
     resolved: &Path,
     file: &str,
     path: &str,
     shown: &Path,
     max: usize,
-) -> Result<Generated, SceneError> {
-    let text = match std::fs::read_to_string(resolved) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return Err(missing(file, path, shown, resolved));
-        }
-        Err(source) => {
-            return Err(SceneError::Io {
-                path: resolved.to_path_buf(),
-                source,
-            })
-        }
-    };
-    parse_xyz(&text, &resolved.display().to_string(), max).map_err(|e| match e {
-        SceneError::Points {
+) -> Result<PointSet, SceneError> {
+    if !resolved.is_file() {
+        return Err(missing(file, path, shown, resolved));
+    }
+    let set = pointsets::read_points(resolved).map_err(|e| match e {
+        PointSetError::Io { source, .. } => SceneError::Io {
+            path: resolved.to_path_buf(),
+            source,
+        },
+        PointSetError::Format {
             file: points,
             line,
             message,
         } => SceneError::Points {
             file: points,
-            line,
+            line: line.unwrap_or(0),
             message: format!("{message} (points file of {path} in {file})"),
         },
-        other => other,
-    })
+    })?;
+    if set.positions.len() > max {
+        return Err(SceneError::value(
+            file,
+            path,
+            format!("{:?}", shown.display().to_string()),
+            &format!(
+                "the points file holds {} points; at most {max} are allowed",
+                set.positions.len()
+            ),
+        ));
+    }
+    Ok(set)
+}
+
+/// The particles of a point set: its normals (+z when the file has none)
+/// and curvature 0.
+pub(super) fn generated(set: PointSet) -> Generated {
+    let n = set.positions.len();
+    Generated {
+        normals: set.normals.unwrap_or_else(|| vec![Vec3::z(); n]),
+        curvatures: vec![0.0; n],
+        positions: set.positions,
+    }
 }
 
 /// The error for a points file that does not exist.
@@ -164,27 +132,72 @@ pub(super) fn list(particles: &[ListParticle]) -> Generated {
 mod tests {
     use super::*;
 
-    #[test]
-    fn parses_points_with_and_without_normals() {
-        let g = parse_xyz("# patch\n0 0 0\n\n1, 2, 3  0 0 2 # tail\n", "p.xyz", 10).unwrap();
-        assert_eq!(g.positions.len(), 2);
-        assert_eq!(g.normals[0], Vec3::z());
-        assert_eq!(g.positions[1], Point3::new(1.0, 2.0, 3.0));
-        assert_eq!(g.normals[1], Vec3::z());
+    fn temp(name: &str, text: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("op-scene-points-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
     }
 
     #[test]
-    fn bad_lines_name_file_and_line() {
-        for (text, needle) in [
-            ("0 0 0\n1 2\n", "p.xyz:2: expected 3 numbers"),
-            ("0 0 x\n", "p.xyz:1: `x` is not a number"),
-            ("0 0 0\n\n0 0 NaN\n", "p.xyz:3: `NaN` is not finite"),
-            ("0 0 0 0 0 0\n", "p.xyz:1: normal (0, 0, 0) is zero"),
-            ("0 0 0\n1 1 1\n2 2 2\n", "p.xyz:3: more than 2 points"),
+    fn points_without_normals_face_plus_z() {
+        let p = temp("plain.xyz", "# patch\n0 0 0\n\n1, 2, 3 # tail\n");
+        let g = generated(read_points(&p, "s.ron", "g", Path::new("plain.xyz"), 10).unwrap());
+        assert_eq!(
+            g.positions,
+            vec![Point3::origin(), Point3::new(1.0, 2.0, 3.0)]
+        );
+        assert_eq!(g.normals, vec![Vec3::z(); 2]);
+        assert_eq!(g.curvatures, vec![0.0; 2]);
+    }
+
+    #[test]
+    fn bad_files_name_file_line_and_field() {
+        for (name, text, needle) in [
+            ("a.xyz", "0 0 0\n1 2\n", "a.xyz:2: expected 3 numbers"),
+            ("b.xyz", "0 0 x\n", "b.xyz:1: `x` is not a number"),
+            (
+                "c.xyz",
+                "0 0 0\n\n0 0 NaN\n",
+                "c.xyz:3: `NaN` is not finite",
+            ),
+            (
+                "d.xyz",
+                "0 0 0 0 0 0\n",
+                "d.xyz:1: normal (0, 0, 0) is zero",
+            ),
+            (
+                "e.xyz",
+                "0 0 0 0 0 1\n1 1 1\n",
+                "e.xyz:2: 3 numbers where earlier lines have 6",
+            ),
         ] {
-            let e = parse_xyz(text, "p.xyz", 2).unwrap_err();
-            assert!(matches!(e, SceneError::Points { .. }));
-            assert!(e.to_string().contains(needle), "{e} / {needle}");
+            let p = temp(name, text);
+            let e =
+                read_points(&p, "s.ron", "objects[0].generator", Path::new(name), 10).unwrap_err();
+            assert!(matches!(e, SceneError::Points { .. }), "{e}");
+            let e = e.to_string();
+            assert!(e.contains(needle), "{e} / {needle}");
+            assert!(e.contains("objects[0].generator in s.ron"), "{e}");
         }
+        let p = temp("f.xyz", "0 0 0\n1 1 1\n2 2 2\n");
+        let e = read_points(&p, "s.ron", "g.path", Path::new("f.xyz"), 2)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("s.ron: g.path") && e.contains("3 points; at most 2"),
+            "{e}"
+        );
+        let e = read_points(
+            &p.with_extension("ply"),
+            "s.ron",
+            "g.path",
+            Path::new("f.ply"),
+            2,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("not found"), "{e}");
     }
 }

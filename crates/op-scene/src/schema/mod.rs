@@ -51,7 +51,10 @@
 //! building: [`Scene::build`].
 
 pub(crate) mod checks;
+pub mod fit;
 pub(crate) mod validate;
+
+pub use fit::FitSettings;
 
 pub use validate::{MAX_COHESION_ALPHA_R0_SQUARED, MAX_COHESION_CUTOFF_OVER_R0};
 

@@ -127,6 +127,9 @@ impl Scene {
         }
         if let Some(c) = &self.creation {
             c.validate(file)?;
+            if let Some(fit) = &c.fit {
+                fit.validate(self, c, file)?;
+            }
             if let Some((k, o)) = self
                 .objects
                 .iter()
