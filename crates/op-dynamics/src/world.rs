@@ -166,7 +166,8 @@ pub struct StepReport {
     /// Seconds per stage, indexed like [`Stage`].
     pub seconds: [f64; 4],
     /// Stable ids of the particles eraser tools removed at the end of the
-    /// step (seed 000 fig. 7), in increasing order.
+    /// step (seed 000 fig. 7), or shaping tools trapped between them (fig.
+    /// 14, [`Role::Shaper`]), in increasing order.
     pub erased: Vec<u32>,
 }
 
@@ -417,6 +418,7 @@ impl World {
                 Role::Attractor { .. } => "attractor",
                 Role::Mover { .. } => "mover",
                 Role::Eraser => "eraser",
+                Role::Shaper { .. } => "shaper",
             };
             out.push(format!("tool:{role}"));
         }
@@ -562,9 +564,10 @@ impl World {
             self.accumulator.clear();
             self.integrator.invalidate();
         }
-        // Erasers act on the state at the end of the step (before the
-        // divergence check, which then sees only the survivors).
-        if self.pipeline.tools.has_eraser() {
+        // Erasers and trapping shapers act on the state at the end of the
+        // step (before the divergence check, which then sees only the
+        // survivors).
+        if self.pipeline.tools.removes_particles() {
             let erased = self.pipeline.tools.erase(self.time, &self.particles);
             if !erased.is_empty() {
                 self.remove_live(&erased);
