@@ -98,19 +98,21 @@ fn fig_14_shaping_tools_open_a_hole_creating_and_deleting_particles() {
 /// `cargo test --profile ci --test figures_torus -- --ignored --nocapture`):
 /// 363 particles at the start (chi 2); at the end 380 particles (24
 /// created, 7 deleted), a hole of radius 3.13 r0, but chi 4, 8 boundary
-/// loops and 27 edges in three or more triangles. The boundary edges lie where the shell wraps the balls'
-/// shoulders and at the neck (spacing stretched past the 1.7 r0
-/// triangulation radius but short of the 2.0 r0 at which the stretching
-/// rule adds a particle); the non-manifold edges lie at the sharp bends
-/// beside the balls, and the shell has not come to rest (kinetic energy
-/// about 2, speeds up to about 1.4 r0/s at t = 16: the trap rule and the
-/// creation rule keep exchanging particles next to the touching balls).
-/// Variants tried (tools withdrawn after the hole opened, balls of radius
-/// 2.5, wider triangulation radius 2.1, stretching window 1.7-2.2, no
-/// creation cap) reached chi between -25 and 9, never a closed surface;
-/// without the cap the stretching rule fills the space between the two
-/// approaching dimples and the run gains energy without bound (see the
-/// scene's comment).
+/// loops and 27 edges in three or more triangles. About 30 boundary
+/// edges lie at the neck (distance 3 from the axis, |z| <= 1: the inner
+/// wall is not closed all round) and about 130 on the shoulders where the
+/// shell wraps the balls (distance 4-6, |z| 2-3: holes in the stretched
+/// shell that the capped creation rule did not fill); the non-manifold
+/// edges are spread over the bends beside the balls. The shell has not
+/// come to rest at t = 16 (kinetic energy 2.7, largest speed 1.4 r0/s).
+/// Variants tried, final (chi, boundary loops): tools withdrawn after the
+/// hole opened (9, 6), (3, 5), (2, 11), (5, 6); no creation at all (-2, 5;
+/// and no particle created, against the paper); creation cap 420 with a
+/// triangulation radius of 2.1 r0 (-18, 11); stretching window 1.7-2.2 r0
+/// (-25, 7); a sphere of radius 6 (64, 20), (83, 15: the extra material
+/// folds); no creation cap (34, 43; balls of radius 2.5: 42, 99), where the
+/// stretching rule fills the space between the two approaching dimples
+/// and the run gains energy without bound (see the scene's comment).
 #[test]
 #[ignore = "not reached: final chi 4 with 8 boundary loops (see the doc comment)"]
 fn fig_14_final_surface_is_a_closed_torus() {
