@@ -4,7 +4,8 @@
 //! some old sphere particles are deleted when trapped between the two
 //! shaping tools". The scene `scenes/fig_14_sphere_to_torus.ron` is run the
 //! way `opsim run` runs it; the triangulation is the one its frames hold
-//! (seed 000 §5, `op_dynamics::triangulation`, radius 1.7 r0).
+//! (seed 000 §5, `op_dynamics::triangulation`, radius 1.7 times the
+//! object's measured rest spacing, 0.88 for this Fibonacci sphere).
 
 mod figure_support;
 
@@ -109,7 +110,8 @@ fn fig_14_shaping_tools_open_a_hole_creating_and_deleting_particles() {
 /// hole opened (9, 6), (3, 5), (2, 11), (5, 6); no creation at all (-2, 5;
 /// and no particle created, against the paper); creation cap 420 with a
 /// triangulation radius of 2.1 r0 (-18, 11); stretching window 1.7-2.2 r0
-/// (-25, 7); a sphere of radius 6 (64, 20), (83, 15: the extra material
+/// (-25, 7); the same run triangulated with radius 1.9 or 2.2 rest
+/// spacings (6, 8), (-50, 17); a sphere of radius 6 (64, 20), (83, 15: the extra material
 /// folds); no creation cap (34, 43; balls of radius 2.5: 42, 99), where the
 /// stretching rule fills the space between the two approaching dimples
 /// and the run gains energy without bound (see the scene's comment).
