@@ -189,7 +189,8 @@ pub struct StepReport {
     /// Seconds per stage, indexed like [`Stage`].
     pub seconds: [f64; 5],
     /// Stable ids of the particles eraser tools removed at the end of the
-    /// step (seed 000 fig. 7), in increasing order.
+    /// step (seed 000 fig. 7), or shaping tools trapped between them (fig.
+    /// 14, [`Role::Shaper`]), in increasing order.
     pub erased: Vec<u32>,
     /// Bonds that broke at the end of the step, stretched beyond their
     /// break length ([`crate::bonds`]; seed 000 fig. 12c tearing).
@@ -479,6 +480,7 @@ impl World {
                 Role::Eraser => "eraser",
                 Role::Heater { .. } => "heater",
                 Role::Knife { .. } => "knife",
+                Role::Shaper { .. } => "shaper",
             };
             out.push(format!("tool:{role}"));
         }
@@ -653,9 +655,10 @@ impl World {
             }
             report.seconds[Stage::Plasticity as usize] = clock.elapsed().as_secs_f64();
         }
-        // Erasers act on the state at the end of the step (before the
-        // divergence check, which then sees only the survivors).
-        if self.pipeline.tools.has_eraser() {
+        // Erasers and trapping shapers act on the state at the end of the
+        // step (before the divergence check, which then sees only the
+        // survivors).
+        if self.pipeline.tools.removes_particles() {
             let erased = self.pipeline.tools.erase(self.time, &self.particles);
             if !erased.is_empty() {
                 self.remove_live(&erased);

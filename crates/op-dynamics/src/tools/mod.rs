@@ -6,7 +6,10 @@
 //! the stages of Runge-Kutta schemes) sees the tool where it is.
 //!
 //! Erasers ([`Role::Eraser`]) exert no force: after each step the world
-//! removes the particles inside them ([`Tools::erase`]).
+//! removes the particles inside them ([`Tools::erase`]). Shaping tools
+//! ([`Role::Shaper`]) are obstacles that, two at a time, also delete the
+//! particles trapped between them ([`Tools::trapped`]), after each step
+//! as well; a world with fewer than two shaping tools does not look.
 //!
 //! Only worlds with tools pay for them: without tools the force pass has
 //! no tool stage. Tools act at particle centres (forces, no torques).
@@ -317,7 +320,10 @@ impl Tool {
                 }
             }
             Role::Eraser | Role::Heater { .. } => {}
-            Role::Obstacle { .. } | Role::Attractor { .. } | Role::Knife { .. } => {
+            Role::Obstacle { .. }
+            | Role::Attractor { .. }
+            | Role::Knife { .. }
+            | Role::Shaper { .. } => {
                 let frame = parry_pose(&pose.position, &pose.rotation);
                 let reach = self.params.role.reach();
                 let bound: Option<Aabb> = (!self.params.shape.is_unbounded())
@@ -350,6 +356,11 @@ impl Tool {
                                 margin,
                                 damping,
                                 ..
+                            }
+                            | Role::Shaper {
+                                stiffness,
+                                margin,
+                                damping,
                             } => {
                                 let (energy, push) = roles::obstacle(stiffness, margin, sd);
                                 if push == 0.0 {
@@ -405,15 +416,78 @@ impl Tools {
         self.tools.iter().any(|t| t.params.role == Role::Eraser)
     }
 
-    /// Ids, in increasing order and without repeats, of the particles
-    /// inside any eraser at time `t` (see [`Role::Eraser`]); movers forget
-    /// the ones they held. The caller removes them from the world. The
+    /// The shaping tools ([`Role::Shaper`]), in order.
+    fn shapers(&self) -> impl Iterator<Item = &Tool> + '_ {
+        self.tools
+            .iter()
+            .filter(|t| matches!(t.params.role, Role::Shaper { .. }))
+    }
+
+    /// Whether the tools can delete particles: some eraser, or at least
+    /// two shaping tools (the world asks [`Tools::erase`] after each step
+    /// only then).
+    pub fn removes_particles(&self) -> bool {
+        self.has_eraser() || self.shapers().nth(1).is_some()
+    }
+
+    /// Stable ids, in increasing order, of the particles trapped between
+    /// shaping tools at time `t` (the trap rule of [`Role::Shaper`]): those
+    /// (of the objects the tools act on) within the margin of at least two
+    /// shaping tools at once. Empty with fewer than two shaping tools.
+    /// Particles are tested in parallel and collected in slot order: the
     /// result depends only on the positions, not on the thread count.
+    pub fn trapped(&self, t: Real, particles: &Particles) -> Vec<u32> {
+        let shapers: Vec<_> = self
+            .shapers()
+            .map(|tool| {
+                let pose = tool.pose(t);
+                let frame = parry_pose(&pose.position, &pose.rotation);
+                let margin = tool.params.role.reach();
+                let bound: Option<Aabb> = (!tool.params.shape.is_unbounded())
+                    .then(|| tool.shape.compute_aabb(&frame).loosened(margin));
+                (tool, frame, margin, bound)
+            })
+            .collect();
+        if shapers.len() < 2 {
+            return Vec::new();
+        }
+        let objects = particles.objects();
+        let ids = particles.ids();
+        let mut trapped: Vec<u32> = particles
+            .positions()
+            .par_iter()
+            .enumerate()
+            .filter_map(|(slot, x)| {
+                let x = x.coords;
+                let pressing = shapers
+                    .iter()
+                    .filter(|(tool, frame, margin, bound)| {
+                        tool.acts_on(objects[slot])
+                            && bound.is_none_or(|b| b.contains_local_point(to_parry(&x)))
+                            // Exactly on the surface (no normal): s = 0 < margin.
+                            && signed_distance(tool.shape(), frame, &x)
+                                .is_none_or(|(s, _)| s < *margin)
+                    })
+                    .take(2)
+                    .count();
+                (pressing >= 2).then_some(ids[slot])
+            })
+            .collect();
+        trapped.sort_unstable();
+        trapped
+    }
+
+    /// Ids, in increasing order and without repeats, of the particles
+    /// inside any eraser at time `t` (see [`Role::Eraser`]) or trapped
+    /// between shaping tools ([`Tools::trapped`]); movers forget the ones
+    /// they held. The caller removes them from the world. The result
+    /// depends only on the positions, not on the thread count.
     pub fn erase(&mut self, t: Real, particles: &Particles) -> Vec<u32> {
         let mut ids: Vec<u32> = self
             .tools
             .iter()
             .flat_map(|tool| tool.erased(t, particles))
+            .chain(self.trapped(t, particles))
             .collect();
         ids.sort_unstable();
         ids.dedup();
@@ -534,6 +608,102 @@ mod tests {
         assert!((first - 0.4 / 5.5).abs() <= 0.011, "{first}");
         assert_eq!(grabbed, vec![vec![], vec![], vec![8]]);
         assert_eq!(run(2), run(1));
+    }
+
+    /// Two shaping balls closing along z on a row of still particles along
+    /// z (fixed: only the trap rule acts) delete exactly the particles
+    /// within both margins: those in the gap between them once it is
+    /// narrower than two margins, none while the gap is wider, none near
+    /// one ball only; the same ids at 1 and 2 threads. A single shaping
+    /// tool deletes nothing (a world with one does not even look).
+    #[test]
+    fn shapers_delete_the_particles_trapped_between_them() {
+        use crate::{Flags, Material, World, WorldParams};
+        let shaper = |from: Real, to: Real| ToolParams {
+            name: "shaper".into(),
+            shape: ToolShape::Ball { radius: 1.0 },
+            path: Path {
+                keyframes: vec![
+                    Keyframe {
+                        time: 0.0,
+                        position: [0.0, 0.0, from],
+                        rotation: [0.0; 3],
+                    },
+                    Keyframe {
+                        time: 1.0,
+                        position: [0.0, 0.0, to],
+                        rotation: [0.0; 3],
+                    },
+                ],
+            },
+            role: Role::Shaper {
+                stiffness: 10.0,
+                margin: 0.3,
+                damping: 0.0,
+            },
+            objects: None,
+        };
+        // Particles at z = -2.0, -1.9, ..., 2.0 (ids 0..=40), held fixed.
+        let row = || {
+            let mut p = Particles::new();
+            for k in 0..=40 {
+                let mut d = ParticleDesc::at(Point3::new(0.0, 0.0, -2.0 + 0.1 * k as Real));
+                d.flags = Flags::FIXED_POSITION | Flags::FIXED_ORIENTATION;
+                p.push(d).unwrap();
+            }
+            p
+        };
+        let run = |threads: usize, tools: Vec<ToolParams>| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let params = WorldParams {
+                        dt: 0.01,
+                        tools,
+                        ..WorldParams::default()
+                    };
+                    let mut w = World::new(row(), &[Material::empty()], params).unwrap();
+                    let mut erased = Vec::new();
+                    let mut first = None;
+                    while w.time() < 1.0 - 1e-9 {
+                        let now = w.step().unwrap().erased.clone();
+                        if !now.is_empty() && first.is_none() {
+                            first = Some(w.time());
+                        }
+                        erased.extend(now);
+                    }
+                    (erased, first, w.tools().len())
+                })
+        };
+        // Ball surfaces at z = ±(2.5 - 1.0 - 1.25 t): the gap 2 (1.5 - 1.25
+        // t) falls below two margins (0.6) at t = 0.96; at t = 1 the gap is
+        // (-0.25, 0.25) and the particles within 0.3 of both surfaces are
+        // those with |z| < 0.05.
+        let closing = vec![shaper(2.5, 1.25), shaper(-2.5, -1.25)];
+        let (erased, first, _) = run(1, closing.clone());
+        assert_eq!(erased, vec![20], "only z = 0 lies within both margins");
+        let first = first.expect("something was trapped");
+        assert!(first >= 0.96 - 1e-9, "trapped too early: t = {first}");
+        assert_eq!(
+            run(2, closing),
+            run(1, vec![shaper(2.5, 1.25), shaper(-2.5, -1.25)])
+        );
+        // Overlapping: the surfaces reach z = ∓0.25 at t = 1 (inside a
+        // ball counts as within its margin), so every particle with
+        // |z| < 0.55 is within 0.3 of both, and is deleted on the way.
+        let (mut wide, _, _) = run(1, vec![shaper(2.5, 0.75), shaper(-2.5, -0.75)]);
+        wide.sort_unstable();
+        assert_eq!(wide, (15..=25).collect::<Vec<u32>>());
+        // One shaper alone, pushed through the whole row, deletes nothing.
+        let (alone, _, _) = run(1, vec![shaper(2.5, -2.5)]);
+        assert!(alone.is_empty(), "{alone:?}");
+        let one = Tools::new(&[shaper(2.5, -2.5)], &row()).unwrap();
+        assert!(!one.removes_particles());
+        assert!(Tools::new(&[shaper(2.5, 1.0), shaper(-2.5, -1.0)], &row())
+            .unwrap()
+            .removes_particles());
     }
 
     /// Every shape's output mesh is closed where the shape is, outward

@@ -96,6 +96,34 @@ pub enum Role {
         /// How far outside the surface it heats, > 0.
         reach: Real,
     },
+    /// A shaping tool (seed 000 §8, fig. 14: a sphere is pushed into a
+    /// torus by two spherical shaping tools, and "some old sphere particles
+    /// are deleted when trapped between the two shaping tools"): a solid
+    /// obstacle with the [`Role::Obstacle`] penalty and damping which, with
+    /// at least one other shaping tool, also deletes the particles it traps.
+    ///
+    /// **Trap rule.** At the end of each step, a particle lying within the
+    /// contact margin of two (or more) shaping tools at once (signed
+    /// distance `s < margin` to each, each tool with its own margin) is
+    /// deleted from the world, like an eraser's particles
+    /// ([`crate::world::StepReport::erased`]). The margin is the particle's
+    /// contact radius: such a particle is pressed by two tool surfaces
+    /// whose gap there is narrower than the two margins together, so it
+    /// cannot stay in the surface between them; a single tool only pushes
+    /// (the region exists only where two tools come within `2 margin` of
+    /// each other). The deletion is an edit of the particle set between
+    /// steps, not a potential (energy is not conserved across it).
+    Shaper {
+        /// Penalty stiffness `k`, > 0 (as [`Role::Obstacle`]).
+        stiffness: Real,
+        /// Contact offset from the surface (a particle radius), > 0: the
+        /// reach of the penalty and of the trap rule.
+        margin: Real,
+        /// Damping of the normal relative velocity while in contact, >= 0
+        /// (as [`Role::Obstacle`]). Default: 0.
+        #[serde(default)]
+        damping: Real,
+    },
 }
 
 fn infinity() -> Real {
@@ -154,6 +182,15 @@ impl Role {
                 error::positive("Knife.power", *power)?;
                 error::positive("Knife.reach", *reach)
             }
+            Role::Shaper {
+                stiffness,
+                margin,
+                damping,
+            } => {
+                error::positive("Shaper.stiffness", *stiffness)?;
+                error::positive("Shaper.margin", *margin)?;
+                error::non_negative("Shaper.damping", *damping)
+            }
         }
     }
 
@@ -172,7 +209,7 @@ impl Role {
     /// particles wherever they are; erasers and heaters exert no force (0).
     pub fn reach(&self) -> Real {
         match self {
-            Role::Obstacle { margin, .. } => *margin,
+            Role::Obstacle { margin, .. } | Role::Shaper { margin, .. } => *margin,
             Role::Attractor { reach, .. } => *reach,
             Role::Mover { .. } => Real::INFINITY,
             Role::Eraser | Role::Heater { .. } => 0.0,
