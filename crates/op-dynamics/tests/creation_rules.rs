@@ -298,3 +298,38 @@ fn stretching_checks_the_shifted_candidate_too() {
         found.iter().map(|d| d.position).collect::<Vec<_>>()
     );
 }
+
+/// Two facing sheets (opposite normals) far enough apart to open a gap do
+/// not stretch into each other; the same pair on one sheet (parallel
+/// normals) does, and a wider normal-angle limit lets the facing pair
+/// stretch too.
+#[test]
+fn facing_sheets_do_not_stretch_into_each_other() {
+    let pair = |n1: Vec3| {
+        let mut p = Particles::new();
+        p.push(ParticleDesc::at(Point3::origin()).with_normal(Vec3::z()))
+            .unwrap();
+        p.push(ParticleDesc::at(Point3::new(0.0, 0.0, 2.2)).with_normal(n1))
+            .unwrap();
+        p
+    };
+    // Nearly opposite (163 degrees): the averaged normal does not vanish.
+    let facing = Vec3::new(0.3, 0.0, -1.0).normalize();
+    let rules = stretching();
+    assert!(rules.candidates(&pair(facing)).unwrap().is_empty());
+    assert!(rules
+        .candidates(&pair(Vec3::new(1.0, 0.0, -0.05).normalize()))
+        .unwrap()
+        .is_empty());
+    let side_by_side = {
+        let mut p = Particles::new();
+        for x in [0.0, 2.2] {
+            p.push(ParticleDesc::at(Point3::new(x, 0.0, 0.0))).unwrap();
+        }
+        p
+    };
+    assert_eq!(rules.candidates(&side_by_side).unwrap().len(), 1);
+    let mut wide = stretching();
+    wide.stretching.as_mut().unwrap().max_normal_angle = std::f64::consts::PI;
+    assert_eq!(wide.candidates(&pair(facing)).unwrap().len(), 1);
+}

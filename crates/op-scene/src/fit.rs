@@ -279,7 +279,7 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
         d_min: params.d_min,
         d_max: params.d_max,
         reach: (0.6 * params.d_max).max(1.5),
-        min_temperature: None,
+        ..StretchingParams::default()
     });
     if !params.open {
         creation.growing = Some(GrowingParams {

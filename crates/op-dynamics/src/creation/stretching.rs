@@ -18,6 +18,14 @@
 //!   world tangents ("local x"), projected on the tangent plane;
 //! - velocity, angular velocity and temperature: weighted means.
 //!
+//! **One sheet** (our addition): a pair whose normals make more than
+//! [`StretchingParams::max_normal_angle`] (default 90°) does not stretch.
+//! Two particles of one surface stretched apart keep nearly parallel
+//! normals; two facing sheets of one object (the two dimples of a sphere
+//! pushed in at its poles, seed 000 fig. 14, or a folded cloth) have
+//! opposite normals, and filling between them would build a wall across
+//! the gap instead of stretching the surface.
+//!
 //! **Heat gating** (seed 000 §8, fig. 13: "only allowing the hot parts of
 //! the surface to deform and stretch"): with [`StretchingParams::min_temperature`]
 //! set, a pair opens a gap only when both its particles are at least that
@@ -53,6 +61,14 @@ pub struct StretchingParams {
     /// (finite), or `None` for every pair. Default: `None`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub min_temperature: Option<Real>,
+    /// Largest angle (radians) between the two particles' normals of a
+    /// pair that stretches, in (0, pi]. Default: pi/2.
+    #[serde(default = "right_angle")]
+    pub max_normal_angle: Real,
+}
+
+fn right_angle() -> Real {
+    std::f64::consts::FRAC_PI_2
 }
 
 impl Default for StretchingParams {
@@ -62,6 +78,7 @@ impl Default for StretchingParams {
             d_max: 2.5,
             reach: 1.5,
             min_temperature: None,
+            max_normal_angle: right_angle(),
         }
     }
 }
@@ -81,6 +98,12 @@ impl StretchingParams {
         if let Some(t) = self.min_temperature {
             error::finite("min_temperature", t)?;
         }
+        error::check(
+            "max_normal_angle",
+            self.max_normal_angle,
+            self.max_normal_angle > 0.0 && self.max_normal_angle <= std::f64::consts::PI,
+            "must be in (0, pi] radians",
+        )?;
         error::check(
             "reach",
             self.reach,
@@ -106,6 +129,8 @@ pub(crate) fn candidates(
     let ids = p.ids();
     let temperatures = p.temperatures();
     let hot = |k: usize| params.min_temperature.is_none_or(|t| temperatures[k] >= t);
+    let cos_max = params.max_normal_angle.cos();
+    let one_sheet = |i: usize, j: usize| p.normal(i).dot(&p.normal(j)) >= cos_max;
     let mut found: Vec<((u32, u32), ParticleDesc)> = (0..p.len())
         .into_par_iter()
         .flat_map_iter(|i| {
@@ -117,6 +142,7 @@ pub(crate) fn candidates(
                     || d2 > d_max * d_max
                     || p.objects()[i] != p.objects()[j]
                     || !(hot(i) && hot(j))
+                    || !one_sheet(i, j)
                 {
                     continue;
                 }
