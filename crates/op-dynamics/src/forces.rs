@@ -588,6 +588,7 @@ fn strength(
 /// The spacing kernel's pair: spacing potential for complete pairs
 /// (weakened by heat when `heated`), the typing repulsion otherwise; zero
 /// beyond the cut-off.
+#[allow(clippy::too_many_arguments)]
 #[inline]
 fn spacing_pair(
     a: &Attributes<'_>,

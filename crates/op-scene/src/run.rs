@@ -81,6 +81,10 @@ pub struct Summary {
     /// skinned objects; see [`crate::skins`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact: Option<ContactStats>,
+    /// Bonds broken over the run (settle phase included), for scenes with
+    /// bonded materials (op-dynamics `bonds`; seed 000 fig. 12c tearing).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bonds_broken: Option<u64>,
     /// Per-object figures.
     pub objects: Vec<ObjectSummary>,
 }
@@ -296,6 +300,7 @@ pub fn run(
         threads: rayon::current_num_threads(),
         enabled: scene.stages(),
         contact: scene.has_contact().then_some(scene.contact),
+        bonds_broken: scene.world.bonds().map(|b| b.broken()),
         objects: scene
             .objects
             .iter()
