@@ -6,11 +6,14 @@
 
 mod common;
 
-use common::{full_material, hex_sheet, in_pool, random_cluster, spacing_material, Rng};
+use common::{
+    assert_energy_gradients, assert_momentum_conserved, full_material, hex_sheet, in_pool,
+    random_cluster, spacing_material, Rng,
+};
 use op_dynamics::bonds::BondParams;
 use op_dynamics::{
-    ExternalParams, ForceWindow, Material, ParticleDesc, Particles, Point3, Quat, Real, Vec3,
-    World, WorldParams,
+    ExternalParams, ForceWindow, Material, ParticleDesc, Particles, Point3, Real, World,
+    WorldParams,
 };
 
 fn bonded(m: Material, radius: Real, break_length: Real) -> Material {
@@ -173,43 +176,7 @@ fn forces_are_energy_gradients_with_broken_bonds() {
         ("spacing only", spacing_material(), 1),
     ] {
         let mut w = partly_broken(material, objects);
-        let (f, t, _) = w.evaluate_forces();
-        let (f, t) = (f.to_vec(), t.to_vec());
-        let h = 1e-6;
-        for slot in [0usize, 9, 22, 41, 63] {
-            for k in 0..3 {
-                let mut e = Vec3::zeros();
-                e[k] = h;
-                let p0 = w.particles().positions()[slot];
-                w.particles_mut().set_position(slot, p0 + e);
-                let ep = energy(&mut w);
-                w.particles_mut().set_position(slot, p0 - e);
-                let em = energy(&mut w);
-                w.particles_mut().set_position(slot, p0);
-                let fd = -(ep - em) / (2.0 * h);
-                let scale = f[slot].norm().max(1e-3);
-                assert!(
-                    (fd - f[slot][k]).abs() <= 1e-6 * scale + 1e-8,
-                    "{case}: force slot {slot} axis {k}: fd {fd} vs {}",
-                    f[slot][k]
-                );
-                let q0 = w.particles().orientations()[slot];
-                w.particles_mut()
-                    .set_orientation(slot, Quat::from_scaled_axis(e) * q0);
-                let ep = energy(&mut w);
-                w.particles_mut()
-                    .set_orientation(slot, Quat::from_scaled_axis(-e) * q0);
-                let em = energy(&mut w);
-                w.particles_mut().set_orientation(slot, q0);
-                let fd = -(ep - em) / (2.0 * h);
-                let scale = t[slot].norm().max(1e-3);
-                assert!(
-                    (fd - t[slot][k]).abs() <= 1e-6 * scale + 1e-8,
-                    "{case}: torque slot {slot} axis {k}: fd {fd} vs {}",
-                    t[slot][k]
-                );
-            }
-        }
+        assert_energy_gradients(&mut w, &[0usize, 9, 22, 41, 63], case);
     }
 }
 
@@ -223,18 +190,7 @@ fn broken_bonds_conserve_momentum() {
         (spacing_material(), 1),
     ] {
         let mut w = partly_broken(material, objects);
-        let (f, t, _) = w.evaluate_forces();
-        let (f, t) = (f.to_vec(), t.to_vec());
-        let pos = w.particles().positions();
-        let (mut lin, mut ang, mut scale) = (Vec3::zeros(), Vec3::zeros(), 0.0);
-        for i in 0..f.len() {
-            lin += f[i];
-            ang += pos[i].coords.cross(&f[i]) + t[i];
-            scale += f[i].norm() * (1.0 + pos[i].coords.norm()) + t[i].norm();
-        }
-        assert!(scale > 1.0, "the test needs non-trivial forces");
-        assert!(lin.norm() <= 1e-12 * scale, "linear: {lin:?}");
-        assert!(ang.norm() <= 1e-12 * scale, "angular: {ang:?}");
+        assert_momentum_conserved(&mut w, "partly broken");
     }
 }
 

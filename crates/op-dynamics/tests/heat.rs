@@ -7,12 +7,15 @@
 
 mod common;
 
-use common::{full_material, hex_sheet, in_pool, random_cluster, spacing_material, Rng};
+use common::{
+    assert_energy_gradients, assert_momentum_conserved, full_material, hex_sheet, in_pool,
+    random_cluster, spacing_material, Rng,
+};
 use op_dynamics::creation::{CreationParams, StretchingParams};
 use op_dynamics::tools::{Path, Role, ToolParams, ToolShape};
 use op_dynamics::{
     ExternalParams, Flags, ForceWindow, HeatParams, HeatResponse, Material, ParticleDesc,
-    Particles, Point3, Quat, Real, Vec3, World, WorldParams,
+    Particles, Point3, Real, World, WorldParams,
 };
 
 const RESPONSE: HeatResponse = HeatResponse {
@@ -80,47 +83,12 @@ fn weakened_forces_and_torques_are_energy_gradients() {
         )
         .unwrap();
         assert!(w.enabled().contains(&"heat_weakening".to_string()));
-        let (f, t, e) = w.evaluate_forces();
-        let (f, t) = (f.to_vec(), t.to_vec());
+        let e = w.evaluate_forces().2;
         assert!(
             (e - cold_energy).abs() > 1e-3 * cold_energy.abs(),
             "{case}: weakening changed nothing ({e} vs {cold_energy})"
         );
-        let h = 1e-6;
-        for slot in [0usize, 7, 19, 33] {
-            for k in 0..3 {
-                let mut d = Vec3::zeros();
-                d[k] = h;
-                let p0 = w.particles().positions()[slot];
-                w.particles_mut().set_position(slot, p0 + d);
-                let ep = w.evaluate_forces().2;
-                w.particles_mut().set_position(slot, p0 - d);
-                let em = w.evaluate_forces().2;
-                w.particles_mut().set_position(slot, p0);
-                let fd = -(ep - em) / (2.0 * h);
-                let scale = f[slot].norm().max(1e-3);
-                assert!(
-                    (fd - f[slot][k]).abs() <= 1e-6 * scale + 1e-8,
-                    "{case}: force slot {slot} axis {k}: fd {fd} vs {}",
-                    f[slot][k]
-                );
-                let q0 = w.particles().orientations()[slot];
-                w.particles_mut()
-                    .set_orientation(slot, Quat::from_scaled_axis(d) * q0);
-                let ep = w.evaluate_forces().2;
-                w.particles_mut()
-                    .set_orientation(slot, Quat::from_scaled_axis(-d) * q0);
-                let em = w.evaluate_forces().2;
-                w.particles_mut().set_orientation(slot, q0);
-                let fd = -(ep - em) / (2.0 * h);
-                let scale = t[slot].norm().max(1e-3);
-                assert!(
-                    (fd - t[slot][k]).abs() <= 1e-6 * scale + 1e-8,
-                    "{case}: torque slot {slot} axis {k}: fd {fd} vs {}",
-                    t[slot][k]
-                );
-            }
-        }
+        assert_energy_gradients(&mut w, &[0usize, 7, 19, 33], case);
     }
 }
 
@@ -130,18 +98,7 @@ fn weakened_forces_conserve_momentum() {
     for material in [full_material(true, 1.0), spacing_material()] {
         let mut w =
             World::new(warm_cluster(2), &[heated(material)], WorldParams::default()).unwrap();
-        let (f, t, _) = w.evaluate_forces();
-        let (f, t) = (f.to_vec(), t.to_vec());
-        let pos = w.particles().positions();
-        let (mut lin, mut ang, mut scale) = (Vec3::zeros(), Vec3::zeros(), 0.0);
-        for i in 0..f.len() {
-            lin += f[i];
-            ang += pos[i].coords.cross(&f[i]) + t[i];
-            scale += f[i].norm() * (1.0 + pos[i].coords.norm()) + t[i].norm();
-        }
-        assert!(scale > 1.0);
-        assert!(lin.norm() <= 1e-12 * scale, "linear {lin:?}");
-        assert!(ang.norm() <= 1e-12 * scale, "angular {ang:?}");
+        assert_momentum_conserved(&mut w, "heated");
     }
 }
 

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{in_pool, Rng};
+use common::{desc_of, in_pool, Rng};
 use op_dynamics::interactions::{CohesionParams, Spacing, WeightParams};
 use op_dynamics::neighbours::NeighbourList;
 use op_dynamics::plasticity::{current_curvature, Plasticity};
@@ -251,23 +251,6 @@ fn plastic_update_is_the_same_at_one_and_two_threads() {
         .count();
     println!("{moved} of {} remembered curvatures changed", kappas.len());
     assert!(moved > 0, "the push yields somewhere");
-}
-
-/// The description of the particle in `slot`, current state included.
-fn desc_of(p: &Particles, slot: usize) -> ParticleDesc {
-    let mut d = ParticleDesc::at(p.positions()[slot]);
-    d.velocity = p.velocities()[slot];
-    d.orientation = p.orientations()[slot];
-    d.angular_velocity = p.angular_velocities()[slot];
-    d.mass = p.masses()[slot];
-    d.inertia = p.inertias()[slot];
-    d.normal_axis = p.normal_axes()[slot];
-    d.flags = p.flags()[slot];
-    d.object = p.objects()[slot];
-    d.kind = p.kinds()[slot];
-    d.material = p.materials()[slot];
-    d.curvature = p.curvatures()[slot];
-    d
 }
 
 /// Removing and inserting particles keeps the plastic stage working: after

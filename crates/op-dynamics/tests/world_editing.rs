@@ -5,29 +5,11 @@
 
 mod common;
 
-use common::{full_material, in_pool, noisy_sheet, spacing_material, Rng};
+use common::{desc_of, full_material, in_pool, noisy_sheet, spacing_material, Rng};
 use op_dynamics::{
     ExternalParams, ForceWindow, Material, ParticleDesc, Particles, Point3, Scheme, Vec3, World,
     WorldParams,
 };
-
-/// The description of the particle in `slot`, current state included.
-fn desc_of(p: &Particles, slot: usize) -> ParticleDesc {
-    let mut d = ParticleDesc::at(p.positions()[slot]);
-    d.velocity = p.velocities()[slot];
-    d.orientation = p.orientations()[slot];
-    d.angular_velocity = p.angular_velocities()[slot];
-    d.mass = p.masses()[slot];
-    d.inertia = p.inertias()[slot];
-    d.normal_axis = p.normal_axes()[slot];
-    d.flags = p.flags()[slot];
-    d.object = p.objects()[slot];
-    d.kind = p.kinds()[slot];
-    d.material = p.materials()[slot];
-    d.curvature = p.curvatures()[slot];
-    d.temperature = p.temperatures()[slot];
-    d
-}
 
 /// State bits of particle `id`.
 fn bits(w: &World, id: u32) -> Vec<u64> {

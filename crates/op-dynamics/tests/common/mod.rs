@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use op_dynamics::interactions::{CohesionParams, Spacing, WeightParams, WeightShape};
-use op_dynamics::{Material, ParticleDesc, Particles, Point3, Quat, Real, Vec3};
+use op_dynamics::{Material, ParticleDesc, Particles, Point3, Quat, Real, Vec3, World};
 
 /// SplitMix64: a tiny deterministic generator for seeded configurations.
 pub struct Rng(u64);
@@ -127,4 +127,90 @@ pub fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
         .build()
         .unwrap()
         .install(f)
+}
+
+/// The description of the particle in `slot`, current state included.
+pub fn desc_of(p: &Particles, slot: usize) -> ParticleDesc {
+    let mut d = ParticleDesc::at(p.positions()[slot]);
+    d.velocity = p.velocities()[slot];
+    d.orientation = p.orientations()[slot];
+    d.angular_velocity = p.angular_velocities()[slot];
+    d.mass = p.masses()[slot];
+    d.inertia = p.inertias()[slot];
+    d.normal_axis = p.normal_axes()[slot];
+    d.flags = p.flags()[slot];
+    d.object = p.objects()[slot];
+    d.kind = p.kinds()[slot];
+    d.material = p.materials()[slot];
+    d.curvature = p.curvatures()[slot];
+    d.temperature = p.temperatures()[slot];
+    d
+}
+
+/// Asserts that the forces and torques of the particles in `slots` are
+/// the central differences (step 1e-6) of the world's potential energy,
+/// under translations and small world rotations of each particle.
+pub fn assert_energy_gradients(w: &mut World, slots: &[usize], case: &str) {
+    let energy = |w: &mut World| w.evaluate_forces().2;
+    let (f, t, _) = w.evaluate_forces();
+    let (f, t) = (f.to_vec(), t.to_vec());
+    let h = 1e-6;
+    for &slot in slots {
+        for k in 0..3 {
+            let mut e = Vec3::zeros();
+            e[k] = h;
+            let p0 = w.particles().positions()[slot];
+            w.particles_mut().set_position(slot, p0 + e);
+            let ep = energy(w);
+            w.particles_mut().set_position(slot, p0 - e);
+            let em = energy(w);
+            w.particles_mut().set_position(slot, p0);
+            let fd = -(ep - em) / (2.0 * h);
+            let scale = f[slot].norm().max(1e-3);
+            assert!(
+                (fd - f[slot][k]).abs() <= 1e-6 * scale + 1e-8,
+                "{case}: force slot {slot} axis {k}: fd {fd} vs {}",
+                f[slot][k]
+            );
+            let q0 = w.particles().orientations()[slot];
+            w.particles_mut()
+                .set_orientation(slot, Quat::from_scaled_axis(e) * q0);
+            let ep = energy(w);
+            w.particles_mut()
+                .set_orientation(slot, Quat::from_scaled_axis(-e) * q0);
+            let em = energy(w);
+            w.particles_mut().set_orientation(slot, q0);
+            let fd = -(ep - em) / (2.0 * h);
+            let scale = t[slot].norm().max(1e-3);
+            assert!(
+                (fd - t[slot][k]).abs() <= 1e-6 * scale + 1e-8,
+                "{case}: torque slot {slot} axis {k}: fd {fd} vs {}",
+                t[slot][k]
+            );
+        }
+    }
+}
+
+/// Asserts that the world's forces and torques (internal ones: build it
+/// without external actions) sum to no force and no moment:
+/// `sum F = 0`, `sum (p x F + tau) = 0`, relative to their size.
+pub fn assert_momentum_conserved(w: &mut World, case: &str) {
+    let (f, t, _) = w.evaluate_forces();
+    let (f, t) = (f.to_vec(), t.to_vec());
+    let pos = w.particles().positions();
+    let (mut lin, mut ang, mut scale) = (Vec3::zeros(), Vec3::zeros(), 0.0);
+    for i in 0..f.len() {
+        lin += f[i];
+        ang += pos[i].coords.cross(&f[i]) + t[i];
+        scale += f[i].norm() * (1.0 + pos[i].coords.norm()) + t[i].norm();
+    }
+    assert!(scale > 1.0, "{case}: the test needs non-trivial forces");
+    assert!(
+        lin.norm() <= 1e-12 * scale,
+        "{case}: linear {lin:?} (scale {scale})"
+    );
+    assert!(
+        ang.norm() <= 1e-12 * scale,
+        "{case}: angular {ang:?} (scale {scale})"
+    );
 }
