@@ -13,6 +13,22 @@ use clap::{Parser, Subcommand};
 use op_scene::render::{self, RenderOptions, Style};
 use op_scene::{BuiltScene, RunError, RunOptions};
 
+/// `println!` that ends the program quietly when stdout is closed early (a
+/// broken pipe, as in `opsim check SCENE | head -1`) instead of panicking;
+/// any other write error is reported with exit code 1.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout().lock(), $($arg)*) {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(0);
+            }
+            eprintln!("opsim: error: writing to stdout: {e}");
+            std::process::exit(1);
+        }
+    }};
+}
+
 /// The default demo scene, embedded so `opsim` works from any directory.
 const DEMO_SCENE: &str = include_str!("../scenes/spiral.ron");
 
@@ -181,7 +197,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                 eprintln!("opsim: note: {note}");
             }
             render::save_png(&rendering.image, &out)?;
-            println!("{}", out.display());
+            outln!("{}", out.display());
             Ok(())
         }
     }
@@ -213,7 +229,7 @@ fn run_fit(points: &Path, out: &Path, spacing: Option<f64>, open: bool) -> Resul
             "null".to_string()
         }
     };
-    println!(
+    outln!(
         "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}}}",
         fit.particles,
         fit.mesh.vertices.len(),
@@ -262,7 +278,7 @@ fn run_built(
     bar.finish_and_clear();
     match result {
         Ok(summary) => {
-            println!(
+            outln!(
                 "{}: {} frames, {} steps, t = {:.4}, {:.2} s -> {}",
                 summary.scene,
                 summary.frames,
@@ -287,31 +303,34 @@ fn run_built(
 
 fn print_check(path: &Path, built: &BuiltScene) {
     let w = &built.world;
-    println!("scene {:?} ({}): valid", built.name, path.display());
+    outln!("scene {:?} ({}): valid", built.name, path.display());
     for o in &built.objects {
-        println!(
+        outln!(
             "  object {:?}: {} particles, rest spacing {:.4}",
             o.name,
             o.ids.len(),
             o.rest_spacing
         );
     }
-    println!("  enabled: {}", built.stages().join(", "));
+    outln!("  enabled: {}", built.stages().join(", "));
     match w.neighbours() {
-        Some(n) => println!(
+        Some(n) => outln!(
             "  neighbours: {:?}, cut-off {:.4}, skin {:.4}",
             n.backend(),
             n.cutoff(),
             n.skin()
         ),
-        None => println!("  neighbours: none (no interaction enabled)"),
+        None => outln!("  neighbours: none (no interaction enabled)"),
     }
     let p = w.params();
-    println!(
+    outln!(
         "  integrator: {:?}, dt {}, duration {}, {} frames per unit time",
-        p.scheme, p.dt, built.duration, built.frame_rate
+        p.scheme,
+        p.dt,
+        built.duration,
+        built.frame_rate
     );
-    println!(
+    outln!(
         "  outputs: particles as {:?}{}",
         built.outputs.particles,
         if built.outputs.metrics {

@@ -282,3 +282,24 @@ fn render_each_style() {
     );
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// A reader that closes the pipe early (`opsim check SCENE | head -0`)
+/// ends `opsim` quietly: exit 0 and no panic message, whether the pipe was
+/// closed before or after it wrote.
+#[test]
+fn closed_stdout_is_not_a_panic() {
+    use std::process::Stdio;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_opsim"))
+        .args(["check", "scenes/fig_07_knife.ron"])
+        .current_dir(root)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run opsim");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+}
