@@ -398,3 +398,31 @@ fn heat_is_deterministic_across_thread_counts() {
     assert!(one.1.iter().any(|&t| t > 1.0), "the knife heated nothing");
     assert_eq!(one, two);
 }
+
+/// Velocity Verlet evaluates forces once per step, reusing the ones of the
+/// step's end; a weakening material at changing temperatures drops them
+/// (they were computed at the old temperatures) and costs a second
+/// evaluation per step, while heat without a weakening material does not.
+#[test]
+fn changing_temperatures_refresh_forces_only_when_materials_weaken() {
+    let evaluations_per_step = |material: Material| {
+        let mut p = Particles::new();
+        for x in hex_sheet(8, 6, 1.0) {
+            p.push(ParticleDesc::at(x)).unwrap();
+        }
+        let params = WorldParams {
+            heat: heat(1.0, 0.5),
+            tools: vec![heater([3.0, 2.0, 0.0], 1.0, 5.0, 1.0)],
+            ..WorldParams::default()
+        };
+        let mut w = World::new(p, &[material], params).unwrap();
+        w.step().unwrap();
+        let before = w.force_evaluations();
+        for _ in 0..10 {
+            w.step().unwrap();
+        }
+        (w.force_evaluations() - before) as Real / 10.0
+    };
+    assert_eq!(evaluations_per_step(spacing_material()), 1.0);
+    assert_eq!(evaluations_per_step(heated(spacing_material())), 2.0);
+}
