@@ -47,12 +47,13 @@
 //! spacing_only/10000` at one thread, medians of three alternated runs
 //! each, 2.91 ms before bonds existed (runs 2.34-2.95) and 2.78 ms after
 //! (2.39-2.96), on a 2-core machine at load 9 (other builds): no
-//! difference beyond the noise. With bonds, one step of a 10k hexagonal
-//! sheet (radius 1.2, 29601 bonds, one thread, median of 30 steps): cohesion
-//! only 2.2-3.7 ms against 1.1 ms unbonded (the single-material fast path
-//! no longer applies, plus the lookup and the breaking pass); the full
-//! oriented material 12.9-13.6 ms against 19.0-20.8 ms unbonded (unbonded
-//! pairs within the weight's reach skip the orientation terms).
+//! difference beyond the noise. With bonds (`world_step/*_bonded/10000`
+//! in the same bench: radius 1.2, breaking beyond 1.5, criterion medians
+//! [low high] on 2 threads): cohesion only 1.78 ms [1.57 1.93] against
+//! 1.95 ms [1.75 2.06] unbonded, the full oriented material 7.21 ms
+//! [7.04 7.54] against 8.82 ms [8.52 9.36] (pairs beyond the bond radius
+//! only repel and skip the orientation terms; the lookup and the breaking
+//! pass cost less than that saves on this sheet).
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
