@@ -203,7 +203,7 @@ fn sphere_rule(
         params.radius,
         &mut half,
     );
-    let full = full_rows(&half, n);
+    let full = half.full_rows();
     let finite: Vec<[Real; 3]> = positions
         .iter()
         .filter(|p| p.iter().all(|c| c.is_finite()))
@@ -362,17 +362,6 @@ fn delaunay_diagonal(v: [u32; 4], positions: &[Point3], normals: &[Vec3], ranks:
     // d inside the circle through a, b, c: the diagonal (c, d) is the
     // Delaunay one.
     inside < 0.0
-}
-
-/// Full neighbour rows (both directions, ascending) from a half list.
-fn full_rows(half: &PairList, n: usize) -> Vec<Vec<u32>> {
-    let mut rows = vec![Vec::new(); n];
-    for (i, j) in half.iter_pairs() {
-        rows[i].push(j as u32);
-        rows[j].push(i as u32);
-    }
-    rows.iter_mut().for_each(|r| r.sort_unstable());
-    rows
 }
 
 struct Ctx<'a> {

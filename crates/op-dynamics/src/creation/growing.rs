@@ -26,7 +26,6 @@ use std::f64::consts::{FRAC_PI_3, TAU};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::stretching::full_rows;
 use super::{child_of, world_tangent, Accepted};
 use crate::error::{self, ParamError};
 use crate::math::Real;
@@ -121,7 +120,7 @@ pub(crate) fn candidates(p: &Particles, r0: Real, params: &GrowingParams, accept
         radius.max(r0 + clearance),
         &mut half,
     );
-    let full = full_rows(&half, p.len());
+    let full = half.full_rows();
     let ids = p.ids();
     let mut found: Vec<(u32, Vec<ParticleDesc>)> = (0..p.len())
         .into_par_iter()

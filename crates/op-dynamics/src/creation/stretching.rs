@@ -125,7 +125,7 @@ pub(crate) fn candidates(
     let radius = d_max.max(reach + 0.5 * d_max);
     let mut half = PairList::new();
     search(NeighbourBackend::CellList, pos, radius, &mut half);
-    let full = full_rows(&half, p.len());
+    let full = half.full_rows();
     let ids = p.ids();
     let temperatures = p.temperatures();
     let hot = |k: usize| params.min_temperature.is_none_or(|t| temperatures[k] >= t);
@@ -230,15 +230,4 @@ fn averaged(
     d.angular_velocity = w / wsum;
     d.temperature = temperature / wsum;
     Some(d)
-}
-
-/// Full neighbour rows (both directions, ascending) from a half list.
-pub(crate) fn full_rows(half: &PairList, n: usize) -> Vec<Vec<u32>> {
-    let mut rows = vec![Vec::new(); n];
-    for (i, j) in half.iter_pairs() {
-        rows[i].push(j as u32);
-        rows[j].push(i as u32);
-    }
-    rows.iter_mut().for_each(|r| r.sort_unstable());
-    rows
 }

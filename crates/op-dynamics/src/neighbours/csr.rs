@@ -242,6 +242,18 @@ impl PairList {
         (0..self.len()).flat_map(move |i| self.row(i).iter().map(move |&j| (i, j as usize)))
     }
 
+    /// The full neighbour rows of this half list: for each particle, every
+    /// neighbour in either direction, ascending.
+    pub fn full_rows(&self) -> Vec<Vec<u32>> {
+        let mut rows = vec![Vec::new(); self.len()];
+        for (i, j) in self.iter_pairs() {
+            rows[i].push(j as u32);
+            rows[j].push(i as u32);
+        }
+        rows.iter_mut().for_each(|r| r.sort_unstable());
+        rows
+    }
+
     /// Makes this a list of `n` particles with no pairs.
     pub(crate) fn set_empty(&mut self, n: usize) {
         check_particle_count(n);
