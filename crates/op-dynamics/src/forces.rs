@@ -313,12 +313,7 @@ fn refresh_sources(sources: &mut Vec<u32>, sources_for: &mut u64, list: &Neighbo
     if *sources_for == list.rebuilds() && sources.len() == list.pairs().num_pairs() {
         return;
     }
-    let pairs = list.pairs();
-    sources.clear();
-    for i in 0..pairs.len() {
-        let r = pairs.row_range(i);
-        sources.extend(std::iter::repeat_n(i as u32, r.len()));
-    }
+    list.pairs().sources_into(sources);
     *sources_for = list.rebuilds();
 }
 

@@ -10,7 +10,7 @@
 //! gives no equations; this module is the simplest model with those
 //! properties, every choice documented:
 //!
-//! - **Sources**: a [`Role::Heater`] or [`Role::Knife`] tool raises the
+//! - **Sources**: a [`Heater`](crate::tools::Role::Heater) or [`Knife`](crate::tools::Role::Knife) tool raises the
 //!   temperature of the particles within `reach` of its surface at
 //!   `power * (1 - max(s, 0) / reach)` per unit time (`s` the signed
 //!   distance, so the full power inside and a linear fall-off outside).
@@ -52,7 +52,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{self, ParamError};
 use crate::math::{Point3, Real};
 use crate::neighbours::PairList;
-use crate::tools::{Role, Tool};
+use crate::tools::Tool;
 
 /// How heat moves in a world (seed 000 §6, §8).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -171,11 +171,6 @@ pub fn heating_rate(power: Real, reach: Real, sd: Real) -> Real {
     }
 }
 
-/// Whether a tool heats ([`Role::Heater`] or [`Role::Knife`]).
-pub fn heats(tool: &Tool) -> bool {
-    matches!(tool.params().role, Role::Heater { .. } | Role::Knife { .. })
-}
-
 /// Reusable buffers of the heat update (no allocation once sized).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct HeatScratch {
@@ -202,7 +197,8 @@ pub(crate) fn advance(
     temperatures: &mut [Real],
     scratch: &mut HeatScratch,
 ) {
-    for tool in tools.iter().filter(|t| heats(t)) {
+    // Tools that do not heat add nothing.
+    for tool in tools {
         tool.add_heat(t, dt, positions, objects, temperatures);
     }
     if let Some((list, cutoff)) = pairs.filter(|_| params.conduction > 0.0) {
@@ -243,10 +239,7 @@ fn conduct(
         weights,
         next,
     } = scratch;
-    sources.clear();
-    for i in 0..n {
-        sources.extend(std::iter::repeat_n(i as u32, list.row_range(i).len()));
-    }
+    list.sources_into(sources);
     let targets = list.neighbours();
     weights.resize(targets.len(), 0.0);
     weights.par_iter_mut().enumerate().for_each(|(k, w)| {

@@ -242,6 +242,16 @@ impl PairList {
         (0..self.len()).flat_map(move |i| self.row(i).iter().map(move |&j| (i, j as usize)))
     }
 
+    /// Fills `out` with the first particle of every pair, in pair-index
+    /// order (the table [`PairList::pair_source`] searches, built in one
+    /// pass for loops over all pairs).
+    pub fn sources_into(&self, out: &mut Vec<u32>) {
+        out.clear();
+        for i in 0..self.len() {
+            out.extend(std::iter::repeat_n(i as u32, self.row_range(i).len()));
+        }
+    }
+
     /// The full neighbour rows of this half list: for each particle, every
     /// neighbour in either direction, ascending.
     pub fn full_rows(&self) -> Vec<Vec<u32>> {
