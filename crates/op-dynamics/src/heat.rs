@@ -10,8 +10,9 @@
 //! gives no equations; this module is the simplest model with those
 //! properties, every choice documented:
 //!
-//! - **Sources**: a [`Heater`](crate::tools::Role::Heater) or [`Knife`](crate::tools::Role::Knife) tool raises the
-//!   temperature of the particles within `reach` of its surface at
+//! - **Sources**: a [`Heater`](crate::tools::Role::Heater) or
+//!   [`Knife`](crate::tools::Role::Knife) tool raises the temperature of
+//!   the particles within `reach` of its surface at
 //!   `power * (1 - max(s, 0) / reach)` per unit time (`s` the signed
 //!   distance, so the full power inside and a linear fall-off outside).
 //! - **Conduction**: `dT_i/dt = c Σ_j w_ij (T_j - T_i)` over the pairs
