@@ -219,6 +219,13 @@ impl Tool {
             .is_none_or(|list| list.contains(&object))
     }
 
+    /// The tool's bounding box at `frame` grown by `reach`, or `None` for
+    /// an unbounded shape (a plane): particles outside it are out of the
+    /// tool's reach and skipped before the exact distance query.
+    fn reach_box(&self, frame: &parry3d_f64::math::Pose, reach: Real) -> Option<Aabb> {
+        (!self.params.shape.is_unbounded()).then(|| self.shape.compute_aabb(frame).loosened(reach))
+    }
+
     /// Stable ids, in increasing order, of the particles (of the objects
     /// the tool acts on) strictly inside the tool's shape at time `t`; empty
     /// unless the tool is an eraser.
@@ -260,8 +267,7 @@ impl Tool {
         };
         let pose = self.pose(t);
         let frame = parry_pose(&pose.position, &pose.rotation);
-        let bound: Option<Aabb> = (!self.params.shape.is_unbounded())
-            .then(|| self.shape.compute_aabb(&frame).loosened(reach));
+        let bound = self.reach_box(&frame, reach);
         let shape = self.shape.as_ref();
         temperatures
             .par_iter_mut()
@@ -326,8 +332,7 @@ impl Tool {
             | Role::Shaper { .. } => {
                 let frame = parry_pose(&pose.position, &pose.rotation);
                 let reach = self.params.role.reach();
-                let bound: Option<Aabb> = (!self.params.shape.is_unbounded())
-                    .then(|| self.shape.compute_aabb(&frame).loosened(reach));
+                let bound = self.reach_box(&frame, reach);
                 let role = &self.params.role;
                 let shape = self.shape.as_ref();
                 forces
@@ -443,8 +448,7 @@ impl Tools {
                 let pose = tool.pose(t);
                 let frame = parry_pose(&pose.position, &pose.rotation);
                 let margin = tool.params.role.reach();
-                let bound: Option<Aabb> = (!tool.params.shape.is_unbounded())
-                    .then(|| tool.shape.compute_aabb(&frame).loosened(margin));
+                let bound = tool.reach_box(&frame, margin);
                 (tool, frame, margin, bound)
             })
             .collect();

@@ -209,11 +209,12 @@ impl Role {
     /// particles wherever they are; erasers and heaters exert no force (0).
     pub fn reach(&self) -> Real {
         match self {
-            Role::Obstacle { margin, .. } | Role::Shaper { margin, .. } => *margin,
+            Role::Obstacle { margin, .. }
+            | Role::Knife { margin, .. }
+            | Role::Shaper { margin, .. } => *margin,
             Role::Attractor { reach, .. } => *reach,
             Role::Mover { .. } => Real::INFINITY,
             Role::Eraser | Role::Heater { .. } => 0.0,
-            Role::Knife { margin, .. } => *margin,
         }
     }
 }
