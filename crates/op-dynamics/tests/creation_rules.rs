@@ -56,7 +56,7 @@ fn a_sheet_pulled_apart_gains_particles_between_far_pairs() {
     )
     .unwrap();
     let params = stretching();
-    let added = creation::apply(&mut w, &params).unwrap();
+    let added = creation::apply(&mut w, &params).unwrap().inserted;
     // Edges of a hexagonal nx x ny patch.
     let edges = (nx - 1) * ny + (2 * nx - 1) * (ny - 1);
     assert_eq!(added, edges);
@@ -238,10 +238,10 @@ fn apply_acts_at_its_interval_and_bad_parameters_are_errors() {
     let mut params = stretching();
     params.interval = 3;
     w.step().unwrap();
-    assert_eq!(creation::apply(&mut w, &params).unwrap(), 0);
+    assert_eq!(creation::apply(&mut w, &params).unwrap().inserted, 0);
     w.step().unwrap();
     w.step().unwrap();
-    assert_eq!(creation::apply(&mut w, &params).unwrap(), 1);
+    assert_eq!(creation::apply(&mut w, &params).unwrap().inserted, 1);
     assert_eq!(w.particles().len(), 3);
 
     let mut bad = stretching();
@@ -332,4 +332,112 @@ fn facing_sheets_do_not_stretch_into_each_other() {
     let mut wide = stretching();
     wide.stretching.as_mut().unwrap().max_normal_angle = std::f64::consts::PI;
     assert_eq!(wide.candidates(&pair(facing)).unwrap().len(), 1);
+}
+
+fn merging(distance: Real) -> CreationParams {
+    CreationParams {
+        merging: Some(creation::MergingParams { distance }),
+        ..CreationParams::new(1.0)
+    }
+}
+
+#[test]
+fn coincident_particles_of_one_object_merge_into_the_smaller_id() {
+    // 0 and 1 nearly coincide; 2 is as close to 0 but another object; 3 is
+    // at the merging distance from 1's partner 0 but 0 is taken; 4 is far.
+    let mut descs: Vec<ParticleDesc> = [
+        (0.0, 0.0, 0.0),
+        (0.1, 0.0, 0.0),
+        (0.0, 0.1, 0.0),
+        (0.0, 0.0, 0.2),
+        (3.0, 0.0, 0.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| ParticleDesc::at(Point3::new(x, y, z)))
+    .collect();
+    descs[0].velocity = Vec3::new(1.0, 0.0, 0.0);
+    descs[1].velocity = Vec3::new(0.0, 1.0, 0.0);
+    descs[1].mass = 3.0;
+    descs[0].temperature = 4.0;
+    descs[2].object = 1;
+    let mut p = Particles::new();
+    for d in descs {
+        p.push(d).unwrap();
+    }
+    let mut w = World::new(p, &[spacing_material()], WorldParams::default()).unwrap();
+    let params = merging(0.3);
+    let merges = params.merges(w.particles()).unwrap();
+    assert_eq!(merges.len(), 1, "{merges:?}");
+    let m = &merges[0];
+    assert_eq!((m.survivor, m.removed), (0, 1));
+    assert!((m.position - Point3::new(0.075, 0.0, 0.0)).norm() < 1e-12);
+    assert!((m.velocity - Vec3::new(0.25, 0.75, 0.0)).norm() < 1e-12);
+    assert!((m.temperature - 1.0).abs() < 1e-12);
+    let applied = creation::apply(&mut w, &params).unwrap();
+    assert_eq!(applied.merged, 1);
+    let p = w.particles();
+    assert!(p.slot_of(1).is_none());
+    assert_eq!(p.len(), 4);
+    assert!((p.positions()[p.slot_of(0).unwrap()] - m.position).norm() < 1e-12);
+    // Particle 3 is 0.2 from 0's new position (0.075 away along x):
+    // the next application merges it.
+    assert_eq!(creation::apply(&mut w, &params).unwrap().merged, 1);
+    assert!(w.particles().slot_of(3).is_none());
+    assert_eq!(creation::apply(&mut w, &params).unwrap().merged, 0);
+    assert_eq!(w.particles().len(), 3, "the other object's particle stays");
+}
+
+#[test]
+fn a_fixed_particle_survives_a_merge_in_place_and_two_fixed_never_merge() {
+    let mut descs: Vec<ParticleDesc> = [(0.0, 0.0, 0.0), (0.1, 0.0, 0.0), (0.1, 0.1, 0.0)]
+        .iter()
+        .map(|&(x, y, z)| ParticleDesc::at(Point3::new(x, y, z)))
+        .collect();
+    descs[1].flags = Flags::FIXED_POSITION;
+    descs[2].flags = Flags::FIXED_POSITION;
+    let mut p = Particles::new();
+    for d in descs {
+        p.push(d).unwrap();
+    }
+    let merges = merging(0.3).merges(&p).unwrap();
+    assert_eq!(merges.len(), 1, "{merges:?}");
+    assert_eq!((merges[0].survivor, merges[0].removed), (1, 0));
+    assert_eq!(merges[0].position, Point3::new(0.1, 0.0, 0.0));
+}
+
+#[test]
+fn merges_do_not_depend_on_threads_or_slot_order() {
+    let mut rng = Rng::new(7);
+    let points: Vec<Point3> = (0..400)
+        .map(|_| {
+            Point3::new(
+                rng.uniform(0.0, 6.0),
+                rng.uniform(0.0, 6.0),
+                rng.uniform(0.0, 1.0),
+            )
+        })
+        .collect();
+    let params = merging(0.3);
+    let base = in_pool(1, || params.merges(&store(&points)).unwrap());
+    assert!(
+        base.len() > 10,
+        "the random cloud has close pairs: {}",
+        base.len()
+    );
+    assert_eq!(base, in_pool(2, || params.merges(&store(&points)).unwrap()));
+    // The same particles (same ids) in reversed slots.
+    let mut shuffled = store(&points);
+    let order: Vec<u32> = (0..points.len() as u32).rev().collect();
+    shuffled.permute(&order);
+    assert_eq!(
+        base,
+        params.merges(&shuffled).unwrap(),
+        "slot order changed the merges"
+    );
+    let bad = merging(1.5);
+    assert!(bad
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .contains("merging.distance"));
 }

@@ -242,6 +242,13 @@ impl BuiltScene {
             }
             if self.world.steps() >= state.next_step {
                 state.next_step = self.world.steps() + state.params.interval;
+                let merges = state
+                    .params
+                    .merges(self.world.particles())
+                    .map_err(|e| format!("creation: {e}"))?;
+                self.world
+                    .merge_particles(&merges)
+                    .map_err(|e| format!("creation: {e}"))?;
                 let mut descs = state
                     .params
                     .candidates(self.world.particles())

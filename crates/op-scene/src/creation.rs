@@ -6,6 +6,7 @@
 //! creation: Some((
 //!     stretching: Some((d_min: 2.0, d_max: 2.5)),
 //!     growing: None,
+//!     merging: Some((distance: 0.3)),
 //!     interval: 10,
 //! )),
 //! ```
@@ -30,7 +31,7 @@
 //! Creation cannot be combined with skins (the skins' primitives are made
 //! for the particles at build time): such a scene is rejected.
 
-use op_dynamics::creation::{CreationParams, GrowingParams, StretchingParams};
+use op_dynamics::creation::{CreationParams, GrowingParams, MergingParams, StretchingParams};
 use op_dynamics::Real;
 use serde::{Deserialize, Serialize};
 
@@ -54,6 +55,10 @@ pub struct CreationSettings {
     /// `min_gap`, `max_gap` in radians, `clearance`). Default: none.
     #[serde(default)]
     pub growing: Option<GrowingParams>,
+    /// The merging rule (`distance`, a fraction of `r0`): particles of one
+    /// object closer than that become one. Default: none.
+    #[serde(default)]
+    pub merging: Option<MergingParams>,
     /// Steps between two applications, >= 1. Default: 10.
     #[serde(default = "ten")]
     pub interval: u64,
@@ -84,6 +89,7 @@ impl CreationSettings {
             r0: self.spacing.unwrap_or(default_r0),
             stretching: self.stretching.clone(),
             growing: self.growing.clone(),
+            merging: self.merging.clone(),
             interval: self.interval,
             max_particles: self.max_particles,
         }
@@ -94,11 +100,11 @@ impl CreationSettings {
         if let Some(s) = self.spacing {
             positive(file, "creation.spacing", s)?;
         }
-        if self.stretching.is_none() && self.growing.is_none() {
+        if self.stretching.is_none() && self.growing.is_none() && self.merging.is_none() {
             return Err(SceneError::invalid(
                 file,
                 "creation",
-                "enables no rule: give `stretching` or `growing` (or remove `creation`)",
+                "enables no rule: give `stretching`, `growing` or `merging` (or remove `creation`)",
             ));
         }
         self.params(1.0)

@@ -9,11 +9,14 @@
 //!   neighbours leave an angular gap in its tangent plane gets new particles
 //!   at distance `r0` inside the gap (seed 000 §7, second rule; point-set
 //!   fitting, figure 10).
+//! - [`merging`]: two particles of one object closer than a fraction of
+//!   `r0` become one (our addition; the cohesion force has no hard core,
+//!   so layers pressed together otherwise stay doubled).
 //!
 //! Each rule is a function that looks at the particles and returns the
 //! particles to insert; [`CreationParams::candidates`] runs the enabled
-//! rules and [`apply`] inserts the result into a world every `interval`
-//! steps (deletion is [`World::remove_particles`]). Lengths are fractions
+//! rules and [`apply`] merges, then inserts the result into a world every
+//! `interval` steps (deletion is [`World::remove_particles`]). Lengths are fractions
 //! of the rest spacing [`CreationParams::r0`].
 //!
 //! **Determinism**: candidates are generated per particle in parallel
@@ -24,6 +27,7 @@
 //! does not depend on the thread count or on the particles' slot order.
 
 pub mod growing;
+pub mod merging;
 pub mod stretching;
 
 use std::collections::HashMap;
@@ -37,6 +41,7 @@ use crate::particles::{ParticleDesc, Particles};
 use crate::world::{World, WorldError};
 
 pub use growing::GrowingParams;
+pub use merging::{Merge, MergingParams};
 pub use stretching::StretchingParams;
 
 /// The creation rules of a simulation.
@@ -53,6 +58,9 @@ pub struct CreationParams {
     /// The growing rule, or none. Default: none.
     #[serde(default)]
     pub growing: Option<GrowingParams>,
+    /// The merging rule, or none. Default: none.
+    #[serde(default)]
+    pub merging: Option<MergingParams>,
     /// Steps between two applications (>= 1): [`apply`] acts when the
     /// world's step count is a multiple of it. Default: 10.
     #[serde(default = "default_interval")]
@@ -78,6 +86,7 @@ impl CreationParams {
             r0,
             stretching: None,
             growing: None,
+            merging: None,
             interval: default_interval(),
             max_particles: default_max_particles(),
         }
@@ -104,7 +113,19 @@ impl CreationParams {
         if let Some(g) = &self.growing {
             g.validate().map_err(|e| e.within("growing"))?;
         }
+        if let Some(m) = &self.merging {
+            m.validate().map_err(|e| e.within("merging"))?;
+        }
         Ok(())
+    }
+
+    /// The merges the merging rule would make now (none when it is off).
+    pub fn merges(&self, particles: &Particles) -> Result<Vec<Merge>, ParamError> {
+        self.validate()?;
+        Ok(self
+            .merging
+            .as_ref()
+            .map_or_else(Vec::new, |m| merging::merges(particles, self.r0, m)))
     }
 
     /// The particles the enabled rules would create now: stretching first,
@@ -133,20 +154,34 @@ impl CreationParams {
     }
 }
 
+/// What one application of the rules did.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub struct Applied {
+    /// Particles removed by the merging rule.
+    pub merged: usize,
+    /// Particles inserted by stretching and growing.
+    pub inserted: usize,
+}
+
 /// Applies the rules to `world` when its step count is a multiple of the
-/// interval: inserts the candidates and returns how many were inserted
-/// (0 between applications).
+/// interval: merges first, then inserts the candidates of the merged
+/// particle set (nothing between applications).
 ///
 /// # Errors
-/// When the parameters are invalid (nothing is inserted).
-pub fn apply(world: &mut World, params: &CreationParams) -> Result<usize, WorldError> {
+/// When the parameters are invalid (nothing changes).
+pub fn apply(world: &mut World, params: &CreationParams) -> Result<Applied, WorldError> {
     params.validate()?;
     if world.steps() % params.interval != 0 {
-        return Ok(0);
+        return Ok(Applied::default());
     }
+    let merges = params.merges(world.particles())?;
+    let merged = world.merge_particles(&merges)?;
     let descs = params.candidates(world.particles())?;
     world.insert_particles(&descs)?;
-    Ok(descs.len())
+    Ok(Applied {
+        merged,
+        inserted: descs.len(),
+    })
 }
 
 /// Accepted candidates, with a hash grid for the "too close to an accepted

@@ -15,6 +15,9 @@
 //! gives the same bits as a world built directly from the edited particle
 //! set in the same slot order (tested in `tests/world_editing.rs`).
 //!
+//! Merging ([`World::merge_particles`], [`crate::creation::merging`]) moves
+//! each survivor and removes the other particle of its pair: one removal.
+//!
 //! Bonds ([`crate::bonds`]): inserted particles bond to every live particle
 //! (old or inserted) within the bond radius at insertion, as at build; bonds
 //! between old particles are left as they are (broken ones stay broken).
@@ -22,6 +25,7 @@
 
 use super::{Config, World, WorldError};
 use crate::bonds::Bonds;
+use crate::creation::Merge;
 use crate::error::ParamError;
 use crate::math::Vec3;
 use crate::particles::ParticleDesc;
@@ -87,6 +91,46 @@ impl World {
             .into());
         }
         Ok(self.remove_live(ids))
+    }
+
+    /// Applies merges of the merging rule ([`crate::creation::merging`]):
+    /// each survivor takes its merge's position, velocity and temperature,
+    /// then the merged-away particles are removed. Returns how many were
+    /// removed.
+    ///
+    /// # Errors
+    /// [`WorldError::Param`] (field `merges`) when an id does not name a
+    /// live particle or a particle appears in two merges; nothing changes
+    /// then.
+    pub fn merge_particles(&mut self, merges: &[Merge]) -> Result<usize, WorldError> {
+        let mut seen = std::collections::HashSet::new();
+        for m in merges {
+            for id in [m.survivor, m.removed] {
+                let problem = if self.particles.slot_of(id).is_none() {
+                    "does not exist (never created or removed)"
+                } else if !seen.insert(id) {
+                    "appears in two merges"
+                } else {
+                    continue;
+                };
+                return Err(ParamError::Invalid {
+                    field: "merges".into(),
+                    message: format!("particle id {id} {problem}"),
+                }
+                .into());
+            }
+        }
+        if merges.is_empty() {
+            return Ok(0);
+        }
+        for m in merges {
+            let s = self.particles.slot_of(m.survivor).expect("checked live");
+            self.particles.set_position(s, m.position);
+            self.particles.set_velocity(s, m.velocity);
+            self.particles.set_temperature(s, m.temperature);
+        }
+        let removed: Vec<u32> = merges.iter().map(|m| m.removed).collect();
+        Ok(self.remove_live(&removed))
     }
 
     /// [`World::remove_particles`] for ids known to name live particles
