@@ -441,3 +441,108 @@ fn merges_do_not_depend_on_threads_or_slot_order() {
         .to_string()
         .contains("merging.distance"));
 }
+
+/// Two 4 x 4 square patches `gap` apart along z, the lower one facing up,
+/// the upper one facing `upper_normal`.
+fn two_layers(gap: Real, upper_normal: Vec3) -> Particles {
+    let mut p = Particles::new();
+    for (z, n) in [(0.0, Vec3::z()), (gap, upper_normal)] {
+        for i in 0..4 {
+            for j in 0..4 {
+                let d = ParticleDesc::at(Point3::new(i as Real, j as Real, z)).with_normal(n);
+                p.push(d).unwrap();
+            }
+        }
+    }
+    p
+}
+
+fn fusion(min_temperature: Option<Real>) -> CreationParams {
+    CreationParams {
+        fusion: Some(creation::FusionParams {
+            min_temperature,
+            ..Default::default()
+        }),
+        ..CreationParams::new(1.0)
+    }
+}
+
+#[test]
+fn facing_layers_pressed_together_fuse_and_parallel_ones_do_not() {
+    let params = fusion(None);
+    // Face to face, 0.5 apart: every particle has its partner across.
+    let gone = params.fusions(&two_layers(0.5, -Vec3::z())).unwrap();
+    assert_eq!(gone.len(), 32, "{gone:?}");
+    // Each pair is a particle of the lower layer (ids 0..16) and the one
+    // above it (id + 16).
+    for pair in gone.chunks(2) {
+        assert_eq!(pair[1], pair[0] + 16, "{pair:?}");
+    }
+    // Back to back fuses too (the normals are opposite either way).
+    let mut back = two_layers(0.5, -Vec3::z());
+    for s in 0..back.len() {
+        let q = back.orientations()[s];
+        let turn = op_dynamics::Quat::from_axis_angle(&Vec3::x_axis(), std::f64::consts::PI);
+        back.set_orientation(s, turn * q);
+    }
+    assert_eq!(params.fusions(&back).unwrap().len(), 32);
+    // Parallel layers (a sheet lying on a copy of itself) do not fuse:
+    // that is the merging rule's case.
+    assert!(params
+        .fusions(&two_layers(0.5, Vec3::z()))
+        .unwrap()
+        .is_empty());
+    // Facing layers farther apart than the distance do not fuse.
+    assert!(params
+        .fusions(&two_layers(0.7, -Vec3::z()))
+        .unwrap()
+        .is_empty());
+}
+
+#[test]
+fn fusion_waits_for_heat_and_spares_fixed_particles() {
+    let mut p = two_layers(0.5, -Vec3::z());
+    assert!(fusion(Some(1.0)).fusions(&p).unwrap().is_empty(), "cold");
+    for s in 0..p.len() {
+        p.set_temperature(s, if p.positions()[s].x < 1.5 { 2.0 } else { 0.0 });
+    }
+    // Columns x = 0 and 1 are hot: 8 pairs.
+    assert_eq!(fusion(Some(1.0)).fusions(&p).unwrap().len(), 16);
+    let mut descs: Vec<ParticleDesc> = Vec::new();
+    for (z, n) in [(0.0, Vec3::z()), (0.5, -Vec3::z())] {
+        let mut d = ParticleDesc::at(Point3::new(0.0, 0.0, z)).with_normal(n);
+        d.flags = Flags::FIXED_POSITION;
+        descs.push(d);
+    }
+    descs[1].flags = Flags::empty();
+    let mut q = Particles::new();
+    for d in descs {
+        q.push(d).unwrap();
+    }
+    assert!(fusion(None).fusions(&q).unwrap().is_empty(), "one is fixed");
+}
+
+#[test]
+fn fusion_is_applied_with_the_other_rules_and_checks_its_parameters() {
+    let mut w = World::new(
+        two_layers(0.5, -Vec3::z()),
+        &[spacing_material()],
+        WorldParams::default(),
+    )
+    .unwrap();
+    let applied = creation::apply(&mut w, &fusion(None)).unwrap();
+    assert_eq!(
+        (applied.fused, applied.merged, applied.inserted),
+        (32, 0, 0)
+    );
+    assert!(w.particles().is_empty());
+    let bad = CreationParams {
+        fusion: Some(creation::FusionParams {
+            min_angle: 1.0,
+            ..Default::default()
+        }),
+        ..CreationParams::new(1.0)
+    };
+    let e = bad.validate().unwrap_err().to_string();
+    assert!(e.contains("fusion.min_angle"), "{e}");
+}

@@ -77,7 +77,8 @@ impl World {
     }
 
     /// Removes the particles with the given ids; survivors keep their ids.
-    /// Returns how many were removed. Repeated ids count once.
+    /// Returns how many were removed. Repeated ids count once; an empty
+    /// list changes nothing (cached forces and the neighbour list stay).
     ///
     /// # Errors
     /// [`WorldError::Param`] (field `ids`) when an id does not name a live
@@ -89,6 +90,9 @@ impl World {
                 message: format!("particle id {bad} does not exist (never created or removed)"),
             }
             .into());
+        }
+        if ids.is_empty() {
+            return Ok(0);
         }
         Ok(self.remove_live(ids))
     }
