@@ -59,6 +59,7 @@ fn variants(name: &str, m: Material) -> Vec<(String, Material, WorldParams)> {
                 heat: Some(HeatResponse {
                     melting: 10.0,
                     residual: 0.2,
+                    cold_drag: 0.0,
                 }),
                 ..m
             },

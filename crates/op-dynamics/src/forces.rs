@@ -256,22 +256,36 @@ impl ForceContext<'_> {
         self.add_external(t, s, forces, torques);
     }
 
-    /// Gravity, force windows, damping, pending accumulator; fixed
-    /// particles get zero force / torque (seed 000 eq. 12-13).
+    /// Gravity, force windows, damping (with the cold drag of heated
+    /// materials), pending accumulator; fixed particles get zero force /
+    /// torque (seed 000 eq. 12-13).
     fn add_external(&self, t: Real, s: StateRef<'_>, forces: &mut [Vec3], torques: &mut [Vec3]) {
         let g = self.external.gravity();
         let b0 = self.external.linear_damping;
         let b1 = self.external.angular_damping;
         let a = &self.attributes;
         let acc = self.accumulator;
-        let uniform = g != Vec3::zeros() || b0 != 0.0 || b1 != 0.0 || acc.is_active();
+        // Cold drag (crate::heat::HeatResponse::cold_drag): only when some
+        // material in use has one.
+        let cold_drag = self.heated
+            && self
+                .materials
+                .iter()
+                .any(|m| m.heat_response().is_some_and(|h| h.cold_drag > 0.0));
+        let drag = |i: usize| {
+            self.materials[a.materials[i] as usize]
+                .heat_response()
+                .map_or(0.0, |h| h.drag(a.temperatures[i]))
+        };
+        let uniform = g != Vec3::zeros() || b0 != 0.0 || b1 != 0.0 || acc.is_active() || cold_drag;
         if uniform {
             forces
                 .par_iter_mut()
                 .zip(torques.par_iter_mut())
                 .enumerate()
                 .for_each(|(i, (f, tq))| {
-                    *f += a.masses[i] * g - b0 * s.velocities[i];
+                    let b = if cold_drag { b0 + drag(i) } else { b0 };
+                    *f += a.masses[i] * g - b * s.velocities[i];
                     *tq -= b1 * s.angular_velocities[i];
                     if acc.is_active() {
                         let (fe, te) = acc.get(a.ids[i]);

@@ -101,6 +101,17 @@ pub struct HeatResponse {
     /// Strength left at and above `melting`, in `[0, 1]`. Default: 0.1.
     #[serde(default = "default_residual")]
     pub residual: Real,
+    /// Drag coefficient `c` of cold particles of this material, >= 0: a
+    /// particle at temperature `T` feels the extra damping force
+    /// `-c w(T) v`, with `w = (s(T) - residual) / (1 - residual)` from 1
+    /// when cold to 0 at the melting temperature. Seed 000 §8 (fig. 13)
+    /// only lets "the hot parts of the surface deform and stretch": with a
+    /// large `c` the cold parts creep so slowly that they keep the shape
+    /// they had when they cooled (a tube pulled out of a sphere would
+    /// otherwise round itself into lobes under co-circularity). Default:
+    /// 0 (none).
+    #[serde(default)]
+    pub cold_drag: Real,
 }
 
 fn default_residual() -> Real {
@@ -108,15 +119,23 @@ fn default_residual() -> Real {
 }
 
 impl HeatResponse {
-    /// Checks `melting > 0` and `0 <= residual <= 1`.
+    /// Checks `melting > 0`, `0 <= residual <= 1` and `cold_drag >= 0`.
     pub fn validate(&self) -> Result<(), ParamError> {
         error::positive("melting", self.melting)?;
+        error::non_negative("cold_drag", self.cold_drag)?;
         error::check(
             "residual",
             self.residual,
             (0.0..=1.0).contains(&self.residual),
             "must be in [0, 1]",
         )
+    }
+
+    /// The cold drag coefficient `c w(T)` at temperature `t` (see
+    /// [`HeatResponse::cold_drag`]).
+    #[inline]
+    pub fn drag(&self, t: Real) -> Real {
+        self.cold_drag * (1.0 - (t / self.melting).clamp(0.0, 1.0))
     }
 
     /// The bond strength `s(T)` at temperature `t`.
@@ -303,6 +322,7 @@ mod tests {
         let r = HeatResponse {
             melting: 10.0,
             residual: 0.2,
+            cold_drag: 0.0,
         };
         assert_eq!(r.strength(-5.0), 1.0);
         assert_eq!(r.strength(0.0), 1.0);

@@ -21,6 +21,7 @@ use op_dynamics::{
 const RESPONSE: HeatResponse = HeatResponse {
     melting: 10.0,
     residual: 0.2,
+    cold_drag: 0.0,
 };
 
 fn heated(m: Material) -> Material {
@@ -425,4 +426,64 @@ fn changing_temperatures_refresh_forces_only_when_materials_weaken() {
     };
     assert_eq!(evaluations_per_step(spacing_material()), 1.0);
     assert_eq!(evaluations_per_step(heated(spacing_material())), 2.0);
+}
+
+/// The cold drag of a heated material: `-c (1 - T / melting) v` on each
+/// particle, clamped to none at and above the melting temperature, added
+/// to the world's uniform damping; a material without it leaves the forces
+/// exactly as they were.
+#[test]
+fn cold_drag_slows_cold_particles_only() {
+    let drag = 40.0;
+    let material = |cold_drag: Real| Material {
+        heat: Some(HeatResponse {
+            cold_drag,
+            ..RESPONSE
+        }),
+        ..spacing_material()
+    };
+    // Three particles far apart (no pair forces): cold, half molten, molten.
+    let build = |cold_drag: Real| {
+        let mut p = Particles::new();
+        for (k, t) in [0.0, 5.0, 12.0].into_iter().enumerate() {
+            let mut d = ParticleDesc::at(Point3::new(10.0 * k as Real, 0.0, 0.0));
+            d.velocity = op_dynamics::Vec3::new(1.0, -2.0, 0.5);
+            d.temperature = t;
+            p.push(d).unwrap();
+        }
+        let params = WorldParams {
+            heat: heat(0.0, 0.0),
+            external: ExternalParams {
+                linear_damping: 1.5,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        World::new(p, &[material(cold_drag)], params).unwrap()
+    };
+    let mut with = build(drag);
+    let mut without = build(0.0);
+    let (f_with, _, _) = with.evaluate_forces();
+    let f_with = f_with.to_vec();
+    let (f_without, _, _) = without.evaluate_forces();
+    let v = op_dynamics::Vec3::new(1.0, -2.0, 0.5);
+    for (k, fraction) in [1.0, 0.5, 0.0].into_iter().enumerate() {
+        let slot = with.particles().slot_of(k as u32).unwrap();
+        let expected = -(1.5 + drag * fraction) * v;
+        assert!(
+            (f_with[slot] - expected).norm() < 1e-12,
+            "particle {k}: {:?} against {expected:?}",
+            f_with[slot]
+        );
+        assert_eq!(f_without[slot], -1.5 * v, "no cold drag: damping only");
+    }
+    let bad = HeatResponse {
+        cold_drag: -1.0,
+        ..RESPONSE
+    };
+    assert!(bad
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .contains("cold_drag"));
 }
