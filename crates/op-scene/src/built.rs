@@ -249,13 +249,6 @@ impl BuiltScene {
                 self.world
                     .merge_particles(&merges)
                     .map_err(|e| format!("creation: {e}"))?;
-                let fused = state
-                    .params
-                    .fusions(self.world.particles())
-                    .map_err(|e| format!("creation: {e}"))?;
-                self.world
-                    .remove_particles(&fused)
-                    .map_err(|e| format!("creation: {e}"))?;
                 let mut descs = state
                     .params
                     .candidates(self.world.particles())

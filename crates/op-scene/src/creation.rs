@@ -31,9 +31,7 @@
 //! Creation cannot be combined with skins (the skins' primitives are made
 //! for the particles at build time): such a scene is rejected.
 
-use op_dynamics::creation::{
-    CreationParams, FusionParams, GrowingParams, MergingParams, StretchingParams,
-};
+use op_dynamics::creation::{CreationParams, GrowingParams, MergingParams, StretchingParams};
 use op_dynamics::Real;
 use serde::{Deserialize, Serialize};
 
@@ -61,11 +59,6 @@ pub struct CreationSettings {
     /// object closer than that become one. Default: none.
     #[serde(default)]
     pub merging: Option<MergingParams>,
-    /// The fusion rule (`distance`, a fraction of `r0`; `min_angle`,
-    /// `max_offset` in radians; `min_temperature`): two layers of one
-    /// object pressed together open where they touch. Default: none.
-    #[serde(default)]
-    pub fusion: Option<FusionParams>,
     /// Steps between two applications, >= 1. Default: 10.
     #[serde(default = "ten")]
     pub interval: u64,
@@ -97,7 +90,6 @@ impl CreationSettings {
             stretching: self.stretching.clone(),
             growing: self.growing.clone(),
             merging: self.merging.clone(),
-            fusion: self.fusion.clone(),
             interval: self.interval,
             max_particles: self.max_particles,
         }
@@ -108,15 +100,11 @@ impl CreationSettings {
         if let Some(s) = self.spacing {
             positive(file, "creation.spacing", s)?;
         }
-        if self.stretching.is_none()
-            && self.growing.is_none()
-            && self.merging.is_none()
-            && self.fusion.is_none()
-        {
+        if self.stretching.is_none() && self.growing.is_none() && self.merging.is_none() {
             return Err(SceneError::invalid(
                 file,
                 "creation",
-                "enables no rule: give `stretching`, `growing`, `merging` or `fusion` (or remove `creation`)",
+                "enables no rule: give `stretching`, `growing` or `merging` (or remove `creation`)",
             ));
         }
         self.params(1.0)

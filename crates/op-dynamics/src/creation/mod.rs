@@ -9,17 +9,14 @@
 //!   neighbours leave an angular gap in its tangent plane gets new particles
 //!   at distance `r0` inside the gap (seed 000 §7, second rule; point-set
 //!   fitting, figure 10).
-//! - [`fusion`]: two layers of one object pressed against each other
-//!   (opposite normals, one on the other) open where they touch (our
-//!   addition, for the handle of figure 13).
 //! - [`merging`]: two particles of one object closer than a fraction of
 //!   `r0` become one (our addition; the cohesion force has no hard core,
 //!   so layers pressed together otherwise stay doubled).
 //!
 //! Each rule is a function that looks at the particles and returns the
 //! particles to insert; [`CreationParams::candidates`] runs the enabled
-//! rules and [`apply`] merges, fuses, then inserts the result into a world
-//! every `interval` steps (deletion is [`World::remove_particles`]). Lengths are fractions
+//! rules and [`apply`] merges, then inserts the result into a world every
+//! `interval` steps (deletion is [`World::remove_particles`]). Lengths are fractions
 //! of the rest spacing [`CreationParams::r0`].
 //!
 //! **Determinism**: candidates are generated per particle in parallel
@@ -29,7 +26,6 @@
 //! `d_min / 2` for stretching, `clearance * r0` for growing). The result
 //! does not depend on the thread count or on the particles' slot order.
 
-pub mod fusion;
 pub mod growing;
 pub mod merging;
 pub mod stretching;
@@ -44,7 +40,6 @@ use crate::math::{tangent_axis, Point3, Quat, Real, Vec3};
 use crate::particles::{ParticleDesc, Particles};
 use crate::world::{World, WorldError};
 
-pub use fusion::FusionParams;
 pub use growing::GrowingParams;
 pub use merging::{Merge, MergingParams};
 pub use stretching::StretchingParams;
@@ -66,9 +61,6 @@ pub struct CreationParams {
     /// The merging rule, or none. Default: none.
     #[serde(default)]
     pub merging: Option<MergingParams>,
-    /// The fusion rule, or none. Default: none.
-    #[serde(default)]
-    pub fusion: Option<FusionParams>,
     /// Steps between two applications (>= 1): [`apply`] acts when the
     /// world's step count is a multiple of it. Default: 10.
     #[serde(default = "default_interval")]
@@ -95,7 +87,6 @@ impl CreationParams {
             stretching: None,
             growing: None,
             merging: None,
-            fusion: None,
             interval: default_interval(),
             max_particles: default_max_particles(),
         }
@@ -125,9 +116,6 @@ impl CreationParams {
         if let Some(m) = &self.merging {
             m.validate().map_err(|e| e.within("merging"))?;
         }
-        if let Some(f) = &self.fusion {
-            f.validate().map_err(|e| e.within("fusion"))?;
-        }
         Ok(())
     }
 
@@ -138,16 +126,6 @@ impl CreationParams {
             .merging
             .as_ref()
             .map_or_else(Vec::new, |m| merging::merges(particles, self.r0, m)))
-    }
-
-    /// The ids of the particles the fusion rule would delete now (none
-    /// when it is off).
-    pub fn fusions(&self, particles: &Particles) -> Result<Vec<u32>, ParamError> {
-        self.validate()?;
-        Ok(self
-            .fusion
-            .as_ref()
-            .map_or_else(Vec::new, |f| fusion::fusions(particles, self.r0, f)))
     }
 
     /// The particles the enabled rules would create now: stretching first,
@@ -181,15 +159,13 @@ impl CreationParams {
 pub struct Applied {
     /// Particles removed by the merging rule.
     pub merged: usize,
-    /// Particles deleted by the fusion rule.
-    pub fused: usize,
     /// Particles inserted by stretching and growing.
     pub inserted: usize,
 }
 
 /// Applies the rules to `world` when its step count is a multiple of the
-/// interval: merges first, then fuses, then inserts the candidates of the
-/// particle set left (nothing between applications).
+/// interval: merges first, then inserts the candidates of the merged
+/// particle set (nothing between applications).
 ///
 /// # Errors
 /// When the parameters are invalid (nothing changes).
@@ -200,12 +176,10 @@ pub fn apply(world: &mut World, params: &CreationParams) -> Result<Applied, Worl
     }
     let merges = params.merges(world.particles())?;
     let merged = world.merge_particles(&merges)?;
-    let fused = world.remove_particles(&params.fusions(world.particles())?)?;
     let descs = params.candidates(world.particles())?;
     world.insert_particles(&descs)?;
     Ok(Applied {
         merged,
-        fused,
         inserted: descs.len(),
     })
 }
