@@ -133,23 +133,28 @@ fn pieces(t: &Triangulation) -> usize {
 /// (at most 2% of its edges).
 ///
 /// Measured (`cargo test --profile ci --test figures_torus -- --nocapture`):
-/// 363 particles at the start (chi 2, closed); at t = 22, 425 particles,
-/// chi -1 with one boundary loop of 3 edges (a torus with one triangle
-/// missing: genus 1); at t = 20 the triangulation is the closed torus
-/// (chi 0, no boundary). The hole has radius about 2.1 and the tube about
-/// 2.1: a round torus of 4.3 around the axis.
+/// 363 particles at the start (chi 2, closed); at t = 22, 428 particles
+/// (131 created, 66 deleted by the trap rule or merged away), and the
+/// triangulation is the closed torus: chi 0, no boundary, manifold, one
+/// piece (856 triangles). Over the frames: genus 1 from t = 12 (chi -5
+/// with 5 small holes), closed from t = 16 on. The hole has radius 2.6
+/// (nearest particle to the axis for |z| < 1); the tube is round, radius
+/// about 2, 4.6 around the axis.
 ///
 /// **Sensitivity** (the scene's parameters were set from the reasoning in
 /// its comment, not by trying values until this passed; these neighbours
-/// were run afterwards, with `opsim run` on edited copies): dt 1.9e-3
-/// also ends genus 1 (chi -1, one loop of 5 edges); dt 2.1e-3, and linear
-/// damping 2.2 instead of 2, do not: the inner wall seals across the hole
-/// while the tools withdraw, the stretching rule fills the seal, and the
-/// run gains energy (kinetic energy from 0.6 to 4000 within 1 s at
-/// t = 19 for the damping 2.2 run) and ends shredded (chi -5 and 44).
-/// Before the merging rule and the overfull-edge pass of the
-/// triangulation, this scene ended with 69 doubled particle pairs (less
-/// than 0.2 r0 apart), 30 edges in three triangles and chi -3.
+/// were run afterwards with `opsim run` on edited copies, final frame):
+/// dt 2.1e-3 also ends a closed torus; dt 1.9e-3 ends genus 1 with two
+/// small holes (chi -2); linear damping 2.2 ends genus 1 by the formula
+/// but with one non-manifold vertex; linear damping 1.8 does not: the
+/// run gains energy and ends shredded (961 particles, 5 pieces). A variant
+/// whose balls withdraw after opening the hole (t = 10 to 14) ended genus
+/// 1 with one or two small holes at dt 2e-3 and 1.9e-3 but shredded at dt
+/// 2.1e-3 and at damping 2.2 (the inner wall sealed across the hole while
+/// the balls withdrew, and the stretching rule filled the seal). Before
+/// the merging rule and the overfull-edge pass of the triangulation, the
+/// withdrawing variant ended with 69 doubled particle pairs (less than 0.2
+/// r0 apart), 30 edges in three triangles and chi -3.
 #[test]
 fn fig_14_final_surface_has_genus_one() {
     let o = run_scene("genus");

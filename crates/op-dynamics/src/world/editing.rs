@@ -33,7 +33,9 @@ use crate::particles::ParticleDesc;
 impl World {
     /// Inserts particles (validated first: nothing is inserted when one of
     /// them is invalid or names a material that does not exist) after the
-    /// existing slots. Returns their new stable ids, in the order given.
+    /// existing slots. Returns their new stable ids, in the order given. An
+    /// empty list changes nothing (cached forces and the neighbour list
+    /// stay).
     ///
     /// # Errors
     /// [`WorldError::Param`] naming `particles[k].<field>` for an invalid
@@ -53,6 +55,9 @@ impl World {
                 }
                 .into());
             }
+        }
+        if descs.is_empty() {
+            return Ok(Vec::new());
         }
         let mut ids = Vec::with_capacity(descs.len());
         for d in descs {
