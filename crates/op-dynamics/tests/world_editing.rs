@@ -202,3 +202,39 @@ fn external_actions_skip_removed_particles() {
     assert_eq!(p.velocities()[p.slot_of(2).unwrap()], Vec3::zeros());
     assert!(p.velocities()[p.slot_of(3).unwrap()].y > 0.0);
 }
+
+/// Empty edits change nothing: no force evaluation is added (velocity
+/// Verlet keeps its cached forces) and the particles keep their bits
+/// against a world that was never edited.
+#[test]
+fn empty_edits_keep_the_cached_forces() {
+    let mut rng = Rng::new(5);
+    let sheet = noisy_sheet(&mut rng, 6, 5, 0.1);
+    let build = || {
+        World::new(
+            sheet.clone(),
+            &[spacing_material()],
+            params(Scheme::VelocityVerlet),
+        )
+        .unwrap()
+    };
+    let (mut edited, mut plain) = (build(), build());
+    for w in [&mut edited, &mut plain] {
+        w.step().unwrap();
+    }
+    let before = edited.force_evaluations();
+    assert!(edited.insert_particles(&[]).unwrap().is_empty());
+    assert_eq!(edited.remove_particles(&[]).unwrap(), 0);
+    for w in [&mut edited, &mut plain] {
+        w.step().unwrap();
+    }
+    assert_eq!(
+        edited.force_evaluations(),
+        before + 1,
+        "one evaluation per step"
+    );
+    assert_eq!(edited.force_evaluations(), plain.force_evaluations());
+    for id in 0..sheet.len() as u32 {
+        assert_eq!(bits(&edited, id), bits(&plain, id), "particle {id}");
+    }
+}
