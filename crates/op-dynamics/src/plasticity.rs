@@ -73,6 +73,7 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::bonds::Bonds;
 use crate::error::{non_negative, positive, ParamError};
 use crate::flags::Flags;
 use crate::forces::{coupling, Unbonded};
@@ -122,11 +123,14 @@ impl Plasticity {
 /// The current curvature `κ̂` of the particle in `slot` (module docs), or
 /// `None` when it has no complete oriented neighbour with a nonzero weight
 /// (or is unoriented). `list` must be up to date for the current positions.
+/// `bonds` are the world's ([`crate::World::bonds`]): a pair that bonds
+/// govern counts only when bonded, as in the force evaluation.
 pub fn current_curvature(
     particles: &Particles,
     materials: &[PreparedMaterial],
     list: &NeighbourList,
     slot: usize,
+    bonds: Option<&Bonds>,
 ) -> Option<Real> {
     let a = particles.attributes();
     if a.flags[slot].contains(Flags::UNORIENTED) {
@@ -145,7 +149,11 @@ pub fn current_curvature(
         .map(|&k| pairs.pair_source(k as usize));
     let row = pairs.row(slot).iter().map(|&j| j as usize);
     for j in incoming.chain(row) {
-        if coupling(&a, &Unbonded, slot, j) != (Coupling::Complete { oriented: true }) {
+        let c = match bonds {
+            Some(b) => coupling(&a, b, slot, j),
+            None => coupling(&a, &Unbonded, slot, j),
+        };
+        if c != (Coupling::Complete { oriented: true }) {
             continue;
         }
         let r = x[j] - p_i;
@@ -175,6 +183,7 @@ pub(crate) fn apply(
     particles: &mut Particles,
     materials: &[PreparedMaterial],
     list: &mut NeighbourList,
+    bonds: Option<&Bonds>,
     dt: Real,
     scratch: &mut PlasticScratch,
 ) -> bool {
@@ -189,7 +198,7 @@ pub(crate) fn apply(
             let kappa = p.curvatures()[i];
             let plastic = materials[p.materials()[i] as usize].plasticity();
             *out = match plastic {
-                Some(rule) => current_curvature(p, materials, list, i)
+                Some(rule) => current_curvature(p, materials, list, i, bonds)
                     .map_or(kappa, |hat| rule.relax(kappa, hat, dt)),
                 None => kappa,
             };

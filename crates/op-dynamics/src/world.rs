@@ -645,6 +645,7 @@ impl World {
                     &mut self.particles,
                     &self.pipeline.materials,
                     list,
+                    self.pipeline.bonds.as_ref(),
                     info.dt_taken,
                     &mut self.plastic_scratch,
                 );

@@ -84,7 +84,7 @@ fn estimates(p: &Particles, m: &Material) -> Vec<Option<Real>> {
     let mut list = NeighbourList::new(NeighbourBackend::AllPairs, 1.5, 0.0);
     list.rebuild(p.positions());
     (0..p.len())
-        .map(|i| current_curvature(p, &prepared, &list, i))
+        .map(|i| current_curvature(p, &prepared, &list, i, None))
         .collect()
 }
 
@@ -352,4 +352,50 @@ fn plasticity_needs_the_form_term_and_valid_values() {
     let bad = material(Some(Plasticity { rate: -1.0, ..rule }));
     let e = bad.prepare().unwrap_err().to_string();
     assert!(e.contains("plasticity.rate") && e.contains("must"), "{e}");
+}
+
+/// In a bonded material the estimate counts only bonded pairs, as the
+/// force evaluation does: a stray particle of the same object near the
+/// shell but beyond the bond radius (it only repels) does not bend the
+/// estimate of its neighbours.
+#[test]
+fn bonded_materials_estimate_over_bonded_pairs_only() {
+    let bonded = Material {
+        bonds: Some(op_dynamics::bonds::BondParams {
+            radius: 1.2,
+            break_length: None,
+        }),
+        ..material(Some(Plasticity {
+            yield_curvature: 0.0,
+            rate: 1.0,
+        }))
+    };
+    let mut p = shell(1.0, 1.0 / RADIUS, Flags::empty());
+    // 1.3 above the north pole particle, beyond the bond radius of every
+    // shell particle but within the interaction cut-off of the pole's.
+    let pole = p.positions()[0];
+    let stray = pole + pole.coords.normalize() * 1.3;
+    p.push(ParticleDesc::at(stray).with_normal(pole.coords.normalize()))
+        .unwrap();
+    let w = World::new(p, &[bonded], params()).unwrap();
+    let bonds = w.bonds().expect("a bonded material");
+    assert!(
+        !bonds.contains(0, 200),
+        "the stray is not bonded to the pole"
+    );
+    let mut list = NeighbourList::new(NeighbourBackend::AllPairs, 1.5, 0.0);
+    let q = w.particles();
+    list.rebuild(q.positions());
+    let pole_slot = q.slot_of(0).unwrap();
+    let with = current_curvature(q, w.materials(), &list, pole_slot, Some(bonds)).unwrap();
+    let without = current_curvature(q, w.materials(), &list, pole_slot, None).unwrap();
+    assert!(
+        (with - 1.0 / RADIUS).abs() < 1e-9,
+        "bonded pairs only: {with} (the shell's 1/R is {})",
+        1.0 / RADIUS
+    );
+    assert!(
+        (without - with).abs() > 0.05,
+        "the stray would bend the estimate: {without} against {with}"
+    );
 }
