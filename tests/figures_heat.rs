@@ -84,9 +84,8 @@ fn fig_07_hot_knife_cuts_the_sheet_in_two() {
 /// Not reproduced (see the closing note of issue 7): the paper's contrast,
 /// "without this modification, the extruded part of the surface has a
 /// tendency to pinch off": the same pull without heat (stretching
-/// everywhere, no weakening) also extrudes a stem in one piece here; and
-/// the handle of fig. 13 (Euler characteristic 2 -> 0: the stem looped
-/// over and joined to the body) is not built.
+/// everywhere, no weakening) also extrudes a stem in one piece here. The
+/// handle that follows is `fig_13_stem_looped_onto_the_body_makes_a_handle`.
 #[test]
 fn fig_13_hot_tool_extrudes_a_stem() {
     use oriented_particles::op_dynamics::triangulation::{triangulate, TriangulationParams};
@@ -129,4 +128,146 @@ fn fig_13_hot_tool_extrudes_a_stem() {
     assert_eq!(t.euler_characteristic(), 2, "still a sphere");
     assert!(t.is_manifold());
     assert!(top > 9.0, "tip at {top}");
+}
+
+/// How many triangles of `t` (over the particles of `built`) the segment
+/// from `a` to `b` crosses (Möller–Trumbore).
+fn crossings(
+    built: &oriented_particles::op_scene::BuiltScene,
+    t: &oriented_particles::op_dynamics::triangulation::Triangulation,
+    a: oriented_particles::op_dynamics::Point3,
+    b: oriented_particles::op_dynamics::Point3,
+) -> usize {
+    let p = built.world.particles();
+    let at = |id: u32| p.positions()[p.slot_of(id).expect("live")];
+    let d = b - a;
+    t.triangles
+        .iter()
+        .filter(|tri| {
+            let (p0, p1, p2) = (at(tri[0]), at(tri[1]), at(tri[2]));
+            let (e1, e2) = (p1 - p0, p2 - p0);
+            let h = d.cross(&e2);
+            let det = e1.dot(&h);
+            if det.abs() < 1e-12 {
+                return false;
+            }
+            let s = a - p0;
+            let u = s.dot(&h) / det;
+            let q = s.cross(&e1);
+            let v = d.dot(&q) / det;
+            let along = e2.dot(&q) / det;
+            (0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && (0.0..=1.0).contains(&along)
+        })
+        .count()
+}
+
+/// The triangulation the frames of `built` hold (radius 1.7 rest spacings).
+fn frames_surface(
+    built: &oriented_particles::op_scene::BuiltScene,
+) -> oriented_particles::op_dynamics::triangulation::Triangulation {
+    use oriented_particles::op_dynamics::triangulation::{triangulate, TriangulationParams};
+    let radius = built.outputs.triangulation_radius * built.objects[0].rest_spacing;
+    triangulate(
+        built.world.particles(),
+        &TriangulationParams::with_radius(radius),
+    )
+    .unwrap()
+}
+
+/// Fig. 13, the handle: the hot stem is looped over onto the sphere's
+/// shoulder and its end opens into the body (`scenes/fig_13_handle.ron`).
+/// Checked:
+/// - at the start a closed sphere (chi 2);
+/// - when the stem's cap rests on the shoulder (t = 17), the segment from
+///   the sphere's centre to the centre of the tool inside the stem's end
+///   crosses two walls (the sphere's and the cap);
+/// - at the end it crosses none: the stem's inside and the body's inside
+///   are one, through the neck where the two rims joined;
+/// - the final triangulation is one manifold piece whose genus
+///   `(2 - chi - b) / 2` (`b` boundary loops) is 1, and whose boundary is
+///   only small holes (at most 8 edges each).
+///
+/// Measured (`cargo test --profile ci --test figures_heat -- --nocapture`):
+/// 363 -> 809 particles; at t = 28 chi -2 with 2 boundary loops of 4 and 5
+/// edges (genus 1). **Not reached**: the issue's Euler characteristic 0,
+/// which needs those holes closed (one on the stretched top of the stem,
+/// one where the tool inside the stem's end pushes on its wall). Over the
+/// frames after the join the holes number 2 to 5, and from t = 20 to 22
+/// and 25 to 27 one vertex of the neck is not manifold (two fans).
+/// Neighbours of the scene's parameters (edited copies, final frame;
+/// the segment is open in all): dt 1.9e-3 genus 1 with 3 holes, dt 2.1e-3
+/// genus 1 with 7, linear damping 1.1 genus 1 with 4, damping 0.9 has two
+/// non-manifold vertices. Before this scene: the cap squeezed against the
+/// wall with no tools inside opened only one wall at a time, stretching
+/// mended each opening, and the rims stayed 1.6 to 4.9 apart (see the
+/// closing note of issue 7).
+#[test]
+fn fig_13_stem_looped_onto_the_body_makes_a_handle() {
+    use oriented_particles::op_dynamics::Point3;
+    let scene = load("fig_13_handle");
+    let start = frames_surface(&build(&scene));
+    assert_eq!(start.euler_characteristic(), 2);
+    assert_eq!(start.boundary_loops(), 0);
+
+    let inside_tip = |built: &oriented_particles::op_scene::BuiltScene| {
+        let tool = built
+            .world
+            .tools()
+            .iter()
+            .find(|t| t.params().name == "tip")
+            .expect("a tool named tip");
+        Point3::from(tool.pose(built.world.time()).position)
+    };
+    let mut touch = scene.clone();
+    touch.world.duration = 17.0;
+    let (built, _) = run(&touch, "touch");
+    let walls = crossings(
+        &built,
+        &frames_surface(&built),
+        Point3::origin(),
+        inside_tip(&built),
+    );
+    println!("t = 17: the segment to the stem's end crosses {walls} walls");
+    assert_eq!(walls, 2, "cap and sphere wall");
+
+    let (built, _) = run(&scene, "handle");
+    let end = frames_surface(&built);
+    let open = crossings(&built, &end, Point3::origin(), inside_tip(&built));
+    let (chi, loops) = (end.euler_characteristic(), end.boundary_loops() as i64);
+    let edges = end.edges();
+    // Boundary loop sizes: boundary edges grouped by shared vertices.
+    let boundary: Vec<(u32, u32)> = edges
+        .iter()
+        .filter(|(_, &c)| c == 1)
+        .map(|(&e, _)| e)
+        .collect();
+    let mut group: std::collections::BTreeMap<u32, usize> = Default::default();
+    for (k, &(a, b)) in boundary.iter().enumerate() {
+        let (ga, gb) = (group.get(&a).copied(), group.get(&b).copied());
+        let g = ga.or(gb).unwrap_or(k);
+        for (old, v) in [(ga, a), (gb, b)] {
+            if let Some(o) = old.filter(|&o| o != g) {
+                group.values_mut().filter(|x| **x == o).for_each(|x| *x = g);
+            }
+            group.insert(v, g);
+        }
+    }
+    let mut sizes: std::collections::BTreeMap<usize, usize> = Default::default();
+    for g in group.values() {
+        *sizes.entry(*g).or_default() += 1;
+    }
+    let largest = sizes.values().copied().max().unwrap_or(0);
+    println!(
+        "end: {} particles, chi {chi}, {loops} boundary loops (largest {largest} vertices), \
+         manifold {}, segment crossings {open}",
+        built.world.particles().len(),
+        end.is_manifold()
+    );
+    assert_eq!(open, 0, "the stem's end did not open into the body");
+    assert!(end.is_manifold());
+    assert_eq!(2 - chi - loops, 2, "genus 1: chi {chi}, {loops} loops");
+    assert!(largest <= 8, "a large hole: {largest} vertices");
+    let p = built.world.particles();
+    let pieces = components(p.positions(), 1.5);
+    assert_eq!(pieces.len(), 1, "{pieces:?}");
 }
