@@ -266,14 +266,7 @@ fn resolve_crossed_diagonals(
     loop {
         let keys: BTreeSet<[u32; 3]> = tris.iter().map(|&t| sorted(t)).collect();
         let has = |a: u32, b: u32, c: u32| keys.contains(&sorted([a, b, c]));
-        // Opposite vertices of each edge held by more than two triangles.
-        let mut opposite: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
-        for t in keys.iter() {
-            for k in 0..3 {
-                let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-                opposite.entry((a.min(b), a.max(b))).or_default().push(c);
-            }
-        }
+        let opposite = opposite_corners(keys.iter());
         let mut drop: BTreeSet<[u32; 3]> = BTreeSet::new();
         for (&(p, q), others) in opposite.iter().filter(|(_, o)| o.len() > 2) {
             for (x, &r) in others.iter().enumerate() {
@@ -304,6 +297,21 @@ fn resolve_crossed_diagonals(
     }
 }
 
+/// The corner opposite each edge in each triangle holding it, by edge
+/// (smaller id first).
+fn opposite_corners<'a>(
+    tris: impl Iterator<Item = &'a [u32; 3]>,
+) -> BTreeMap<(u32, u32), Vec<u32>> {
+    let mut opposite: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
+    for t in tris {
+        for k in 0..3 {
+            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            opposite.entry((a.min(b), a.max(b))).or_default().push(c);
+        }
+    }
+    opposite
+}
+
 /// Keeps, of the triangles on an edge held by more than two, at most one on
 /// each side of the edge in the tangent plane: the one whose opposite
 /// corner sees the edge under the largest angle (the Delaunay one; an
@@ -317,13 +325,7 @@ fn resolve_overfull_edges(
 ) {
     use std::collections::BTreeSet;
     loop {
-        let mut opposite: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
-        for t in tris.iter() {
-            for k in 0..3 {
-                let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-                opposite.entry((a.min(b), a.max(b))).or_default().push(c);
-            }
-        }
+        let opposite = opposite_corners(tris.iter());
         let mut drop: BTreeSet<[u32; 3]> = BTreeSet::new();
         for (&(p, q), others) in opposite.iter().filter(|(_, o)| o.len() > 2) {
             let (xp, xq) = (positions[p as usize], positions[q as usize]);

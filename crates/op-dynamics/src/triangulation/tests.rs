@@ -163,6 +163,21 @@ fn sphere_shell_is_closed_and_faces_outward() {
     }
 }
 
+/// A coarse sphere (radius 2.5, spacing 1) with each particle moved by up
+/// to 0.12 along each axis (seeded).
+fn jittered_sphere(seed: u64) -> (Vec<Point3>, Vec<Vec3>) {
+    let (mut p, normals) = sphere(2.5, 1.0);
+    let mut rng = Rng(seed);
+    for x in &mut p {
+        *x += Vec3::new(
+            rng.uniform(-0.12, 0.12),
+            rng.uniform(-0.12, 0.12),
+            rng.uniform(-0.12, 0.12),
+        );
+    }
+    (p, normals)
+}
+
 /// Coarse, jittered spheres (about 80 particles, so each triangle's sphere
 /// test sees the curvature): the sphere test alone keeps both diagonals of
 /// some quadrilaterals (all four faces of a flat tetrahedron, edges in
@@ -175,15 +190,7 @@ fn crossed_diagonals_are_resolved_on_coarse_curved_surfaces() {
     let over_full = |t: &Triangulation| t.edges().values().filter(|&&c| c > 2).count();
     let (mut before, mut after) = (0, 0);
     for seed in 1..=8u64 {
-        let (mut p, normals) = sphere(2.5, 1.0);
-        let mut rng = Rng(seed);
-        for x in &mut p {
-            *x += Vec3::new(
-                rng.uniform(-0.12, 0.12),
-                rng.uniform(-0.12, 0.12),
-                rng.uniform(-0.12, 0.12),
-            );
-        }
+        let (p, normals) = jittered_sphere(seed);
         let params = TriangulationParams::with_radius(1.7);
         let ranks: Vec<u32> = (0..p.len() as u32).collect();
         let raw = Triangulation {
@@ -214,15 +221,7 @@ fn no_edge_is_left_in_three_triangles_on_coarse_curved_surfaces() {
     let mut closed = 0;
     let mut loops = Vec::new();
     for seed in 1..=8u64 {
-        let (mut p, normals) = sphere(2.5, 1.0);
-        let mut rng = Rng(seed);
-        for x in &mut p {
-            *x += Vec3::new(
-                rng.uniform(-0.12, 0.12),
-                rng.uniform(-0.12, 0.12),
-                rng.uniform(-0.12, 0.12),
-            );
-        }
+        let (p, normals) = jittered_sphere(seed);
         let t = tri(&p, &normals, 1.7);
         let over_full = t.edges().values().filter(|&&c| c > 2).count();
         assert_eq!(over_full, 0, "seed {seed}");
