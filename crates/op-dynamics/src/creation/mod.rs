@@ -13,11 +13,11 @@
 //!   `r0` become one (our addition; the cohesion force has no hard core,
 //!   so layers pressed together otherwise stay doubled).
 //!
-//! Each rule is a function that looks at the particles and returns the
-//! particles to insert; [`CreationParams::candidates`] runs the enabled
-//! rules and [`apply`] merges, then inserts the result into a world every
-//! `interval` steps (deletion is [`World::remove_particles`]). Lengths are fractions
-//! of the rest spacing [`CreationParams::r0`].
+//! Each rule is a function that looks at the particles and returns what
+//! to change; [`CreationParams::merges`] and [`CreationParams::candidates`]
+//! run the enabled rules and [`apply`] merges, then inserts, into a world
+//! every `interval` steps (deletion is [`World::remove_particles`]).
+//! Lengths are fractions of the rest spacing [`CreationParams::r0`].
 //!
 //! **Determinism**: candidates are generated per particle in parallel
 //! (ordered collect), then accepted serially in a fixed order (stretching
