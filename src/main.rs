@@ -59,11 +59,20 @@ enum Command {
         /// Worker threads (results are identical for any count).
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
         threads: Option<u64>,
+        /// Lift the work limits (steps, frames, particle-steps, created
+        /// particles) that keep every valid scene's run bounded.
+        #[arg(long)]
+        no_work_limits: bool,
     },
-    /// Validate a scene and print what it enables.
+    /// Validate a scene, print what it enables and estimate its largest
+    /// stable step (on a bounded sample of the scene: memory proportional to
+    /// the scene file, not to its particles).
     Check {
         /// Scene file (.ron or .json).
         scene: PathBuf,
+        /// Lift the work limits, as `run --no-work-limits`.
+        #[arg(long)]
+        no_work_limits: bool,
     },
     /// Fit a particle surface to a point set (seed 000 §7) and write its
     /// triangle mesh; prints one JSON line of figures.
@@ -156,6 +165,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             out,
             frames,
             threads,
+            no_work_limits,
         }) => {
             if let Some(k) = threads {
                 rayon::ThreadPoolBuilder::new()
@@ -163,14 +173,13 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                     .build_global()
                     .context("cannot start the thread pool")?;
             }
-            let built = load(&scene)?;
+            let built = load(&scene, no_work_limits)?;
             run_built(built, out, frames.map(|f| f as usize))
         }
-        Some(Command::Check { scene }) => {
-            let built = load(&scene)?;
-            print_check(&scene, &built);
-            Ok(())
-        }
+        Some(Command::Check {
+            scene,
+            no_work_limits,
+        }) => check(&scene, no_work_limits),
         Some(Command::Fit {
             points,
             out,
@@ -243,8 +252,16 @@ fn run_fit(points: &Path, out: &Path, spacing: Option<f64>, open: bool) -> Resul
     Ok(())
 }
 
-fn load(path: &Path) -> Result<BuiltScene> {
-    let scene = op_scene::load_scene(path)?;
+fn limits(no_work_limits: bool) -> op_scene::WorkLimits {
+    if no_work_limits {
+        op_scene::WorkLimits::unlimited()
+    } else {
+        op_scene::WorkLimits::default()
+    }
+}
+
+fn load(path: &Path, no_work_limits: bool) -> Result<BuiltScene> {
+    let scene = op_scene::load_scene_with(path, limits(no_work_limits))?;
     let base = path.parent().map(Path::to_path_buf);
     Ok(scene.build(base.as_deref(), Some(path.to_path_buf()))?)
 }
@@ -276,6 +293,14 @@ fn run_built(
         bar.set_position(k as u64);
     });
     bar.finish_and_clear();
+    let warnings = match &result {
+        Ok(s) => &s.warnings,
+        Err(RunError::Diverged { summary, .. }) => &summary.warnings,
+        Err(_) => &Vec::new(),
+    };
+    for w in warnings {
+        eprintln!("opsim: warning: {w}");
+    }
     match result {
         Ok(summary) => {
             outln!(
@@ -301,15 +326,21 @@ fn run_built(
     }
 }
 
-fn print_check(path: &Path, built: &BuiltScene) {
+/// `opsim check`: validates the scene, builds a bounded sample of it
+/// (`op_scene::stability`) and prints what it enables, its objects and the
+/// stable-step estimate, with a warning when `dt` exceeds it.
+fn check(path: &Path, no_work_limits: bool) -> Result<(), Failure> {
+    let scene = op_scene::load_scene_with(path, limits(no_work_limits))?;
+    let counts = scene.validate(path.parent())?;
+    let sample = op_scene::stability::sample(&scene, path.parent())?;
+    let built = &sample.built;
     let w = &built.world;
-    outln!("scene {:?} ({}): valid", built.name, path.display());
-    for o in &built.objects {
+    outln!("scene {:?} ({}): valid", scene.name, path.display());
+    for ((o, n), b) in scene.objects.iter().zip(&counts).zip(&built.objects) {
         outln!(
-            "  object {:?}: {} particles, rest spacing {:.4}",
+            "  object {:?}: {n} particles, rest spacing {:.4}",
             o.name,
-            o.ids.len(),
-            o.rest_spacing
+            b.rest_spacing
         );
     }
     outln!("  enabled: {}", built.stages().join(", "));
@@ -327,9 +358,23 @@ fn print_check(path: &Path, built: &BuiltScene) {
         "  integrator: {:?}, dt {}, duration {}, {} frames per unit time",
         p.scheme,
         p.dt,
-        built.duration,
-        built.frame_rate
+        scene.world.duration,
+        scene.world.frame_rate
     );
+    let e = &sample.estimate;
+    match e.dt_max {
+        Some(max) => outln!(
+            "  stable step: at most {max:.3e} for {:?} (stiffest mode ω² = {:.3e} 1/time², object {:?})",
+            p.scheme,
+            e.lambda,
+            e.object
+        ),
+        None => outln!(
+            "  stable step: not bounded for {:?} (ω² = {:.3e} 1/time²)",
+            p.scheme,
+            e.lambda
+        ),
+    }
     outln!(
         "  outputs: particles as {:?}{}",
         built.outputs.particles,
@@ -339,6 +384,10 @@ fn print_check(path: &Path, built: &BuiltScene) {
             ""
         }
     );
+    if let Some(warning) = e.warning(scene.world.dt, &scene.world.integrator) {
+        eprintln!("opsim: warning: {warning}");
+    }
+    Ok(())
 }
 
 #[cfg(test)]

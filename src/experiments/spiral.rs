@@ -448,6 +448,7 @@ impl SpiralRecipe {
             },
             creation: None,
             origin: String::new(),
+            limits: Default::default(),
         }
     }
 }

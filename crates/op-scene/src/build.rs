@@ -48,6 +48,22 @@ impl Scene {
         base_dir: Option<&Path>,
         source: Option<PathBuf>,
     ) -> Result<BuiltScene, SceneError> {
+        let mut built = self.build_world(base_dir, source)?;
+        let estimate = crate::stability::estimate(self, base_dir)?;
+        built.step_warnings = estimate
+            .warning(self.world.dt, &self.world.integrator)
+            .into_iter()
+            .collect();
+        Ok(built)
+    }
+
+    /// [`Scene::build`] without the stable-step estimate (which builds a
+    /// sample of the scene through this).
+    pub(crate) fn build_world(
+        &self,
+        base_dir: Option<&Path>,
+        source: Option<PathBuf>,
+    ) -> Result<BuiltScene, SceneError> {
         let file = self.origin();
         let counts = self.validate(base_dir)?;
 
@@ -277,6 +293,8 @@ impl Scene {
             outputs: self.outputs.clone(),
             energy_growth: w.divergence.energy_growth,
             energy_gain: w.divergence.energy_gain,
+            extent_growth: w.divergence.extent_growth,
+            step_warnings: Vec::new(),
             creation,
         })
     }

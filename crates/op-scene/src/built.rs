@@ -63,6 +63,13 @@ pub struct BuiltScene {
     /// scale (|kinetic| + |potential| at t = 0, at least 1e-12 per
     /// particle). Default 1e6; infinity disables the check.
     pub energy_growth: Real,
+    /// Explosion threshold: a particle this many scene sizes beyond the
+    /// scene's bounds ends the run as diverged (see [`crate::health`]).
+    pub extent_growth: Real,
+    /// Warnings known before the run starts (a step above the estimated
+    /// stable step, see [`crate::stability`]); the runner puts them first
+    /// in the summary's `warnings`.
+    pub step_warnings: Vec<String>,
     /// Energy-gain threshold of passive scenes (no force window, zero
     /// gravity, no contact): the run is declared diverged when a frame's
     /// total energy exceeds the lowest earlier one by more than
@@ -147,6 +154,23 @@ impl BuiltScene {
             stages.push("triangulation".into());
         }
         stages
+    }
+
+    /// Whether nothing feeds energy into the scene or changes its energy
+    /// function: no force window, zero gravity, no tool, no contact, no
+    /// heat, no creation, no bonds and no plastic material. Only such a
+    /// scene is checked for energy gain.
+    pub fn is_passive(&self) -> bool {
+        let w = &self.world;
+        let e = &w.params().external;
+        e.forces.is_empty()
+            && e.gravity().iter().all(|g| *g == 0.0)
+            && self.tools.is_empty()
+            && !self.has_contact()
+            && w.params().heat.is_none()
+            && self.creation.is_none()
+            && w.bonds().is_none()
+            && w.materials().iter().all(|m| m.plasticity().is_none())
     }
 
     /// Whether skins are in contact: implicit contact (two or more skinned

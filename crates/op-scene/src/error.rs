@@ -20,7 +20,9 @@ use op_dynamics::ParamError;
 #[non_exhaustive]
 pub enum SceneError {
     /// A file could not be read. Fix: check the path and permissions.
-    #[error("{}: {source}", path.display())]
+    /// (The operating system's message is the error's source, printed once
+    /// by error-chain printers such as `opsim`'s.)
+    #[error("cannot read {}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -87,6 +89,40 @@ pub enum SceneError {
     },
 }
 
+/// A number for messages: as Rust prints it when that is short (at most 12
+/// characters), otherwise in scientific notation with at most 6 significant
+/// digits (`1e308`, not 309 digits).
+pub fn short(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() <= 12 || !x.is_finite() {
+        return plain;
+    }
+    let sci = format!("{x:.5e}");
+    // Trim trailing zeros of the mantissa: 1.50000e3 -> 1.5e3.
+    match sci.split_once('e') {
+        Some((m, e)) if m.contains('.') => {
+            let m = m.trim_end_matches('0').trim_end_matches('.');
+            format!("{m}e{e}")
+        }
+        _ => sci,
+    }
+}
+
+/// Longest text quoted whole in a message; longer text is elided.
+pub const MAX_QUOTED_CHARS: usize = 80;
+
+/// `text` for a message: whole when at most [`MAX_QUOTED_CHARS`]
+/// characters, else its start and end around `...` and its length.
+pub fn elide(text: &str) -> String {
+    let n = text.chars().count();
+    if n <= MAX_QUOTED_CHARS {
+        return text.to_string();
+    }
+    let head: String = text.chars().take(MAX_QUOTED_CHARS / 2).collect();
+    let tail: String = text.chars().skip(n - MAX_QUOTED_CHARS / 4).collect();
+    format!("{head}...{tail} ({n} characters)")
+}
+
 /// `" "` before a message that starts with `= value`, `": "` otherwise.
 fn separator(message: &str) -> &'static str {
     if message.starts_with("= ") {
@@ -106,14 +142,20 @@ impl SceneError {
         }
     }
 
-    /// An [`SceneError::Invalid`] for a rejected value.
+    /// An [`SceneError::Invalid`] for a rejected value; numbers are shown
+    /// in short form ([`short`]) and long values elided ([`elide`]).
     pub(crate) fn value(
         file: &str,
         path: impl Into<String>,
         value: impl std::fmt::Display,
         allowed: &str,
     ) -> Self {
-        Self::invalid(file, path, format!("= {value}: {allowed}"))
+        let text = value.to_string();
+        let shown = match text.parse::<f64>() {
+            Ok(x) if text.len() > 12 => short(x),
+            _ => elide(&text),
+        };
+        Self::invalid(file, path, format!("= {shown}: {allowed}"))
     }
 
     /// An op-dynamics parameter error under the scene path `prefix`
@@ -172,6 +214,11 @@ mod tests {
             message: "unknown field".into(),
         };
         assert_eq!(e.to_string(), "scenes/bad.ron:3:5: unknown field");
+        let e = SceneError::value("s.ron", "world.dt", 1e308, "too large");
+        assert_eq!(e.to_string(), "s.ron: world.dt = 1e308: too large");
+        let e = SceneError::value("s.ron", "name", "x".repeat(4_000_000), "bad");
+        assert!(e.to_string().len() < 200, "{}", e.to_string().len());
+        assert!(e.to_string().contains("(4000000 characters)"));
         let p = ParamError::OutOfRange {
             field: "spacing.cohesion.alpha".into(),
             value: f64::NAN,

@@ -22,7 +22,11 @@ use crate::outputs::{Outputs, ParticleOutput};
 use crate::skins::{BuiltSkin, SkinTool};
 
 /// Writes `bytes_fn`'s output to `path` atomically: a temporary file in the
-/// same directory, flushed and synced, then renamed over `path`.
+/// same directory, flushed and synced, then renamed over `path`. The
+/// temporary file is created exclusively (`create_new`: it fails rather than
+/// follow a symbolic link or reuse a file someone else made) under a name
+/// no other process can predict (process id, a counter and the clock's
+/// nanoseconds), and removed when anything fails.
 pub fn write_atomically(
     path: &Path,
     bytes_fn: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
@@ -32,9 +36,8 @@ pub fn write_atomically(
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
-    let tmp: PathBuf = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    let (tmp, file) = create_temporary(dir, &name)?;
     let result = (|| {
-        let file = fs::File::create(&tmp)?;
         let mut w = BufWriter::new(file);
         bytes_fn(&mut w)?;
         w.flush()?;
@@ -45,6 +48,39 @@ pub fn write_atomically(
         let _ = fs::remove_file(&tmp);
     }
     result
+}
+
+/// Whether `file_name` is one of [`write_atomically`]'s temporary files.
+pub fn is_temporary(file_name: &str) -> bool {
+    file_name.starts_with('.') && file_name.ends_with(".opsim-tmp")
+}
+
+/// A new temporary file `.{name}.{pid}-{counter}-{nanos}.opsim-tmp` in `dir`,
+/// created exclusively; retried under a new name if one exists.
+fn create_temporary(dir: &Path, name: &str) -> std::io::Result<(PathBuf, fs::File)> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let mut last = None;
+    for _ in 0..16 {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.subsec_nanos());
+        let k = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let tmp = dir.join(format!(
+            ".{name}.{}-{k}-{nanos}.opsim-tmp",
+            std::process::id()
+        ));
+        match fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+        {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| std::io::Error::other("cannot create a temporary file")))
 }
 
 fn vertex(v: Vec3) -> Vertex {

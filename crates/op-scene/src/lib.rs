@@ -10,11 +10,13 @@ pub mod built;
 pub mod creation;
 pub mod export;
 pub mod fit;
+pub mod health;
 pub mod outputs;
 pub mod pointsets;
 pub mod render;
 pub mod run;
 pub mod skins;
+pub mod stability;
 
 pub use built::{BuiltObject, BuiltScene};
 pub use creation::CreationSettings;
@@ -30,7 +32,8 @@ pub mod schema;
 
 pub use error::SceneError;
 pub use generators::{CurvatureLaw, Generator};
-pub use load::{build_scene_file, load_scene, parse_scene, Format};
+pub use load::{build_scene_file, load_scene, load_scene_with, parse_scene, Format};
 pub use schema::{
-    DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, ToolSpec, WorldSettings,
+    DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, ToolSpec, WorkLimits,
+    WorldSettings,
 };

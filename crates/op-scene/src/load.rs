@@ -47,14 +47,60 @@ impl Format {
 /// [`SceneError::Parse`] (with line and column), then the validation
 /// errors of [`Scene::validate`].
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    load_scene_with(path, crate::schema::WorkLimits::default())
+}
+
+/// [`load_scene`] under the given work limits (kept in
+/// [`Scene::limits`], so building validates under them too).
+pub fn load_scene_with(
+    path: &Path,
+    limits: crate::schema::WorkLimits,
+) -> Result<Scene, SceneError> {
     let format = Format::from_path(path)?;
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let scene = parse_unvalidated(&text, format, &path.display().to_string())?;
+    let text = read_text_file(path, MAX_SCENE_FILE_BYTES)?;
+    let mut scene = parse_unvalidated(&text, format, &path.display().to_string())?;
+    scene.limits = limits;
     scene.validate(path.parent())?;
     Ok(scene)
+}
+
+/// Largest scene file read, in bytes (256 MiB: a `List` of a million
+/// particles takes about 100 MiB).
+pub const MAX_SCENE_FILE_BYTES: u64 = 256 << 20;
+
+/// Reads the regular file at `path` (symbolic links followed) as UTF-8 text
+/// of at most `limit` bytes: a device, a FIFO or a directory is refused
+/// before anything is read, and so is a larger file.
+pub fn read_text_file(path: &Path, limit: u64) -> Result<String, SceneError> {
+    use std::io::Read;
+    let io = |source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(io(std::io::Error::other(
+            "not a regular file (a scene must be a .ron or .json file)",
+        )));
+    }
+    if meta.len() > limit {
+        return Err(io(std::io::Error::other(format!(
+            "{} bytes, more than the limit of {limit} bytes",
+            meta.len()
+        ))));
+    }
+    let mut text = String::new();
+    std::fs::File::open(path)
+        .map_err(io)?
+        .take(limit + 1)
+        .read_to_string(&mut text)
+        .map_err(io)?;
+    if text.len() as u64 > limit {
+        return Err(io(std::io::Error::other(format!(
+            "more than the limit of {limit} bytes"
+        ))));
+    }
+    Ok(text)
 }
 
 /// Loads the scene file at `path` and builds it ([`load_scene`] then
@@ -75,7 +121,9 @@ pub fn parse_scene(text: &str, format: Format, origin: &str) -> Result<Scene, Sc
 }
 
 /// Parses scene text without validating it.
+/// A UTF-8 byte order mark at the start is skipped.
 pub fn parse_unvalidated(text: &str, format: Format, origin: &str) -> Result<Scene, SceneError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut scene: Scene = match format {
         Format::Ron => ron::Options::default()
             .with_default_extension(Extensions::IMPLICIT_SOME)
@@ -121,6 +169,25 @@ mod tests {
         let json = serde_json::to_string(&s).unwrap();
         let back = parse_scene(&json, Format::Json, "<t.json>").unwrap();
         assert_eq!(back.objects, s.objects);
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        let with_bom = format!("\u{feff}{BASE}");
+        assert!(parse_scene(&with_bom, Format::Ron, "<t>").is_ok());
+    }
+
+    #[test]
+    fn non_regular_and_oversized_scene_files_are_refused() {
+        let e = read_text_file(Path::new("/dev/zero"), 1 << 20).unwrap_err();
+        assert!(format!("{:?}", e).contains("not a regular file"), "{e:?}");
+        let dir = std::env::temp_dir().join(format!("op-scene-big-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let big = dir.join("big.ron");
+        std::fs::write(&big, "x".repeat(2000)).unwrap();
+        let e = read_text_file(&big, 1000).unwrap_err();
+        assert!(format!("{:?}", e).contains("limit"), "{e:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

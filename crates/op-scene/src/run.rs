@@ -5,7 +5,6 @@
 //! `diverged: true`.
 
 use std::fs;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -14,7 +13,9 @@ use op_dynamics::{Point3, Real};
 use serde::Serialize;
 
 use crate::built::{BuiltObject, BuiltScene};
+use crate::error::short;
 use crate::export::{frame_name, write_atomically, write_frame};
+use crate::health::{energy_floor, Health, ENERGY_GAIN_WARNING};
 use crate::outputs::ParticleOutput;
 use crate::skins::ContactStats;
 
@@ -43,6 +44,15 @@ pub struct ObjectSummary {
     pub rest_shape_error_final: Real,
     /// Largest rest shape error over the frames.
     pub rest_shape_error_max: Real,
+    /// Connected components of the object's particles at the last frame,
+    /// two particles joined when closer than its material's interaction
+    /// range (see [`crate::health`]); absent when the material has none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pieces: Option<usize>,
+    /// Largest bond stretch seen: the largest ratio of current to rest
+    /// distance over the object's rest neighbour pairs, over the frames
+    /// (see [`crate::health`]).
+    pub bond_stretch_max: Real,
     /// Highest temperature of any of its particles over the frames, when
     /// the scene has `world.heat` (seed 000 §6, §8).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -69,6 +79,16 @@ pub struct Summary {
     /// world's, settle phase included).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub divergence: Option<String>,
+    /// What a user should know before trusting the frames: an object that
+    /// broke into pieces, left the scene's bounds, a passive scene that
+    /// gained energy, a step above the estimated stable step (see
+    /// [`crate::health`]). Also printed by `opsim run`.
+    pub warnings: Vec<String>,
+    /// Why the run stopped early other than by diverging (an output that
+    /// could not be written, a skin that could not be polygonized), when
+    /// it did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
     /// Frames written.
     pub frames: usize,
     /// Rayon threads used.
@@ -93,13 +113,22 @@ pub struct Summary {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RunError {
-    /// An output could not be written.
-    #[error("cannot write {path}: {source}")]
+    /// An output could not be written (the summary, with `failure` set,
+    /// is written when it can be). The operating system's message is the
+    /// source.
+    #[error("cannot write {}", path.display())]
     Io {
         /// The file or directory.
         path: PathBuf,
         /// The cause.
         source: std::io::Error,
+    },
+    /// The output directory holds a symbolic link where opsim writes: it
+    /// refuses to write through it.
+    #[error("{}: is a symbolic link; opsim does not write through links inside the output directory (remove it or choose another --out)", path.display())]
+    Symlink {
+        /// The link.
+        path: PathBuf,
     },
     /// The simulation diverged; the summary (with `diverged: true`) and the
     /// frames before it were written.
@@ -132,8 +161,100 @@ pub fn rest_shape_error(scene: &BuiltScene, object: &BuiltObject) -> Real {
     rest_shape_rms(&rest, &current) / object.rest_spacing.max(Real::MIN_POSITIVE)
 }
 
+/// Makes `out_dir` ready for a run: creates it (and `frames/` when frames
+/// are written), refuses symbolic links where opsim writes, and removes the
+/// files a previous run left there (only the names opsim writes:
+/// `summary.json`, `metrics.csv`, `frames/frame_*.obj` and opsim's
+/// temporary files), so frames of two runs never mix.
+pub fn prepare_output(out_dir: &Path, write_frames: bool) -> Result<(), RunError> {
+    fs::create_dir_all(out_dir).map_err(io(out_dir))?;
+    let frames_dir = out_dir.join("frames");
+    let link = |p: &Path| {
+        fs::symlink_metadata(p)
+            .map(|m| m.file_type().is_symlink())
+            .unwrap_or(false)
+    };
+    for p in [
+        frames_dir.clone(),
+        out_dir.join("metrics.csv"),
+        out_dir.join("summary.json"),
+    ] {
+        if link(&p) {
+            return Err(RunError::Symlink { path: p });
+        }
+    }
+    let ours = |name: &str| crate::export::is_temporary(name);
+    for (dir, frame_files) in [(out_dir.to_path_buf(), false), (frames_dir.clone(), true)] {
+        let Ok(entries) = fs::read_dir(&dir) else {
+            continue;
+        };
+        for e in entries {
+            let e = e.map_err(io(&dir))?;
+            let name = e.file_name().to_string_lossy().into_owned();
+            let is_frame = frame_files && name.starts_with("frame_") && name.ends_with(".obj");
+            let is_output = !frame_files && (name == "summary.json" || name == "metrics.csv");
+            if is_frame || is_output || ours(&name) {
+                let path = e.path();
+                if link(&path) {
+                    return Err(RunError::Symlink { path });
+                }
+                fs::remove_file(&path).map_err(io(&path))?;
+            }
+        }
+    }
+    if write_frames {
+        fs::create_dir_all(&frames_dir).map_err(io(&frames_dir))?;
+    }
+    Ok(())
+}
+
+/// `metrics.csv`, kept in memory and written atomically (like the frames)
+/// at most every few seconds of wall time and at the end, so the file on
+/// disk is always whole.
+struct Metrics {
+    path: PathBuf,
+    text: String,
+    saved: Instant,
+}
+
+impl Metrics {
+    const HEADER: &'static str =
+        "frame,time,kinetic,potential,total,oscillation,max_speed,wall_seconds\n";
+    /// Seconds between two saves during a run.
+    const SAVE_INTERVAL: f64 = 5.0;
+
+    fn new(path: PathBuf) -> Self {
+        Metrics {
+            path,
+            text: Self::HEADER.to_string(),
+            saved: Instant::now(),
+        }
+    }
+
+    fn push(&mut self, row: std::fmt::Arguments) -> Result<(), RunError> {
+        use std::fmt::Write as _;
+        let _ = writeln!(self.text, "{row}");
+        if self.saved.elapsed().as_secs_f64() > Self::SAVE_INTERVAL {
+            self.save()?;
+        }
+        Ok(())
+    }
+
+    fn save(&mut self) -> Result<(), RunError> {
+        self.saved = Instant::now();
+        write_atomically(&self.path, |w| w.write_all(self.text.as_bytes())).map_err(io(&self.path))
+    }
+}
+
 /// Runs `scene`, writing into `opts.out_dir`; `on_frame(k, total)` is
 /// called after each frame (progress display).
+///
+/// The output directory is prepared first ([`prepare_output`]). Each frame
+/// is checked for divergence (non-finite or runaway energy, an energy gain
+/// of a passive scene when asked for) and explosion (a particle far beyond
+/// the scene's bounds, [`crate::health`]); either ends the run with
+/// [`RunError::Diverged`] after writing the summary. The summary's
+/// `warnings` say what else went wrong without stopping the run.
 pub fn run(
     scene: &mut BuiltScene,
     opts: &RunOptions,
@@ -143,73 +264,61 @@ pub fn run(
     let frames_dir = opts.out_dir.join("frames");
     let write_frames =
         scene.outputs.particles != ParticleOutput::None || scene.outputs.triangulation;
-    if write_frames {
-        fs::create_dir_all(&frames_dir).map_err(io(&frames_dir))?;
-    } else {
-        fs::create_dir_all(&opts.out_dir).map_err(io(&opts.out_dir))?;
-    }
+    prepare_output(&opts.out_dir, write_frames)?;
     let total = opts
         .frames
         .unwrap_or_else(|| (scene.duration * scene.frame_rate).round() as usize + 1)
         .max(1);
-    let metrics_path = opts.out_dir.join("metrics.csv");
-    let mut metrics = if scene.outputs.metrics {
-        let mut f = fs::File::create(&metrics_path).map_err(io(&metrics_path))?;
-        writeln!(
-            f,
-            "frame,time,kinetic,potential,total,oscillation,max_speed,wall_seconds"
-        )
-        .map_err(io(&metrics_path))?;
-        Some(f)
-    } else {
-        None
-    };
+    let duration = (total - 1) as Real / scene.frame_rate;
+    let mut metrics = scene
+        .outputs
+        .metrics
+        .then(|| Metrics::new(opts.out_dir.join("metrics.csv")));
     let mut max_err = vec![0.0; scene.objects.len()];
     let mut last_err = vec![0.0; scene.objects.len()];
     let heat = scene.world.params().heat.is_some();
     let mut hottest = vec![Real::NEG_INFINITY; scene.objects.len()];
     let mut energy_scale = None;
-    // Nothing feeds energy into a passive scene: see `energy_gain`.
-    let passive = {
-        let e = &scene.world.params().external;
-        e.forces.is_empty() && e.gravity() == op_dynamics::Vec3::zeros() && !scene.has_contact()
-    };
+    let passive = scene.is_passive();
     let mut lowest_total = Real::INFINITY;
+    let mut gain_seen: Real = 0.0;
+    let mut gain_scale = None;
     let mut written = 0;
     let mut divergence: Option<String> = None;
+    let mut failure: Option<RunError> = None;
+    let mut warnings = scene.step_warnings.clone();
     if let Err(d) = scene.settle() {
         divergence = Some(format!("while settling: {d}"));
     }
+    let mut health = Health::new(scene, duration, scene.extent_growth);
+    let floor = energy_floor(scene, health.size(), duration);
     let t0 = scene.world.time();
     for k in 0..total {
         if divergence.is_some() {
             break;
         }
-        if k > 0 {
-            let t = t0 + k as Real / scene.frame_rate;
-            if let Err(d) = scene.advance_to(t) {
-                divergence = Some(d);
-                break;
-            }
-        } else if let Err(e) = scene.advance_to(scene.world.time()) {
-            // Poses the skins on the settled particles.
-            divergence = Some(e);
+        // Frame 0 poses the skins on the settled particles.
+        let t = t0 + k as Real / scene.frame_rate;
+        if let Err(d) = scene.advance_to(if k == 0 { scene.world.time() } else { t }) {
+            divergence = Some(d);
             break;
         }
         let d = scene.world.diagnostics();
         let count = scene.world.particles().len();
-        let here = (d.kinetic_translational + d.kinetic_rotational).abs()
-            + d.potential.abs()
-            + 1e-12 * count as Real;
-        // The scale is taken at frame 0, and again (keeping the larger)
-        // whenever the creation rules changed the particle count: new
-        // particles bring energy the first frame did not hold.
+        let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
+        // The scale is taken at frame 0, never below the energy the scene's
+        // own inputs can give it (`energy_floor`), and again (keeping the
+        // larger) whenever the creation rules changed the particle count:
+        // new particles bring energy the first frame did not hold.
         let scale = match energy_scale {
             Some((s, c)) if c == count => s,
             Some((s, _)) => Real::max(s, here),
-            None => here,
+            None => here.max(floor),
         };
         energy_scale = Some((scale, count));
+        // The gain of a passive scene is measured against its own energy at
+        // frame 0 (a damped scene at rest holds only potential energy).
+        let own_scale = *gain_scale.get_or_insert(here.max(1e-12 * count as Real));
         let kinetic = d.kinetic_translational + d.kinetic_rotational;
         if !d.total.is_finite() || kinetic > scene.energy_growth * scale {
             let p = scene.world.particles();
@@ -222,27 +331,35 @@ pub fn run(
                 .map_or(0, |s| p.ids()[s]);
             divergence = Some(format!(
                 "simulation diverged at step {} (t = {}): particle {fastest}: runaway energy \
-                 (kinetic {kinetic:.3e} > {:.1e} x initial scale {scale:.3e})",
+                 (kinetic {kinetic:.3e} > {} x energy scale {scale:.3e})",
                 scene.world.steps(),
-                scene.world.time(),
-                scene.energy_growth
+                short(scene.world.time()),
+                short(scene.energy_growth)
             ));
             break;
         }
-        if passive && d.total > lowest_total + scene.energy_gain * scale {
-            divergence = Some(format!(
-                "simulation diverged at step {} (t = {}): energy gain: total energy {:.6e} \
-                 exceeds the lowest of the earlier frames, {lowest_total:.6e}, by more than \
-                 divergence.energy_gain = {:e} x initial scale {scale:.3e}; a damped, unforced \
-                 scene cannot gain energy: a step too large for the stiffness put it in \
-                 (reduce dt or use the adaptive scheme), or a pair started at r = 0, where its \
-                 energy is taken as 0",
-                scene.world.steps(),
-                scene.world.time(),
-                d.total,
-                scene.energy_gain
-            ));
+        if let Some(message) = health.observe(scene) {
+            divergence = Some(message);
             break;
+        }
+        if passive && lowest_total.is_finite() {
+            let gain = (d.total - lowest_total) / own_scale.max(Real::MIN_POSITIVE);
+            if gain > scene.energy_gain {
+                divergence = Some(format!(
+                    "simulation diverged at step {} (t = {}): energy gain: total energy {:.6e} \
+                     exceeds the lowest of the earlier frames, {lowest_total:.6e}, by more than \
+                     divergence.energy_gain = {} x energy scale {own_scale:.3e}; a damped, \
+                     unforced scene cannot gain energy: a step too large for the stiffness put \
+                     it in (reduce dt or use the adaptive scheme), or a pair started at r = 0, \
+                     where its energy is taken as 0",
+                    scene.world.steps(),
+                    short(scene.world.time()),
+                    d.total,
+                    short(scene.energy_gain)
+                ));
+                break;
+            }
+            gain_seen = gain_seen.max(gain);
         }
         lowest_total = lowest_total.min(d.total);
         for (o, obj) in scene.objects.iter().enumerate() {
@@ -260,7 +377,7 @@ pub fn run(
         }
         if write_frames {
             let path = frames_dir.join(frame_name(k));
-            write_frame(
+            if let Err(e) = write_frame(
                 &path,
                 &scene.world,
                 &scene.objects,
@@ -268,13 +385,14 @@ pub fn run(
                 &scene.skin_tools,
                 &scene.tools,
                 &scene.outputs,
-            )
-            .map_err(io(&path))?;
+            ) {
+                failure = Some(io(&path)(e));
+                break;
+            }
         }
         written += 1;
-        if let Some(f) = metrics.as_mut() {
-            writeln!(
-                f,
+        if let Some(m) = metrics.as_mut() {
+            if let Err(e) = m.push(format_args!(
                 "{k},{},{kinetic},{},{},{},{},{}",
                 scene.scene_time(),
                 d.potential,
@@ -282,12 +400,28 @@ pub fn run(
                 d.oscillation,
                 d.max_speed,
                 clock.elapsed().as_secs_f64()
-            )
-            .and_then(|_| f.flush())
-            .map_err(io(&metrics_path))?;
+            )) {
+                failure = Some(e);
+                break;
+            }
         }
         on_frame(k + 1, total);
     }
+    if let Some(m) = metrics.as_mut() {
+        if let Err(e) = m.save() {
+            failure.get_or_insert(e);
+        }
+    }
+    if gain_seen > ENERGY_GAIN_WARNING {
+        warnings.push(format!(
+            "the scene gained energy without input: the total energy rose {} times its energy \
+             scale above the lowest earlier frame (a step too large for the stiffness, or \
+             particles started on top of each other)",
+            short(gain_seen)
+        ));
+    }
+    let (findings, health_warnings) = health.finish(scene);
+    warnings.extend(health_warnings);
     let summary = Summary {
         scene: scene.name.clone(),
         steps: scene.world.steps(),
@@ -296,6 +430,8 @@ pub fn run(
         wall_seconds: clock.elapsed().as_secs_f64(),
         diverged: divergence.is_some(),
         divergence: divergence.clone(),
+        warnings,
+        failure: failure.as_ref().map(error_chain),
         frames: written,
         threads: rayon::current_num_threads(),
         enabled: scene.stages(),
@@ -304,8 +440,9 @@ pub fn run(
         objects: scene
             .objects
             .iter()
+            .zip(findings)
             .enumerate()
-            .map(|(o, obj)| ObjectSummary {
+            .map(|(o, (obj, found))| ObjectSummary {
                 name: obj.name.clone(),
                 particles: obj
                     .all_ids()
@@ -313,16 +450,22 @@ pub fn run(
                     .count(),
                 rest_shape_error_final: last_err[o],
                 rest_shape_error_max: max_err[o],
+                pieces: found.pieces,
+                bond_stretch_max: found.bond_stretch_max,
                 temperature_max: (heat && hottest[o].is_finite()).then_some(hottest[o]),
             })
             .collect(),
     };
     let path = opts.out_dir.join("summary.json");
-    write_atomically(&path, |w| {
+    let saved = write_atomically(&path, |w| {
         serde_json::to_writer_pretty(&mut *w, &summary).map_err(std::io::Error::other)?;
         writeln!(w)
     })
-    .map_err(io(&path))?;
+    .map_err(io(&path));
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    saved?;
     match divergence {
         Some(message) => Err(RunError::Diverged {
             message,
@@ -330,6 +473,18 @@ pub fn run(
         }),
         None => Ok(summary),
     }
+}
+
+/// An error and its sources, `: `-separated (one line for the summary).
+fn error_chain(e: &RunError) -> String {
+    let mut text = e.to_string();
+    let mut source = std::error::Error::source(e);
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text
 }
 
 #[cfg(test)]

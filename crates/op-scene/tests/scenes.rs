@@ -652,10 +652,12 @@ fn ron_and_json_versions_build_identical_worlds() {
     assert_eq!(
         Scene {
             origin: String::new(),
+            limits: Default::default(),
             ..from_json.clone()
         },
         Scene {
             origin: String::new(),
+            limits: Default::default(),
             ..from_ron.clone()
         }
     );

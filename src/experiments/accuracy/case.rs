@@ -254,6 +254,7 @@ pub fn triangle_scene(p: Real) -> Scene {
         creation: None,
         outputs: Default::default(),
         origin: "<triangle>".into(),
+        limits: Default::default(),
     }
 }
 

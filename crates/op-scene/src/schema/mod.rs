@@ -52,9 +52,12 @@
 
 pub(crate) mod checks;
 pub mod fit;
+pub mod limits;
 pub(crate) mod validate;
+pub(crate) mod work;
 
 pub use fit::FitSettings;
+pub use limits::WorkLimits;
 
 pub use validate::{MAX_COHESION_ALPHA_R0_SQUARED, MAX_COHESION_CUTOFF_OVER_R0};
 
@@ -111,6 +114,11 @@ pub struct Scene {
     /// (shown as `<scene>`).
     #[serde(skip)]
     pub origin: String,
+    /// The work limits validation applies ([`WorkLimits`]). Not part of the
+    /// file: set by the caller (`opsim --no-work-limits`). Default:
+    /// [`WorkLimits::default`].
+    #[serde(skip)]
+    pub limits: WorkLimits,
 }
 
 impl Scene {
@@ -247,6 +255,24 @@ pub struct DivergenceSettings {
     /// Default: infinity (off; JSON: omit it).
     #[serde(default = "infinity", skip_serializing_if = "is_infinite")]
     pub energy_gain: Real,
+    /// Explosion threshold: the run is declared diverged (exit 3) when a
+    /// particle gets this many scene sizes beyond the scene's bounds (the
+    /// box of the particles at frame 0 and of the tools over the run,
+    /// grown by the motion gravity, initial velocities and force windows
+    /// can cause; see `op_scene::health`), > 0. Default: 1e4; infinity
+    /// disables the check.
+    #[serde(
+        default = "extent_growth",
+        skip_serializing_if = "is_default_extent_growth"
+    )]
+    pub extent_growth: Real,
+}
+
+fn extent_growth() -> Real {
+    crate::health::DEFAULT_EXTENT_GROWTH
+}
+fn is_default_extent_growth(v: &Real) -> bool {
+    *v == extent_growth()
 }
 
 impl Default for DivergenceSettings {
@@ -255,6 +281,7 @@ impl Default for DivergenceSettings {
             max_speed: infinity(),
             energy_growth: million(),
             energy_gain: infinity(),
+            extent_growth: extent_growth(),
         }
     }
 }

@@ -122,6 +122,7 @@ impl Scene {
         for (k, f) in self.forces.iter().enumerate() {
             self.validate_force(k, f, &counts)?;
         }
+        self.validate_work(total, base_dir)?;
         for (k, t) in self.tools.iter().enumerate() {
             self.validate_tool(k, t)?;
         }
@@ -217,6 +218,7 @@ impl Scene {
             ("world.divergence.max_speed", w.divergence.max_speed),
             ("world.divergence.energy_growth", w.divergence.energy_growth),
             ("world.divergence.energy_gain", w.divergence.energy_gain),
+            ("world.divergence.extent_growth", w.divergence.extent_growth),
         ] {
             if v.is_nan() || v <= 0.0 {
                 return Err(SceneError::value(

@@ -1,0 +1,424 @@
+//! The health report of a run: what a user must know before trusting
+//! exit 0.
+//!
+//! The runner ([`crate::run`]) watches every frame and writes what it saw
+//! into `summary.json`:
+//!
+//! - **pieces**: the connected components of each object's particles, two
+//!   particles joined when they are closer than the object material's
+//!   interaction range ([`op_dynamics::PreparedMaterial::cutoff`]), at
+//!   frame 0 and at the last frame. An object that ends in more pieces than
+//!   it started with broke (intended for tearing scenes, which say so in
+//!   their header; a warning either way, with the count).
+//! - **bond stretch**: the largest ratio of current to rest distance over
+//!   the object's rest neighbour pairs (pairs of original particles at most
+//!   [`NEIGHBOUR_PAIR_FACTOR`] rest spacings apart in the rest shape) over
+//!   all frames.
+//! - **escape**: how far a particle got from the scene's bounds (the box of
+//!   the particles at frame 0 and of the tools' positions over the run),
+//!   in units of the scene's size, after allowing for the motion that
+//!   gravity, the initial velocities and the force windows can cause.
+//!   [`ESCAPE_WARNING`] sizes is a warning; `world.divergence.extent_growth`
+//!   sizes (default [`DEFAULT_EXTENT_GROWTH`]) is an explosion, which ends
+//!   the run like a divergence (exit 3).
+//!
+//! The energy checks (runaway kinetic energy, energy gained by a passive
+//! scene) are the runner's; their scale comes from [`energy_floor`], which
+//! is never zero, so a scene that starts at rest is measured against the
+//! energy its own inputs can give it rather than against nothing.
+
+use op_dynamics::{Point3, Real, Vec3};
+
+use crate::built::{BuiltObject, BuiltScene};
+
+/// Rest neighbour pairs are the original particles at most this many rest
+/// spacings apart in the rest shape.
+pub const NEIGHBOUR_PAIR_FACTOR: Real = 1.5;
+/// A particle this many scene sizes beyond the scene's bounds (after the
+/// allowed motion) is reported in `warnings`.
+pub const ESCAPE_WARNING: Real = 100.0;
+/// Default of `world.divergence.extent_growth`: a particle this many scene
+/// sizes beyond the scene's bounds is an explosion (exit 3).
+pub const DEFAULT_EXTENT_GROWTH: Real = 1e4;
+/// A passive scene whose total energy rises above the lowest earlier frame
+/// by more than this fraction of its energy scale gets a warning (the
+/// divergence check `world.divergence.energy_gain` is off by default).
+pub const ENERGY_GAIN_WARNING: Real = 1e-2;
+
+/// Axis-aligned box.
+#[derive(Clone, Copy, Debug)]
+struct Bounds {
+    min: Vec3,
+    max: Vec3,
+}
+
+impl Bounds {
+    fn empty() -> Self {
+        Bounds {
+            min: Vec3::repeat(Real::INFINITY),
+            max: Vec3::repeat(Real::NEG_INFINITY),
+        }
+    }
+
+    fn add(&mut self, p: &Vec3) {
+        if p.iter().all(|c| c.is_finite()) {
+            self.min = self.min.inf(p);
+            self.max = self.max.sup(p);
+        }
+    }
+
+    fn diagonal(&self) -> Real {
+        if self.min.x > self.max.x {
+            0.0
+        } else {
+            (self.max - self.min).norm()
+        }
+    }
+
+    /// Distance from `p` to the box (0 inside).
+    fn distance(&self, p: &Vec3) -> Real {
+        let below = (self.min - p).sup(&Vec3::zeros());
+        let above = (p - self.max).sup(&Vec3::zeros());
+        (below + above).norm()
+    }
+}
+
+/// Per-object figures of the health report.
+#[derive(Clone, Debug)]
+struct ObjectHealth {
+    /// Interaction range of the object's material (0: no interaction, no
+    /// pieces reported).
+    range: Real,
+    /// Rest neighbour pairs: ids and rest distance.
+    pairs: Vec<(u32, u32, Real)>,
+    /// Pieces at frame 0.
+    pieces_start: Option<usize>,
+    /// Largest bond stretch seen.
+    stretch_max: Real,
+}
+
+/// What the health report found for one object at the end of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObjectFindings {
+    /// Connected components at the last frame (`None` when the object's
+    /// material has no interaction range).
+    pub pieces: Option<usize>,
+    /// Largest bond stretch seen (1 = rest length; 0 when the object has
+    /// no rest neighbour pair).
+    pub bond_stretch_max: Real,
+}
+
+/// Watches a run frame by frame; see the module docs.
+#[derive(Clone, Debug)]
+pub struct Health {
+    bounds: Bounds,
+    size: Real,
+    /// Speed allowance: initial speeds.
+    speed: Real,
+    /// Acceleration allowance: gravity plus the largest force window per
+    /// unit mass.
+    accel: Real,
+    /// Scene time of frame 0 (world time).
+    t0: Real,
+    explode_at: Real,
+    objects: Vec<ObjectHealth>,
+    escape_max: Real,
+    escaped_object: Option<usize>,
+}
+
+impl Health {
+    /// Starts watching `scene` at its frame 0 (after the settle phase),
+    /// for a run lasting `duration`; `extent_growth` is the explosion
+    /// threshold in scene sizes.
+    pub fn new(scene: &BuiltScene, duration: Real, extent_growth: Real) -> Health {
+        let w = &scene.world;
+        let p = w.particles();
+        let mut bounds = Bounds::empty();
+        for x in p.positions() {
+            bounds.add(&x.coords);
+        }
+        let t0 = w.time();
+        for tool in &scene.tools {
+            for k in 0..=64 {
+                let t = t0 + duration * k as Real / 64.0;
+                bounds.add(&tool.pose(t).position);
+            }
+        }
+        let spacing = scene
+            .objects
+            .iter()
+            .map(|o| o.rest_spacing)
+            .filter(|r| r.is_finite())
+            .fold(0.0, Real::max);
+        let size = bounds.diagonal().max(spacing).max(Real::MIN_POSITIVE);
+        let speed = p
+            .velocities()
+            .iter()
+            .map(|v| v.norm())
+            .filter(|v| v.is_finite())
+            .fold(0.0, Real::max);
+        let ext = &w.params().external;
+        let min_mass = p
+            .masses()
+            .iter()
+            .copied()
+            .filter(|m| *m > 0.0)
+            .fold(Real::INFINITY, Real::min);
+        let window = ext
+            .forces
+            .iter()
+            .map(|f| Vec3::from(f.force).norm() / min_mass)
+            .filter(|a| a.is_finite())
+            .fold(0.0, Real::max);
+        let accel = Vec3::from(ext.gravity).norm() + window;
+        let objects = scene
+            .objects
+            .iter()
+            .map(|o| {
+                let range = object_range(scene, o);
+                ObjectHealth {
+                    range,
+                    pairs: rest_pairs(o),
+                    pieces_start: (range > 0.0).then(|| pieces(scene, o, range)),
+                    stretch_max: 0.0,
+                }
+            })
+            .collect();
+        Health {
+            bounds,
+            size,
+            speed,
+            accel,
+            t0,
+            explode_at: extent_growth,
+            objects,
+            escape_max: 0.0,
+            escaped_object: None,
+        }
+    }
+
+    /// Observes the current frame; returns the explosion message when a
+    /// particle is `extent_growth` scene sizes beyond the scene's bounds.
+    pub fn observe(&mut self, scene: &BuiltScene) -> Option<String> {
+        let w = &scene.world;
+        let p = w.particles();
+        let t = (w.time() - self.t0).max(0.0);
+        let allowed = self.speed * t + 0.5 * self.accel * t * t;
+        let mut worst: Option<(Real, u32, usize)> = None;
+        for (o, (obj, h)) in scene.objects.iter().zip(&mut self.objects).enumerate() {
+            for &(a, b, rest) in &h.pairs {
+                if let (Some(sa), Some(sb)) = (p.slot_of(a), p.slot_of(b)) {
+                    let d = (p.positions()[sa] - p.positions()[sb]).norm();
+                    h.stretch_max = h.stretch_max.max(d / rest);
+                }
+            }
+            for id in obj.all_ids() {
+                let Some(s) = p.slot_of(id) else { continue };
+                let x = p.positions()[s].coords;
+                let d = (self.bounds.distance(&x) - allowed).max(0.0) / self.size;
+                let d = if d.is_nan() { Real::INFINITY } else { d };
+                if worst.is_none_or(|(m, _, _)| d > m) {
+                    worst = Some((d, id, o));
+                }
+            }
+        }
+        let (d, id, o) = worst?;
+        if d > self.escape_max {
+            self.escape_max = d;
+            self.escaped_object = Some(o);
+        }
+        (d > self.explode_at).then(|| {
+            format!(
+                "simulation exploded at step {} (t = {}): particle {id} of object {:?} is \
+                 {} scene sizes ({}) beyond the scene's bounds, more than \
+                 world.divergence.extent_growth = {}",
+                w.steps(),
+                crate::error::short(w.time()),
+                scene.objects[o].name,
+                crate::error::short(d),
+                crate::error::short(self.size),
+                crate::error::short(self.explode_at)
+            )
+        })
+    }
+
+    /// The findings per object and the warnings, at the end of the run.
+    pub fn finish(&self, scene: &BuiltScene) -> (Vec<ObjectFindings>, Vec<String>) {
+        let mut warnings = Vec::new();
+        let findings = scene
+            .objects
+            .iter()
+            .zip(&self.objects)
+            .map(|(o, h)| {
+                let now = (h.range > 0.0).then(|| pieces(scene, o, h.range));
+                if let (Some(start), Some(end)) = (h.pieces_start, now) {
+                    if end > start {
+                        warnings.push(format!(
+                            "object {:?} broke into {end} pieces ({start} at frame 0): parts of \
+                             it are farther apart than its material's interaction range ({})",
+                            o.name,
+                            crate::error::short(h.range)
+                        ));
+                    }
+                }
+                ObjectFindings {
+                    pieces: now,
+                    bond_stretch_max: h.stretch_max,
+                }
+            })
+            .collect();
+        if self.escape_max > ESCAPE_WARNING {
+            let name = self
+                .escaped_object
+                .map_or("?", |o| scene.objects[o].name.as_str());
+            warnings.push(format!(
+                "object {name:?} left the scene's bounds: a particle got {} scene sizes ({}) \
+                 beyond them, more than gravity, the initial velocities and the force windows \
+                 can explain",
+                crate::error::short(self.escape_max),
+                crate::error::short(self.size)
+            ));
+        }
+        (findings, warnings)
+    }
+}
+
+/// Interaction range of an object: the largest cut-off of its particles'
+/// materials.
+fn object_range(scene: &BuiltScene, o: &BuiltObject) -> Real {
+    let p = scene.world.particles();
+    let materials = scene.world.materials();
+    o.all_ids()
+        .filter_map(|id| p.slot_of(id))
+        .filter_map(|s| materials.get(p.materials()[s] as usize))
+        .map(|m| m.cutoff())
+        .fold(0.0, Real::max)
+}
+
+/// The rest neighbour pairs of an object (see the module docs).
+fn rest_pairs(o: &BuiltObject) -> Vec<(u32, u32, Real)> {
+    let reach = NEIGHBOUR_PAIR_FACTOR * o.rest_spacing;
+    if !(reach > 0.0 && reach.is_finite()) {
+        return Vec::new();
+    }
+    let mut pairs = Vec::new();
+    let points: Vec<(u32, Point3)> = o.ids.iter().copied().zip(o.rest.iter().copied()).collect();
+    close_pairs(&points, reach, |a, b, d| {
+        if d > 0.0 {
+            pairs.push((points[a].0, points[b].0, d));
+        }
+    });
+    pairs
+}
+
+/// Connected components of the object's current particles, joined when
+/// closer than `range`.
+pub fn pieces(scene: &BuiltScene, o: &BuiltObject, range: Real) -> usize {
+    let p = scene.world.particles();
+    let points: Vec<(u32, Point3)> = o
+        .all_ids()
+        .filter_map(|id| p.slot_of(id).map(|s| (id, p.positions()[s])))
+        .collect();
+    let mut parent: Vec<usize> = (0..points.len()).collect();
+    fn root(parent: &mut [usize], mut a: usize) -> usize {
+        while parent[a] != a {
+            parent[a] = parent[parent[a]];
+            a = parent[a];
+        }
+        a
+    }
+    close_pairs(&points, range, |a, b, _| {
+        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+        if ra != rb {
+            parent[ra.max(rb)] = ra.min(rb);
+        }
+    });
+    (0..points.len())
+        .filter(|&a| root(&mut parent, a) == a)
+        .count()
+}
+
+/// Calls `f(a, b, distance)` for every pair of `points` (indices, `a < b`)
+/// closer than `reach`, in a deterministic order, by a hash grid of cell
+/// size `reach`. Points with non-finite coordinates are their own pieces.
+fn close_pairs(points: &[(u32, Point3)], reach: Real, mut f: impl FnMut(usize, usize, Real)) {
+    use std::collections::HashMap;
+    let cell = |x: &Point3| -> Option<[i64; 3]> {
+        let c = [x.x / reach, x.y / reach, x.z / reach];
+        // Beyond ±2^52 cells the grid cannot tell neighbours apart; such
+        // particles are reported separately (the escape check sees them).
+        c.iter()
+            .all(|v| v.is_finite() && v.abs() < 4.5e15)
+            .then(|| c.map(|v| v.floor() as i64))
+    };
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (k, (_, x)) in points.iter().enumerate() {
+        if let Some(c) = cell(x) {
+            grid.entry(c).or_default().push(k);
+        }
+    }
+    for (a, (_, x)) in points.iter().enumerate() {
+        let Some(c) = cell(x) else { continue };
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
+                        continue;
+                    };
+                    for &b in list {
+                        if b <= a {
+                            continue;
+                        }
+                        let d = (points[b].1 - x).norm();
+                        if d < reach {
+                            f(a, b, d);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The energy scale no run falls below: the kinetic energy every particle
+/// would have moving at the larger of one scene size per frame interval
+/// and the speed gravity gives over the run. Never zero for a scene with
+/// mass, so a scene that starts at rest is not measured against nothing.
+pub fn energy_floor(scene: &BuiltScene, size: Real, duration: Real) -> Real {
+    let w = &scene.world;
+    let g = Vec3::from(w.params().external.gravity).norm();
+    let v = (size * scene.frame_rate).max(g * (duration + scene.settle));
+    let mass: Real = w.particles().masses().iter().sum();
+    0.5 * mass * v * v
+}
+
+impl Health {
+    /// The scene's size (the diagonal of its bounds, at least its largest
+    /// rest spacing).
+    pub fn size(&self) -> Real {
+        self.size
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn close_pairs_and_bounds() {
+        let pts: Vec<(u32, Point3)> = [0.0, 0.5, 1.0, 3.0, 3.4]
+            .iter()
+            .enumerate()
+            .map(|(k, &x)| (k as u32, Point3::new(x, 0.0, 0.0)))
+            .collect();
+        let mut found = Vec::new();
+        close_pairs(&pts, 0.6, |a, b, _| found.push((a, b)));
+        found.sort();
+        assert_eq!(found, vec![(0, 1), (1, 2), (3, 4)]);
+        let mut b = Bounds::empty();
+        b.add(&Vec3::zeros());
+        b.add(&Vec3::new(1.0, 1.0, 0.0));
+        assert_eq!(b.distance(&Vec3::new(0.5, 0.5, 0.0)), 0.0);
+        assert!((b.distance(&Vec3::new(4.0, 1.0, 0.0)) - 3.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,309 @@
+//! Validation that a scene asks for a finite run of bounded work (see
+//! [`super::limits`]): steps, frames, heat sub-steps, created particles,
+//! skin grids, and every length relative to the scene's length scale.
+
+use std::path::Path;
+
+use op_dynamics::Real;
+
+use super::limits::{
+    MAX_CONDUCTION_STEP, MAX_EXTENT_OVER_SPACING, MAX_ROTATION, MAX_SKIN_NODES_PER_AXIS,
+};
+use super::validate::object_path;
+use super::Scene;
+use crate::error::{short, SceneError};
+use crate::generators::Generator;
+
+/// Smallest stretching `d_min` and growing `radius` of the creation rules,
+/// in rest spacings: closer candidates would overlap their neighbours, and
+/// the rules' search grids grow as their inverse cube.
+pub const MIN_CREATION_DISTANCE: Real = 0.5;
+
+impl Scene {
+    /// The scene's length scale: the largest generator spacing or material
+    /// rest distance (1 when there is none).
+    pub(crate) fn length_scale(&self) -> Real {
+        let generators = self
+            .objects
+            .iter()
+            .filter_map(|o| o.generator.nominal_spacing());
+        let materials = self.materials.values().filter_map(|m| match &m.spacing {
+            Some(op_dynamics::interactions::Spacing::Cohesion(c)) => Some(c.r0),
+            Some(op_dynamics::interactions::Spacing::LennardJones(l)) => Some(l.r0),
+            None => None,
+        });
+        let l = generators
+            .chain(materials)
+            .filter(|r| r.is_finite() && *r > 0.0)
+            .fold(0.0, Real::max);
+        if l > 0.0 {
+            l
+        } else {
+            1.0
+        }
+    }
+
+    /// Checks the run's size against [`Scene::limits`] and the lengths
+    /// against the scene's length scale; `total` is the particle count.
+    pub(crate) fn validate_work(
+        &self,
+        total: usize,
+        base_dir: Option<&Path>,
+    ) -> Result<(), SceneError> {
+        let file = self.origin();
+        let w = &self.world;
+        let lim = &self.limits;
+        let flag = "(opsim --no-work-limits lifts this limit)";
+        let interval = 1.0 / w.frame_rate;
+        if w.dt > interval * (1.0 + 1e-9) {
+            return Err(SceneError::value(
+                file,
+                "world.dt",
+                short(w.dt),
+                &format!(
+                    "must be at most the frame interval 1 / world.frame_rate = {} (a step \
+                     longer than a frame would be cut short, not taken)",
+                    short(interval)
+                ),
+            ));
+        }
+        let frames = w.duration * w.frame_rate + 1.0;
+        if frames > lim.max_frames {
+            return Err(SceneError::value(
+                file,
+                "world.frame_rate",
+                short(w.frame_rate),
+                &format!(
+                    "with world.duration = {} gives {} frames, more than the limit of {} {flag}",
+                    short(w.duration),
+                    short(frames.round()),
+                    short(lim.max_frames)
+                ),
+            ));
+        }
+        let steps = (w.settle + w.duration) / w.dt;
+        if steps > lim.max_steps {
+            return Err(SceneError::value(
+                file,
+                "world.dt",
+                short(w.dt),
+                &format!(
+                    "makes (world.settle + world.duration) / dt = {} steps, more than the limit \
+                     of {} {flag}",
+                    short(steps.ceil()),
+                    short(lim.max_steps)
+                ),
+            ));
+        }
+        let particle_steps = steps * total as Real;
+        if particle_steps > lim.max_particle_steps {
+            return Err(SceneError::value(
+                file,
+                "world.duration",
+                short(w.duration),
+                &format!(
+                    "makes {} steps of {total} particles, {} particle-steps, more than the \
+                     limit of {} {flag}",
+                    short(steps.ceil()),
+                    short(particle_steps),
+                    short(lim.max_particle_steps)
+                ),
+            ));
+        }
+        if let Some(h) = &w.heat {
+            if h.conduction * w.dt > MAX_CONDUCTION_STEP {
+                return Err(SceneError::value(
+                    file,
+                    "world.heat.conduction",
+                    short(h.conduction),
+                    &format!(
+                        "times world.dt must be at most {MAX_CONDUCTION_STEP} (each step takes \
+                         about 2 conduction dt times the neighbour count heat sub-steps): at most \
+                         {}",
+                        short(MAX_CONDUCTION_STEP / w.dt)
+                    ),
+                ));
+            }
+        }
+        if let Some(c) = &self.creation {
+            if c.max_particles as Real > lim.max_created {
+                return Err(SceneError::value(
+                    file,
+                    "creation.max_particles",
+                    c.max_particles,
+                    &format!("must be at most {} {flag}", short(lim.max_created)),
+                ));
+            }
+            if let Some(s) = &c.stretching {
+                if s.d_min < MIN_CREATION_DISTANCE {
+                    return Err(SceneError::value(
+                        file,
+                        "creation.stretching.d_min",
+                        short(s.d_min),
+                        &format!("must be at least {MIN_CREATION_DISTANCE} rest spacings"),
+                    ));
+                }
+            }
+            if let Some(g) = &c.growing {
+                if g.radius < MIN_CREATION_DISTANCE {
+                    return Err(SceneError::value(
+                        file,
+                        "creation.growing.radius",
+                        short(g.radius),
+                        &format!("must be at least {MIN_CREATION_DISTANCE} rest spacings"),
+                    ));
+                }
+            }
+        }
+        self.validate_lengths(base_dir)
+    }
+
+    /// Every coordinate, tool size and object size within
+    /// [`MAX_EXTENT_OVER_SPACING`] length scales; tool rotations within
+    /// [`MAX_ROTATION`]; skins within [`MAX_SKIN_NODES_PER_AXIS`] grid
+    /// nodes per axis.
+    fn validate_lengths(&self, base_dir: Option<&Path>) -> Result<(), SceneError> {
+        let file = self.origin();
+        let scale = self.length_scale();
+        let max = MAX_EXTENT_OVER_SPACING * scale;
+        let allowed = format!(
+            "must be within {} of the origin ({} times the scene's length scale {}, its largest \
+             generator or material spacing)",
+            short(max),
+            short(MAX_EXTENT_OVER_SPACING),
+            short(scale)
+        );
+        let check = |path: String, v: &[Real; 3]| -> Result<(), SceneError> {
+            let norm = v.iter().map(|c| c * c).sum::<Real>().sqrt();
+            if norm <= max {
+                Ok(())
+            } else {
+                Err(SceneError::value(
+                    file,
+                    path,
+                    format!("[{}, {}, {}]", short(v[0]), short(v[1]), short(v[2])),
+                    &allowed,
+                ))
+            }
+        };
+        for (k, o) in self.objects.iter().enumerate() {
+            let path = object_path(k, &o.name);
+            let at = |f: &str| format!("{path}.generator.{}.{f}", o.generator.name());
+            match &o.generator {
+                Generator::Spiral { center, .. }
+                | Generator::HexSheet { center, .. }
+                | Generator::SphereShell { center, .. }
+                | Generator::TorusShell { center, .. } => check(at("center"), center)?,
+                Generator::Chain { start, .. } => check(at("start"), start)?,
+                Generator::List { particles } => {
+                    for (j, p) in particles.iter().enumerate() {
+                        check(at(&format!("particles[{j}].position")), &p.position)?;
+                    }
+                }
+                Generator::Points { .. } => {}
+            }
+            let extent = object_extent(&o.generator, base_dir, file, &format!("{path}.generator"))?;
+            if extent > max {
+                return Err(SceneError::value(
+                    file,
+                    format!("{path}.generator"),
+                    format!("an object {} across", short(extent)),
+                    &format!(
+                        "objects must be at most {} across ({} times the scene's length scale)",
+                        short(max),
+                        short(MAX_EXTENT_OVER_SPACING)
+                    ),
+                ));
+            }
+            if let Some(skin) = &o.skin {
+                let nodes = (extent + 2.0 * skin.radius) / skin.cell_size + 3.0;
+                if !(nodes <= MAX_SKIN_NODES_PER_AXIS) {
+                    return Err(SceneError::value(
+                        file,
+                        format!("{path}.skin.cell_size"),
+                        short(skin.cell_size),
+                        &format!(
+                            "the skin of an object {} across with radius {} needs about {} grid \
+                             nodes per axis at this cell size, more than the polygonizer's {}: \
+                             use a cell size of at least {}",
+                            short(extent),
+                            short(skin.radius),
+                            short(nodes.ceil()),
+                            MAX_SKIN_NODES_PER_AXIS,
+                            short((extent + 2.0 * skin.radius) / (MAX_SKIN_NODES_PER_AXIS - 3.0))
+                        ),
+                    ));
+                }
+            }
+        }
+        for (k, t) in self.tools.iter().enumerate() {
+            if let Ok(shape) = t.shape.build() {
+                let aabb = shape.compute_local_aabb();
+                let size = (aabb.maxs - aabb.mins).length() as Real;
+                if !t.shape.is_unbounded() && !(size <= max) {
+                    return Err(SceneError::value(
+                        file,
+                        format!("tools[{k}].shape"),
+                        format!("a shape {} across", short(size)),
+                        &format!(
+                            "tools must be at most {} across ({} times the scene's length scale)",
+                            short(max),
+                            short(MAX_EXTENT_OVER_SPACING)
+                        ),
+                    ));
+                }
+            }
+            for (j, f) in t.path.keyframes.iter().enumerate() {
+                check(format!("tools[{k}].path[{j}].position"), &f.position)?;
+                let angle = f.rotation.iter().map(|c| c * c).sum::<Real>().sqrt();
+                if !(angle <= MAX_ROTATION) {
+                    return Err(SceneError::value(
+                        file,
+                        format!("tools[{k}].path[{j}].rotation"),
+                        short(angle),
+                        &format!(
+                            "rotation angles must be at most {} rad (a thousand turns)",
+                            short(MAX_ROTATION)
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The size of the object a generator makes (an upper bound for lattices,
+/// the bounding-box diagonal for points and lists).
+fn object_extent(
+    g: &Generator,
+    base_dir: Option<&Path>,
+    file: &str,
+    path: &str,
+) -> Result<Real, SceneError> {
+    Ok(match g {
+        Generator::Spiral { count, spacing, .. } | Generator::Chain { count, spacing, .. } => {
+            count.saturating_sub(1) as Real * spacing
+        }
+        Generator::HexSheet {
+            nx, ny, spacing, ..
+        } => (*nx.max(ny)) as Real * spacing,
+        Generator::SphereShell { radius, .. } => 2.0 * radius,
+        Generator::TorusShell { major, minor, .. } => 2.0 * (major + minor),
+        Generator::List { .. } | Generator::Points { .. } => {
+            let positions = g.generate(base_dir, file, path)?.positions;
+            let mut lo = [Real::INFINITY; 3];
+            let mut hi = [Real::NEG_INFINITY; 3];
+            for p in &positions {
+                for c in 0..3 {
+                    lo[c] = lo[c].min(p[c]);
+                    hi[c] = hi[c].max(p[c]);
+                }
+            }
+            (0..3)
+                .map(|c| (hi[c] - lo[c]).max(0.0).powi(2))
+                .sum::<Real>()
+                .sqrt()
+        }
+    })
+}

@@ -1,0 +1,340 @@
+//! The largest stable step of a scene, estimated before it runs.
+//!
+//! A fixed-step scheme is stable on a mode of angular frequency `ω` only
+//! while `dt ω` stays below a bound of the scheme: 2 for velocity Verlet and
+//! symplectic Euler, about 2.785 for RK4 (the classic stability-region
+//! limit on the imaginary axis); explicit Euler needs the damping rate `c`
+//! (linear damping over mass) to outweigh the growth it adds, `dt < c / ω²`.
+//! `reports/stability.md` measures these laws on probe systems
+//! (`dt sqrt(λ) ≈ 2` for velocity Verlet).
+//!
+//! `ω² = λ`, the largest eigenvalue of the mass-weighted Hessian
+//! `M^-1/2 H M^-1/2` of the potential energy over positions and rotation
+//! vectors, is found by power iteration on a sample of the scene: every
+//! object's generator shrunk to a patch of the same spacing and curvature
+//! ([`SAMPLE_PARTICLES`] particles at most), built with the scene's
+//! materials and tools, its Hessian-vector products by central differences
+//! of the forces and torques. The sample's memory and work are bounded
+//! whatever the scene's size, so `opsim check` can afford it.
+
+use std::path::Path;
+
+use op_dynamics::{Flags, Point3, Quat, Real, Scheme, Vec3, World};
+
+use crate::error::{short, SceneError};
+use crate::generators::Generator;
+use crate::schema::Scene;
+
+/// Largest number of particles per object in the sample.
+pub const SAMPLE_PARTICLES: usize = 400;
+/// Power iterations.
+const ITERATIONS: usize = 60;
+
+/// What [`estimate`] found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepEstimate {
+    /// Largest eigenvalue of the mass-weighted Hessian, 1/time².
+    pub lambda: Real,
+    /// Object whose particle moves most in that mode.
+    pub object: String,
+    /// Largest stable step of the scene's scheme (`None` for the adaptive
+    /// scheme, whose controller shrinks the step as needed, or when the
+    /// scene has no stiffness).
+    pub dt_max: Option<Real>,
+}
+
+impl StepEstimate {
+    /// The warning for a step `dt` above [`StepEstimate::dt_max`].
+    pub fn warning(&self, dt: Real, scheme: &Scheme) -> Option<String> {
+        let max = self.dt_max?;
+        (dt > max).then(|| {
+            format!(
+                "world.dt = {} exceeds the estimated largest stable step of {scheme:?}, {} (stiffest \
+                 mode ω² = {} 1/time², in object {:?}): the run may oscillate or blow up; reduce \
+                 dt or use the Adaptive scheme",
+                short(dt),
+                short(max),
+                short(self.lambda),
+                self.object
+            )
+        })
+    }
+}
+
+/// The stability bound `dt sqrt(λ)` of a scheme; explicit Euler's depends
+/// on the damping rate `c` as `dt < c / λ`.
+pub fn largest_stable_step(scheme: &Scheme, lambda: Real, damping_rate: Real) -> Option<Real> {
+    if !(lambda > 0.0 && lambda.is_finite()) {
+        return None;
+    }
+    match scheme {
+        Scheme::VelocityVerlet | Scheme::SymplecticEuler => Some(2.0 / lambda.sqrt()),
+        Scheme::Rk4 => Some(2.785 / lambda.sqrt()),
+        Scheme::ExplicitEuler => Some(damping_rate / lambda),
+        _ => None,
+    }
+}
+
+/// A generator of the same spacing and curvature as `g`, with at most
+/// about [`SAMPLE_PARTICLES`] particles (points files and lists are kept
+/// whole here and trimmed after the build).
+fn sample_generator(g: &Generator) -> Generator {
+    let n = SAMPLE_PARTICLES;
+    let mut g = g.clone();
+    match &mut g {
+        Generator::Spiral { count, .. } | Generator::Chain { count, .. } => {
+            *count = (*count).min(n);
+        }
+        Generator::HexSheet { nx, ny, .. } => {
+            let side = (n as Real).sqrt() as usize;
+            *nx = (*nx).min(side);
+            *ny = (*ny).min(side);
+        }
+        Generator::SphereShell {
+            radius, spacing, ..
+        } => {
+            // Count ∝ (radius / spacing)²: shrink the radius, not below
+            // two spacings.
+            let count = 4.0 * std::f64::consts::PI * (*radius / *spacing).powi(2);
+            if count > n as Real {
+                *radius = (*radius * (n as Real / count).sqrt()).max(2.0 * *spacing);
+            }
+        }
+        Generator::TorusShell {
+            major,
+            minor,
+            spacing,
+            ..
+        } => {
+            let count = 4.0 * std::f64::consts::PI.powi(2) * *major * *minor / (*spacing).powi(2);
+            if count > n as Real {
+                let f = (n as Real / count).sqrt();
+                *minor = (*minor * f).max(*spacing);
+                *major = (*major * f).max(2.0 * *minor);
+            }
+        }
+        Generator::Points { .. } | Generator::List { .. } => {}
+    }
+    g
+}
+
+/// The sample scene of the module docs: shrunk generators, no overrides
+/// (their selections count the full objects' particles), no force window,
+/// no creation, no skin, no settle phase.
+fn sample_scene(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    for o in &mut s.objects {
+        o.generator = sample_generator(&o.generator);
+        o.overrides.clear();
+        o.skin = None;
+    }
+    s.forces.clear();
+    s.creation = None;
+    s.world.settle = 0.0;
+    s
+}
+
+/// The bounded sample of a scene ([`sample_scene`], built and trimmed) and
+/// its stable-step estimate: what `opsim check` reports without building
+/// the whole scene.
+pub struct Sample {
+    /// The sample, built (each object at most [`SAMPLE_PARTICLES`]
+    /// particles; its world holds the scene's materials, kernel and tools).
+    pub built: crate::BuiltScene,
+    /// The stable-step estimate.
+    pub estimate: StepEstimate,
+}
+
+/// Estimates the largest stable step of `scene` (see the module docs).
+///
+/// # Errors
+///
+/// The scene's own validation and build errors.
+pub fn estimate(scene: &Scene, base_dir: Option<&Path>) -> Result<StepEstimate, SceneError> {
+    Ok(sample(scene, base_dir)?.estimate)
+}
+
+/// Builds the sample of `scene` and estimates its stable step.
+///
+/// # Errors
+///
+/// The scene's own validation and build errors.
+pub fn sample(scene: &Scene, base_dir: Option<&Path>) -> Result<Sample, SceneError> {
+    let sample = sample_scene(scene);
+    let mut built = sample.build_world(base_dir, None)?;
+    let world = &mut built.world;
+    // Trim points files and lists to the particles nearest each object's
+    // first one.
+    let mut extra = Vec::new();
+    for o in &built.objects {
+        if o.ids.len() > SAMPLE_PARTICLES {
+            let first = o.rest[0];
+            let mut by_distance: Vec<(Real, u32)> = o
+                .ids
+                .iter()
+                .zip(&o.rest)
+                .map(|(&id, x)| ((x - first).norm(), id))
+                .collect();
+            by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            extra.extend(by_distance[SAMPLE_PARTICLES..].iter().map(|e| e.1));
+        }
+    }
+    if !extra.is_empty() {
+        world
+            .remove_particles(&extra)
+            .map_err(|e| SceneError::Build {
+                file: scene.origin().to_string(),
+                message: format!("sampling the scene for its stable step: {e}"),
+            })?;
+    }
+    let (lambda, slot) = largest_eigenvalue(world);
+    let p = world.particles();
+    let object = slot
+        .and_then(|s| built.objects.get(p.objects()[s] as usize))
+        .map_or_else(String::new, |o| o.name.clone());
+    let mass = p
+        .masses()
+        .iter()
+        .copied()
+        .filter(|m| *m > 0.0)
+        .fold(0.0, Real::max);
+    let damping_rate = scene.world.linear_damping / mass.max(Real::MIN_POSITIVE);
+    let estimate = StepEstimate {
+        lambda,
+        object,
+        dt_max: largest_stable_step(&scene.world.integrator, lambda, damping_rate),
+    };
+    Ok(Sample { built, estimate })
+}
+
+/// The largest eigenvalue (in magnitude) of the mass-weighted Hessian at
+/// the world's current state, and the slot moving most in its mode. Fixed
+/// positions and orientations are left out. Velocity-dependent forces
+/// (damping, friction) do not change between the two sides of a central
+/// difference and cancel. The state is restored afterwards.
+pub fn largest_eigenvalue(world: &mut World) -> (Real, Option<usize>) {
+    let n = world.particles().len();
+    let base_p: Vec<Point3> = world.particles().positions().to_vec();
+    let base_q: Vec<Quat> = world.particles().orientations().to_vec();
+    // 1/sqrt(mass) per degree of freedom; 0 for fixed ones.
+    let weights: Vec<Real> = {
+        let p = world.particles();
+        (0..6 * n)
+            .map(|k| {
+                let s = k / 6;
+                let flags = p.flags()[s];
+                if k % 6 < 3 {
+                    if flags.contains(Flags::FIXED_POSITION) {
+                        0.0
+                    } else {
+                        p.inv_masses()[s].sqrt()
+                    }
+                } else if flags.contains(Flags::FIXED_ORIENTATION) {
+                    0.0
+                } else {
+                    1.0 / p.inertias()[s][k % 3].sqrt()
+                }
+            })
+            .map(|w| if w.is_finite() { w } else { 0.0 })
+            .collect()
+    };
+    let length = spacing_scale(&base_p);
+    let set = |world: &mut World, u: &[Real], h: Real| {
+        let p = world.particles_mut();
+        for s in 0..n {
+            let dx = Vec3::new(u[6 * s], u[6 * s + 1], u[6 * s + 2]) * h;
+            let dr = Vec3::new(u[6 * s + 3], u[6 * s + 4], u[6 * s + 5]) * h;
+            p.set_position(s, base_p[s] + dx);
+            p.set_orientation(s, Quat::from_scaled_axis(dr) * base_q[s]);
+        }
+    };
+    // A fixed pseudo-random start (same estimate every time).
+    let mut v: Vec<Real> = (0..6 * n)
+        .map(|k| {
+            let x = ((k as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11) as Real;
+            (x / (1u64 << 53) as Real - 0.5) * weights[k].signum()
+        })
+        .collect();
+    let mut lambda = 0.0;
+    for _ in 0..ITERATIONS {
+        let norm = v.iter().map(|x| x * x).sum::<Real>().sqrt();
+        if !(norm > 0.0 && norm.is_finite()) {
+            break;
+        }
+        v.iter_mut().for_each(|x| *x /= norm);
+        let u: Vec<Real> = v.iter().zip(&weights).map(|(a, w)| a * w).collect();
+        let umax = u.iter().fold(0.0, |m: Real, x| m.max(x.abs()));
+        if umax == 0.0 {
+            break;
+        }
+        // Displacements of 1e-6 of the spacing (and radians) at most.
+        let h = 1e-6 * length.min(1.0) / umax;
+        let mut grad = [vec![0.0; 6 * n], vec![0.0; 6 * n]];
+        for (side, sign) in [-1.0, 1.0].into_iter().enumerate() {
+            set(world, &u, sign * h);
+            let (f, t, _) = world.evaluate_forces();
+            for s in 0..n {
+                for c in 0..3 {
+                    grad[side][6 * s + c] = -f[s][c];
+                    grad[side][6 * s + 3 + c] = -t[s][c];
+                }
+            }
+        }
+        let y: Vec<Real> = (0..6 * n)
+            .map(|k| weights[k] * (grad[1][k] - grad[0][k]) / (2.0 * h))
+            .collect();
+        lambda = v.iter().zip(&y).map(|(a, b)| a * b).sum::<Real>().abs();
+        v = y;
+    }
+    let p = world.particles_mut();
+    for s in 0..n {
+        p.set_position(s, base_p[s]);
+        p.set_orientation(s, base_q[s]);
+    }
+    let slot = (0..n).max_by(|&a, &b| {
+        let m = |s: usize| (0..6).map(|c| v[6 * s + c].abs()).fold(0.0, Real::max);
+        m(a).total_cmp(&m(b))
+    });
+    (if lambda.is_finite() { lambda } else { 0.0 }, slot)
+}
+
+/// A length scale of a point set: its mean nearest-neighbour distance over
+/// a few points, or 1 when it has fewer than two.
+fn spacing_scale(points: &[Point3]) -> Real {
+    let take = points.len().min(32);
+    let d: Vec<Real> = (0..take)
+        .filter_map(|a| {
+            points
+                .iter()
+                .enumerate()
+                .filter(|(b, _)| *b != a)
+                .map(|(_, x)| (x - points[a]).norm())
+                .filter(|d| *d > 0.0)
+                .min_by(|x, y| x.total_cmp(y))
+        })
+        .collect();
+    if d.is_empty() {
+        1.0
+    } else {
+        d.iter().sum::<Real>() / d.len() as Real
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scheme_bounds() {
+        let l = 100.0;
+        assert_eq!(
+            largest_stable_step(&Scheme::VelocityVerlet, l, 0.0),
+            Some(0.2)
+        );
+        assert_eq!(
+            largest_stable_step(&Scheme::ExplicitEuler, l, 1.0),
+            Some(0.01)
+        );
+        assert_eq!(largest_stable_step(&Scheme::VelocityVerlet, 0.0, 0.0), None);
+    }
+}
