@@ -63,6 +63,11 @@ enum Command {
         /// particles) that keep every valid scene's run bounded.
         #[arg(long)]
         no_work_limits: bool,
+        /// Largest number of particle-steps (particles times steps) the run
+        /// may take; a scene that needs more is refused before it starts.
+        /// Default: 1e12.
+        #[arg(long)]
+        max_particle_steps: Option<f64>,
     },
     /// Validate a scene, print what it enables and estimate its largest
     /// stable step (on a bounded sample of the scene: memory proportional to
@@ -73,6 +78,9 @@ enum Command {
         /// Lift the work limits, as `run --no-work-limits`.
         #[arg(long)]
         no_work_limits: bool,
+        /// As `run --max-particle-steps`.
+        #[arg(long)]
+        max_particle_steps: Option<f64>,
     },
     /// Fit a particle surface to a point set (seed 000 §7) and write its
     /// triangle mesh; prints one JSON line of figures.
@@ -166,6 +174,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             frames,
             threads,
             no_work_limits,
+            max_particle_steps,
         }) => {
             if let Some(k) = threads {
                 rayon::ThreadPoolBuilder::new()
@@ -173,13 +182,16 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                     .build_global()
                     .context("cannot start the thread pool")?;
             }
-            let built = load(&scene, no_work_limits)?;
-            run_built(built, out, frames.map(|f| f as usize))
+            let frames = frames.map(|f| usize::try_from(f).unwrap_or(usize::MAX));
+            let limits = limits(no_work_limits, max_particle_steps)?;
+            let built = load(&scene, limits, frames)?;
+            run_built(built, out, frames)
         }
         Some(Command::Check {
             scene,
             no_work_limits,
-        }) => check(&scene, no_work_limits),
+            max_particle_steps,
+        }) => check(&scene, limits(no_work_limits, max_particle_steps)?),
         Some(Command::Fit {
             points,
             out,
@@ -252,16 +264,24 @@ fn run_fit(points: &Path, out: &Path, spacing: Option<f64>, open: bool) -> Resul
     Ok(())
 }
 
-fn limits(no_work_limits: bool) -> op_scene::WorkLimits {
-    if no_work_limits {
+/// The work limits the flags ask for.
+fn limits(no_work_limits: bool, max_particle_steps: Option<f64>) -> Result<op_scene::WorkLimits> {
+    let mut limits = if no_work_limits {
         op_scene::WorkLimits::unlimited()
     } else {
         op_scene::WorkLimits::default()
+    };
+    if let Some(m) = max_particle_steps {
+        if m.is_nan() || m <= 0.0 {
+            return Err(anyhow!("--max-particle-steps {m}: must be > 0"));
+        }
+        limits.max_particle_steps = m;
     }
+    Ok(limits)
 }
 
-fn load(path: &Path, no_work_limits: bool) -> Result<BuiltScene> {
-    let scene = op_scene::load_scene_with(path, limits(no_work_limits))?;
+fn load(path: &Path, limits: op_scene::WorkLimits, frames: Option<usize>) -> Result<BuiltScene> {
+    let scene = op_scene::load_scene_with(path, limits, frames)?;
     let base = path.parent().map(Path::to_path_buf);
     Ok(scene.build(base.as_deref(), Some(path.to_path_buf()))?)
 }
@@ -329,8 +349,8 @@ fn run_built(
 /// `opsim check`: validates the scene, builds a bounded sample of it
 /// (`op_scene::stability`) and prints what it enables, its objects and the
 /// stable-step estimate, with a warning when `dt` exceeds it.
-fn check(path: &Path, no_work_limits: bool) -> Result<(), Failure> {
-    let scene = op_scene::load_scene_with(path, limits(no_work_limits))?;
+fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
+    let scene = op_scene::load_scene_with(path, limits, None)?;
     let counts = scene.validate(path.parent())?;
     let sample = op_scene::stability::sample(&scene, path.parent())?;
     let built = &sample.built;

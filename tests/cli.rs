@@ -49,6 +49,7 @@ fn run_scene(scene: &Path, out: &Path, extra: &[&str]) -> Output {
         out.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
+    std::fs::create_dir_all(out).unwrap();
     opsim(&args, out)
 }
 
@@ -302,4 +303,261 @@ fn closed_stdout_is_not_a_panic() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert!(out.status.success(), "{:?}: {stderr}", out.status);
+}
+
+// ---- Runs that tell the truth (exit 0 only for a run that went right) ----
+
+/// Writes `body` as `name` in `dir` and returns its path.
+fn scene_file(dir: &Path, name: &str, body: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, body).unwrap();
+    path
+}
+
+/// One particle, with `world` settings and `extra` top-level fields.
+fn one_particle(world: &str, extra: &str) -> String {
+    format!(
+        "(name: \"p\", world: ({world}), materials: {{\"m\": ()}}, \
+         objects: [(name: \"p\", material: \"m\", generator: List(particles: [(position: (0, 0, 0))]))]{extra})"
+    )
+}
+
+/// Every value in every output file is finite.
+fn assert_outputs_finite(out: &Path) {
+    let mut files = vec![out.join("summary.json"), out.join("metrics.csv")];
+    if out.join("frames").is_dir() {
+        files.extend(frames(out));
+    }
+    for f in files.iter().filter(|f| f.is_file()) {
+        let t = std::fs::read_to_string(f).unwrap().to_lowercase();
+        assert!(
+            !t.contains("nan") && !t.contains("inf") && !t.contains("null"),
+            "{}",
+            f.display()
+        );
+    }
+}
+
+/// A particle falling from rest under gravity is not a runaway: the energy
+/// scale is never zero (it was 1e-12 and the run exited 3).
+#[test]
+fn a_particle_falling_from_rest_is_not_a_divergence() {
+    let dir = temp_dir("fall");
+    let scene = scene_file(
+        &dir,
+        "fall.ron",
+        &one_particle("dt: 1e-3, duration: 3, gravity: (0, 0, -9.81)", ""),
+    );
+    let o = run_scene(&scene, &dir.join("out"), &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    let s = summary(&dir.join("out"));
+    assert_eq!(s["warnings"].as_array().unwrap().len(), 0, "{s}");
+    assert_outputs_finite(&dir.join("out"));
+}
+
+/// Values that cannot give a finite run of bounded work are refused by
+/// `check`, naming the field and what is allowed.
+#[test]
+fn values_without_a_finite_run_are_refused() {
+    let dir = temp_dir("bounds");
+    let list = |a: &str, b: &str| {
+        format!(
+            "(name: \"l\", materials: {{\"m\": ()}}, objects: [(name: \"l\", material: \"m\", \
+             generator: List(particles: [(position: {a}), (position: {b})]))])"
+        )
+    };
+    let tool = |shape: &str, path: &str| {
+        one_particle(
+            "dt: 1e-3",
+            &format!(", tools: [(shape: {shape}, path: [{path}], role: Obstacle(stiffness: 10))]"),
+        )
+    };
+    let cases = [
+        (one_particle("dt: 50, frame_rate: 2", ""), "world.dt"),
+        (one_particle("dt: 1e12", ""), "world.dt"),
+        (one_particle("dt: 1e-320", ""), "steps"),
+        (one_particle("settle: 1e308", ""), "steps"),
+        (one_particle("frame_rate: 1e-320", ""), "world.frame_rate"),
+        (
+            one_particle("heat: (conduction: 1e15, cooling: 0, ambient: 0)", ""),
+            "world.heat.conduction",
+        ),
+        (list("(0, 0, 0)", "(1e308, 0, 0)"), "particles[1].position"),
+        (
+            tool("Ball(radius: 1e308)", "(time: 0, position: (0, 0, 0))"),
+            "tools[0].shape",
+        ),
+        (
+            tool(
+                "Ball(radius: 1)",
+                "(time: 0, position: (0, 0, 3), rotation: (1e308, 0, 0))",
+            ),
+            "rotation",
+        ),
+        (
+            "(name: \"s\", materials: {\"m\": ()}, objects: [(name: \"s\", material: \"m\", \
+             generator: Chain(count: 10, spacing: 1), skin: (primitive: Point, radius: 100, \
+             cell_size: 0.25))])"
+                .to_string(),
+            "skin.cell_size",
+        ),
+    ];
+    for (k, (body, field)) in cases.iter().enumerate() {
+        let path = scene_file(&dir, &format!("case{k}.ron"), body);
+        let o = opsim(&["check", path.to_str().unwrap()], &dir);
+        let msg = text(&o);
+        assert_eq!(o.status.code(), Some(2), "case {k}: {msg}");
+        assert!(msg.contains(field), "case {k}: {msg}");
+        assert!(msg.len() < 600, "case {k}: long message: {msg}");
+        assert!(!msg.contains("0000000000"), "case {k}: long number: {msg}");
+    }
+    // The documented particle limit is checked without making the
+    // particles: `check` of ten million is as quick as of ten.
+    let big = scene_file(
+        &dir,
+        "big.ron",
+        "(name: \"b\", materials: {\"m\": ()}, objects: [(name: \"b\", material: \"m\", \
+         generator: Chain(count: 10000000, spacing: 1))])",
+    );
+    let start = std::time::Instant::now();
+    let o = opsim(&["check", big.to_str().unwrap()], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("10000000 particles"), "{}", text(&o));
+    assert!(
+        start.elapsed().as_secs() < 30,
+        "check built the particles: {:?}",
+        start.elapsed()
+    );
+}
+
+/// `check` warns when dt exceeds the estimated stable step, and the run
+/// carries the same warning.
+#[test]
+fn a_step_above_the_stable_step_is_reported() {
+    let dir = temp_dir("stable");
+    let spiral = std::fs::read_to_string(repo().join("scenes/spiral.ron")).unwrap();
+    // The spiral's stiffest mode is near ω² = 200: dt 0.5 (its frame
+    // interval) is far beyond velocity Verlet's 2/ω ≈ 0.14.
+    let path = scene_file(&dir, "spiral.ron", &spiral.replace("dt: 0.005", "dt: 0.5"));
+    let o = opsim(&["check", path.to_str().unwrap()], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("exceeds the estimated largest stable step"),
+        "{}",
+        text(&o)
+    );
+    let o = opsim(
+        &["check", repo().join("scenes/spiral.ron").to_str().unwrap()],
+        &dir,
+    );
+    assert!(!text(&o).contains("warning"), "{}", text(&o));
+    assert!(text(&o).contains("stable step: at most"), "{}", text(&o));
+}
+
+/// An object pulled apart is not a silent success: the summary names its
+/// pieces and the warning is printed.
+#[test]
+fn break_up_is_reported() {
+    let dir = temp_dir("breakup");
+    let spiral = std::fs::read_to_string(repo().join("scenes/spiral.ron")).unwrap();
+    let doubled = spiral
+        .replace("0.0113329, -0.443191", "0.0226658, -0.886382")
+        .replace("-0.0113329, 0.443191", "-0.0226658, 0.886382");
+    assert_ne!(doubled, spiral);
+    let path = scene_file(&dir, "spiral.ron", &doubled);
+    let o = run_scene(&path, &dir.join("out"), &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("warning: object \"spiral\" broke into 2 pieces"),
+        "{}",
+        text(&o)
+    );
+    let s = summary(&dir.join("out"));
+    assert_eq!(s["objects"][0]["pieces"], 2);
+    assert!(s["objects"][0]["bond_stretch_max"].as_f64().unwrap() > 1.5);
+    assert_eq!(s["warnings"].as_array().unwrap().len(), 1);
+    // The demo's own pull keeps it whole.
+    let o = run_scene(&repo().join("scenes/spiral.ron"), &dir.join("demo"), &[]);
+    assert!(o.status.success(), "{}", text(&o));
+    let s = summary(&dir.join("demo"));
+    assert_eq!(s["objects"][0]["pieces"], 1);
+    assert!(s["warnings"].as_array().unwrap().is_empty(), "{s}");
+}
+
+/// A reused output directory keeps nothing of the previous run; links
+/// where opsim writes are refused; no temporary file is left.
+#[test]
+fn outputs_are_clean_and_never_written_through_links() {
+    let dir = temp_dir("outputs");
+    let scene = scene_file(&dir, "p.ron", &one_particle("dt: 1e-2, duration: 1", ""));
+    let out = dir.join("out");
+    let o = run_scene(&scene, &out, &["--frames", "10"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(frames(&out).len(), 10);
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let o = run_scene(&scene, &out, &["--frames", "3"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(
+        frames(&out).len(),
+        3,
+        "frames of the previous run were kept"
+    );
+    assert_eq!(summary(&out)["frames"], 3);
+    let rows = std::fs::read_to_string(out.join("metrics.csv")).unwrap();
+    assert_eq!(rows.lines().count(), 4, "{rows}");
+    assert!(
+        out.join("notes.txt").is_file(),
+        "a file opsim does not write was removed"
+    );
+    let leftovers: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .chain(std::fs::read_dir(out.join("frames")).unwrap())
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    // A `frames` link inside --out would send the frames elsewhere.
+    let elsewhere = dir.join("elsewhere");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    let linked = dir.join("linked");
+    std::fs::create_dir_all(&linked).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, linked.join("frames")).unwrap();
+    let o = run_scene(&scene, &linked, &["--frames", "2"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("symbolic link"), "{}", text(&o));
+    assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 0);
+    let linked = dir.join("linked2");
+    std::fs::create_dir_all(&linked).unwrap();
+    std::os::unix::fs::symlink(dir.join("victim.csv"), linked.join("metrics.csv")).unwrap();
+    let o = run_scene(&scene, &linked, &["--frames", "2"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(!dir.join("victim.csv").exists());
+}
+
+/// Messages: the OS error once, a BOM accepted, a huge name elided, a
+/// device refused before it is read.
+#[test]
+fn messages_are_short_and_inputs_bounded() {
+    let dir = temp_dir("messages");
+    let o = opsim(&["check", dir.join("missing.ron").to_str().unwrap()], &dir);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(text(&o).matches("No such file").count(), 1, "{}", text(&o));
+    let body = one_particle("dt: 1e-3", "");
+    let bom = scene_file(&dir, "bom.ron", &format!("\u{feff}{body}"));
+    let o = opsim(&["check", bom.to_str().unwrap()], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    let long = body.replacen(
+        "name: \"p\"",
+        &format!("name: \"{}/\"", "x".repeat(4_000_000)),
+        1,
+    );
+    let long = scene_file(&dir, "long.ron", &long);
+    let o = opsim(&["check", long.to_str().unwrap()], &dir);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o).len() < 1000, "{} characters", text(&o).len());
+    let dev = dir.join("dev.ron");
+    std::os::unix::fs::symlink("/dev/zero", &dev).unwrap();
+    let o = opsim(&["check", dev.to_str().unwrap()], &dir);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o).contains("not a regular file"), "{}", text(&o));
 }

@@ -144,10 +144,13 @@ impl Health {
                 bounds.add(&tool.pose(t).position);
             }
         }
+        // At least one interaction range: a scene that starts as a point
+        // (particles on top of each other) still has the size its material
+        // gives it.
         let spacing = scene
             .objects
             .iter()
-            .map(|o| o.rest_spacing)
+            .flat_map(|o| [o.rest_spacing, object_range(scene, o)])
             .filter(|r| r.is_finite())
             .fold(0.0, Real::max);
         let size = bounds.diagonal().max(spacing).max(Real::MIN_POSITIVE);
@@ -195,6 +198,12 @@ impl Health {
             escape_max: 0.0,
             escaped_object: None,
         }
+    }
+
+    /// The scene's size: the diagonal of its bounds, at least its largest
+    /// rest spacing and interaction range.
+    pub fn size(&self) -> Real {
+        self.size
     }
 
     /// Observes the current frame; returns the explosion message when a
@@ -390,14 +399,6 @@ pub fn energy_floor(scene: &BuiltScene, size: Real, duration: Real) -> Real {
     let v = (size * scene.frame_rate).max(g * (duration + scene.settle));
     let mass: Real = w.particles().masses().iter().sum();
     0.5 * mass * v * v
-}
-
-impl Health {
-    /// The scene's size (the diagonal of its bounds, at least its largest
-    /// rest spacing).
-    pub fn size(&self) -> Real {
-        self.size
-    }
 }
 
 #[cfg(test)]

@@ -47,19 +47,29 @@ impl Format {
 /// [`SceneError::Parse`] (with line and column), then the validation
 /// errors of [`Scene::validate`].
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    load_scene_with(path, crate::schema::WorkLimits::default())
+    load_scene_with(path, crate::schema::WorkLimits::default(), None)
 }
 
 /// [`load_scene`] under the given work limits (kept in
-/// [`Scene::limits`], so building validates under them too).
+/// [`Scene::limits`], so building validates under them too). With
+/// `frames` (the runner's frame count override, at least 2), the duration
+/// is cut to those frames first, so the limits count the run that will
+/// actually be made.
 pub fn load_scene_with(
     path: &Path,
     limits: crate::schema::WorkLimits,
+    frames: Option<usize>,
 ) -> Result<Scene, SceneError> {
     let format = Format::from_path(path)?;
     let text = read_text_file(path, MAX_SCENE_FILE_BYTES)?;
     let mut scene = parse_unvalidated(&text, format, &path.display().to_string())?;
     scene.limits = limits;
+    if let Some(n) = frames.filter(|&n| n >= 2) {
+        let d = (n - 1) as op_dynamics::Real / scene.world.frame_rate;
+        if d.is_finite() && d > 0.0 && d < scene.world.duration {
+            scene.world.duration = d;
+        }
+    }
     scene.validate(path.parent())?;
     Ok(scene)
 }

@@ -68,6 +68,19 @@ impl Scene {
             ));
         }
         let frames = w.duration * w.frame_rate + 1.0;
+        if frames < 1.5 {
+            return Err(SceneError::value(
+                file,
+                "world.frame_rate",
+                short(w.frame_rate),
+                &format!(
+                    "with world.duration = {} gives no frame after frame 0: frame_rate must be at \
+                     least 1 / duration = {}",
+                    short(w.duration),
+                    short(1.0 / w.duration)
+                ),
+            ));
+        }
         if frames > lim.max_frames {
             return Err(SceneError::value(
                 file,
