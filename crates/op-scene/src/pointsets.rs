@@ -166,8 +166,9 @@ fn format_err(file: &str, line: Option<usize>, message: impl Into<String>) -> Po
 /// `obj`, case-insensitive).
 ///
 /// # Errors
-/// An unreadable file, an unknown extension, malformed content, no point,
-/// or a non-finite value.
+/// An unreadable file, one that is not a regular file or is larger than
+/// [`MAX_POINT_FILE_BYTES`], an unknown extension, malformed content, no
+/// point, or a non-finite value.
 pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
     let set = read_points(path)?;
     if set.positions.is_empty() {
@@ -184,7 +185,8 @@ pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
 /// set (the scene layer reports that against the field that reads it).
 ///
 /// # Errors
-/// An unreadable file, an unknown extension, malformed content or a
+/// An unreadable file, one that is not a regular file or is larger than
+/// [`MAX_POINT_FILE_BYTES`], an unknown extension, malformed content or a
 /// non-finite value.
 pub fn read_points(path: &Path) -> Result<PointSet, PointSetError> {
     let file = path.display().to_string();
