@@ -239,13 +239,19 @@ fn run_fit(points: &Path, out: &Path, spacing: Option<f64>, open: bool) -> Resul
         } else {
             2
         },
-        error: anyhow!(e).context(format!("cannot fit {}", points.display())),
+        // The spacing's message names the flag it came from.
+        error: match e {
+            op_scene::fit::FitError::Spacing { .. } => anyhow!("--{e}"),
+            e => anyhow!(e),
+        }
+        .context(format!("cannot fit {}", points.display())),
     })?;
     op_scene::fit::write_obj(out, &fit)
         .with_context(|| format!("cannot write {}", out.display()))?;
     let number = |x: f64| {
         if x.is_finite() {
-            format!("{x}")
+            // Exponent notation for very large or small values.
+            format!("{x:?}")
         } else {
             "null".to_string()
         }

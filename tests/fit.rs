@@ -1,7 +1,10 @@
 //! Point-set interpolation (seed 000 §7, DESIGN §6 `opsim fit`): sampled
 //! spheres and tori give closed meshes of the right Euler characteristic
 //! close to the true surface; an open patch keeps a hole wider than the
-//! search range and closes one narrower; bad files exit with code 2.
+//! search range and closes one narrower; bad files exit with code 2, and
+//! so do degenerate samples (issue 13): collinear, coincident, too few, no
+//! surface, a spacing out of range; any finite scale fits like the unit
+//! scale; only regular files are read.
 
 use std::f64::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
@@ -350,4 +353,194 @@ fn cli_fit_is_identical_at_one_and_two_threads() {
         meshes.push(std::fs::read(dir.join(&out)).unwrap());
     }
     assert_eq!(meshes[0], meshes[1]);
+}
+
+/// Runs `opsim` in `cwd`, killed after `seconds` (a hang fails the test
+/// instead of stalling it).
+fn opsim_within(args: &[&str], cwd: &Path, seconds: u64) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_opsim"))
+        .args(args)
+        .current_dir(cwd)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run opsim");
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed().as_secs() > seconds {
+            child.kill().unwrap();
+            let o = child.wait_with_output().unwrap();
+            panic!("opsim {args:?} ran over {seconds} s: {}", text(&o));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// The unit sphere and the same samples scaled by 1e65, 1e-100 and 1e155
+/// give the same mesh, scaled: exit 0, the same Euler characteristic and
+/// face count, the same RMS and spacing relative to the scale. Before the
+/// fit worked in the unit box, 1e65 and 1e-100 gave an empty mesh (exit 0,
+/// distances `null`) and 1e155 hung.
+#[test]
+fn any_finite_scale_fits_like_the_unit_sphere() {
+    let dir = temp_dir("scales");
+    let unit = fibonacci_sphere(400, 1.0);
+    let mut reference: Option<serde_json::Value> = None;
+    for (name, scale) in [
+        ("1", 1.0),
+        ("1e65", 1e65),
+        ("1e-100", 1e-100),
+        ("1e155", 1e155),
+    ] {
+        let file = format!("s{name}.xyz");
+        let points: Vec<Point3> = unit.iter().map(|p| p * scale).collect();
+        write_xyz(&dir.join(&file), &points, None);
+        let o = opsim_within(&["fit", &file, "--out", &format!("s{name}.obj")], &dir, 120);
+        assert!(o.status.success(), "scale {name}: {}", text(&o));
+        let j = figures(&o);
+        let Some(r) = &reference else {
+            assert_eq!(j["euler_characteristic"], 2, "{j}");
+            reference = Some(j);
+            continue;
+        };
+        for key in [
+            "euler_characteristic",
+            "boundary_loops",
+            "faces",
+            "vertices",
+        ] {
+            assert_eq!(j[key], r[key], "scale {name}: {key}: {j} vs {r}");
+        }
+        for key in ["rms_distance", "max_distance", "spacing"] {
+            let (a, b) = (j[key].as_f64().unwrap() / scale, r[key].as_f64().unwrap());
+            assert!((a - b).abs() <= 1e-6 * b, "scale {name}: {key} {a} vs {b}");
+        }
+        let mesh = read_point_set(&dir.join(format!("s{name}.obj"))).unwrap();
+        let radius = (mesh.positions[0].coords / scale).norm();
+        assert!((radius - 1.0).abs() < 0.05, "scale {name}: radius {radius}");
+    }
+}
+
+/// Collinear samples exit 2 and say why (they gave an empty mesh, exit 0).
+#[test]
+fn collinear_samples_exit_2_saying_why() {
+    let dir = temp_dir("collinear");
+    let line: Vec<Point3> = (0..50)
+        .map(|k| Point3::new(k as f64, 2.0 * k as f64, -(k as f64)))
+        .collect();
+    write_xyz(&dir.join("line.xyz"), &line, None);
+    let o = opsim_within(&["fit", "line.xyz", "--out", "m.obj"], &dir, 120);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let t = text(&o);
+    assert!(t.contains("line.xyz") && t.contains("lie on a line"), "{t}");
+    assert!(!dir.join("m.obj").exists());
+}
+
+/// Degenerate samples and spacings exit 2 with a reason, never 0 with an
+/// empty mesh: coincident samples, two samples, a circle (a curve: no
+/// surface), a spacing above the bounding box's diagonal (1e300 gave an
+/// empty mesh) or too small for the particle limit (the message names the
+/// flag, the value and the valid range).
+#[test]
+fn degenerate_inputs_exit_2_with_a_reason() {
+    let dir = temp_dir("degenerate");
+    write_xyz(
+        &dir.join("same.xyz"),
+        &[Point3::new(1.0, 2.0, 3.0); 20],
+        None,
+    );
+    write_xyz(
+        &dir.join("two.xyz"),
+        &[Point3::origin(), Point3::new(1.0, 0.0, 0.0)],
+        None,
+    );
+    let circle: Vec<Point3> = (0..63)
+        .map(|k| Point3::new((0.1 * k as f64).cos(), (0.1 * k as f64).sin(), 0.0))
+        .collect();
+    write_xyz(&dir.join("circle.xyz"), &circle, None);
+    write_xyz(&dir.join("sphere.xyz"), &fibonacci_sphere(200, 1.0), None);
+    for (args, wanted) in [
+        (vec!["same.xyz"], "all 20 samples coincide"),
+        (vec!["two.xyz"], "at least 3 are needed"),
+        (vec!["circle.xyz"], "no surface"),
+        (
+            vec!["sphere.xyz", "--spacing", "1e300"],
+            "--spacing 1e300: must be between",
+        ),
+        (
+            vec!["sphere.xyz", "--spacing", "1e-9"],
+            "--spacing 1e-9: must be between",
+        ),
+    ] {
+        let mut all = vec!["fit"];
+        all.extend(&args);
+        all.extend(["--out", "m.obj"]);
+        let o = opsim_within(&all, &dir, 120);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o));
+        assert!(text(&o).contains(wanted), "{args:?}: {}", text(&o));
+        assert!(!dir.join("m.obj").exists(), "{args:?}");
+    }
+}
+
+/// A symlink to /dev/zero (read until 2 GB before) is refused at once by
+/// `fit` and `render`, naming the file.
+#[cfg(unix)]
+#[test]
+fn non_regular_inputs_are_refused() {
+    let dir = temp_dir("devzero");
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.xyz")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.obj")).unwrap();
+    for args in [
+        ["fit", "zero.xyz", "--out", "m.obj"],
+        ["render", "zero.obj", "--out", "z.png"],
+    ] {
+        let o = opsim_within(&args, &dir, 30);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o));
+        let t = text(&o);
+        assert!(
+            t.contains(args[1]) && t.contains("not a regular file"),
+            "{args:?}: {t}"
+        );
+    }
+}
+
+/// A bad token of 1 MB is quoted cut to 80 characters with the line
+/// number (it was echoed whole); a byte-order mark is accepted.
+#[test]
+fn bad_content_is_elided_and_a_byte_order_mark_accepted() {
+    let dir = temp_dir("elide");
+    let long = "7".repeat(1 << 20) + "z";
+    std::fs::write(dir.join("long.xyz"), format!("0 0 0\n1 0 {long}\n")).unwrap();
+    let o = opsim_within(&["fit", "long.xyz", "--out", "m.obj"], &dir, 60);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.len() < 300, "{} bytes of error", err.len());
+    assert!(err.contains("long.xyz:2:") && err.contains("..."), "{err}");
+
+    write_xyz(&dir.join("plain.xyz"), &fibonacci_sphere(200, 1.0), None);
+    let plain = std::fs::read(dir.join("plain.xyz")).unwrap();
+    let mut bom = b"\xEF\xBB\xBF".to_vec();
+    bom.extend_from_slice(&plain);
+    std::fs::write(dir.join("bom.xyz"), bom).unwrap();
+    let o = opsim_within(&["fit", "bom.xyz", "--out", "b.obj"], &dir, 120);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(figures(&o)["euler_characteristic"], 2);
+}
+
+/// The system's message appears once in an error chain (the render
+/// reader's printed it twice).
+#[test]
+fn os_errors_are_printed_once() {
+    let dir = temp_dir("oserror");
+    for args in [
+        ["fit", "missing.xyz", "--out", "m.obj"],
+        ["render", "missing.obj", "--out", "z.png"],
+    ] {
+        let o = opsim_within(&args, &dir, 30);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.matches("os error").count(), 1, "{args:?}: {err}");
+        assert!(err.contains("missing."), "{err}");
+    }
 }

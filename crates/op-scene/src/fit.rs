@@ -4,16 +4,25 @@
 //! Entry point: [`fit`] with [`FitParams`]; [`write_obj`] writes the mesh.
 //!
 //! **Stages**, in units of the spacing `h` (every length below is a
-//! multiple of `h`; the data are moved to their centroid and scaled by
-//! `1/h`, so the material constants are those of a unit-spacing scene):
+//! multiple of `h`). The data are first mapped into the unit box (the
+//! bounding box's centre to the origin, its largest half-side to 1, halving
+//! first so that no step overflows), then moved to their centroid and
+//! scaled by `1/h`: the material constants are those of a unit-spacing
+//! scene, and data of any finite scale and offset fit alike (a sphere of
+//! radius 1e-100 or 1e155 gives the unit sphere's mesh, scaled). The mesh
+//! is triangulated and measured at unit spacing and mapped back.
 //!
-//! 1. *Spacing*: `--spacing` or the median over the samples of the
-//!    distance to the nearest other sample (robust to a few outliers).
+//! 1. *Spacing*: `--spacing` or the median over the distinct samples of the
+//!    distance to the nearest other sample (robust to a few outliers; a
+//!    k-d tree, O(n log n) for any distribution). A given spacing must lie
+//!    between the spacing that would need [`MAX_PARTICLES`] particles
+//!    (estimated as the distinct samples times `(median / h)²`) and the
+//!    bounding box's diagonal ([`FitError::Spacing`]).
 //!    Samples within `h/4` of an earlier sample are merged into it (they
 //!    would sit on top of each other as particles); all samples still count
 //!    in the distance figures.
 //! 2. *Normals*: from the file when it has them; otherwise by local PCA
-//!    (the least-variance direction of the samples within `2.5 h`) and
+//!    (the least-variance direction of the merged samples within `2.5 h`) and
 //!    oriented by propagation over that neighbour graph along its maximum
 //!    spanning tree of `|n_i . n_j|` (Hoppe et al. 1992), started in each
 //!    connected component at its sample of largest x with the normal's
@@ -68,6 +77,19 @@
 //! does not close holes and lets the sphere drift (sample RMS 0.0022 at
 //! `relax_time` 1, 0.018 at 10, for h = 0.08).
 //!
+//! **Refused inputs** ([`FitError::Input`]): fewer than 3 samples or 3
+//! distinct ones (all coinciding), fewer than 3 left after merging, more
+//! than [`MAX_PARTICLES`] distinct samples, samples all within `h/4` of one
+//! line (collinear: no surface spans them), a spacing for which cohesion
+//! has no valid cut-off (far coarser than the samples), and a fit that is
+//! no surface: half of the samples or more farther than `h` from its
+//! triangles (0 triangles; samples along a curve, such as a circle).
+//!
+//! **Bounded work**: at most [`MAX_PARTICLES`] (1 000 000) particles, of
+//! which the filling rules create at most `20 × seeds + 1000`;
+//! [`FitParams::max_rounds`] creation rounds of 50 steps and
+//! `relax_time / 2e-3` relaxation steps.
+//!
 //! **Scenes**: [`DataNeighbourhood`] and [`release`] also serve a scene's
 //! `creation.fit` ([`crate::schema::fit`]), which runs these stages
 //! frame by frame (`scenes/fig_10_interpolation.ron`); spacing, material
@@ -97,7 +119,10 @@ use crate::pointsets::PointSet;
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitParams {
     /// Sample spacing `h` (absolute length, > 0), or `None` for the median
-    /// nearest-sample distance. Default: `None`.
+    /// nearest-sample distance. [`fit`] refuses one above the diagonal of
+    /// the samples' bounding box, or so small that the surface would need
+    /// more than [`MAX_PARTICLES`] particles ([`FitError::Spacing`] gives
+    /// the range). Default: `None`.
     pub spacing: Option<Real>,
     /// Open data: stretching only, holes wider than `d_max` stay. Default:
     /// false (closed data).
@@ -143,6 +168,22 @@ pub enum FitError {
     /// The parameters or the data are unusable; the message says why.
     #[error("{0}")]
     Input(String),
+    /// The spacing is outside the range these samples allow (absolute
+    /// lengths). Fix: give a spacing in `[min, max]`, or none.
+    #[error(
+        "spacing {value:e}: must be between {min:.3e} and {max:.3e} for these samples ({why})"
+    )]
+    Spacing {
+        /// The spacing given.
+        value: Real,
+        /// The smallest spacing: below it the surface would need more
+        /// than [`MAX_PARTICLES`] particles.
+        min: Real,
+        /// The largest spacing: the diagonal of the samples' bounding box.
+        max: Real,
+        /// Which bound it breaks.
+        why: String,
+    },
     /// The particle world rejected a parameter.
     #[error(transparent)]
     Param(#[from] ParamError),
@@ -153,7 +194,10 @@ pub enum FitError {
 
 impl From<WorldError> for FitError {
     fn from(e: WorldError) -> Self {
-        FitError::World(e.to_string())
+        match e {
+            WorldError::Param(p) => FitError::Param(p),
+            e => FitError::World(e.to_string()),
+        }
     }
 }
 
@@ -198,14 +242,62 @@ impl FitParams {
     }
 }
 
+/// Largest number of particles of a fit: the distinct samples, the
+/// particles the spacing would need (estimated as the distinct samples
+/// times `(median sample distance / spacing)²`), and the particles the
+/// filling rules create are all bounded by it. With at most
+/// [`FitParams::max_rounds`] creation rounds of 50 steps and
+/// `relax_time / 2e-3` relaxation steps, this bounds a fit's work.
+pub const MAX_PARTICLES: usize = 1_000_000;
+
+/// Distance (in spacings) within which samples are merged, and below which
+/// samples all within that distance of one line are collinear.
+const MERGE: Real = 0.25;
+
+/// The data frame: a sample `p` is `2 (centre + scale q)` with `q` in
+/// `[-1, 1]³` (halves first, so no step overflows at any finite scale).
+struct Frame {
+    /// Half the bounding box's centre.
+    centre: Vec3,
+    /// Half the bounding box's largest side.
+    scale: Real,
+}
+
+impl Frame {
+    fn to_local(&self, p: &Point3) -> Point3 {
+        Point3::from((p.coords * 0.5 - self.centre) / self.scale)
+    }
+
+    fn to_data(&self, q: &Point3) -> Point3 {
+        Point3::from((self.centre + q.coords * self.scale) * 2.0)
+    }
+
+    fn length_to_data(&self, d: Real) -> Real {
+        d * self.scale * 2.0
+    }
+
+    fn length_to_local(&self, d: Real) -> Real {
+        d * 0.5 / self.scale
+    }
+}
+
 /// Fits a particle surface to `data` and triangulates it (see the module
 /// documentation for the stages).
 ///
+/// The samples are first mapped to the unit box (any finite scale and
+/// offset fit alike), then to unit spacing; the mesh is mapped back.
+///
 /// # Errors
-/// Invalid parameters; fewer than 3 samples; a zero spacing estimate
-/// (duplicate samples: pass a spacing); a sample whose normal cannot be
-/// estimated (fewer than 2 neighbours within `2.5 h`: give normals in the
-/// file); a relaxation that diverged.
+/// [`FitError::Input`]: invalid parameters; fewer than 3 samples, or fewer
+/// than 3 distinct ones (all coinciding), or fewer than 3 left after
+/// merging at the spacing; a non-finite sample; more than
+/// [`MAX_PARTICLES`] distinct samples; samples on a line (all within a
+/// quarter spacing of it); a sample whose normal cannot be estimated
+/// (fewer than 2 neighbours within `2.5 h`: give normals in the file); a
+/// fit without a triangle; a mesh that cannot be represented at the data's
+/// scale. [`FitError::Spacing`]: a spacing above the bounding box's
+/// diagonal or needing more than [`MAX_PARTICLES`]. [`FitError::World`]: a
+/// relaxation that diverged.
 pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
     params.validate()?;
     let n = data.positions.len();
@@ -222,28 +314,120 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
             )));
         }
     }
-    let centroid = data
+    if let Some(k) = data
         .positions
         .iter()
-        .fold(Vec3::zeros(), |s, p| s + p.coords)
-        / n as Real;
-    let h = match params.spacing {
-        Some(h) => h,
-        None => median_nearest_distance(&data.positions)?,
+        .position(|p| !p.iter().all(|c| c.is_finite()))
+    {
+        return Err(FitError::Input(format!(
+            "sample {} has a non-finite coordinate",
+            k + 1
+        )));
+    }
+    let (lo, hi) = data.positions.iter().fold(
+        (
+            Vec3::repeat(Real::INFINITY),
+            Vec3::repeat(Real::NEG_INFINITY),
+        ),
+        |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+    );
+    let frame = Frame {
+        centre: lo * 0.25 + hi * 0.25,
+        scale: (hi * 0.5 - lo * 0.5).max(),
     };
-    // Unit-spacing coordinates.
-    let unit: Vec<Point3> = data
-        .positions
+    if lo == hi {
+        return Err(FitError::Input(format!(
+            "all {n} samples coincide at ({}, {}, {}): a surface needs samples spread over it",
+            lo.x, lo.y, lo.z
+        )));
+    }
+    if frame.scale == 0.0 {
+        return Err(FitError::Input(format!(
+            "the samples' bounding box ({:e} to {:e}) is too small to be represented once halved (subnormal coordinates): scale the samples up",
+            lo.min(),
+            hi.max()
+        )));
+    }
+    let local: Vec<Point3> = data.positions.iter().map(|p| frame.to_local(p)).collect();
+    // The bounding box's diagonal in local units (half the data's, over
+    // the scale).
+    let diagonal = (hi * 0.5 - lo * 0.5).map(|c| c / frame.scale).norm();
+
+    // Spacing (in local units), bounded by the diagonal and the particle
+    // limit.
+    let distinct = distinct_points(&local);
+    if distinct.len() < 3 {
+        return Err(FitError::Input(format!(
+            "the {n} samples are at {} distinct positions: at least 3 are needed",
+            distinct.len()
+        )));
+    }
+    if distinct.len() > MAX_PARTICLES {
+        return Err(FitError::Input(format!(
+            "{} distinct samples: at most {MAX_PARTICLES} can be fitted",
+            distinct.len()
+        )));
+    }
+    let median = median_of(nearest_distances(&distinct));
+    let smallest = median * (distinct.len() as Real / MAX_PARTICLES as Real).sqrt();
+    let h = match params.spacing {
+        None => median,
+        Some(value) => {
+            let h = frame.length_to_local(value);
+            let range = |why: String| FitError::Spacing {
+                value,
+                min: frame.length_to_data(smallest),
+                max: frame.length_to_data(diagonal),
+                why,
+            };
+            if h > diagonal {
+                return Err(range(
+                    "it exceeds the diagonal of the samples' bounding box".into(),
+                ));
+            }
+            if h < smallest {
+                let needed = distinct.len() as Real * (median / h).powi(2);
+                let needed = if needed.is_finite() {
+                    format!("about {needed:.3e}")
+                } else {
+                    "more than 1e308".into()
+                };
+                return Err(range(format!(
+                    "below {:.3e} the surface would need more than the limit of {MAX_PARTICLES} particles: {needed} at this spacing",
+                    frame.length_to_data(smallest)
+                )));
+            }
+            h
+        }
+    };
+    let spacing = match params.spacing {
+        Some(value) => value,
+        None => frame.length_to_data(h),
+    };
+    // Unit-spacing coordinates about the samples' centroid.
+    let centroid = local.iter().fold(Vec3::zeros(), |s, p| s + p.coords) / n as Real;
+    let unit: Vec<Point3> = local
         .iter()
         .map(|p| Point3::from((p.coords - centroid) / h))
         .collect();
-    let normals = match &data.normals {
-        Some(v) => v.clone(),
-        None => estimate_normals(&unit, 2.5)?,
-    };
-    let kept = merge_close(&unit, 0.25);
+    if let Some(off) = collinear_within(&unit, MERGE) {
+        return Err(FitError::Input(format!(
+            "the samples lie on a line (all within {:.3e} of it, less than a quarter of the spacing {spacing:.3e}): a surface needs samples spread in two directions",
+            frame.length_to_data(off * h)
+        )));
+    }
+    let kept = merge_close(&unit, MERGE);
+    if kept.len() < 3 {
+        return Err(FitError::Input(format!(
+            "{} samples are left after merging those within a quarter of the spacing {spacing:.3e}: at least 3 are needed (give a smaller spacing)",
+            kept.len()
+        )));
+    }
     let seeds: Vec<Point3> = kept.iter().map(|&k| unit[k]).collect();
-    let seed_normals: Vec<Vec3> = kept.iter().map(|&k| normals[k]).collect();
+    let seed_normals: Vec<Vec3> = match &data.normals {
+        Some(v) => kept.iter().map(|&k| v[k]).collect(),
+        None => estimate_normals(&seeds, 2.5)?,
+    };
     let rest = first_ring_mean(&seeds, 1.5);
 
     let material = Material {
@@ -271,7 +455,12 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
         d.flags = Flags::FIXED_POSITION.union(Flags::FIXED_ORIENTATION);
         particles.push(d)?;
     }
-    let mut world = World::new(particles, &[material], world_params)?;
+    let mut world = World::new(particles, &[material], world_params).map_err(|e| {
+        FitError::Input(format!(
+            "the spacing {spacing:.3e} does not suit these samples: {e} (the cohesion rest distance is the mean distance between neighbouring samples, {rest:.3} spacings; give a spacing near the median distance between samples, {:.3e})",
+            frame.length_to_data(median)
+        ))
+    })?;
 
     // Filling rounds (seed 000 §7).
     let mut creation = CreationParams::new(rest);
@@ -287,7 +476,7 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
             ..GrowingParams::default()
         });
     }
-    creation.max_particles = 20 * seeds.len() + 1000;
+    creation.max_particles = (20 * seeds.len() + 1000).min(MAX_PARTICLES);
     let near = DataNeighbourhood::new(&seeds, &seed_normals, rest, params.d_max, params.open);
     for _ in 0..params.max_rounds {
         let mut descs = creation.candidates(world.particles())?;
@@ -304,25 +493,184 @@ pub fn fit(data: &PointSet, params: &FitParams) -> Result<Fit, FitError> {
     release(&mut world, &seed_ids)?;
     advance(&mut world, params.relax_time)?;
 
-    // Triangulate and measure, back in data coordinates.
+    // Triangulate and measure at unit spacing, then map back.
     let p = world.particles();
-    let positions: Vec<Point3> = p
-        .positions()
-        .iter()
-        .map(|q| Point3::from(q.coords * h + centroid))
-        .collect();
     let pnormals: Vec<Vec3> = (0..p.len()).map(|s| p.normal(s)).collect();
-    let mesh = SurfaceMesh::new(
-        &positions,
+    let mut mesh = SurfaceMesh::new(
+        p.positions(),
         &pnormals,
-        params.triangulation_radius * rest * h,
-        &data.positions,
+        params.triangulation_radius * rest,
+        &unit,
     )?;
+    // A surface covers its samples: most lie within a spacing of it.
+    let covered = sample_distances(&unit, &mesh.vertices, &mesh.faces)
+        .iter()
+        .filter(|&&d| d <= 1.0)
+        .count();
+    if 2 * covered <= n {
+        return Err(FitError::Input(format!(
+            "no surface: the {} particles grown from {} samples at spacing {spacing:.3e} gave {} triangle(s), within one spacing of only {covered} of the {n} samples (samples along a curve, or a spacing too coarse for them: the median distance between samples is {:.3e})",
+            p.len(),
+            seeds.len(),
+            mesh.faces.len(),
+            frame.length_to_data(median)
+        )));
+    }
+    let to_data = |q: &Point3| frame.to_data(&Point3::from(q.coords * h + centroid));
+    mesh.vertices.iter_mut().for_each(|v| *v = to_data(v));
+    mesh.rms_distance = frame.length_to_data(mesh.rms_distance * h);
+    mesh.max_distance = frame.length_to_data(mesh.max_distance * h);
+    if !(mesh
+        .vertices
+        .iter()
+        .all(|v| v.iter().all(|c| c.is_finite()))
+        && mesh.max_distance.is_finite())
+    {
+        return Err(FitError::Input(format!(
+            "the mesh cannot be represented in 64-bit floating point at the samples' scale (bounding box diagonal {:.3e})",
+            frame.length_to_data(diagonal)
+        )));
+    }
     Ok(Fit {
-        spacing: h,
-        particles: positions.len(),
+        spacing,
+        particles: p.len(),
         mesh,
     })
+}
+
+/// The bits of a point's coordinates (`-0` as `+0`): equal for equal
+/// points.
+fn bits(p: &Point3) -> [u64; 3] {
+    [p.x, p.y, p.z].map(|c| (c + 0.0).to_bits())
+}
+
+/// The points of `points` without exact repeats (first occurrence kept, in
+/// order).
+fn distinct_points(points: &[Point3]) -> Vec<Point3> {
+    let keys: Vec<[u64; 3]> = points.iter().map(bits).collect();
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
+    let mut keep = vec![false; points.len()];
+    for (k, &i) in order.iter().enumerate() {
+        keep[i] = k == 0 || keys[order[k - 1]] != keys[i];
+    }
+    (0..points.len())
+        .filter(|&i| keep[i])
+        .map(|i| points[i])
+        .collect()
+}
+
+/// The median of `v` (not empty).
+fn median_of(mut v: Vec<Real>) -> Real {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Whether the points all lie within `tolerance` of one line (the
+/// principal axis through their mean): their largest distance from it if
+/// so.
+fn collinear_within(points: &[Point3], tolerance: Real) -> Option<Real> {
+    let mean = points.iter().fold(Vec3::zeros(), |s, p| s + p.coords) / points.len() as Real;
+    let mut cov = op_dynamics::Mat3::zeros();
+    for p in points {
+        let d = p.coords - mean;
+        cov += d * d.transpose();
+    }
+    let eig = cov.symmetric_eigen();
+    let (k, _) = eig
+        .eigenvalues
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))?;
+    let axis = eig.eigenvectors.column(k).normalize();
+    let off = points
+        .iter()
+        .map(|p| {
+            let d = p.coords - mean;
+            (d - axis * axis.dot(&d)).norm()
+        })
+        .fold(0.0, Real::max);
+    (off <= tolerance).then_some(off)
+}
+
+/// For each of the (distinct) `points`, the distance to its nearest other
+/// point, by a k-d tree (each node split at the median of its widest
+/// axis): O(n log n) for any distribution.
+fn nearest_distances(points: &[Point3]) -> Vec<Real> {
+    let mut index: Vec<usize> = (0..points.len()).collect();
+    let mut axes = vec![0u8; points.len()];
+    build_kd(points, &mut index, &mut axes);
+    let tree = KdTree {
+        points,
+        index: &index,
+        axes: &axes,
+    };
+    (0..points.len())
+        .map(|i| {
+            let mut best = Real::INFINITY;
+            tree.nearest(0, points.len(), &points[i], i, &mut best);
+            best
+        })
+        .collect()
+}
+
+/// Orders `index` as an implicit k-d tree: the median of each range at its
+/// middle, split on the axis stored at the same place of `axes`.
+fn build_kd(points: &[Point3], index: &mut [usize], axes: &mut [u8]) {
+    if index.len() <= 1 {
+        return;
+    }
+    let (lo, hi) = index.iter().fold(
+        (
+            Vec3::repeat(Real::INFINITY),
+            Vec3::repeat(Real::NEG_INFINITY),
+        ),
+        |(lo, hi), &i| (lo.inf(&points[i].coords), hi.sup(&points[i].coords)),
+    );
+    let axis = (hi - lo).imax();
+    let mid = index.len() / 2;
+    index.select_nth_unstable_by(mid, |&a, &b| points[a][axis].total_cmp(&points[b][axis]));
+    axes[mid] = axis as u8;
+    let (left, right) = index.split_at_mut(mid);
+    let (left_axes, right_axes) = axes.split_at_mut(mid);
+    build_kd(points, left, left_axes);
+    build_kd(points, &mut right[1..], &mut right_axes[1..]);
+}
+
+/// An implicit k-d tree over `points` built by [`build_kd`].
+struct KdTree<'a> {
+    points: &'a [Point3],
+    index: &'a [usize],
+    axes: &'a [u8],
+}
+
+impl KdTree<'_> {
+    /// Lowers `best` to the distance from `q` to the nearest point of the
+    /// range `start..end` other than the point `skip`.
+    fn nearest(&self, start: usize, end: usize, q: &Point3, skip: usize, best: &mut Real) {
+        if start >= end {
+            return;
+        }
+        let mid = start + (end - start) / 2;
+        let i = self.index[mid];
+        if i != skip {
+            *best = best.min((self.points[i] - q).norm());
+        }
+        if end - start == 1 {
+            return;
+        }
+        let axis = self.axes[mid] as usize;
+        let diff = q[axis] - self.points[i][axis];
+        let (near, far) = if diff < 0.0 {
+            ((start, mid), (mid + 1, end))
+        } else {
+            ((mid + 1, end), (start, mid))
+        };
+        self.nearest(near.0, near.1, q, skip, best);
+        if diff.abs() < *best {
+            self.nearest(far.0, far.1, q, skip, best);
+        }
+    }
 }
 
 /// A triangulated particle surface (seed 000 §5) and its distance to the
@@ -502,45 +850,35 @@ fn pairs(points: &[Point3], radius: Real) -> PairList {
     half
 }
 
-/// Median over the points of the distance to the nearest other point.
+/// Median over the points of the distance to the nearest other point (0
+/// for a point with a duplicate), by a k-d tree over the distinct points.
 pub(crate) fn median_nearest_distance(points: &[Point3]) -> Result<Real, FitError> {
-    let (lo, hi) = points.iter().fold(
-        (
-            Vec3::repeat(Real::INFINITY),
-            Vec3::repeat(Real::NEG_INFINITY),
-        ),
-        |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
-    );
-    let diagonal = (hi - lo).norm();
-    if diagonal.is_nan() || diagonal <= 0.0 {
+    let distinct = distinct_points(points);
+    if distinct.len() < 2 {
         return Err(FitError::Input(
             "all samples coincide: no spacing can be estimated".into(),
         ));
     }
-    // A surface of n samples at spacing h has an area of about n h²; start
-    // at twice the size of a square patch's spacing and widen.
-    let mut radius = 2.0 * diagonal / (points.len() as Real).sqrt();
-    loop {
-        let half = pairs(points, radius);
-        let mut nearest = vec![Real::INFINITY; points.len()];
-        for (i, j) in half.iter_pairs() {
-            let d = (points[i] - points[j]).norm();
-            nearest[i] = nearest[i].min(d);
-            nearest[j] = nearest[j].min(d);
-        }
-        let found = nearest.iter().filter(|d| d.is_finite()).count();
-        if 2 * found > points.len() || radius > diagonal {
-            nearest.sort_by(|a, b| a.total_cmp(b));
-            let h = nearest[points.len() / 2];
-            if !(h.is_finite() && h > 0.0) {
-                return Err(FitError::Input(format!(
-                    "the median nearest-sample distance is {h} (duplicate samples?): pass --spacing"
-                )));
-            }
-            return Ok(h);
-        }
-        radius *= 2.0;
+    let nearest = nearest_distances(&distinct);
+    let mut count: HashMap<[u64; 3], usize> = HashMap::new();
+    for p in points {
+        *count.entry(bits(p)).or_default() += 1;
     }
+    let all: Vec<Real> = distinct
+        .iter()
+        .zip(nearest)
+        .flat_map(|(p, d)| {
+            let k = count.get(&bits(p)).copied().unwrap_or(1);
+            std::iter::once(if k > 1 { 0.0 } else { d }).chain(std::iter::repeat_n(0.0, k - 1))
+        })
+        .collect();
+    let h = median_of(all);
+    if !(h.is_finite() && h > 0.0) {
+        return Err(FitError::Input(format!(
+            "the median nearest-sample distance is {h} (duplicate samples?): pass a spacing"
+        )));
+    }
+    Ok(h)
 }
 
 /// Indices of the points kept when each point within `dist` of an earlier
@@ -738,8 +1076,19 @@ impl Grid {
 /// RMS and largest distance from `samples` to the triangles (infinite when
 /// there is no triangle).
 fn distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 3]]) -> (Real, Real) {
+    let d = sample_distances(samples, vertices, faces);
+    let sum: Real = d.iter().map(|x| x * x).sum();
+    (
+        (sum / samples.len() as Real).sqrt(),
+        d.into_iter().fold(0.0, Real::max),
+    )
+}
+
+/// Distance from each of `samples` to the triangles (infinite when there is
+/// no triangle).
+fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 3]]) -> Vec<Real> {
     if faces.is_empty() {
-        return (Real::INFINITY, Real::INFINITY);
+        return vec![Real::INFINITY; samples.len()];
     }
     // Triangles binned by their bounding boxes in a grid of the longest
     // edge; a sample looks in its cell's 27 cells first, all triangles when
@@ -770,7 +1119,7 @@ fn distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 3]]) -> (Re
             &vertices[f[2] as usize],
         )
     };
-    let (mut sum, mut max) = (0.0, 0.0 as Real);
+    let mut out = Vec::with_capacity(samples.len());
     for p in samples {
         let k = key(&p.coords);
         let mut best = Real::INFINITY;
@@ -794,10 +1143,9 @@ fn distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 3]]) -> (Re
                 .map(|t| tri_distance(p, t))
                 .fold(best, Real::min);
         }
-        sum += best * best;
-        max = max.max(best);
+        out.push(best);
     }
-    ((sum / samples.len() as Real).sqrt(), max)
+    out
 }
 
 /// Distance from `p` to the triangle `abc` (closest point by region,
@@ -914,5 +1262,152 @@ mod tests {
             .collect();
         let n = estimate_normals(&pts, 2.5).unwrap();
         assert!(n.iter().all(|v| v.z > 0.99), "{n:?}");
+    }
+
+    /// Pseudo-random points (a fixed LCG) in a box of side `size`.
+    fn scattered(n: usize, size: Real) -> Vec<Point3> {
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as Real / (1u64 << 53) as Real * size
+        };
+        (0..n)
+            .map(|_| Point3::new(next(), next(), next()))
+            .collect()
+    }
+
+    /// The k-d tree's nearest distances equal brute force, also on planar
+    /// data (ties on one axis) and with a far outlier.
+    #[test]
+    fn kd_tree_nearest_distances_match_brute_force() {
+        let mut sets = vec![scattered(500, 1.0)];
+        let mut plane = scattered(300, 1.0);
+        plane.iter_mut().for_each(|p| p.z = 0.0);
+        sets.push(plane);
+        let mut outlier = scattered(100, 1e-3);
+        outlier.push(Point3::new(1e3, 0.0, 0.0));
+        sets.push(outlier);
+        for pts in sets {
+            let fast = nearest_distances(&pts);
+            for (i, p) in pts.iter().enumerate() {
+                let slow = pts
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != i)
+                    .map(|(_, q)| (q - p).norm())
+                    .fold(Real::INFINITY, Real::min);
+                assert_eq!(fast[i], slow, "point {i}");
+            }
+        }
+    }
+
+    /// Duplicates count as nearest distance 0 in the scene's spacing
+    /// estimate; `-0` equals `+0`; all coincident is an error.
+    #[test]
+    fn distinct_points_and_duplicates() {
+        let pts = vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(-0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(3.0, 0.0, 0.0),
+        ];
+        assert_eq!(distinct_points(&pts).len(), 3);
+        // Nearest: 0, 0, 1, 2: median (index 2 of 4) is 1.
+        assert_eq!(median_nearest_distance(&pts).unwrap(), 1.0);
+        let same = vec![Point3::new(1.0, 2.0, 3.0); 5];
+        assert!(median_nearest_distance(&same).is_err());
+    }
+
+    #[test]
+    fn collinear_samples_are_detected() {
+        let line: Vec<Point3> = (0..20)
+            .map(|k| Point3::new(k as Real, 2.0 * k as Real, 0.1 * ((k % 2) as Real)))
+            .collect();
+        let off = collinear_within(&line, 0.25).expect("collinear");
+        assert!(off > 0.04 && off < 0.06, "{off}");
+        let grid: Vec<Point3> = (0..20)
+            .map(|k| Point3::new((k % 10) as Real, (k / 10) as Real, 0.0))
+            .collect();
+        assert!(collinear_within(&grid, 0.25).is_none());
+    }
+
+    /// A spacing is bounded by the diagonal and by the particle limit, and
+    /// the error names both bounds.
+    #[test]
+    fn spacing_out_of_range_is_an_error_with_the_range() {
+        let data = PointSet {
+            positions: scattered(200, 1.0)
+                .into_iter()
+                .map(|p| Point3::from(p.coords.normalize()))
+                .collect(),
+            normals: None,
+        };
+        for h in [1e300, 10.0, 1e-5, 1e-300] {
+            let params = FitParams {
+                spacing: Some(h),
+                ..FitParams::default()
+            };
+            match fit(&data, &params) {
+                Err(FitError::Spacing {
+                    value, min, max, ..
+                }) => {
+                    assert_eq!(value, h);
+                    assert!(
+                        min > 1e-4 && min < 1e-2 && max > 1.5 && max <= 3f64.sqrt(),
+                        "{min} {max} (the samples' box is within [0, 1]³)"
+                    );
+                }
+                other => panic!("spacing {h}: {other:?}"),
+            }
+        }
+    }
+
+    /// Degenerate data: coincident, too few distinct, collinear, a curve
+    /// (no surface); each a clear input error, none a panic or a mesh.
+    #[test]
+    fn degenerate_samples_are_input_errors() {
+        let fit_of = |positions: Vec<Point3>| {
+            fit(
+                &PointSet {
+                    positions,
+                    normals: None,
+                },
+                &FitParams::default(),
+            )
+        };
+        let message = |r: Result<Fit, FitError>| match r {
+            Err(FitError::Input(m)) => m,
+            other => panic!("{other:?}"),
+        };
+        let m = message(fit_of(vec![Point3::new(1.0, 2.0, 3.0); 10]));
+        assert!(m.contains("all 10 samples coincide"), "{m}");
+        let mut two = vec![Point3::origin(); 5];
+        two.push(Point3::new(1.0, 0.0, 0.0));
+        let m = message(fit_of(two));
+        assert!(m.contains("2 distinct positions"), "{m}");
+        let line = (0..30).map(|k| Point3::new(k as Real, 0.0, 0.0)).collect();
+        let m = message(fit_of(line));
+        assert!(m.contains("lie on a line"), "{m}");
+        let circle = (0..63)
+            .map(|k| Point3::new((0.1 * k as Real).cos(), (0.1 * k as Real).sin(), 0.0))
+            .collect();
+        let m = message(fit_of(circle));
+        assert!(m.starts_with("no surface"), "{m}");
+        let bad = vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, Real::INFINITY, 0.0),
+        ];
+        let m = message(fit_of(bad));
+        assert!(m.contains("sample 3"), "{m}");
+        let tiny = vec![
+            Point3::origin(),
+            Point3::new(5e-324, 0.0, 0.0),
+            Point3::new(0.0, 5e-324, 0.0),
+        ];
+        let m = message(fit_of(tiny));
+        assert!(m.contains("too small to be represented"), "{m}");
     }
 }

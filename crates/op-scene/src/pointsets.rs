@@ -4,8 +4,15 @@
 //!
 //! Entry points: [`read_point_set`] (by extension) and the parsers
 //! [`parse_xyz`], [`parse_ply`], [`parse_obj`]. Every error names the file,
-//! the line for text input, and what is wrong; nothing panics on bad input.
+//! the line for text input, and what is wrong (a long offending token is
+//! cut to [`EXCERPT_CHARS`] characters); nothing panics on bad input.
+//!
+//! **Limits**: the input must be a regular file (a symlink is followed; a
+//! directory, device, pipe or socket is refused before it is opened) of at
+//! most [`MAX_POINT_FILE_BYTES`] (1 GiB). A UTF-8 byte-order mark at the
+//! start of the file is skipped.
 
+use std::io::Read;
 use std::path::Path;
 
 use op_dynamics::{Point3, Real, Vec3};
@@ -17,6 +24,107 @@ pub struct PointSet {
     pub positions: Vec<Point3>,
     /// Unit normals, one per position, or `None` when the file has none.
     pub normals: Option<Vec<Vec3>>,
+}
+
+/// Largest point-set file read (1 GiB); a larger one is an error naming it.
+pub const MAX_POINT_FILE_BYTES: u64 = 1 << 30;
+
+/// Longest excerpt of a file's content quoted in an error message, in
+/// characters; a longer token is cut and ends with `...`.
+pub const EXCERPT_CHARS: usize = 80;
+
+/// `text` as quoted in an error message: at most [`EXCERPT_CHARS`]
+/// characters, the cut marked by `...`.
+pub(crate) fn excerpt(text: &str) -> String {
+    if text.chars().count() <= EXCERPT_CHARS {
+        return text.to_string();
+    }
+    let head: String = text.chars().take(EXCERPT_CHARS - 3).collect();
+    format!("{head}...")
+}
+
+/// Why an input file was not read by [`read_regular_file`].
+#[derive(Debug)]
+pub(crate) enum InputFileError {
+    /// The system could not open or read it.
+    Io(std::io::Error),
+    /// It is not a regular file; what it is instead.
+    NotRegular(&'static str),
+    /// It holds more than the limit; its size in bytes (at least).
+    TooLarge(u64),
+}
+
+impl InputFileError {
+    /// The message for a problem other than [`InputFileError::Io`].
+    pub(crate) fn message(&self, limit: u64) -> String {
+        match self {
+            InputFileError::Io(e) => e.to_string(),
+            InputFileError::NotRegular(what) => {
+                format!("not a regular file ({what}): give a file")
+            }
+            InputFileError::TooLarge(size) => format!(
+                "{size} bytes or more, larger than the limit of {limit} bytes ({} MiB)",
+                limit >> 20
+            ),
+        }
+    }
+}
+
+/// What a non-regular file is, for messages.
+fn file_kind(t: std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+        if t.is_fifo() {
+            return "a named pipe";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_dir() {
+        "a directory"
+    } else {
+        "not a file"
+    }
+}
+
+/// The bytes of the regular file at `path` (symlinks followed), at most
+/// `limit` of them. The type and size are checked before the file is
+/// opened (so a pipe or device is never read), and the read stops after
+/// `limit + 1` bytes in case the file grew meanwhile.
+pub(crate) fn read_regular_file(path: &Path, limit: u64) -> Result<Vec<u8>, InputFileError> {
+    let meta = std::fs::metadata(path).map_err(InputFileError::Io)?;
+    if !meta.is_file() {
+        return Err(InputFileError::NotRegular(file_kind(meta.file_type())));
+    }
+    if meta.len() > limit {
+        return Err(InputFileError::TooLarge(meta.len()));
+    }
+    let file = std::fs::File::open(path).map_err(InputFileError::Io)?;
+    let opened = file.metadata().map_err(InputFileError::Io)?;
+    if !opened.is_file() {
+        return Err(InputFileError::NotRegular(file_kind(opened.file_type())));
+    }
+    let mut bytes = Vec::with_capacity(opened.len().min(limit) as usize);
+    file.take(limit + 1)
+        .read_to_end(&mut bytes)
+        .map_err(InputFileError::Io)?;
+    if bytes.len() as u64 > limit {
+        return Err(InputFileError::TooLarge(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// `bytes` without a leading UTF-8 byte-order mark.
+pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
 }
 
 /// A point-set file could not be read.
@@ -31,8 +139,9 @@ pub enum PointSetError {
         /// The system error.
         source: std::io::Error,
     },
-    /// The file's content is malformed. Fix: edit that line (or the
-    /// header) of the file.
+    /// The file is not a usable point set: not a regular file, larger than
+    /// [`MAX_POINT_FILE_BYTES`], or malformed content. Fix: give a regular
+    /// file, or edit that line (or the header) of the file.
     #[error("{file}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
     Format {
         /// The file.
@@ -57,8 +166,9 @@ fn format_err(file: &str, line: Option<usize>, message: impl Into<String>) -> Po
 /// `obj`, case-insensitive).
 ///
 /// # Errors
-/// An unreadable file, an unknown extension, malformed content, no point,
-/// or a non-finite value.
+/// An unreadable file, one that is not a regular file or is larger than
+/// [`MAX_POINT_FILE_BYTES`], an unknown extension, malformed content, no
+/// point, or a non-finite value.
 pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
     let set = read_points(path)?;
     if set.positions.is_empty() {
@@ -75,7 +185,8 @@ pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
 /// set (the scene layer reports that against the field that reads it).
 ///
 /// # Errors
-/// An unreadable file, an unknown extension, malformed content or a
+/// An unreadable file, one that is not a regular file or is larger than
+/// [`MAX_POINT_FILE_BYTES`], an unknown extension, malformed content or a
 /// non-finite value.
 pub fn read_points(path: &Path) -> Result<PointSet, PointSetError> {
     let file = path.display().to_string();
@@ -90,14 +201,21 @@ pub fn read_points(path: &Path) -> Result<PointSet, PointSetError> {
             format!("unknown point-set format `.{ext}`: use .xyz, .ply or .obj"),
         ));
     }
-    let bytes = std::fs::read(path).map_err(|source| PointSetError::Io {
-        file: file.clone(),
-        source,
-    })?;
+    let bytes = match read_regular_file(path, MAX_POINT_FILE_BYTES) {
+        Ok(b) => b,
+        Err(InputFileError::Io(source)) => {
+            return Err(PointSetError::Io {
+                file: file.clone(),
+                source,
+            })
+        }
+        Err(e) => return Err(format_err(&file, None, e.message(MAX_POINT_FILE_BYTES))),
+    };
+    let bytes = strip_bom(&bytes);
     Ok(match ext.as_str() {
-        "ply" => parse_ply(&bytes, &file)?,
+        "ply" => parse_ply(bytes, &file)?,
         _ => {
-            let text = std::str::from_utf8(&bytes)
+            let text = std::str::from_utf8(bytes)
                 .map_err(|e| format_err(&file, None, format!("not UTF-8 text: {e}")))?;
             if ext == "xyz" {
                 parse_xyz(text, &file)?
@@ -109,14 +227,18 @@ pub fn read_points(path: &Path) -> Result<PointSet, PointSetError> {
 }
 
 fn number(field: &str, file: &str, line: usize) -> Result<Real, PointSetError> {
-    let x: Real = field
-        .parse()
-        .map_err(|_| format_err(file, Some(line), format!("`{field}` is not a number")))?;
+    let x: Real = field.parse().map_err(|_| {
+        format_err(
+            file,
+            Some(line),
+            format!("`{}` is not a number", excerpt(field)),
+        )
+    })?;
     if !x.is_finite() {
         return Err(format_err(
             file,
             Some(line),
-            format!("`{field}` is not finite"),
+            format!("`{}` is not finite", excerpt(field)),
         ));
     }
     Ok(x)
@@ -137,6 +259,7 @@ fn unit(n: Vec3, file: &str, line: Option<usize>) -> Result<Vec3, PointSetError>
 /// commas between numbers), `#` starts a comment, blank lines skipped.
 /// Either every point has a normal or none has.
 pub fn parse_xyz(text: &str, file: &str) -> Result<PointSet, PointSetError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut columns = None;
@@ -194,6 +317,7 @@ pub fn parse_xyz(text: &str, file: &str) -> Result<PointSet, PointSetError> {
 /// there are exactly as many as `v` lines, their normals (in order). Other
 /// lines (faces, groups, ...) are ignored.
 pub fn parse_obj(text: &str, file: &str) -> Result<PointSet, PointSetError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     for (k, raw) in text.lines().enumerate() {
@@ -307,6 +431,7 @@ struct Element {
 /// their normals when all three are present. Other elements (faces, ...)
 /// are skipped.
 pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
+    let bytes = strip_bom(bytes);
     // Header: text lines up to `end_header`.
     let mut pos = 0;
     let mut line_no = 0;
@@ -340,7 +465,7 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
                     other => {
                         return Err(err(format!(
                             "format {} is not supported: use ascii or binary_little_endian",
-                            other.unwrap_or("(missing)")
+                            excerpt(other.unwrap_or("(missing)"))
                         )))
                     }
                 }
@@ -349,9 +474,9 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
                 let (Some(name), Some(count)) = (fields.get(1), fields.get(2)) else {
                     return Err(err("`element` needs a name and a count".into()));
                 };
-                let count = count
-                    .parse()
-                    .map_err(|_| err(format!("element count `{count}` is not a count")))?;
+                let count = count.parse().map_err(|_| {
+                    err(format!("element count `{}` is not a count", excerpt(count)))
+                })?;
                 elements.push(Element {
                     name: name.to_string(),
                     count,
@@ -363,10 +488,12 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
                     return Err(err("`property` before any `element`".into()));
                 };
                 let ty = |k: usize| {
-                    fields
-                        .get(k)
-                        .and_then(|t| Scalar::parse(t))
-                        .ok_or_else(|| err(format!("unknown property type in `{}`", raw.trim())))
+                    fields.get(k).and_then(|t| Scalar::parse(t)).ok_or_else(|| {
+                        err(format!(
+                            "unknown property type in `{}`",
+                            excerpt(raw.trim())
+                        ))
+                    })
                 };
                 let property = if fields.get(1) == Some(&"list") {
                     Property {
@@ -384,7 +511,7 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
                 element.properties.push(property);
             }
             Some("end_header") => break,
-            Some(other) => return Err(err(format!("unknown header keyword `{other}`"))),
+            Some(other) => return Err(err(format!("unknown header keyword `{}`", excerpt(other)))),
         }
     }
     let Some(binary) = format else {
@@ -416,6 +543,11 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
         let mut data = &bytes[pos..];
         let truncated = || format_err(file, None, "binary data ends early");
         for (k, element) in elements.iter().enumerate().take(vertex_index + 1) {
+            if element.properties.is_empty() {
+                // Rows of no bytes (the vertex element has x, y and z):
+                // nothing to skip, however large the count.
+                continue;
+            }
             for _ in 0..element.count {
                 let mut row = Vec::with_capacity(element.properties.len());
                 for p in &element.properties {
@@ -623,5 +755,111 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("points.txt") && e.contains(".xyz"), "{e}");
+    }
+
+    fn temp_dir(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("op-pointsets-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// A 100 000-character token is quoted cut to 80 characters, with the
+    /// line number (it was echoed whole).
+    #[test]
+    fn long_bad_tokens_are_elided() {
+        let long = "x".repeat(100_000);
+        let e = parse_xyz(&format!("0 0 0\n1 2 {long}\n"), "l.xyz")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("l.xyz:2:"), "{e}");
+        assert!(
+            e.contains(&format!("`{}...`", "x".repeat(EXCERPT_CHARS - 3))),
+            "{e}"
+        );
+        assert!(e.len() < 200, "{} characters", e.len());
+        let e = parse_obj(&format!("v 0 0 {long}\n"), "l.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("l.obj:1:") && e.len() < 200, "{e}");
+        let ply = format!("ply\nformat ascii 1.0\n{long}\nend_header\n");
+        let e = parse_ply(ply.as_bytes(), "l.ply").unwrap_err().to_string();
+        assert!(e.starts_with("l.ply:3:") && e.len() < 200, "{e}");
+        assert_eq!(excerpt("short"), "short");
+        assert_eq!(excerpt(&"é".repeat(81)).chars().count(), EXCERPT_CHARS);
+    }
+
+    /// Text files that start with a UTF-8 byte-order mark read as without
+    /// it (the first line was `\u{feff}0`, not a number).
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        let dir = temp_dir("bom");
+        let body = [
+            ("p.xyz", "0 0 0\n1 0 0\n0 1 0\n"),
+            ("p.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"),
+            ("p.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n"),
+        ];
+        for (name, text) in body {
+            let path = dir.join(name);
+            std::fs::write(&path, format!("\u{feff}{text}")).unwrap();
+            let s = read_point_set(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(s.positions[1], Point3::new(1.0, 0.0, 0.0), "{name}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A symlink to /dev/zero (read until 2 GB before) and a directory are
+    /// refused before they are read, naming the file; a file over the
+    /// limit is refused.
+    #[cfg(unix)]
+    #[test]
+    fn only_regular_files_under_the_limit_are_read() {
+        let dir = temp_dir("regular");
+        let zero = dir.join("zero.xyz");
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+        let e = read_point_set(&zero).unwrap_err().to_string();
+        assert!(
+            e.contains("zero.xyz") && e.contains("not a regular file (a character device)"),
+            "{e}"
+        );
+        let sub = dir.join("d.ply");
+        std::fs::create_dir(&sub).unwrap();
+        let e = read_point_set(&sub).unwrap_err().to_string();
+        assert!(e.contains("d.ply") && e.contains("a directory"), "{e}");
+        let small = dir.join("s.xyz");
+        std::fs::write(&small, "0 0 0\n").unwrap();
+        assert!(matches!(
+            read_regular_file(&small, 5),
+            Err(InputFileError::TooLarge(6))
+        ));
+        assert_eq!(read_regular_file(&small, 6).unwrap().len(), 6);
+        let e = InputFileError::TooLarge(6).message(5);
+        assert!(e.contains("limit of 5 bytes"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A binary PLY element without properties and a huge count is
+    /// skipped at once (the loop ran over the count).
+    #[test]
+    fn binary_ply_empty_element_with_a_huge_count_is_skipped() {
+        let mut bytes = format!(
+            "ply\nformat binary_little_endian 1.0\nelement empty {}\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
+            usize::MAX
+        )
+        .into_bytes();
+        for c in [1f32, 2.0, 3.0] {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+        let s = parse_ply(&bytes, "e.ply").unwrap();
+        assert_eq!(s.positions, vec![Point3::new(1.0, 2.0, 3.0)]);
+    }
+
+    /// The I/O error's message is not repeated by its source.
+    #[test]
+    fn io_errors_do_not_repeat_the_system_message() {
+        let e = read_point_set(Path::new("/nonexistent/p.xyz")).unwrap_err();
+        let source = std::error::Error::source(&e).expect("a source").to_string();
+        assert!(!e.to_string().contains(&source), "{e} / {source}");
+        assert!(e.to_string().contains("p.xyz"), "{e}");
     }
 }

@@ -8,15 +8,26 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RenderError {
-    /// A file or directory could not be read or written.
+    /// A file or directory could not be read or written (the system's
+    /// message is the source, not repeated in this one's).
     /// Fix: check that the path exists and is readable (or its directory writable).
-    #[error("{}: {source}", path.display())]
+    #[error("{}: cannot read or write", path.display())]
     Io {
         /// The file or directory concerned.
         path: PathBuf,
         /// The underlying error.
         #[source]
         source: std::io::Error,
+    },
+    /// An input file is not one that can be read: not a regular file (a
+    /// directory, device, pipe or socket) or larger than
+    /// [`super::MAX_OBJ_FILE_BYTES`]. Fix: give a regular OBJ file.
+    #[error("{}: {message}", path.display())]
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong and what would be valid.
+        message: String,
     },
     /// A line of an OBJ file is malformed (bad number, index out of range, ...).
     /// Fix: the message names the file, the 1-based line and what is wrong.
@@ -52,7 +63,7 @@ pub enum RenderError {
         message: String,
     },
     /// The PNG encoder failed for a reason other than I/O.
-    #[error("{}: cannot encode PNG: {source}", path.display())]
+    #[error("{}: cannot encode PNG", path.display())]
     Encode {
         /// The file being written.
         path: PathBuf,
@@ -92,5 +103,18 @@ mod tests {
         // So that callers (e.g. a CLI flag parser) can box and pass it across threads.
         fn check<T: std::error::Error + Send + Sync + 'static>() {}
         check::<super::RenderError>();
+    }
+
+    /// The system's message is the source and is not repeated in the
+    /// error's own (the chain printed it twice).
+    #[test]
+    fn io_error_does_not_repeat_its_source() {
+        let e = super::RenderError::io(
+            "f.obj",
+            std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+        );
+        assert_eq!(e.to_string(), "f.obj: cannot read or write");
+        let source = std::error::Error::source(&e).map(|s| s.to_string());
+        assert_eq!(source.as_deref(), Some("no such file"));
     }
 }

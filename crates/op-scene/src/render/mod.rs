@@ -28,7 +28,7 @@ pub use camera::{CameraSpec, DEFAULT_AZIMUTH_DEG, DEFAULT_ELEVATION_DEG, DEFAULT
 pub use contact_sheet::{render_contact_sheet, sheet_grid};
 pub use error::RenderError;
 pub use image::RgbImage;
-pub use obj::{ObjData, ObjObject};
+pub use obj::{ObjData, ObjObject, MAX_OBJ_FILE_BYTES};
 pub use styles::Style;
 
 use camera::Camera;

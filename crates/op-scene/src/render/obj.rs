@@ -5,7 +5,10 @@
 //! references (polygons fan-triangulated, negative indices relative to the end),
 //! `l` polylines and `p` points. Other statements (`s`, `usemtl`, `mtllib`, ...)
 //! are ignored. A malformed line gives [`RenderError::Parse`] naming the file,
-//! the line and what is wrong; nothing panics.
+//! the line and what is wrong (a long offending token is cut to 80 characters,
+//! ending with `...`); nothing panics. Only regular files (symlinks followed) of
+//! at most [`MAX_OBJ_FILE_BYTES`] are read; a leading UTF-8 byte-order mark is
+//! skipped.
 //!
 //! Vertex normals: a vertex takes the normal that an element references with it
 //! (`f 1//4 ...`, the first such reference wins). A vertex that no element gives
@@ -17,6 +20,11 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use super::error::RenderError;
+use crate::pointsets::{excerpt, read_regular_file, InputFileError};
+
+/// Largest OBJ file read (1 GiB); a larger one, or one that is not a
+/// regular file, is a [`RenderError::Input`] naming it.
+pub const MAX_OBJ_FILE_BYTES: u64 = 1 << 30;
 
 /// One object (`o` or `g` block) of an OBJ file, with indices local to it.
 ///
@@ -190,10 +198,17 @@ impl ObjData {
     /// Reads and parses the OBJ file at `path`.
     ///
     /// # Errors
-    /// [`RenderError::Io`] if the file cannot be read, [`RenderError::Parse`] for a
-    /// malformed line.
+    /// [`RenderError::Io`] if the file cannot be read, [`RenderError::Input`] if
+    /// it is not a regular file (after following symlinks) or is larger than
+    /// [`MAX_OBJ_FILE_BYTES`], [`RenderError::Parse`] for a malformed line.
     pub fn read(path: &Path) -> Result<Self, RenderError> {
-        let bytes = std::fs::read(path).map_err(|e| RenderError::io(path, e))?;
+        let bytes = read_regular_file(path, MAX_OBJ_FILE_BYTES).map_err(|e| match e {
+            InputFileError::Io(source) => RenderError::io(path, source),
+            e => RenderError::Input {
+                path: path.to_path_buf(),
+                message: e.message(MAX_OBJ_FILE_BYTES),
+            },
+        })?;
         Self::parse(
             &String::from_utf8_lossy(&bytes),
             &path.display().to_string(),
@@ -205,6 +220,7 @@ impl ObjData {
     /// # Errors
     /// [`RenderError::Parse`] naming the line and what is wrong.
     pub fn parse(text: &str, source: &str) -> Result<Self, RenderError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut parser = Parser {
             source,
             line: 0,
@@ -378,11 +394,11 @@ impl Parser<'_> {
         }
         let mut out = [0.0; 3];
         for (k, token) in args.iter().enumerate() {
-            let x: f64 = token
-                .parse()
-                .map_err(|_| self.error(format!("'{keyword}': '{token}' is not a number")))?;
+            let x: f64 = token.parse().map_err(|_| {
+                self.error(format!("'{keyword}': '{}' is not a number", excerpt(token)))
+            })?;
             if !x.is_finite() {
-                return Err(self.error(format!("'{keyword}': '{token}' is not finite")));
+                return Err(self.error(format!("'{keyword}': '{}' is not finite", excerpt(token))));
             }
             if k < 3 {
                 out[k] = x;
@@ -399,7 +415,7 @@ impl Parser<'_> {
     fn reference(&self, token: &str) -> Result<Ref, RenderError> {
         let parts: Vec<&str> = token.split('/').collect();
         if parts.len() > 3 {
-            return Err(self.error(format!("bad vertex reference '{token}'")));
+            return Err(self.error(format!("bad vertex reference '{}'", excerpt(token))));
         }
         let v = self.index(parts[0], self.positions.len(), "vertex", token)?;
         if let Some(t) = parts.get(1).filter(|t| !t.is_empty()) {
@@ -420,9 +436,13 @@ impl Parser<'_> {
         what: &str,
         token: &str,
     ) -> Result<usize, RenderError> {
-        let k: i64 = text
-            .parse()
-            .map_err(|_| self.error(format!("bad {what} index '{text}' in '{token}'")))?;
+        let k: i64 = text.parse().map_err(|_| {
+            self.error(format!(
+                "bad {what} index '{}' in '{}'",
+                excerpt(text),
+                excerpt(token)
+            ))
+        })?;
         let resolved = if k > 0 {
             usize::try_from(k - 1).ok().filter(|&i| i < count)
         } else if k < 0 {
@@ -431,12 +451,14 @@ impl Parser<'_> {
                 .and_then(|back| count.checked_sub(back))
         } else {
             return Err(self.error(format!(
-                "{what} index 0 in '{token}' (OBJ indices start at 1)"
+                "{what} index 0 in '{}' (OBJ indices start at 1)",
+                excerpt(token)
             )));
         };
         resolved.ok_or_else(|| {
             self.error(format!(
-                "{what} index {k} in '{token}' out of range ({count} defined so far)"
+                "{what} index {k} in '{}' out of range ({count} defined so far)",
+                excerpt(token)
             ))
         })
     }
@@ -636,5 +658,49 @@ p 7
         assert!(o.push_line([0, 3]).is_err());
         assert!(o.push_point(0).is_ok());
         assert!(o.push_vertex([f64::NAN, 0.0, 0.0], None).is_err());
+    }
+
+    /// A long bad token is quoted cut to 80 characters (it was echoed
+    /// whole), with the line number.
+    #[test]
+    fn long_bad_tokens_are_elided() {
+        let long = "9".repeat(50_000) + "x";
+        for text in [
+            format!("v 0 0 0\nv 1 {long} 0\n"),
+            format!("v 0 0 0\nf 1 1 {long}\n"),
+            format!("v 0 0 0\np 1/{long}/2/3\n"),
+        ] {
+            let (line, msg) = parse_error(&text);
+            assert_eq!(line, 2);
+            assert!(msg.contains("...") && msg.len() < 250, "{msg}");
+        }
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        let d = ObjData::parse("\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "x").unwrap();
+        assert_eq!(d.triangle_count(), 1);
+    }
+
+    /// A symlink to /dev/zero was read until memory ran out; it is refused
+    /// before it is opened, naming the file.
+    #[cfg(unix)]
+    #[test]
+    fn only_regular_files_are_read() {
+        let dir = std::env::temp_dir().join(format!("op-render-obj-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let zero = dir.join("zero.obj");
+        std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+        let e = ObjData::read(&zero).unwrap_err();
+        assert!(matches!(e, RenderError::Input { .. }), "{e:?}");
+        let msg = e.to_string();
+        assert!(
+            msg.contains("zero.obj") && msg.contains("not a regular file"),
+            "{msg}"
+        );
+        let e = ObjData::read(&dir).unwrap_err().to_string();
+        assert!(e.contains("a directory"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
