@@ -49,11 +49,14 @@ impl Scene {
         source: Option<PathBuf>,
     ) -> Result<BuiltScene, SceneError> {
         let mut built = self.build_world(base_dir, source)?;
-        let estimate = crate::stability::estimate(self, base_dir)?;
-        built.step_warnings = estimate
-            .warning(self.world.dt, &self.world.integrator)
-            .into_iter()
-            .collect();
+        // The estimate is advice: a sample that cannot be built (the full
+        // scene could) only means there is no estimate.
+        if let Ok(estimate) = crate::stability::estimate(self, base_dir) {
+            built.step_warnings = estimate
+                .warning(self.world.dt, &self.world.integrator)
+                .into_iter()
+                .collect();
+        }
         Ok(built)
     }
 
