@@ -165,7 +165,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                 op_scene::Format::Ron,
                 "<demo: scenes/spiral.ron>",
             )?;
-            let built = scene.build(None, None)?;
+            let built = scene.build_for_run(None, None)?;
             run_built(built, None, None)
         }
         Some(Command::Run {
@@ -289,7 +289,7 @@ fn limits(no_work_limits: bool, max_particle_steps: Option<f64>) -> Result<op_sc
 fn load(path: &Path, limits: op_scene::WorkLimits, frames: Option<usize>) -> Result<BuiltScene> {
     let scene = op_scene::load_scene_with(path, limits, frames)?;
     let base = path.parent().map(Path::to_path_buf);
-    Ok(scene.build(base.as_deref(), Some(path.to_path_buf()))?)
+    Ok(scene.build_for_run(base.as_deref(), Some(path.to_path_buf()))?)
 }
 
 fn run_built(

@@ -48,9 +48,20 @@ impl Scene {
         base_dir: Option<&Path>,
         source: Option<PathBuf>,
     ) -> Result<BuiltScene, SceneError> {
+        self.build_world(base_dir, source)
+    }
+
+    /// [`Scene::build`], then the stable-step estimate
+    /// ([`crate::stability`]): a `dt` above it becomes the first of the
+    /// run's warnings ([`BuiltScene::step_warnings`]). What `opsim run`
+    /// uses. The estimate is advice: a sample that cannot be built (the
+    /// full scene could) only means there is no estimate.
+    pub fn build_for_run(
+        &self,
+        base_dir: Option<&Path>,
+        source: Option<PathBuf>,
+    ) -> Result<BuiltScene, SceneError> {
         let mut built = self.build_world(base_dir, source)?;
-        // The estimate is advice: a sample that cannot be built (the full
-        // scene could) only means there is no estimate.
         if let Ok(estimate) = crate::stability::estimate(self, base_dir) {
             built.step_warnings = estimate
                 .warning(self.world.dt, &self.world.integrator)
@@ -60,7 +71,7 @@ impl Scene {
         Ok(built)
     }
 
-    /// [`Scene::build`] without the stable-step estimate (which builds a
+    /// The build of [`Scene::build`] (the stable-step estimate builds its
     /// sample of the scene through this).
     pub(crate) fn build_world(
         &self,

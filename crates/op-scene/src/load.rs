@@ -113,11 +113,11 @@ pub fn read_text_file(path: &Path, limit: u64) -> Result<String, SceneError> {
     Ok(text)
 }
 
-/// Loads the scene file at `path` and builds it ([`load_scene`] then
-/// [`Scene::build`] with the file's directory and path).
+/// Loads the scene file at `path` and builds it for a run ([`load_scene`]
+/// then [`Scene::build_for_run`] with the file's directory and path).
 pub fn build_scene_file(path: &Path) -> Result<BuiltScene, SceneError> {
     let scene = load_scene(path)?;
-    scene.build(path.parent(), Some(path.to_path_buf()))
+    scene.build_for_run(path.parent(), Some(path.to_path_buf()))
 }
 
 /// Parses and validates scene text (embedded scenes, tests). `origin`
