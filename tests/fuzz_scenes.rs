@@ -207,21 +207,47 @@ fn run(scene: &Path, out: &Path) -> (Outcome, String, f64) {
     (outcome, msg, start.elapsed().as_secs_f64())
 }
 
-/// Files under `out` holding a non-finite number.
+/// Files under `out` holding a non-finite number: a `null` value in
+/// `summary.json` (serde's form of NaN and infinity), a field of
+/// `metrics.csv` or a coordinate of a frame that does not parse as a finite
+/// number.
 fn non_finite_outputs(out: &Path) -> Vec<PathBuf> {
-    let mut files = vec![out.join("summary.json"), out.join("metrics.csv")];
-    if let Ok(d) = std::fs::read_dir(out.join("frames")) {
-        files.extend(d.map(|e| e.unwrap().path()));
+    fn has_null(v: &serde_json::Value) -> bool {
+        match v {
+            serde_json::Value::Null => true,
+            serde_json::Value::Array(a) => a.iter().any(has_null),
+            serde_json::Value::Object(o) => o.values().any(has_null),
+            _ => false,
+        }
     }
-    files
-        .into_iter()
-        .filter(|f| {
-            std::fs::read_to_string(f).is_ok_and(|t| {
-                let t = t.to_lowercase();
-                t.contains("nan") || t.contains("inf") || t.contains("null")
-            })
-        })
-        .collect()
+    let finite = |t: &str| t.parse::<f64>().is_ok_and(f64::is_finite);
+    let mut bad = Vec::new();
+    let summary = out.join("summary.json");
+    if let Ok(t) = std::fs::read_to_string(&summary) {
+        if serde_json::from_str::<serde_json::Value>(&t).map_or(true, |v| has_null(&v)) {
+            bad.push(summary);
+        }
+    }
+    let metrics = out.join("metrics.csv");
+    if let Ok(t) = std::fs::read_to_string(&metrics) {
+        if !t.lines().skip(1).flat_map(|l| l.split(',')).all(finite) {
+            bad.push(metrics);
+        }
+    }
+    if let Ok(d) = std::fs::read_dir(out.join("frames")) {
+        for f in d.map(|e| e.unwrap().path()) {
+            let t = std::fs::read_to_string(&f).unwrap_or_default();
+            let ok = t
+                .lines()
+                .filter(|l| l.starts_with("v ") || l.starts_with("vn "))
+                .flat_map(|l| l.split_whitespace().skip(1))
+                .all(finite);
+            if !ok {
+                bad.push(f);
+            }
+        }
+    }
+    bad
 }
 
 #[test]
