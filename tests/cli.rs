@@ -384,6 +384,13 @@ fn values_without_a_finite_run_are_refused() {
         ),
         (list("(0, 0, 0)", "(1e308, 0, 0)"), "particles[1].position"),
         (
+            one_particle(
+                "dt: 1e-3",
+                ", creation: Some((stretching: Some((d_min: 1e-320, d_max: 2.5))))",
+            ),
+            "creation.stretching.d_min",
+        ),
+        (
             tool("Ball(radius: 1e308)", "(time: 0, position: (0, 0, 0))"),
             "tools[0].shape",
         ),

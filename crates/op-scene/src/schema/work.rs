@@ -147,22 +147,22 @@ impl Scene {
                     &format!("must be at most {} {flag}", short(lim.max_created)),
                 ));
             }
-            if let Some(s) = &c.stretching {
-                if s.d_min < MIN_CREATION_DISTANCE {
+            let distances = [
+                (
+                    "creation.stretching.d_min",
+                    c.stretching.as_ref().map(|s| s.d_min),
+                ),
+                (
+                    "creation.growing.radius",
+                    c.growing.as_ref().map(|g| g.radius),
+                ),
+            ];
+            for (field, d) in distances {
+                if let Some(d) = d.filter(|d| *d < MIN_CREATION_DISTANCE) {
                     return Err(SceneError::value(
                         file,
-                        "creation.stretching.d_min",
-                        short(s.d_min),
-                        &format!("must be at least {MIN_CREATION_DISTANCE} rest spacings"),
-                    ));
-                }
-            }
-            if let Some(g) = &c.growing {
-                if g.radius < MIN_CREATION_DISTANCE {
-                    return Err(SceneError::value(
-                        file,
-                        "creation.growing.radius",
-                        short(g.radius),
+                        field,
+                        short(d),
                         &format!("must be at least {MIN_CREATION_DISTANCE} rest spacings"),
                     ));
                 }
