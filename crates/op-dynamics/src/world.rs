@@ -674,7 +674,7 @@ impl World {
         let held = self.time < self.hold_until - 1e-12 * self.params.dt;
         if self.accumulator.is_active() && !held {
             self.accumulator.clear();
-            self.integrator.invalidate();
+            self.integrator.invalidate_forces();
         }
         if self.params.heat.is_some() {
             self.advance_heat(info.dt_taken);
@@ -695,7 +695,7 @@ impl World {
                 );
                 // Cached forces were computed with the old curvatures.
                 if changed {
-                    self.integrator.invalidate();
+                    self.integrator.invalidate_forces();
                 }
             }
             report.seconds[Stage::Plasticity as usize] = clock.elapsed().as_secs_f64();
@@ -747,7 +747,7 @@ impl World {
             &mut self.heat_scratch,
         );
         if self.pipeline.heated {
-            self.integrator.invalidate();
+            self.integrator.invalidate_forces();
         }
     }
 
