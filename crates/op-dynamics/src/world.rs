@@ -656,6 +656,7 @@ impl World {
         let mut ctx = self
             .pipeline
             .context(attributes, &self.params.external, &self.accumulator);
+        ctx.step_start = Some(self.time);
         let info = self
             .integrator
             .step(&mut ctx, &bodies, self.time, dt, state);

@@ -1,13 +1,14 @@
 //! Issue 13, item 7: engine defects pinned at the world level (neighbour
 //! radius errors instead of panics, exact angular momentum of velocity
-//! Verlet).
+//! Verlet, force windows at the end of a settle phase).
 
 mod common;
 
-use common::{full_material, random_cluster, Rng};
+use common::{full_material, random_cluster, spacing_material, Rng};
 use op_dynamics::interactions::{LennardJonesParams, RepulsionParams, Spacing, WeightParams};
 use op_dynamics::{
-    Material, NeighbourParams, ParticleDesc, Particles, Point3, Real, Vec3, World, WorldParams,
+    AdaptiveParams, ExternalParams, ForceWindow, Material, NeighbourParams, ParticleDesc,
+    Particles, Point3, Real, Scheme, Vec3, World, WorldParams,
 };
 
 fn two_particles(objects: [u32; 2]) -> Particles {
@@ -188,4 +189,77 @@ fn issue_13_velocity_verlet_conserves_angular_momentum_to_round_off() {
     );
     assert!(worst_scale < 5e-12, "{worst_scale:e}");
     assert!(worst < 2e-10, "{worst:e}");
+}
+
+/// A world with a force window starting at `settle` (scene time 0), or
+/// without it.
+fn settle_world(scheme: Scheme, dt: Real, settle: Real, window: bool) -> World {
+    let mut rng = Rng::new(5);
+    let p = random_cluster(&mut rng, 8, 1);
+    let forces = if window {
+        vec![ForceWindow {
+            particles: vec![0, 3],
+            force: [5.0, -2.0, 1.0],
+            start: settle,
+            end: Real::INFINITY,
+            ramp: 0.0,
+        }]
+    } else {
+        Vec::new()
+    };
+    let params = WorldParams {
+        scheme,
+        dt,
+        external: ExternalParams {
+            linear_damping: 0.3,
+            forces,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    World::new(p, &[spacing_material()], params).unwrap()
+}
+
+/// Bits of every position and velocity.
+fn bits(w: &World) -> Vec<u64> {
+    let p = w.particles();
+    p.positions()
+        .iter()
+        .zip(p.velocities())
+        .flat_map(|(x, v)| [x.x, x.y, x.z, v.x, v.y, v.z].map(Real::to_bits))
+        .collect()
+}
+
+/// "Forces of a window starting at 0 already act in the last settle step":
+/// the force was evaluated at the end time of that step, where a step load
+/// was already on. A window starting at the end of the settle phase must
+/// leave the settled state unchanged, bit for bit, and act right after.
+#[test]
+fn issue_13_window_at_the_end_of_settling_does_not_act_in_it() {
+    let schemes = [
+        Scheme::VelocityVerlet,
+        Scheme::SymplecticEuler,
+        Scheme::ExplicitEuler,
+        Scheme::Rk4,
+        Scheme::Adaptive(AdaptiveParams::with_tolerance(1e-6)),
+    ];
+    for scheme in schemes {
+        for (dt, settle) in [(1e-2, 0.5), (1e-2, 0.37), (3e-3, 1.0 / 3.0), (0.07, 0.7)] {
+            let mut with = settle_world(scheme, dt, settle, true);
+            let mut without = settle_world(scheme, dt, settle, false);
+            with.advance_to(settle).unwrap();
+            without.advance_to(settle).unwrap();
+            assert_eq!(with.time(), settle);
+            assert!(
+                bits(&with) == bits(&without),
+                "{scheme:?} dt {dt} settle {settle}: the window acted before its start"
+            );
+            with.step().unwrap();
+            without.step().unwrap();
+            assert!(
+                bits(&with) != bits(&without),
+                "{scheme:?} dt {dt} settle {settle}: the window does not act after its start"
+            );
+        }
+    }
 }
