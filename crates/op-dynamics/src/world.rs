@@ -29,8 +29,8 @@ pub struct NeighbourParams {
     pub backend: NeighbourBackend,
     /// Skin as a fraction of the interaction cut-off: lists hold pairs
     /// within `cutoff * (1 + skin)` and are rebuilt when a particle moved
-    /// more than half the skin. `0 < skin <` [`MAX_SKIN`]; the list radius
-    /// `cutoff * (1 + skin)` of every material must also be finite
+    /// more than half the skin. `0 < skin <= 10` ([`MAX_SKIN`]); the list
+    /// radius `cutoff * (1 + skin)` of every material must also be finite
     /// ([`World::new`] checks it). Default: 0.2.
     pub skin: Real,
     /// Re-sort particles in spatial (Morton) order at each rebuild.

@@ -78,7 +78,7 @@ const MAX_NEWTON_ITERATIONS: usize = 12;
 /// body until it blows up.
 ///
 /// Solved by Newton's method from the explicit Euler guess, to round-off
-/// (at most [`MAX_NEWTON_ITERATIONS`]); a singular Jacobian (only at
+/// (at most 12 iterations); a singular Jacobian (only at
 /// `h |ω| ≫ 1`) falls back to one fixed-point update per iteration.
 /// Returns `omega` unchanged for a rotationally locked particle.
 pub fn gyroscopic_kick(q: &Quat, omega: &Vec3, torque: &Vec3, inertia: &Vec3, h: Real) -> Vec3 {
