@@ -14,6 +14,18 @@ use crate::math::{Real, Vec3};
 ///
 /// The magnitude factor is 0 before `start`, rises linearly to 1 over
 /// `ramp`, stays 1, and falls linearly to 0 over `ramp` ending at `end`.
+///
+/// **Step boundaries.** A step load (`ramp = 0`) jumps at `start` and
+/// `end`. The world evaluates it from inside the step being taken
+/// ([`ForceWindow::factor_within`]): at the step's start time as it is just
+/// after, at later times (stages, end) as it was just before. So a window starting at a
+/// step boundary acts in the steps after it and in none that ends there,
+/// whether the scheme evaluates forces at the start of a step (Euler) or
+/// at its end (velocity Verlet's second half kick, the last Runge–Kutta
+/// stage); likewise a window ending at a step boundary acts in the step
+/// that ends there and in none after. op-scene's force windows count from
+/// the end of the settle phase, so one starting at scene time 0 does not
+/// touch the settled state.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ForceWindow {
@@ -72,9 +84,30 @@ impl ForceWindow {
         Ok(())
     }
 
-    /// The magnitude factor in [0, 1] at time `t`.
+    /// The magnitude factor in [0, 1] at time `t` (on from `start`
+    /// included to `end` excluded).
     pub fn factor(&self, t: Real) -> Real {
-        if t < self.start || t >= self.end {
+        self.one_sided(t, false)
+    }
+
+    /// The magnitude factor at time `t` seen from inside the step that
+    /// starts at `step_start`: the limit from the right at `t <= step_start`
+    /// (the step's start), from the left at later times (its stages and
+    /// end, however long the step turns out; see the type's docs). The two
+    /// limits differ only at the jumps of a step load.
+    pub fn factor_within(&self, t: Real, step_start: Real) -> Real {
+        self.one_sided(t, t > step_start)
+    }
+
+    /// The factor's limit at `t` from the left (`from_left`) or from the
+    /// right.
+    fn one_sided(&self, t: Real, from_left: bool) -> Real {
+        let off = if from_left {
+            t <= self.start || t > self.end
+        } else {
+            t < self.start || t >= self.end
+        };
+        if off {
             return 0.0;
         }
         if self.ramp <= 0.0 {
@@ -205,6 +238,26 @@ mod tests {
             ramp: 1.0,
         };
         assert_eq!(w.factor(0.5), 0.0);
+        // Seen from a step: only a step load's jumps depend on the side.
+        for t in [1.0, 5.0] {
+            for s in [0.0, 1.0, 4.0, 5.0] {
+                assert_eq!(w.factor_within(t, s), 0.0);
+            }
+        }
+        let step = ForceWindow {
+            ramp: 0.0,
+            ..w.clone()
+        };
+        assert_eq!(step.factor_within(1.0, 0.5), 0.0, "a step ending at start");
+        assert_eq!(
+            step.factor_within(1.0, 1.0),
+            1.0,
+            "a step beginning at start"
+        );
+        assert_eq!(step.factor_within(5.0, 4.0), 1.0, "a step ending at end");
+        assert_eq!(step.factor_within(5.0, 5.0), 0.0, "a step beginning at end");
+        assert_eq!(step.factor_within(3.0, 2.5), 1.0);
+        assert_eq!(step.factor(1.0), 1.0);
         assert!((w.factor(1.5) - 0.5).abs() < 1e-15);
         assert_eq!(w.factor(3.0), 1.0);
         assert!((w.factor(4.75) - 0.25).abs() < 1e-15);

@@ -103,6 +103,11 @@ pub(crate) struct ForceContext<'a> {
     /// The bond store (`None`: no particle has a bonded material).
     pub bonds: Option<&'a Bonds>,
     pub external: &'a ExternalParams,
+    /// Start time of the world step being taken: force windows are
+    /// evaluated from inside it
+    /// ([`crate::external::ForceWindow::factor_within`]). `None` outside a
+    /// step (plain [`crate::external::ForceWindow::factor`]).
+    pub step_start: Option<Real>,
     pub accumulator: &'a ExternalAccumulator,
     pub tools: &'a Tools,
     pub scratch: &'a mut ForceScratch,
@@ -145,6 +150,7 @@ impl Pipeline {
             neighbours: self.neighbours.as_mut(),
             bonds: self.bonds.as_ref(),
             external,
+            step_start: None,
             accumulator,
             tools: &self.tools,
             scratch: &mut self.scratch,
@@ -295,7 +301,10 @@ impl ForceContext<'_> {
                 });
         }
         for w in &self.external.forces {
-            let k = w.factor(t);
+            let k = match self.step_start {
+                Some(t0) => w.factor_within(t, t0),
+                None => w.factor(t),
+            };
             if k != 0.0 {
                 let fw = k * Vec3::from(w.force);
                 for &id in &w.particles {

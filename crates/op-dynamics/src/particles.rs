@@ -52,6 +52,11 @@ impl ParticleType {
     }
 }
 
+/// Smallest norm of a [`ParticleDesc::orientation`] quaternion: below it
+/// (or for a non-finite one) the normalization on creation is undefined or
+/// dominated by round-off.
+pub const MIN_ORIENTATION_NORM: Real = 1e-6;
+
 /// Everything needed to create one particle. Start from
 /// [`ParticleDesc::at`] and override what differs from the defaults.
 #[derive(Clone, Debug, PartialEq)]
@@ -139,12 +144,19 @@ impl ParticleDesc {
         )?;
         error::finite("curvature", self.curvature)?;
         error::finite("temperature", self.temperature)?;
+        // The orientation is normalized on creation, so any finite
+        // quaternion of a reasonable norm is a frame; a zero (or vanishing)
+        // one has no direction and would normalize to NaN.
         let q = self.orientation.quaternion();
+        let norm = q.norm();
         error::check(
             "orientation",
-            q.norm(),
-            q.coords.iter().all(|c| c.is_finite()),
-            "must be a finite unit quaternion",
+            norm,
+            q.coords.iter().all(|c| c.is_finite())
+                && norm.is_finite()
+                && norm >= MIN_ORIENTATION_NORM,
+            "must be a finite quaternion of norm >= 1e-6 (it is normalized on creation; \
+             a zero quaternion is no rotation)",
         )
     }
 }
@@ -541,6 +553,38 @@ mod tests {
         d.mass = 1.0;
         assert!(p.push(d).is_err());
         assert!(p.is_empty());
+    }
+
+    /// A zero or non-finite orientation was accepted and normalized to NaN.
+    #[test]
+    fn degenerate_orientations_are_refused() {
+        use nalgebra::Quaternion;
+        let bad = [
+            Quaternion::new(0.0, 0.0, 0.0, 0.0),
+            Quaternion::new(1e-9, 0.0, 0.0, 0.0),
+            Quaternion::new(Real::NAN, 0.0, 0.0, 0.0),
+            Quaternion::new(1.0, Real::INFINITY, 0.0, 0.0),
+            Quaternion::new(1e300, 1e300, 0.0, 0.0),
+        ];
+        for q in bad {
+            let mut d = ParticleDesc::at(Point3::origin());
+            d.orientation = Quat::new_unchecked(q);
+            let e = d.validate().unwrap_err().to_string();
+            assert!(
+                e.contains("orientation") && e.contains("norm >= 1e-6"),
+                "{e}"
+            );
+            assert!(Particles::new().push(d).is_err());
+        }
+        // A finite non-unit quaternion is a valid frame, normalized on
+        // creation.
+        let mut d = ParticleDesc::at(Point3::origin());
+        d.orientation = Quat::new_unchecked(Quaternion::new(2.0, 0.0, 0.0, 2.0));
+        let mut p = Particles::new();
+        p.push(d).unwrap();
+        let q = p.orientations()[0];
+        assert!((q.quaternion().norm() - 1.0).abs() < 1e-15);
+        assert!((q.angle() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
     }
 
     #[test]

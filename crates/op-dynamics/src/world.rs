@@ -29,7 +29,9 @@ pub struct NeighbourParams {
     pub backend: NeighbourBackend,
     /// Skin as a fraction of the interaction cut-off: lists hold pairs
     /// within `cutoff * (1 + skin)` and are rebuilt when a particle moved
-    /// more than half the skin. > 0. Default: 0.2.
+    /// more than half the skin. `0 < skin <= 10` ([`MAX_SKIN`]); the list
+    /// radius `cutoff * (1 + skin)` of every material must also be finite
+    /// ([`World::new`] checks it). Default: 0.2.
     pub skin: Real,
     /// Re-sort particles in spatial (Morton) order at each rebuild.
     /// Default: true.
@@ -45,6 +47,12 @@ impl Default for NeighbourParams {
         }
     }
 }
+
+/// Largest neighbour skin (as a fraction of the cut-off): a list of radius
+/// `(1 + skin)` cut-offs holds `(1 + skin)^3` times the pairs that interact,
+/// so a skin of 10 already makes the list over 1000 times too long; larger
+/// values only cost memory and time (and `1e308` overflows the radius).
+pub const MAX_SKIN: Real = 10.0;
 
 /// When a run is declared diverged (besides NaN / infinite values, which
 /// always are).
@@ -105,7 +113,13 @@ impl WorldParams {
     /// Checks every field; `particle_count` bounds force-window ids.
     pub fn validate(&self, particle_count: usize) -> Result<(), ParamError> {
         error::positive("dt", self.dt)?;
-        error::positive("neighbours.skin", self.neighbours.skin)?;
+        error::check(
+            "neighbours.skin",
+            self.neighbours.skin,
+            self.neighbours.skin > 0.0 && self.neighbours.skin <= MAX_SKIN,
+            "must be > 0 and <= 10 (a fraction of the cut-off; the lists hold pairs within \
+             cutoff * (1 + skin))",
+        )?;
         error::check(
             "divergence.max_speed",
             self.divergence.max_speed,
@@ -283,10 +297,39 @@ impl Config {
     }
 
     /// The neighbour list this configuration needs (none without a kernel).
+    ///
+    /// Cannot fail once [`neighbour_radius_check`] accepted every material:
+    /// the configuration's cut-off is one of theirs.
     fn neighbour_list(&self, params: &NeighbourParams) -> Option<NeighbourList> {
         (self.kernel != Kernel::None)
             .then(|| NeighbourList::new(params.backend, self.cutoff, self.cutoff * params.skin))
     }
+}
+
+/// Checks that every material's cut-off with the skin gives a neighbour
+/// list (a finite radius `cutoff * (1 + skin)`), so that no later choice of
+/// the materials in use (particles inserted by [`World::insert_particles`]
+/// included) can meet an impossible list.
+fn neighbour_radius_check(
+    prepared: &[PreparedMaterial],
+    params: &NeighbourParams,
+) -> Result<(), ParamError> {
+    for (k, m) in prepared.iter().enumerate() {
+        let cutoff = m.cutoff();
+        if NeighbourList::try_new(params.backend, cutoff, cutoff * params.skin).is_err() {
+            return Err(ParamError::Invalid {
+                field: format!("materials[{k}]"),
+                message: format!(
+                    "cut-off {cutoff} with neighbours.skin {}: the neighbour radius \
+                     cutoff * (1 + skin) = {} is not a finite number; lower the cut-offs \
+                     (spacing, weight, repulsion) or the skin",
+                    params.skin,
+                    cutoff + cutoff * params.skin
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// An oriented particle world.
@@ -350,6 +393,7 @@ impl World {
             }
             .into());
         }
+        neighbour_radius_check(&prepared, &params.neighbours)?;
         let config = Config::of(&particles, &prepared);
         let neighbours = config.neighbour_list(&params.neighbours);
         let bonds = Bonds::needed(&particles, &prepared).then(|| {
@@ -612,6 +656,7 @@ impl World {
         let mut ctx = self
             .pipeline
             .context(attributes, &self.params.external, &self.accumulator);
+        ctx.step_start = Some(self.time);
         let info = self
             .integrator
             .step(&mut ctx, &bodies, self.time, dt, state);
@@ -630,7 +675,7 @@ impl World {
         let held = self.time < self.hold_until - 1e-12 * self.params.dt;
         if self.accumulator.is_active() && !held {
             self.accumulator.clear();
-            self.integrator.invalidate();
+            self.integrator.invalidate_forces();
         }
         if self.params.heat.is_some() {
             self.advance_heat(info.dt_taken);
@@ -651,7 +696,7 @@ impl World {
                 );
                 // Cached forces were computed with the old curvatures.
                 if changed {
-                    self.integrator.invalidate();
+                    self.integrator.invalidate_forces();
                 }
             }
             report.seconds[Stage::Plasticity as usize] = clock.elapsed().as_secs_f64();
@@ -703,7 +748,7 @@ impl World {
             &mut self.heat_scratch,
         );
         if self.pipeline.heated {
-            self.integrator.invalidate();
+            self.integrator.invalidate_forces();
         }
     }
 

@@ -581,6 +581,54 @@ fn settle_phase_shifts_forces_and_sets_the_rest_shape() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// Issue 13: "forces of a window starting at 0 already act in the last
+/// settle step". A step load starting at scene time 0 (world time
+/// `settle`) leaves the settled state unchanged, bit for bit, whatever the
+/// scheme, and acts in the first step after it.
+#[test]
+fn window_starting_at_scene_time_zero_does_not_act_in_the_settle_phase() {
+    let text = |scheme: &str, settle: &str, forces: &str| {
+        format!(
+            r#"(
+            name: "settle-window",
+            world: (dt: 0.01, integrator: {scheme}, duration: 1, frame_rate: 4, settle: {settle}),
+            materials: {{"m": (spacing: Cohesion((cutoff: 1.5)), form: 2, weight: (cutoff: 1.5))}},
+            objects: [(name: "s", material: "m",
+                generator: Spiral(count: 6, spacing: 1, curvature_start: 0.3, curvature_end: 0.9))],
+            forces: [{forces}],
+        )"#
+        )
+    };
+    let window = r#"(object: "s", particles: First(2), force: (3, -1, 0.5), start: 0)"#;
+    let state = |b: &BuiltScene| {
+        let p = b.world.particles();
+        let ids = &b.objects[0].ids;
+        let v: Vec<Vec3> = ids
+            .iter()
+            .map(|&id| p.velocities()[p.slot_of(id).unwrap()])
+            .collect();
+        (positions_of(&b.world, ids), v)
+    };
+    for scheme in ["VelocityVerlet", "SymplecticEuler", "Rk4"] {
+        for settle in ["0.5", "0.37", "0.123"] {
+            let mut with = build_ron(&text(scheme, settle, window));
+            let mut without = build_ron(&text(scheme, settle, ""));
+            with.settle().unwrap();
+            without.settle().unwrap();
+            assert!(
+                state(&with) == state(&without),
+                "{scheme}, settle {settle}: the window acted before scene time 0"
+            );
+            with.world.step().unwrap();
+            without.world.step().unwrap();
+            assert!(
+                state(&with) != state(&without),
+                "{scheme}, settle {settle}: the window does not act after scene time 0"
+            );
+        }
+    }
+}
+
 #[test]
 fn only_used_materials_enter_the_world() {
     let built = build_ron(

@@ -116,7 +116,7 @@ fn verlet_reuses_end_of_step_forces() {
         let t = k as Real * dt;
         let info = cached.step(&mut a, &mut Smooth::default(), t, dt);
         assert_eq!(info.force_evaluations, if k == 0 { 2 } else { 1 });
-        b.invalidate();
+        b.invalidate_forces();
         assert_eq!(
             fresh
                 .step(&mut b, &mut Smooth::default(), t, dt)

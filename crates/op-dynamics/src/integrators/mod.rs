@@ -311,8 +311,8 @@ pub struct Integrator {
     /// True when `forces`/`torques` hold the forces at the end of the last
     /// step (valid input for the next step's first stage / half kick).
     cache_valid: bool,
-    /// Verlet: world angular momenta after the first half kick.
-    momenta: Vec<Vec3>,
+    /// Verlet: world angular momenta, carried from step to step.
+    momenta: velocity_verlet::Momenta,
     /// Runge–Kutta stage state and derivatives.
     rk: RkBuffers,
     /// Adaptive: the step proposed by the controller after the last step.
@@ -345,7 +345,7 @@ impl Integrator {
             forces: Vec::new(),
             torques: Vec::new(),
             cache_valid: false,
-            momenta: Vec::new(),
+            momenta: velocity_verlet::Momenta::default(),
             rk: RkBuffers::default(),
             dt_suggested: None,
             translation_only: false,
@@ -358,10 +358,19 @@ impl Integrator {
     }
 
     /// Forget cached forces (Verlet and the adaptive scheme reuse the forces
-    /// from the end of the previous step; the world calls this when the
-    /// state or forces changed outside the integrator). The adaptive step
+    /// from the end of the previous step, Verlet also the angular momenta;
+    /// the world calls this when the state or forces changed outside the
+    /// integrator). The adaptive step
     /// suggestion is kept: a bad guess only costs a rejected attempt.
     pub fn invalidate(&mut self) {
+        self.cache_valid = false;
+        self.momenta.invalidate();
+    }
+
+    /// Forget the cached forces only: the force field changed (external
+    /// forces cleared, curvatures or temperatures updated) but the state
+    /// did not, so velocity Verlet keeps carrying its angular momenta.
+    pub fn invalidate_forces(&mut self) {
         self.cache_valid = false;
     }
 

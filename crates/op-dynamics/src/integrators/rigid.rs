@@ -16,7 +16,7 @@
 //! [`angular_momentum`] / [`rotational_kinetic_energy`] count only the axes
 //! whose moment is finite and positive.
 
-use crate::math::{Quat, Real, Vec3};
+use crate::math::{Mat3, Quat, Real, Vec3};
 
 /// The inverse principal moments `1/I` when all three moments are finite and
 /// strictly positive, `None` for a rotationally locked particle (see the
@@ -55,6 +55,63 @@ pub fn angular_acceleration(q: &Quat, omega: &Vec3, torque: &Vec3, inertia: &Vec
     let lb = inertia.component_mul(&wb);
     let alpha_b = (tb - wb.cross(&lb)).component_mul(&inv);
     q.transform_vector(&alpha_b)
+}
+
+/// Newton iterations of [`gyroscopic_kick`] at most (it converges
+/// quadratically: 2 to 4 iterations reach round-off at `h |ω| ≲ 0.1`).
+const MAX_NEWTON_ITERATIONS: usize = 12;
+
+/// The angular velocity after a kick of duration `h` by Euler's equations
+/// with the gyroscopic term taken implicitly: the implicit midpoint rule
+/// for the body-frame equations `I ω̇_b = τ_b − ω_b × (I ω_b)`,
+///
+/// `ω_b1 = ω_b0 + h I⁻¹ (τ_b − ω_m × (I ω_m))`, `ω_m = ½(ω_b0 + ω_b1)`,
+///
+/// in the body frame of `q` (held fixed during the kick), returned in the
+/// world frame `ω₁ = R(q) ω_b1`. With `τ = 0` the midpoint rule conserves
+/// the quadratic invariants of the free body, the kinetic energy
+/// `½ ω_b·Iω_b` and `|I ω_b| = |L|`, exactly up to the solver tolerance and
+/// round-off (Hairer, Lubich & Wanner, "Geometric Numerical Integration",
+/// 2006, §IV.2, Theorem 2.1: the implicit midpoint rule conserves quadratic
+/// first integrals; the body-frame Euler equations as in §VII.5). An
+/// explicit gyroscopic term instead pumps energy into an asymmetric free
+/// body until it blows up.
+///
+/// Solved by Newton's method from the explicit Euler guess, to round-off
+/// (at most 12 iterations); a singular Jacobian (only at
+/// `h |ω| ≫ 1`) falls back to one fixed-point update per iteration.
+/// Returns `omega` unchanged for a rotationally locked particle.
+pub fn gyroscopic_kick(q: &Quat, omega: &Vec3, torque: &Vec3, inertia: &Vec3, h: Real) -> Vec3 {
+    let Some(inv) = inverse_moments(inertia) else {
+        return *omega;
+    };
+    // Rotate with the normalized frame: the world ω is stored between steps
+    // and read back in the next step's frame, so a norm |q| = 1 + δ left by
+    // round-off would scale ω by |q|⁴ per step and the energy would drift
+    // (2e-9 over 200,000 steps in the free-body test).
+    let q = &Quat::new_normalize(*q.quaternion());
+    let w0 = q.inverse_transform_vector(omega);
+    let tb = q.inverse_transform_vector(torque);
+    // Residual of the midpoint equation at the candidate `x`.
+    let residual = |x: &Vec3| {
+        let m = 0.5 * (w0 + x);
+        x - w0 - h * (tb - m.cross(&inertia.component_mul(&m))).component_mul(&inv)
+    };
+    let mut x = w0 + h * (tb - w0.cross(&inertia.component_mul(&w0))).component_mul(&inv);
+    for _ in 0..MAX_NEWTON_ITERATIONS {
+        let g = residual(&x);
+        let m = 0.5 * (w0 + x);
+        // d(m × Im)/dm = [m]× diag(I) − [Im]×, and dm/dx = ½.
+        let d_gyro = m.cross_matrix() * Mat3::from_diagonal(inertia)
+            - inertia.component_mul(&m).cross_matrix();
+        let jac = Mat3::identity() + Mat3::from_diagonal(&inv) * d_gyro * (0.5 * h);
+        let step = jac.try_inverse().map_or(g, |j| j * g);
+        x -= step;
+        if step.norm() <= 4.0 * Real::EPSILON * x.norm() {
+            break;
+        }
+    }
+    q.transform_vector(&x)
 }
 
 /// World angular momentum `L = R diag(I) Rᵀ ω`.
@@ -154,6 +211,30 @@ mod tests {
         assert!(de.abs() < 1e-8, "dT/dt = {de}");
         // And the energy matches ½ ω·L.
         assert!((e(&q, &w) - 0.5 * w.dot(&l(&q, &w))).abs() < 1e-14);
+    }
+
+    #[test]
+    fn gyroscopic_kick_solves_the_midpoint_equation() {
+        let q = some_orientation();
+        let w = Vec3::new(0.7, -1.1, 2.0);
+        let tau = Vec3::new(-0.4, 0.9, 0.1);
+        let inertia = anisotropic();
+        let h = 0.05;
+        let w1 = gyroscopic_kick(&q, &w, &tau, &inertia, h);
+        // In the world frame (q fixed): I_w (ω₁ − ω)/h = τ − ω_m × I_w ω_m.
+        let r = q.to_rotation_matrix().into_inner();
+        let iw = r * Mat3::from_diagonal(&inertia) * r.transpose();
+        let wm = 0.5 * (w + w1);
+        let residual = iw * (w1 - w) / h - (tau - wm.cross(&(iw * wm)));
+        assert!(residual.norm() < 1e-12, "{residual}");
+        // Torque-free: kinetic energy and |L| kept to round-off.
+        let w1 = gyroscopic_kick(&q, &w, &Vec3::zeros(), &inertia, h);
+        let e = |w: &Vec3| rotational_kinetic_energy(&q, w, &inertia);
+        let l = |w: &Vec3| angular_momentum(&q, w, &inertia).norm();
+        assert!((e(&w1) - e(&w)).abs() < 1e-15 * e(&w) * 8.0);
+        assert!((l(&w1) - l(&w)).abs() < 1e-15 * l(&w) * 8.0);
+        // Locked particles keep their angular velocity.
+        assert_eq!(gyroscopic_kick(&q, &w, &tau, &Vec3::zeros(), h), w);
     }
 
     #[test]

@@ -22,9 +22,37 @@
 //!   relative, measured in the tests). Below `0.01 r0` panels halve down to
 //!   `r` (the energy grows like `-ln r`).
 //! - **tabulated** (default): a cubic Hermite table of `U` with `U' = -f_cut`
-//!   at uniform nodes over `[table_start r0, r_c]`; the tabulated force is
-//!   exactly minus the derivative of the tabulated energy. Below the table
-//!   the exact mode is used (the two join continuously at the first node).
+//!   at uniform nodes over the range where the force is not negligible
+//!   (below); the tabulated force is exactly minus the derivative of the
+//!   tabulated energy. Below `table_start r0` the exact mode is used (the
+//!   two join continuously).
+//!
+//! **Tabulated range.** `f` decays like a Gaussian away from `r0`, so a
+//! cut-off far beyond the well (up to 1000 r0 is accepted) would spread
+//! uniform nodes over a range where the force is zero to round-off: 1024
+//! nodes up to 1000 r0 made the force 121% wrong and the well 4.7x too
+//! deep. The table covers only `[a, b]`: `b = min(r_c, r0 + u_b)` with
+//! `|f| <= 1e-16 f_max` beyond `r0 + u_b` ([`NEGLIGIBLE_FORCE`]; `|f|`
+//! decreases monotonically there), and `a = max(table_start r0, r0 - u_a)`
+//! with `E u³/(table_start r0) exp(-α u²) <= 1e-16 f_max` for `u >= u_a`.
+//! Beyond `b` the energy and force are exactly 0 (the dropped tail
+//! `∫_b^{r_c} f_cut` is below `1e-16 f_max / κ`, `κ = -d ln|f|/dr` at `b`,
+//! as `ln|f|` is concave there); on `[table_start r0, a)` the energy is the
+//! constant `U(a)` with zero force. The energy stays continuous everywhere
+//! (0 at `b` and at the cut-off) and the force is `-dU/dr` exactly; the
+//! force jumps by at most `1e-16 f_max` at `a` and `b`.
+//!
+//! **Error bound (tabulated mode).** For every `r > 0`,
+//! `|f_table(r) - f_cut(r)| <= 1e-6 f_max` ([`TABLE_FORCE_TOLERANCE`]) and
+//! `|U_table(r) - U(r)| <= 1e-9 |U(r0)|` ([`TABLE_ENERGY_TOLERANCE`], the
+//! well depth). [`CohesionParams::prepare`] checks it on every interval at
+//! the points where the cubic Hermite error of the force (`τ = ½ ± 1/√12`)
+//! and of the energy (`τ = ½`) peaks, against the exact mode, and raises
+//! the node count above `table_nodes` until it holds (at most 1 000 000
+//! nodes, an error beyond; no accepted parameters need that many: the
+//! tests sweep `α r0²` from 1e-2 to 1e6 and cut-offs up to 1000 r0). The
+//! default (cut-off ≈ 2.08 r0) keeps its 1024 nodes over
+//! `[0.5 r0, r_c]`.
 //!
 //! Default cut-off: where `|f|` falls to [`AUTO_CUTOFF_RATIO`] (1e-6) of the
 //! maximum attraction. Reach and core softness are traded against each other
@@ -40,6 +68,21 @@ use serde::{Deserialize, Serialize};
 /// The default cut-off is where `|f|` has fallen to this fraction of the
 /// maximum attraction force.
 pub const AUTO_CUTOFF_RATIO: Real = 1e-6;
+
+/// Force magnitude, as a fraction of the maximum attraction `f_max`, below
+/// which the tabulated mode treats the force as zero (module docs).
+pub const NEGLIGIBLE_FORCE: Real = 1e-16;
+
+/// Largest tabulated force error as a fraction of `f_max` (module docs).
+pub const TABLE_FORCE_TOLERANCE: Real = 1e-6;
+
+/// Largest tabulated energy error as a fraction of the well depth
+/// `|U(r0)|` (module docs).
+pub const TABLE_ENERGY_TOLERANCE: Real = 1e-9;
+
+/// Most table nodes [`CohesionParams::prepare`] may use to meet the
+/// tolerances.
+const MAX_TABLE_NODES: usize = 1_000_000;
 
 /// How the cohesion energy and force are evaluated.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -74,7 +117,9 @@ pub struct CohesionParams {
     /// Start of the table as a fraction of `r0` (`0 < table_start < 1`);
     /// shorter distances use the exact mode. Default: 0.5.
     pub table_start: Real,
-    /// Number of table nodes (16 ..= 1 000 000). Default: 1024.
+    /// Number of table nodes at least (16 ..= 1 000 000), over the range
+    /// where the force is not negligible; raised when needed to meet the
+    /// error bound of the module docs. Default: 1024.
     pub table_nodes: usize,
 }
 
@@ -225,16 +270,26 @@ impl CohesionParams {
             breaks: Vec::new(),
             tail: Vec::new(),
             table: None,
+            zero_from: r_c,
+            flat_from: r_c,
+            flat_energy: 0.0,
+            exact_offset: 0.0,
         };
         c.build_partition();
         if self.mode == CohesionMode::Tabulated {
-            let start = self.table_start * self.r0;
-            let table = HermiteTable::new(start, r_c, self.table_nodes, |r| {
-                (c.energy_exact(r), -c.force(r))
-            });
-            c.table = Some(table);
+            c.build_table(self.table_start * self.r0, self.table_nodes)?;
         }
         Ok(c)
+    }
+}
+
+/// The largest `x` in `[lo, hi]` with `g(x) > 0`, for `g` decreasing on
+/// `[lo, hi]` with `g(lo) > 0` (bisection to round-off; `hi` if `g(hi) > 0`).
+fn last_positive(lo: Real, hi: Real, g: impl Fn(Real) -> Real) -> Real {
+    if g(hi) > 0.0 {
+        hi
+    } else {
+        bisect(lo, hi, |x| g(x) > 0.0)
     }
 }
 
@@ -252,9 +307,108 @@ pub struct Cohesion {
     /// `tail[k] = ∫_{breaks[k]}^{r_c} f_cut`.
     tail: Vec<Real>,
     table: Option<HermiteTable>,
+    /// Energy and force are 0 from here on: the cut-off, or the table's end
+    /// where the force became negligible.
+    zero_from: Real,
+    /// With a table starting above `table_start r0`: from here up to the
+    /// table the energy is `flat_energy` and the force 0 (module docs).
+    flat_from: Real,
+    /// The table's energy at its first node.
+    flat_energy: Real,
+    /// Subtracted from the exact energy below the flat part / table, so
+    /// the energy stays continuous where the table drops the negligible
+    /// integrals.
+    exact_offset: Real,
 }
 
 impl Cohesion {
+    /// `(a, b)`: the range `[a, b]` within `[start, r_c]` outside which the
+    /// force is negligible (module docs).
+    fn table_range(&self, start: Real) -> (Real, Real) {
+        let (r0, alpha, e) = (self.r0, self.alpha, self.e);
+        let target = (NEGLIGIBLE_FORCE * self.f_max).ln();
+        // Beyond the well: |f| decreases monotonically past r_m.
+        let u_m = self.r_m - r0;
+        let ln_f = |u: Real| e.ln() + 3.0 * u.ln() - (r0 + u).ln() - alpha * u * u;
+        let mut hi = 2.0 * u_m;
+        while ln_f(hi) > target && r0 + hi < self.cutoff() {
+            hi *= 2.0;
+        }
+        let b = (r0 + last_positive(u_m, hi, |u| ln_f(u) - target)).min(self.cutoff());
+        // Inside the core: bound |f| by E u³/start exp(-α u²), which
+        // increases up to u* = sqrt(1.5/α) and decreases beyond.
+        let u_max = r0 - start;
+        let u_star = (1.5 / alpha).sqrt();
+        let ln_bound = |u: Real| e.ln() + 3.0 * u.ln() - start.ln() - alpha * u * u;
+        let a = if u_star >= u_max || ln_bound(u_max) > target {
+            start
+        } else {
+            r0 - last_positive(u_star, u_max, |u| ln_bound(u) - target)
+        };
+        (a.max(start), b)
+    }
+
+    /// Builds the table over [`Self::table_range`] with at least `nodes`
+    /// nodes, raising the count until the error bound of the module docs
+    /// holds at the interpolation error peaks of every interval.
+    fn build_table(&mut self, start: Real, nodes: usize) -> Result<(), ParamError> {
+        let (a, b) = self.table_range(start);
+        let tail_b = self.energy_exact(b);
+        let depth = self.energy_exact(self.r0).abs();
+        let mut n = nodes;
+        loop {
+            let table =
+                HermiteTable::new(a, b, n, |r| (self.energy_exact(r) - tail_b, -self.force(r)));
+            let (ef, eu) = self.table_error(&table);
+            let (rf, ru) = (
+                ef / (TABLE_FORCE_TOLERANCE * self.f_max),
+                eu / (TABLE_ENERGY_TOLERANCE * depth),
+            );
+            if rf <= 1.0 && ru <= 1.0 {
+                self.zero_from = b;
+                self.flat_from = start;
+                self.flat_energy = table.eval(a).0;
+                self.exact_offset = self.energy_exact(start) - self.flat_energy;
+                self.table = Some(table);
+                return Ok(());
+            }
+            if n >= MAX_TABLE_NODES {
+                return Err(ParamError::Invalid {
+                    field: "table_nodes".into(),
+                    message: format!(
+                        "{MAX_TABLE_NODES} nodes on [{a}, {b}] do not reach the table's error \
+                         bound (force error {:.1e} f_max, energy error {:.1e} of the well \
+                         depth): use the exact mode",
+                        ef / self.f_max,
+                        eu / depth
+                    ),
+                });
+            }
+            // Force error ~ n^-3, energy error ~ n^-4; 25% margin.
+            let grow = rf.cbrt().max(ru.powf(0.25)).max(1.0) * 1.25;
+            n = ((n as Real * grow).ceil() as usize).min(MAX_TABLE_NODES);
+        }
+    }
+
+    /// Largest force and energy errors of `table` against the exact mode,
+    /// at the points of every interval where the cubic Hermite error of the
+    /// energy (`τ = ½`) and of its derivative (`τ = ½ ± 1/√12`) peaks.
+    fn table_error(&self, table: &HermiteTable) -> (Real, Real) {
+        let offset = 0.5 / (3.0 as Real).sqrt();
+        let (a, h) = (table.start(), table.spacing());
+        let intervals = ((table.end() - a) / h).round() as usize;
+        let (mut ef, mut eu): (Real, Real) = (0.0, 0.0);
+        for k in 0..intervals {
+            for t in [0.5 - offset, 0.5, 0.5 + offset] {
+                let r = a + (k as Real + t) * h;
+                let (u, du) = table.eval(r);
+                ef = ef.max((du + self.force(r)).abs());
+                eu = eu.max((u - self.energy_exact(r)).abs());
+            }
+        }
+        (ef, eu)
+    }
+
     fn build_partition(&mut self) {
         let r_c = self.taper.cutoff();
         let r_on = self.taper.r_on();
@@ -349,16 +503,43 @@ impl Cohesion {
     }
 
     /// `(U(r), dU/dr)` in the configured mode, for `r > 0`; zero beyond
-    /// the cut-off.
+    /// the cut-off (and, tabulated, beyond the range where the force is
+    /// not negligible, see the module docs).
     #[inline]
     pub fn eval(&self, r: Real) -> (Real, Real) {
-        if r >= self.taper.cutoff() {
+        if r >= self.zero_from {
             return (0.0, 0.0);
         }
         match &self.table {
             Some(t) if r >= t.start() => t.eval(r),
-            _ => self.eval_exact(r),
+            _ => self.eval_below_table(r),
         }
+    }
+
+    /// [`Self::eval`] below the table: the flat part, then the exact mode
+    /// (shifted to join the table continuously).
+    #[cold]
+    fn eval_below_table(&self, r: Real) -> (Real, Real) {
+        if self.table.is_none() {
+            self.eval_exact(r)
+        } else if r >= self.flat_from {
+            (self.flat_energy, 0.0)
+        } else {
+            (self.energy_exact(r) - self.exact_offset, -self.force(r))
+        }
+    }
+
+    /// The tabulated range `[a, b]` (module docs), or `None` in the exact
+    /// mode.
+    pub fn table_range_in_use(&self) -> Option<(Real, Real)> {
+        self.table.as_ref().map(|t| (t.start(), t.end()))
+    }
+
+    /// Number of table nodes in use (0 in the exact mode).
+    pub fn table_nodes_in_use(&self) -> usize {
+        self.table.as_ref().map_or(0, |t| {
+            ((t.end() - t.start()) / t.spacing()).round() as usize + 1
+        })
     }
 }
 
@@ -512,6 +693,76 @@ mod tests {
         );
         assert!(ef < 1e-6, "{ef:e}");
         assert!(eu < 1e-9, "{eu:e}");
+    }
+
+    /// Uniform nodes spread to a large cut-off lost the well: 1024 nodes up
+    /// to 1000 r0 gave a force error of 121% of f_max and a well 4.7x too
+    /// deep. Now the tabulated force and energy stay within the stated
+    /// bound of the direct evaluation (closed-form force, quadrature energy
+    /// accurate to round-off) at any accepted cut-off and alpha.
+    #[test]
+    fn table_error_bound_holds_at_any_cutoff() {
+        let d = CohesionParams::default();
+        // (alpha, cut-off, taper): a narrow well needs a short taper to
+        // start beyond the maximum attraction.
+        let cases = [
+            (16.0, None, 0.1),
+            (16.0, Some(100.0), 0.1),
+            (16.0, Some(1000.0), 0.1),
+            (1e-5, Some(1000.0), 0.1),
+            (1e-3, Some(100.0), 0.1),
+            (1e-2, None, 0.1),
+            (1e-2, Some(1000.0), 0.1),
+            (1.0, Some(1000.0), 0.1),
+            (1e4, None, 0.02),
+            (1e4, Some(1000.0), 0.1),
+            (1e6, None, 0.002),
+            (1e6, Some(100.0), 0.1),
+        ];
+        for (alpha, cutoff, taper) in cases {
+            let p = CohesionParams {
+                alpha,
+                cutoff,
+                taper,
+                ..d
+            };
+            let c = p.prepare().unwrap();
+            let x = exact(p);
+            let (_, f_max) = x.max_attraction();
+            let depth = x.energy_exact(p.r0).abs();
+            let (a, b) = c.table_range_in_use().unwrap();
+            let start = p.table_start * p.r0;
+            let r_c = c.cutoff();
+            let mut samples = Vec::new();
+            for (lo, hi, n) in [(a, b, 20_000), (start, b, 10_000), (start, r_c, 5_000)] {
+                samples.extend((0..=n).map(|k| lo + (hi - lo) * (k as Real + 0.37) / n as Real));
+            }
+            samples.extend([0.2 * start, 0.9 * start, a, b, 0.5 * (b + r_c), r_c * 0.999]);
+            let (mut ef, mut eu): (Real, Real) = (0.0, 0.0);
+            for r in samples.into_iter().filter(|&r| r > 0.0 && r < r_c) {
+                let (u, du) = c.eval(r);
+                let (ue, due) = x.eval_exact(r);
+                ef = ef.max((du - due).abs() / f_max);
+                eu = eu.max((u - ue).abs() / depth);
+            }
+            eprintln!(
+                "cohesion table alpha {alpha:e} cutoff {r_c:.4}: {} nodes on [{a:.4}, {b:.4}], \
+                 force error {ef:.2e} f_max, energy error {eu:.2e} depth",
+                c.table_nodes_in_use()
+            );
+            assert!(
+                ef <= TABLE_FORCE_TOLERANCE,
+                "alpha {alpha} cutoff {r_c}: {ef:e}"
+            );
+            assert!(
+                eu <= TABLE_ENERGY_TOLERANCE,
+                "alpha {alpha} cutoff {r_c}: {eu:e}"
+            );
+        }
+        // The default keeps its table: 1024 nodes over [table_start r0, r_c].
+        let c = d.prepare().unwrap();
+        assert_eq!(c.table_nodes_in_use(), 1024);
+        assert_eq!(c.table_range_in_use(), Some((0.5, c.cutoff())));
     }
 
     #[test]
