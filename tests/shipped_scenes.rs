@@ -1,6 +1,11 @@
 //! Every shipped scene runs to the end without a warning, unless its header
 //! says which one it expects (`// expect-warning: TEXT (why)`: a warning
-//! containing TEXT must then be printed, as for the tearing scenes).
+//! containing TEXT must then be printed, as for the tearing scenes), and its
+//! frames hash to the golden value in `tests/data/golden_frames.txt` (a
+//! refactoring of the step must not change a bit; a change of the physics
+//! named in its commit re-blesses them with `OPSIM_BLESS=1`).
+//! `OPSIM_BIN` runs another build of `opsim` (to bless the goldens of an
+//! earlier commit).
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -8,6 +13,26 @@ use std::sync::Mutex;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// FNV-1a over the run's frames, in name order.
+fn frames_hash(out: &std::path::Path) -> String {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(out.join("frames"))
+        .map(|d| d.map(|e| e.unwrap().path()).collect())
+        .unwrap_or_default();
+    files.sort();
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for f in &files {
+        for b in std::fs::read(f).unwrap() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    format!("{h:016x} {}", files.len())
+}
+
+fn golden_path() -> PathBuf {
+    repo().join("tests/data/golden_frames.txt")
 }
 
 /// The expected warnings of a scene: the TEXT of its `expect-warning` lines.
@@ -28,6 +53,8 @@ fn shipped_scenes_run_without_unexpected_warnings() {
     scenes.sort();
     let root = std::env::temp_dir().join(format!("opsim-shipped-{}", std::process::id()));
     let failures = Mutex::new(Vec::new());
+    let hashes = Mutex::new(Vec::new());
+    let bin = std::env::var("OPSIM_BIN").unwrap_or_else(|_| env!("CARGO_BIN_EXE_opsim").into());
     let queue = Mutex::new(scenes.clone());
     std::thread::scope(|s| {
         for _ in 0..2 {
@@ -37,7 +64,7 @@ fn shipped_scenes_run_without_unexpected_warnings() {
                 };
                 let name = scene.file_stem().unwrap().to_string_lossy().into_owned();
                 let out = root.join(&name);
-                let o = Command::new(env!("CARGO_BIN_EXE_opsim"))
+                let o = Command::new(&bin)
                     .args([
                         "run",
                         scene.to_str().unwrap(),
@@ -53,8 +80,7 @@ fn shipped_scenes_run_without_unexpected_warnings() {
                     .filter_map(|l| l.strip_prefix("opsim: warning: "))
                     .collect();
                 let expect = expected(&std::fs::read_to_string(&scene).unwrap());
-                let mut fail =
-                    |why: String| failures.lock().unwrap().push(format!("{name}: {why}"));
+                let fail = |why: String| failures.lock().unwrap().push(format!("{name}: {why}"));
                 if !o.status.success() {
                     fail(format!("exit {:?}: {stderr}", o.status.code()));
                 }
@@ -70,11 +96,31 @@ fn shipped_scenes_run_without_unexpected_warnings() {
                         ));
                     }
                 }
+                hashes
+                    .lock()
+                    .unwrap()
+                    .push(format!("{name} {}", frames_hash(&out)));
                 let _ = std::fs::remove_dir_all(&out);
             });
         }
     });
     let _ = std::fs::remove_dir_all(&root);
-    let failures = failures.into_inner().unwrap();
+    let mut hashes = hashes.into_inner().unwrap();
+    hashes.sort();
+    let mut failures = failures.into_inner().unwrap();
+    if std::env::var_os("OPSIM_BLESS").is_some() {
+        std::fs::write(golden_path(), hashes.join("\n") + "\n").unwrap();
+    } else {
+        let golden = std::fs::read_to_string(golden_path()).unwrap_or_default();
+        let golden: Vec<&str> = golden.lines().collect();
+        for h in &hashes {
+            if !golden.contains(&h.as_str()) {
+                failures.push(format!(
+                    "frames differ from tests/data/golden_frames.txt: {h} (re-bless with \
+                     OPSIM_BLESS=1 only for a change of the physics named in the commit)"
+                ));
+            }
+        }
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
