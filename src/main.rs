@@ -68,6 +68,9 @@ enum Command {
         /// Default: 1e12.
         #[arg(long)]
         max_particle_steps: Option<f64>,
+        /// Print the seconds spent in each stage of the step at the end.
+        #[arg(long)]
+        profile: bool,
     },
     /// Validate a scene, print what it enables and estimate its largest
     /// stable step (on a bounded sample of the scene: memory proportional to
@@ -166,7 +169,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                 "<demo: scenes/spiral.ron>",
             )?;
             let built = scene.build_for_run(None, None)?;
-            run_built(built, None, None)
+            run_built(built, None, None, false)
         }
         Some(Command::Run {
             scene,
@@ -175,6 +178,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             threads,
             no_work_limits,
             max_particle_steps,
+            profile,
         }) => {
             if let Some(k) = threads {
                 rayon::ThreadPoolBuilder::new()
@@ -185,7 +189,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             let frames = frames.map(|f| usize::try_from(f).unwrap_or(usize::MAX));
             let limits = limits(no_work_limits, max_particle_steps)?;
             let built = load(&scene, limits, frames)?;
-            run_built(built, out, frames)
+            run_built(built, out, frames, profile)
         }
         Some(Command::Check {
             scene,
@@ -296,6 +300,7 @@ fn run_built(
     mut built: BuiltScene,
     out: Option<PathBuf>,
     frames: Option<usize>,
+    profile: bool,
 ) -> Result<(), Failure> {
     let out_dir = out.unwrap_or_else(|| Path::new("opsim-out").join(&built.name));
     let opts = RunOptions {
@@ -327,6 +332,14 @@ fn run_built(
     for w in warnings {
         eprintln!("opsim: warning: {w}");
     }
+    let summary = match &result {
+        Ok(s) => Some(s),
+        Err(RunError::Diverged { summary, .. }) => Some(&**summary),
+        Err(_) => None,
+    };
+    if let (true, Some(s)) = (profile, summary) {
+        print_profile(s);
+    }
     match result {
         Ok(summary) => {
             outln!(
@@ -350,6 +363,21 @@ fn run_built(
         }),
         Err(e) => Err(e.into()),
     }
+}
+
+/// The `--profile` table: seconds and share of the wall time per stage, in
+/// decreasing order.
+fn print_profile(s: &op_scene::Summary) {
+    let mut rows: Vec<(&String, &f64)> = s.stages.iter().collect();
+    rows.sort_by(|a, b| b.1.total_cmp(a.1).then(a.0.cmp(b.0)));
+    outln!("{:<12} {:>10} {:>7}", "stage", "seconds", "share");
+    for (name, secs) in rows {
+        outln!(
+            "{name:<12} {secs:>10.4} {:>6.1}%",
+            100.0 * secs / s.wall_seconds.max(f64::MIN_POSITIVE)
+        );
+    }
+    outln!("{:<12} {:>10.4} {:>6.1}%", "wall", s.wall_seconds, 100.0);
 }
 
 /// `opsim check`: validates the scene, builds a bounded sample of it

@@ -304,8 +304,7 @@ fn mutated_scenes_exit_cleanly_in_bounded_time_with_finite_outputs() {
                     );
                 }
                 let mut t = tally.lock().unwrap();
-                let mut fail =
-                    |why: String| failures.lock().unwrap().push(format!("{name}: {why}"));
+                let fail = |why: String| failures.lock().unwrap().push(format!("{name}: {why}"));
                 match outcome {
                     Outcome::Exit(0) => t[0] += 1,
                     Outcome::Exit(2) => t[1] += 1,

@@ -23,6 +23,7 @@
 pub mod bonds;
 pub mod creation;
 pub mod diagnostics;
+pub mod driver;
 pub mod error;
 pub mod external;
 pub mod flags;

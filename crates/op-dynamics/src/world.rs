@@ -187,6 +187,40 @@ pub enum Stage {
     /// Plastic update of the remembered curvatures (only with plastic
     /// materials).
     Plasticity,
+    /// Heat conduction, sources and cooling (only with heat).
+    Heat,
+    /// Breaking of stretched bonds (only with bonded materials).
+    Bonds,
+    /// Erasers and trapping shapers (only with such tools).
+    Erase,
+}
+
+impl Stage {
+    /// Every stage, in [`StepReport::seconds`] order.
+    pub const ALL: [Stage; 8] = [
+        Stage::Reorder,
+        Stage::Neighbours,
+        Stage::Integrate,
+        Stage::Check,
+        Stage::Plasticity,
+        Stage::Heat,
+        Stage::Bonds,
+        Stage::Erase,
+    ];
+
+    /// Lower-case name, for timing tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Reorder => "reorder",
+            Stage::Neighbours => "neighbours",
+            Stage::Integrate => "integrate",
+            Stage::Check => "check",
+            Stage::Plasticity => "plasticity",
+            Stage::Heat => "heat",
+            Stage::Bonds => "bonds",
+            Stage::Erase => "erase",
+        }
+    }
 }
 
 /// What one call of [`World::step`] did.
@@ -201,7 +235,7 @@ pub struct StepReport {
     /// Whether particles were re-sorted.
     pub reordered: bool,
     /// Seconds per stage, indexed like [`Stage`].
-    pub seconds: [f64; 5],
+    pub seconds: [f64; 8],
     /// Stable ids of the particles eraser tools removed at the end of the
     /// step (seed 000 fig. 7), or shaping tools trapped between them (fig.
     /// 14, [`Role::Shaper`]), in increasing order.
@@ -357,6 +391,8 @@ pub struct World {
     steps: u64,
     dt_next: Real,
     report: StepReport,
+    /// Seconds per [`Stage`] summed over every step.
+    stage_seconds: [f64; 8],
     heat_scratch: heat::HeatScratch,
 }
 
@@ -431,6 +467,7 @@ impl World {
             steps: 0,
             dt_next: params.dt,
             report: StepReport::default(),
+            stage_seconds: [0.0; 8],
             heat_scratch: heat::HeatScratch::default(),
             particles,
             params,
@@ -566,6 +603,22 @@ impl World {
         &self.report
     }
 
+    /// Seconds spent in each stage of [`World::step`] over every step so
+    /// far, by stage name ([`Stage::name`]; stages a world does not have
+    /// stay at 0).
+    pub fn stage_seconds(&self) -> Vec<(&'static str, f64)> {
+        Stage::ALL
+            .iter()
+            .map(|s| (s.name(), self.stage_seconds[*s as usize]))
+            .collect()
+    }
+
+    /// Drops the integrator's cached forces: the next step evaluates them
+    /// anew (a stage changed what they depend on; see [`crate::driver`]).
+    pub fn invalidate_forces(&mut self) {
+        self.integrator.invalidate();
+    }
+
     /// Adds a force and a torque (world frame, torque about the particle's
     /// position) to particle `id`, held constant during the next step and
     /// then cleared. This is how other crates (op-implicit contact, tools)
@@ -678,10 +731,14 @@ impl World {
             self.integrator.invalidate_forces();
         }
         if self.params.heat.is_some() {
+            let clock = std::time::Instant::now();
             self.advance_heat(info.dt_taken);
+            report.seconds[Stage::Heat as usize] = clock.elapsed().as_secs_f64();
         }
         if let Some(bonds) = self.pipeline.bonds.as_mut() {
+            let clock = std::time::Instant::now();
             report.bonds_broken = bonds.break_stretched(&self.particles);
+            report.seconds[Stage::Bonds as usize] = clock.elapsed().as_secs_f64();
         }
         if self.plastic {
             let clock = std::time::Instant::now();
@@ -705,16 +762,21 @@ impl World {
         // step (before the divergence check, which then sees only the
         // survivors).
         if self.pipeline.tools.removes_particles() {
+            let clock = std::time::Instant::now();
             let erased = self.pipeline.tools.erase(self.time, &self.particles);
             if !erased.is_empty() {
                 self.remove_live(&erased);
             }
             report.erased = erased;
+            report.seconds[Stage::Erase as usize] = clock.elapsed().as_secs_f64();
         }
 
         let clock = std::time::Instant::now();
         let check = self.check_divergence();
         report.seconds[Stage::Check as usize] = clock.elapsed().as_secs_f64();
+        for (total, s) in self.stage_seconds.iter_mut().zip(report.seconds) {
+            *total += s;
+        }
         self.report = report;
         check?;
         Ok(&self.report)

@@ -65,6 +65,32 @@ impl Skin {
         Ok(())
     }
 
+    /// Attaches more primitives (particle id, primitive in its body frame),
+    /// after the existing ones: particles the creation rules added to the
+    /// skinned object. They enter the field at the next [`Skin::repose`].
+    ///
+    /// # Errors
+    ///
+    /// An invalid primitive (nothing is attached then).
+    pub fn attach(&mut self, attachments: &[(u32, Primitive)]) -> Result<(), SkinError> {
+        if let Some(k) = attachments.iter().position(|(_, p)| !p.is_valid()) {
+            return Err(SkinError::InvalidPrimitive {
+                index: self.attachments.len() + k,
+            });
+        }
+        self.attachments.extend_from_slice(attachments);
+        Ok(())
+    }
+
+    /// Keeps the attachments whose particle id `keep` accepts (the others'
+    /// particles were removed: merged, erased, released). The field follows
+    /// at the next [`Skin::repose`]. Returns how many were dropped.
+    pub fn retain(&mut self, mut keep: impl FnMut(u32) -> bool) -> usize {
+        let before = self.attachments.len();
+        self.attachments.retain(|(id, _)| keep(*id));
+        before - self.attachments.len()
+    }
+
     /// The (particle id, primitive) attachments, in the order given.
     pub fn attachments(&self) -> &[(u32, Primitive)] {
         &self.attachments

@@ -291,7 +291,22 @@ impl Scene {
                 fit,
             }
         });
+        // Only the stages the scene uses (crate::stages, in their order).
+        let mut driver = op_dynamics::driver::Driver::new();
+        if let Some(c) = &creation {
+            if c.fit.is_some() {
+                driver.push(Box::new(crate::stages::FitRelease));
+            }
+            driver.push(Box::new(crate::stages::Creation));
+        }
+        if skins.len() >= 2 || !skin_tools.is_empty() {
+            driver.push(Box::new(crate::stages::Contact));
+        }
+        if !skins.is_empty() {
+            driver.push(Box::new(crate::stages::Skins));
+        }
         Ok(BuiltScene {
+            driver,
             skins,
             skin_tools,
             tools,

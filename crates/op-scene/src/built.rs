@@ -2,11 +2,13 @@
 
 use std::path::PathBuf;
 
+use op_dynamics::driver::{DriveError, Driver};
 use op_dynamics::{Divergence, Point3, Real, Tool, World};
 
 use crate::creation::CreationState;
 use crate::outputs::{Outputs, ParticleOutput};
-use crate::skins::{contact_step, BuiltSkin, ContactStats, SkinTool};
+use crate::skins::{BuiltSkin, ContactStats, SkinTool};
+use crate::stages::SceneState;
 
 /// One object of a built scene.
 #[derive(Clone, Debug)]
@@ -91,6 +93,9 @@ pub struct BuiltScene {
     /// The creation rules, when the scene has some (see
     /// [`crate::creation`]).
     pub creation: Option<CreationState>,
+    /// The driver of the scene's stages ([`crate::stages`]): only those
+    /// the scene uses.
+    pub driver: Driver<SceneState>,
 }
 
 impl BuiltScene {
@@ -182,129 +187,49 @@ impl BuiltScene {
         self.skins.len() >= 2 || !self.skin_tools.is_empty()
     }
 
-    /// Advances the world to world time `t_end`. Without contact this is
-    /// [`World::advance_to`]; with contact the world advances by intervals
-    /// of `dt`, the contact reactions computed at the start of each and
-    /// held over it (over every step of it with the adaptive scheme), and [`BuiltScene::contact`] is updated (see
-    /// [`crate::skins`]). Skins are re-posed at `t_end` either way.
+    /// Advances the world to world time `t_end` through the scene's driver
+    /// ([`BuiltScene::driver`]): the stages of [`crate::stages`] act between
+    /// the world's steps (creation, a fit's release, skin contact) and skins
+    /// follow the particles. The shared state ([`BuiltScene::objects`],
+    /// `skins`, `skin_tools`, `contact`, `creation`) is lent to the driver
+    /// for the call.
     ///
     /// # Errors
     ///
-    /// The divergence or contact sampling error, as a message.
-    pub fn advance_to(&mut self, t_end: Real) -> Result<(), String> {
-        if self.has_contact() {
-            let dt = self.world.params().dt;
-            loop {
-                let remaining = t_end - self.world.time();
-                if remaining <= 1e-12 * dt {
-                    break;
-                }
-                let h = if remaining <= dt * (1.0 + 1e-6) {
-                    remaining
-                } else {
-                    dt
-                };
-                contact_step(
-                    &mut self.world,
-                    &mut self.skins,
-                    &self.skin_tools,
-                    &self.objects,
-                    h,
-                    &mut self.contact,
-                )?;
-                let target = self.world.time() + h;
-                self.world.hold_external_forces_until(target);
-                self.world.advance_to(target).map_err(|d| d.to_string())?;
-            }
-        } else if self.creation.is_some() {
-            self.advance_creating(t_end)?;
-        } else {
-            self.world.advance_to(t_end).map_err(|d| d.to_string())?;
-        }
-        for s in &mut self.skins {
-            s.skin
-                .repose(&self.world)
-                .map_err(|e| format!("posing skin {}: {e}", s.name))?;
-        }
-        Ok(())
+    /// The world's divergence or a stage's failure.
+    pub fn advance_to(&mut self, t_end: Real) -> Result<(), DriveError> {
+        let mut state = SceneState {
+            objects: std::mem::take(&mut self.objects),
+            skins: std::mem::take(&mut self.skins),
+            skin_tools: std::mem::take(&mut self.skin_tools),
+            contact: self.contact,
+            creation: self.creation.take(),
+        };
+        let result = self.driver.advance_to(&mut self.world, &mut state, t_end);
+        self.objects = state.objects;
+        self.skins = state.skins;
+        self.skin_tools = state.skin_tools;
+        self.contact = state.contact;
+        self.creation = state.creation;
+        result
     }
 
-    /// [`BuiltScene::advance_to`] with creation rules: advances at most to
-    /// the step where the rules act next, applies them there, and repeats
-    /// until `t_end`.
-    fn advance_creating(&mut self, t_end: Real) -> Result<(), String> {
-        let dt = self.world.params().dt;
-        loop {
-            let remaining = t_end - self.world.time();
-            if remaining <= 1e-12 * dt {
-                return Ok(());
-            }
-            let Some(state) = self.creation.as_mut() else {
-                return self.world.advance_to(t_end).map_err(|d| d.to_string());
-            };
-            let mut release_time = Real::INFINITY;
-            if let Some(fit) = state.fit.as_mut().filter(|f| !f.released) {
-                if self.world.time() >= fit.release_time - 1e-12 * dt {
-                    // Seed 000 §7: the samples are freed, creation stops.
-                    fit.released = true;
-                    // The surviving samples (an eraser may have removed
-                    // some) keep their rest positions under their new ids.
-                    let o = &mut self.objects[fit.object];
-                    let p = self.world.particles();
-                    let (ids, rest): (Vec<u32>, Vec<_>) = o
-                        .ids
-                        .iter()
-                        .zip(&o.rest)
-                        .filter(|(&id, _)| p.slot_of(id).is_some())
-                        .unzip();
-                    o.ids = crate::fit::release(&mut self.world, &ids)
-                        .map_err(|e| format!("releasing the fit's samples: {e}"))?;
-                    o.rest = rest;
-                } else {
-                    release_time = fit.release_time;
-                }
-            }
-            if state.fit.as_ref().is_some_and(|f| f.released) {
-                return self.world.advance_to(t_end).map_err(|d| d.to_string());
-            }
-            if self.world.steps() >= state.next_step {
-                state.next_step = self.world.steps() + state.params.interval;
-                let merges = state
-                    .params
-                    .merges(self.world.particles())
-                    .map_err(|e| format!("creation: {e}"))?;
-                self.world
-                    .merge_particles(&merges)
-                    .map_err(|e| format!("creation: {e}"))?;
-                let mut descs = state
-                    .params
-                    .candidates(self.world.particles())
-                    .map_err(|e| format!("creation: {e}"))?;
-                if let Some(fit) = &state.fit {
-                    descs.retain(|d| fit.near.contains(&d.position));
-                }
-                let ids = self
-                    .world
-                    .insert_particles(&descs)
-                    .map_err(|e| format!("creation: {e}"))?;
-                for (d, id) in descs.iter().zip(ids) {
-                    if let Some(o) = self.objects.get_mut(d.object as usize) {
-                        o.created.push(id);
-                    }
-                }
-            }
-            // Step by step up to the next application (or t_end).
-            let steps_left = state_steps_left(self.creation.as_ref(), self.world.steps());
-            let target = (self.world.time() + steps_left as Real * dt)
-                .min(t_end)
-                .min(release_time);
-            let target = if t_end - target <= 1e-12 * dt {
-                t_end
-            } else {
-                target
-            };
-            self.world.advance_to(target).map_err(|d| d.to_string())?;
-        }
+    /// Seconds spent per stage so far: the world's own stages
+    /// ([`World::stage_seconds`]; those it does not have are left out),
+    /// then the scene's ([`crate::stages`]).
+    pub fn timings(&self) -> Vec<(String, f64)> {
+        let world = self
+            .world
+            .stage_seconds()
+            .into_iter()
+            .filter(|(_, t)| *t > 0.0)
+            .map(|(n, t)| (n.to_string(), t));
+        let scene = self
+            .driver
+            .timings()
+            .into_iter()
+            .filter(|(n, _)| n != "world");
+        world.chain(scene).collect()
     }
 
     /// Scene time: the world's time minus the settle phase once it ran
@@ -316,9 +241,4 @@ impl BuiltScene {
             self.world.time()
         }
     }
-}
-
-/// Steps until the creation rules act next (at least 1).
-fn state_steps_left(state: Option<&CreationState>, steps: u64) -> u64 {
-    state.map_or(1, |s| s.next_step.saturating_sub(steps).max(1))
 }

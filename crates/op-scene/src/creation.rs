@@ -28,8 +28,8 @@
 //! act only near an object's samples and stop at the release time, when
 //! the samples are freed.
 //!
-//! Creation cannot be combined with skins (the skins' primitives are made
-//! for the particles at build time): such a scene is rejected.
+//! Created particles of a skinned object get the object's skin primitive,
+//! merged ones lose theirs ([`crate::stages`]).
 
 use op_dynamics::creation::{CreationParams, GrowingParams, MergingParams, StretchingParams};
 use op_dynamics::Real;

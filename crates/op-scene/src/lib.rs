@@ -17,6 +17,7 @@ pub mod render;
 pub mod run;
 pub mod skins;
 pub mod stability;
+pub mod stages;
 
 pub use built::{BuiltObject, BuiltScene};
 pub use creation::CreationSettings;

@@ -44,6 +44,8 @@ pub struct ObjectSummary {
     pub rest_shape_error_final: Real,
     /// Largest rest shape error over the frames.
     pub rest_shape_error_max: Real,
+    /// Particles the creation rules added to the object over the run.
+    pub created: usize,
     /// Connected components of the object's particles at the last frame,
     /// two particles joined when closer than its material's interaction
     /// range (see [`crate::health`]); absent when the material has none.
@@ -89,6 +91,13 @@ pub struct Summary {
     /// it did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
+    /// Seconds spent per stage over the run: the world's own stages
+    /// (integrate, neighbours, reorder, check, heat, bonds, plasticity,
+    /// erase: those it has), the scene's stages ([`crate::stages`]: fit,
+    /// creation, contact, skin), then the runner's `measure` (energies, rest
+    /// shape errors, health) and `export` (frames, with their polygonized
+    /// skins and triangulations). `opsim run --profile` prints them.
+    pub stages: std::collections::BTreeMap<String, f64>,
     /// Frames written.
     pub frames: usize,
     /// Rayon threads used.
@@ -291,6 +300,7 @@ pub fn run(
         divergence = Some(format!("while settling: {d}"));
     }
     let mut health = Health::new(scene, duration, scene.extent_growth);
+    let (mut measure_seconds, mut export_seconds) = (0.0, 0.0);
     let floor = energy_floor(scene, health.size(), duration);
     let t0 = scene.world.time();
     for k in 0..total {
@@ -300,9 +310,12 @@ pub fn run(
         // Frame 0 poses the skins on the settled particles.
         let t = t0 + k as Real / scene.frame_rate;
         if let Err(d) = scene.advance_to(if k == 0 { scene.world.time() } else { t }) {
-            divergence = Some(d);
+            // A stage's failure ends the run as a divergence does (exit 3):
+            // the state it left cannot be continued.
+            divergence = Some(d.to_string());
             break;
         }
+        let measuring = Instant::now();
         let d = scene.world.diagnostics();
         let count = scene.world.particles().len();
         let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
@@ -375,6 +388,8 @@ pub fn run(
                     .fold(hottest[o], Real::max);
             }
         }
+        measure_seconds += measuring.elapsed().as_secs_f64();
+        let exporting = Instant::now();
         if write_frames {
             let path = frames_dir.join(frame_name(k));
             if let Err(e) = write_frame(
@@ -391,6 +406,7 @@ pub fn run(
             }
         }
         written += 1;
+        export_seconds += exporting.elapsed().as_secs_f64();
         if let Some(m) = metrics.as_mut() {
             if let Err(e) = m.push(format_args!(
                 "{k},{},{kinetic},{},{},{},{},{}",
@@ -436,6 +452,14 @@ pub fn run(
         divergence: divergence.clone(),
         warnings,
         failure: failure.as_ref().map(error_chain),
+        stages: scene
+            .timings()
+            .into_iter()
+            .chain([
+                ("measure".to_string(), measure_seconds),
+                ("export".to_string(), export_seconds),
+            ])
+            .collect(),
         frames: written,
         threads: rayon::current_num_threads(),
         enabled: scene.stages(),
@@ -454,6 +478,7 @@ pub fn run(
                     .count(),
                 rest_shape_error_final: last_err[o],
                 rest_shape_error_max: max_err[o],
+                created: obj.created.len(),
                 pieces: found.pieces,
                 bond_stretch_max: found.bond_stretch_max,
                 temperature_max: (heat && hottest[o].is_finite()).then_some(hottest[o]),

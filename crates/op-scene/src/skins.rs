@@ -137,6 +137,9 @@ pub struct BuiltSkin {
     pub cell_size: Real,
     /// Contact stiffness.
     pub stiffness: Real,
+    /// The primitive each particle of the object carries (in its body
+    /// frame).
+    pub primitive: Primitive,
 }
 
 impl BuiltSkin {
@@ -156,7 +159,30 @@ impl BuiltSkin {
             skin,
             cell_size: spec.cell_size,
             stiffness: spec.stiffness,
+            primitive: prim,
         })
+    }
+
+    /// Attaches the object's primitive to the particles `ids` (created by
+    /// the creation rules); posed at the next re-pose.
+    pub fn attach(&mut self, ids: &[u32]) {
+        let new: Vec<(u32, Primitive)> = ids.iter().map(|&id| (id, self.primitive)).collect();
+        // The primitive was valid when the skin was built.
+        let _ = self.skin.attach(&new);
+    }
+
+    /// Drops the primitives of the particles `ids` (merged or released).
+    pub fn detach(&mut self, ids: &[u32]) {
+        if !ids.is_empty() {
+            let gone: std::collections::HashSet<u32> = ids.iter().copied().collect();
+            self.skin.retain(|id| !gone.contains(&id));
+        }
+    }
+
+    /// Drops the primitives of particles that no longer exist (erased by
+    /// tools): an eraser cutting a skinned sheet leaves a skin with a slot.
+    pub fn detach_missing(&mut self, particles: &op_dynamics::Particles) -> usize {
+        self.skin.retain(|id| particles.slot_of(id).is_some())
     }
 
     /// The skin's mesh at its current pose.
@@ -294,6 +320,8 @@ pub fn contact_step(
     stats: &mut ContactStats,
 ) -> Result<(), String> {
     for s in skins.iter_mut() {
+        // Erasers and shapers removed particles during the last interval.
+        s.detach_missing(world.particles());
         s.skin
             .repose(world)
             .map_err(|e| format!("posing skin {}: {e}", s.name))?;

@@ -963,11 +963,6 @@ const BAD_SCENES: &[(&str, Expect, &[&str])] = &[
         &["d_mid", "d_min"],
     ),
     (
-        "creation_with_skin.ron",
-        Expect::Invalid,
-        &["creation", "skins", "objects[0] \"a\".skin"],
-    ),
-    (
         "triangulation_radius.ron",
         Expect::Invalid,
         &["outputs.triangulation_radius = 0", "> 0"],

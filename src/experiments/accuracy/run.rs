@@ -57,7 +57,7 @@ pub fn simulate(case: &Case, method: &Method) -> Result<Trajectory, String> {
         force_evaluations: 0,
     };
     for &t in &case.entry.samples {
-        built.advance_to(t0 + t)?;
+        built.advance_to(t0 + t).map_err(|e| e.to_string())?;
         let energy = built.world.diagnostics().total;
         let p = built.world.particles();
         let slots: Vec<usize> = ids

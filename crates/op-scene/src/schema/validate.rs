@@ -131,21 +131,6 @@ impl Scene {
             if let Some(fit) = &c.fit {
                 fit.validate(self, c, file)?;
             }
-            if let Some((k, o)) = self
-                .objects
-                .iter()
-                .enumerate()
-                .find(|(_, o)| o.skin.is_some())
-            {
-                return Err(SceneError::invalid(
-                    file,
-                    "creation",
-                    format!(
-                        "cannot be combined with skins ({}.skin is set): skins are made for the particles at build time",
-                        object_path(k, &o.name)
-                    ),
-                ));
-            }
         }
         Ok(counts)
     }

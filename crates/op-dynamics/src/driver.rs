@@ -1,0 +1,266 @@
+//! The simulation driver: one home for the flow of a step.
+//!
+//! A [`World`] steps particles: forces, integration and its own per-step
+//! actions (heat, bonds, plasticity, erasers; see [`World::step`]). What
+//! acts *between* steps on a schedule (particle creation, the release of a
+//! fit's samples, skin contact, skin posing) is a [`Stage`], and a
+//! [`Driver`] runs an ordered list of them around the world's steps:
+//!
+//! 1. every due [`Phase::Edit`] stage runs (in list order) and returns its
+//!    [`Effects`]: particles inserted or removed, cached forces invalid;
+//!    the driver drops the world's cached forces once if any stage asked,
+//!    and tells every stage of the particles inserted and removed
+//!    ([`Stage::notify`]), so a skin gains primitives for created particles
+//!    and drops those of merged ones;
+//! 2. the interval's end is the earliest [`Stage::horizon`] (and the
+//!    target time);
+//! 3. every due [`Phase::Forces`] stage runs: it adds external forces and
+//!    torques held over the interval
+//!    ([`World::hold_external_forces_until`]);
+//! 4. the world advances to the interval's end
+//!    ([`World::advance_to`], landing on it exactly).
+//!
+//! [`Driver::advance_to`] repeats this until the target time, then runs
+//! every stage's [`Stage::at_target`] (skins follow the particles, dropping
+//! the primitives of particles the world erased). Each stage, and the
+//! world's advance, is timed ([`Driver::timings`]). The context
+//! `C` is the state the stages share (for op-scene: objects, skins,
+//! contact figures); op-dynamics knows nothing of it.
+
+use std::time::Instant;
+
+use crate::world::{Divergence, World};
+use crate::Real;
+
+/// What a stage changed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Effects {
+    /// The world's cached forces are no longer valid (particles were
+    /// inserted, removed or changed).
+    pub forces_invalid: bool,
+    /// Ids of particles inserted.
+    pub inserted: Vec<u32>,
+    /// Ids of particles removed (merged or erased).
+    pub removed: Vec<u32>,
+}
+
+impl Effects {
+    /// Whether anything changed.
+    pub fn is_empty(&self) -> bool {
+        !self.forces_invalid && self.inserted.is_empty() && self.removed.is_empty()
+    }
+}
+
+/// When in the interval a stage runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// Before the interval, first: changes the particle set or state.
+    Edit,
+    /// Before the interval, after the edits: adds external forces held
+    /// over the interval.
+    Forces,
+}
+
+/// A stage's failure.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+#[error("{stage}: {message}")]
+pub struct StageError {
+    /// The stage's name.
+    pub stage: String,
+    /// What went wrong.
+    pub message: String,
+}
+
+impl StageError {
+    /// An error of `stage`.
+    pub fn new(stage: &str, message: impl std::fmt::Display) -> Self {
+        StageError {
+            stage: stage.to_string(),
+            message: message.to_string(),
+        }
+    }
+}
+
+/// Why [`Driver::advance_to`] stopped.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DriveError {
+    /// The world diverged.
+    #[error(transparent)]
+    Diverged(#[from] Divergence),
+    /// A stage failed.
+    #[error(transparent)]
+    Stage(#[from] StageError),
+}
+
+/// Something acting on the world between steps, on a schedule; see the
+/// module docs for the order.
+pub trait Stage<C>: Send {
+    /// Name, for timings and errors.
+    fn name(&self) -> &str;
+
+    /// When it runs.
+    fn phase(&self) -> Phase;
+
+    /// Whether it runs before the next interval.
+    fn due(&self, world: &World, ctx: &C) -> bool;
+
+    /// The latest world time the world may reach before this stage must
+    /// run again (infinity: no constraint).
+    fn horizon(&self, world: &World, ctx: &C) -> Real;
+
+    /// Runs; `until` is the end of the coming interval (for a
+    /// [`Phase::Edit`] stage, the target time: the interval is not known
+    /// yet).
+    fn run(&mut self, world: &mut World, ctx: &mut C, until: Real) -> Result<Effects, StageError>;
+
+    /// Told of the effects of the stages that ran before the interval.
+    fn notify(
+        &mut self,
+        _world: &World,
+        _ctx: &mut C,
+        _effects: &Effects,
+    ) -> Result<(), StageError> {
+        Ok(())
+    }
+
+    /// Once the world reached the target of [`Driver::advance_to`].
+    fn at_target(&mut self, _world: &World, _ctx: &mut C) -> Result<(), StageError> {
+        Ok(())
+    }
+}
+
+/// Runs stages around a world's steps; see the module docs.
+pub struct Driver<C> {
+    stages: Vec<Box<dyn Stage<C>>>,
+    seconds: Vec<f64>,
+    world_seconds: f64,
+}
+
+impl<C> Default for Driver<C> {
+    fn default() -> Self {
+        Driver {
+            stages: Vec::new(),
+            seconds: Vec::new(),
+            world_seconds: 0.0,
+        }
+    }
+}
+
+impl<C> Driver<C> {
+    /// A driver with no stage: [`Driver::advance_to`] is the world's.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Appends a stage (stages of one phase run in the order added).
+    pub fn push(&mut self, stage: Box<dyn Stage<C>>) {
+        self.stages.push(stage);
+        self.seconds.push(0.0);
+    }
+
+    /// The stages' names, in order.
+    pub fn names(&self) -> Vec<&str> {
+        self.stages.iter().map(|s| s.name()).collect()
+    }
+
+    /// Seconds spent in each stage, then in the world's steps (`"world"`),
+    /// since the driver was made.
+    pub fn timings(&self) -> Vec<(String, f64)> {
+        self.stages
+            .iter()
+            .zip(&self.seconds)
+            .map(|(s, t)| (s.name().to_string(), *t))
+            .chain(std::iter::once(("world".to_string(), self.world_seconds)))
+            .collect()
+    }
+
+    /// Advances `world` to time `t_end` with the stages acting between
+    /// intervals (see the module docs); lands on `t_end` exactly.
+    ///
+    /// # Errors
+    ///
+    /// The world's divergence or a stage's failure; the world is left as
+    /// it was when it happened.
+    pub fn advance_to(
+        &mut self,
+        world: &mut World,
+        ctx: &mut C,
+        t_end: Real,
+    ) -> Result<(), DriveError> {
+        let eps = 1e-12 * world.params().dt;
+        loop {
+            let remaining = t_end - world.time();
+            if remaining <= eps {
+                break;
+            }
+            // 1. Edits, then their effects told to everyone.
+            let mut effects = Effects::default();
+            for k in 0..self.stages.len() {
+                if self.stages[k].phase() != Phase::Edit || !self.stages[k].due(world, ctx) {
+                    continue;
+                }
+                let clock = Instant::now();
+                let e = self.stages[k].run(world, ctx, t_end)?;
+                self.seconds[k] += clock.elapsed().as_secs_f64();
+                effects.forces_invalid |= e.forces_invalid;
+                effects.inserted.extend(e.inserted);
+                effects.removed.extend(e.removed);
+            }
+            if !effects.is_empty() {
+                if effects.forces_invalid {
+                    world.invalidate_forces();
+                }
+                for k in 0..self.stages.len() {
+                    let clock = Instant::now();
+                    self.stages[k].notify(world, ctx, &effects)?;
+                    self.seconds[k] += clock.elapsed().as_secs_f64();
+                }
+            }
+            // 2. The interval.
+            let mut target = t_end;
+            for s in &self.stages {
+                target = target.min(s.horizon(world, ctx));
+            }
+            // An interval ending within 1e-6 steps of the target takes all
+            // of it (no sliver interval from round-off).
+            if t_end - target <= 1e-6 * world.params().dt {
+                target = t_end;
+            }
+            if target <= world.time() + eps {
+                // A stage that cannot let time pass would loop forever.
+                return Err(StageError::new(
+                    "driver",
+                    format!(
+                        "no stage lets time pass beyond t = {} (target {t_end})",
+                        world.time()
+                    ),
+                )
+                .into());
+            }
+            // 3. Forces held over it.
+            for k in 0..self.stages.len() {
+                if self.stages[k].phase() != Phase::Forces || !self.stages[k].due(world, ctx) {
+                    continue;
+                }
+                let clock = Instant::now();
+                let e = self.stages[k].run(world, ctx, target)?;
+                self.seconds[k] += clock.elapsed().as_secs_f64();
+                if e.forces_invalid {
+                    world.invalidate_forces();
+                }
+            }
+            // 4. The world's steps.
+            let clock = Instant::now();
+            let stepped = world.advance_to(target);
+            self.world_seconds += clock.elapsed().as_secs_f64();
+            stepped?;
+        }
+        for k in 0..self.stages.len() {
+            let clock = Instant::now();
+            self.stages[k].at_target(world, ctx)?;
+            self.seconds[k] += clock.elapsed().as_secs_f64();
+        }
+        Ok(())
+    }
+}
