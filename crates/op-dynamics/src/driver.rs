@@ -109,6 +109,15 @@ pub trait Stage<C>: Send {
     /// run again (infinity: no constraint).
     fn horizon(&self, world: &World, ctx: &C) -> Real;
 
+    /// How far beyond [`Stage::horizon`] the interval may stretch when that
+    /// reaches the target of [`Driver::advance_to`] (no sliver interval
+    /// from round-off). Default 0: the horizon is exact (a schedule counted
+    /// in steps, such as the creation rules', would shift by the sliver
+    /// step otherwise).
+    fn slack(&self, _world: &World) -> Real {
+        0.0
+    }
+
     /// Runs; `until` is the end of the coming interval (for a
     /// [`Phase::Edit`] stage, the target time: the interval is not known
     /// yet).
@@ -217,14 +226,16 @@ impl<C> Driver<C> {
                     self.seconds[k] += clock.elapsed().as_secs_f64();
                 }
             }
-            // 2. The interval.
+            // 2. The interval: up to the earliest horizon, or to the target
+            // when every stage lets its interval stretch that far.
             let mut target = t_end;
             for s in &self.stages {
-                target = target.min(s.horizon(world, ctx));
+                let h = s.horizon(world, ctx);
+                if t_end > h + s.slack(world) {
+                    target = target.min(h);
+                }
             }
-            // An interval ending within 1e-6 steps of the target takes all
-            // of it (no sliver interval from round-off).
-            if t_end - target <= 1e-6 * world.params().dt {
+            if t_end - target <= eps {
                 target = t_end;
             }
             if target <= world.time() + eps {

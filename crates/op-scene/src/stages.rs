@@ -185,6 +185,12 @@ impl Stage<SceneState> for Contact {
         world.time() + world.params().dt
     }
 
+    /// An interval within 1e-6 steps of the target takes all of it, as
+    /// [`World::advance_to`] does for its last step.
+    fn slack(&self, world: &World) -> Real {
+        1e-6 * world.params().dt
+    }
+
     fn run(
         &mut self,
         world: &mut World,
