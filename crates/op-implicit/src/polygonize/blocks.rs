@@ -237,30 +237,55 @@ pub(super) fn sample_band(
             (a as usize, b as isize)
         };
         let ((i0, i1), (j0, j1), (k0, k1)) = (local(0, nx), local(1, ny), local(2, nz));
+        if i1 < i0 as isize || j1 < j0 as isize || k1 < k0 as isize {
+            continue;
+        }
         let r2 = r * r;
         let inv = 1.0 / r2;
+        let inv_h = 1.0 / h;
         let point = matches!(prim.shape(), Shape::Point);
-        for k in k0 as isize..=k1 {
-            let k = k as usize;
-            for j in j0 as isize..=j1 {
-                let j = j as usize;
-                let row = (k * ny + j) * nx;
-                let p0 = grid.node(block.start[0], block.start[1] + j, block.start[2] + k);
-                let (dy, dz) = (p0.y - c.y, p0.z - c.z);
+        let [s0, s1, s2] = block.start;
+        for k in k0..=k1 as usize {
+            let dz = grid.lo.z + (s2 + k) as Real * h - c.z;
+            if dz * dz >= r2 {
+                continue;
+            }
+            for j in j0..=j1 as usize {
+                let dy = grid.lo.y + (s1 + j) as Real * h - c.y;
                 let dyz = dy * dy + dz * dz;
                 if dyz >= r2 {
                     continue;
                 }
-                for i in i0 as isize..=i1 {
-                    let i = i as usize;
-                    let p = grid.node(block.start[0] + i, block.start[1] + j, block.start[2] + k);
-                    values[row + i] += if point {
-                        let dx = p.x - c.x;
-                        value_sq((dx * dx + dyz) * inv)
-                    } else {
-                        prim.field(&p)
-                    };
-                    evaluations += 1;
+                let row = (k * ny + j) * nx;
+                if point {
+                    // Only the chord of the row inside the sphere: nodes
+                    // floor(xa) + 1 ..= floor(xb) (floors by truncating
+                    // values >= 0); a node exactly on the sphere adds 0.
+                    let half = (r2 - dyz).sqrt();
+                    let xa = ((c.x - half - grid.lo.x) * inv_h - s0 as Real).max(-1.0);
+                    let xb = ((c.x + half - grid.lo.x) * inv_h - s0 as Real).max(-1.0);
+                    let a = ((xa + 1.0) as isize).max(i0 as isize) as usize;
+                    let b = ((xb + 1.0) as isize - 1).min(i1);
+                    if b < a as isize {
+                        continue;
+                    }
+                    let b = b as usize;
+                    // The node's x exactly as Grid::node computes it; the
+                    // kernel written branch-free so the loop vectorizes.
+                    let base = (s0 + a) as i32;
+                    for (m, v) in values[row + a..=row + b].iter_mut().enumerate() {
+                        let dx = grid.lo.x + (base + m as i32) as Real * h - c.x;
+                        let s = (dx * dx + dyz) * inv;
+                        let f = 1.0 + s * (-22.0 / 9.0 + s * (17.0 / 9.0 - s * (4.0 / 9.0)));
+                        *v += if s < 1.0 { f } else { 0.0 };
+                    }
+                    evaluations += b + 1 - a;
+                } else {
+                    for i in i0..=i1 as usize {
+                        let p = grid.node(s0 + i, s1 + j, s2 + k);
+                        values[row + i] += prim.field(&p);
+                        evaluations += 1;
+                    }
                 }
             }
         }
