@@ -227,6 +227,9 @@ pub(super) fn sample_band(
     let mut values = vec![0.0; nx * ny * nz];
     let mut evaluations = 0;
     let h = grid.h;
+    let xs: Vec<Real> = (0..nx)
+        .map(|i| grid.node(block.start[0] + i, 0, 0).x)
+        .collect();
     for &i in list {
         let prim = &field.primitives()[i as usize];
         let (c, r) = prim.bounding_sphere();
@@ -272,9 +275,8 @@ pub(super) fn sample_band(
                     let b = b as usize;
                     // The node's x exactly as Grid::node computes it; the
                     // kernel written branch-free so the loop vectorizes.
-                    let base = (s0 + a) as i32;
-                    for (m, v) in values[row + a..=row + b].iter_mut().enumerate() {
-                        let dx = grid.lo.x + (base + m as i32) as Real * h - c.x;
+                    for (v, x) in values[row + a..=row + b].iter_mut().zip(&xs[a..=b]) {
+                        let dx = x - c.x;
                         let s = (dx * dx + dyz) * inv;
                         let f = 1.0 + s * (-22.0 / 9.0 + s * (17.0 / 9.0 - s * (4.0 / 9.0)));
                         *v += if s < 1.0 { f } else { 0.0 };
