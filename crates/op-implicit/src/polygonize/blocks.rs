@@ -1,4 +1,4 @@
-//! The sampling grid cut into blocks of [`BLOCK`]³ cells, and the narrow
+//! The sampling grid cut into blocks of [`BLOCK`] cells, and the narrow
 //! band: which blocks can hold a piece of the skin, and their node values
 //! splatted from the primitives that reach them.
 //!
@@ -21,8 +21,9 @@ use crate::field::{Field, ScalarField};
 use crate::kernel::value_sq;
 use crate::primitives::Shape;
 
-/// Cells per block side.
-pub(super) const BLOCK: usize = 8;
+/// Cells per block along x, y, z: long along x, the rows the primitives
+/// are splatted along, so a row's setup is shared by more nodes.
+pub(super) const BLOCK: [usize; 3] = [16, 8, 8];
 
 /// The node grid: origin, cell size and nodes per axis.
 #[derive(Clone, Copy, Debug)]
@@ -41,15 +42,15 @@ impl Grid {
 
     /// Blocks per axis.
     pub fn blocks(&self) -> [usize; 3] {
-        self.dims.map(|n| (n - 1).div_ceil(BLOCK))
+        [0, 1, 2].map(|k| (self.dims[k] - 1).div_ceil(BLOCK[k]))
     }
 
     /// Block `b` (linear index, x fastest).
     pub fn block(&self, b: usize) -> Block {
         let nb = self.blocks();
         let idx = [b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])];
-        let start = idx.map(|i| i * BLOCK);
-        let cells = [0, 1, 2].map(|k| BLOCK.min(self.dims[k] - 1 - start[k]));
+        let start = [0, 1, 2].map(|k| idx[k] * BLOCK[k]);
+        let cells = [0, 1, 2].map(|k| BLOCK[k].min(self.dims[k] - 1 - start[k]));
         Block { start, cells }
     }
 }
@@ -141,11 +142,11 @@ fn block_range(grid: &Grid, (c, r): (Point3, Real)) -> Option<[(usize, usize); 3
     let mut out = [(0, 0); 3];
     for k in 0..3 {
         let (lo, hi) = node_range(grid, k, c[k] - r, c[k] + r)?;
-        let last = (grid.dims[k] - 1).div_ceil(BLOCK) - 1;
+        let last = (grid.dims[k] - 1).div_ceil(BLOCK[k]) - 1;
         // Block b holds nodes [b B, (b + 1) B].
         out[k] = (
-            (lo.div_ceil(BLOCK)).saturating_sub(1).min(last),
-            (hi / BLOCK).min(last),
+            (lo.div_ceil(BLOCK[k])).saturating_sub(1).min(last),
+            (hi / BLOCK[k]).min(last),
         );
     }
     Some(out)
