@@ -240,8 +240,9 @@ const NOTES: &str = "
   spline) and so the iso-surfaces differ slightly.
 - The narrow band here skips the blocks no primitive reaches and those whose kernel bounds lie on
   one side of the iso value. For a solid particle cloud with support 4 r, those bounds cannot
-  certify the interior at these block sizes (a block's half diagonal is 0.4-0.9 of the support
-  radius, so the farthest-distance bound falls below the iso value): the interior is sampled, as
+  certify the interior at these block sizes (a block's half diagonal is 0.6-2.4 times the support
+  radius, so the farthest-distance bound falls below the iso value; it would take blocks of half
+  diagonal under about 0.1 of the support radius): the interior is sampled, as
   splashsurf's dense subdomains sample it. The sampled volume is then the support of the
   particles, and the time is set by the cost per kernel evaluation (ours: f64, 2-lane SSE2;
   splashsurf: f32 with AVX2). On thin skins (sheets, shells) the band follows the area (unit test
