@@ -33,6 +33,11 @@ pub enum PolygonizeError {
     /// world units.
     #[error("cell size must be finite and > 0, got {0}")]
     InvalidCellSize(f64),
+    /// The iso value is not finite and > 0 (the field is 0 far from the
+    /// skeleton, so the surface must lie above 0). Fix: give a positive iso
+    /// value, at most the field's largest value.
+    #[error("iso value must be finite and > 0, got {0}")]
+    InvalidIso(f64),
     /// The sampling grid would need more nodes along an axis than allowed.
     /// Fix: raise the cell size or `max_nodes_per_axis`.
     #[error(

@@ -2,8 +2,8 @@
 //!
 //! Seed 002 §6 and DESIGN §5: skeleton primitives posed in particle frames,
 //! a compact-support field kernel (Wyvill 1986), the summed field with
-//! analytic gradient, and polygonization of its iso-surface with the
-//! `isosurface` crate.
+//! analytic gradient, and polygonization of its iso-surface (narrow-band
+//! marching cubes over blocks, in parallel).
 //!
 //! Entry points:
 //! - [`Primitive`] (point, segment, rectangle/square, ellipsoid) in a
@@ -46,6 +46,9 @@ pub use implicit_contact::{
     deform, Bulge, ContactPair, ContactSample, DeformedField, ImplicitContactParams, PairReactions,
 };
 pub use kernel::{iso_radius, ISO};
-pub use polygonize::{polygonize, polygonize_field, polygonize_region, Mesh, PolygonizeParams};
+pub use polygonize::{
+    polygonize, polygonize_field, polygonize_region, polygonize_with_stats, Mesh, PolygonizeParams,
+    PolygonizeStats,
+};
 pub use primitives::{PosedPrimitive, Primitive, Shape};
 pub use skin::Skin;

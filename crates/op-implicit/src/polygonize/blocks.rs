@@ -1,0 +1,315 @@
+//! The sampling grid cut into blocks of [`BLOCK`] cells, and the narrow
+//! band: which blocks can hold a piece of the skin, and their node values
+//! splatted from the primitives that reach them.
+//!
+//! The field is the sum of compactly supported primitive fields (seed 002
+//! §6), so a block can only be crossed by the surface where some
+//! primitive's support reaches it. For each candidate block, the sum of
+//! each point primitive's kernel at its nearest and farthest distance to
+//! the block bounds the field on the block (the kernel decreases with
+//! distance; other shapes count 0 to 1); a block whose bounds lie both
+//! below or both above the iso value has all its nodes on one side and no
+//! crossing, and is skipped. The rest are sampled by splatting (each
+//! primitive adds its field to the nodes of the block inside its bounding
+//! sphere, in increasing primitive index: the same sum, term by term, as
+//! [`Field::value`]), so blocks far from every primitive cost nothing and
+//! a node shared by two blocks gets the same bits in both.
+
+use op_dynamics::{Point3, Real, Vec3};
+
+use crate::field::{Field, ScalarField};
+use crate::kernel::value_sq;
+use crate::primitives::Shape;
+
+/// Cells per block along x, y, z: long along x, the rows the primitives
+/// are splatted along, so a row's setup is shared by more nodes.
+pub(super) const BLOCK: [usize; 3] = [16, 8, 8];
+
+/// The node grid: origin, cell size and nodes per axis.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Grid {
+    pub lo: Point3,
+    pub h: Real,
+    pub dims: [usize; 3],
+}
+
+impl Grid {
+    /// World position of node `(i, j, k)`.
+    #[inline]
+    pub fn node(&self, i: usize, j: usize, k: usize) -> Point3 {
+        self.lo + Vec3::new(i as Real, j as Real, k as Real) * self.h
+    }
+
+    /// Blocks per axis.
+    pub fn blocks(&self) -> [usize; 3] {
+        [0, 1, 2].map(|k| (self.dims[k] - 1).div_ceil(BLOCK[k]))
+    }
+
+    /// Block `b` (linear index, x fastest).
+    pub fn block(&self, b: usize) -> Block {
+        let nb = self.blocks();
+        let idx = [b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])];
+        let start = [0, 1, 2].map(|k| idx[k] * BLOCK[k]);
+        let cells = [0, 1, 2].map(|k| BLOCK[k].min(self.dims[k] - 1 - start[k]));
+        Block { start, cells }
+    }
+}
+
+/// A block: its first node and its cells per axis (nodes: one more).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Block {
+    pub start: [usize; 3],
+    pub cells: [usize; 3],
+}
+
+impl Block {
+    /// Nodes per axis.
+    pub fn nodes(&self) -> [usize; 3] {
+        self.cells.map(|c| c + 1)
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes().iter().product()
+    }
+
+    /// The block's box `(lo, hi)` (its corner nodes).
+    fn bounds(&self, grid: &Grid) -> (Point3, Point3) {
+        let [i, j, k] = self.start;
+        let [a, b, c] = self.cells;
+        (grid.node(i, j, k), grid.node(i + a, j + b, k + c))
+    }
+}
+
+/// Per block, the primitives whose bounding sphere's box reaches one of
+/// its nodes, in increasing index (CSR).
+pub(super) struct BlockLists {
+    starts: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl BlockLists {
+    /// Lists the primitives of `field` per block of `grid`.
+    pub fn new(field: &Field, grid: &Grid) -> Self {
+        let nb = grid.blocks();
+        let n_blocks: usize = nb.iter().product();
+        let ranges: Vec<Option<[(usize, usize); 3]>> = field
+            .primitives()
+            .iter()
+            .map(|p| block_range(grid, p.bounding_sphere()))
+            .collect();
+        let mut counts = vec![0u32; n_blocks + 1];
+        let each = |r: &[(usize, usize); 3], f: &mut dyn FnMut(usize)| {
+            for k in r[2].0..=r[2].1 {
+                for j in r[1].0..=r[1].1 {
+                    for i in r[0].0..=r[0].1 {
+                        f((k * nb[1] + j) * nb[0] + i);
+                    }
+                }
+            }
+        };
+        for r in ranges.iter().flatten() {
+            each(r, &mut |b| counts[b + 1] += 1);
+        }
+        for b in 0..n_blocks {
+            counts[b + 1] += counts[b];
+        }
+        let mut fill = counts.clone();
+        let mut items = vec![0u32; counts[n_blocks] as usize];
+        for (i, r) in ranges.iter().enumerate() {
+            if let Some(r) = r {
+                each(r, &mut |b| {
+                    items[fill[b] as usize] = i as u32;
+                    fill[b] += 1;
+                });
+            }
+        }
+        BlockLists {
+            starts: counts,
+            items,
+        }
+    }
+
+    /// The primitives reaching block `b`, increasing.
+    pub fn of(&self, b: usize) -> &[u32] {
+        &self.items[self.starts[b] as usize..self.starts[b + 1] as usize]
+    }
+}
+
+/// The blocks (per axis, inclusive) whose nodes the box of sphere
+/// `(c, r)` may reach, or `None` when it reaches no node.
+fn block_range(grid: &Grid, (c, r): (Point3, Real)) -> Option<[(usize, usize); 3]> {
+    let mut out = [(0, 0); 3];
+    for k in 0..3 {
+        let (lo, hi) = node_range(grid, k, c[k] - r, c[k] + r)?;
+        let last = (grid.dims[k] - 1).div_ceil(BLOCK[k]) - 1;
+        // Block b holds nodes [b B, (b + 1) B].
+        out[k] = (
+            (lo.div_ceil(BLOCK[k])).saturating_sub(1).min(last),
+            (hi / BLOCK[k]).min(last),
+        );
+    }
+    Some(out)
+}
+
+/// The nodes along axis `k` within `[a, b]`, widened by one node each way
+/// (rounding), or `None` when there are none.
+fn node_range(grid: &Grid, k: usize, a: Real, b: Real) -> Option<(usize, usize)> {
+    let n = grid.dims[k] as Real;
+    let lo = ((a - grid.lo[k]) / grid.h).floor() - 1.0;
+    let hi = ((b - grid.lo[k]) / grid.h).ceil() + 1.0;
+    if hi < 0.0
+        || lo > n - 1.0
+        || lo.partial_cmp(&hi) == Some(std::cmp::Ordering::Greater)
+        || lo.is_nan()
+        || hi.is_nan()
+    {
+        return None;
+    }
+    Some((lo.max(0.0) as usize, hi.min(n - 1.0) as usize))
+}
+
+/// What sampling a block found.
+pub(super) enum Sampled {
+    /// All nodes are on one side of the iso value: no crossing.
+    Skipped,
+    /// Node values (x fastest), and how many primitive fields were
+    /// evaluated.
+    Values(Vec<Real>, usize),
+}
+
+/// Bounds of the field on block `block` from the primitives `list`: a
+/// block outside every point primitive's support-bound interval, or inside
+/// enough of them, cannot cross `iso` (module doc).
+fn can_skip(field: &Field, grid: &Grid, block: &Block, list: &[u32], iso: Real) -> bool {
+    if list.is_empty() {
+        return true;
+    }
+    let (lo, hi) = block.bounds(grid);
+    let (mut upper, mut lower) = (0.0, 0.0);
+    for &i in list {
+        let prim = &field.primitives()[i as usize];
+        let (c, r) = prim.bounding_sphere();
+        if !matches!(prim.shape(), Shape::Point) {
+            upper += 1.0;
+            continue;
+        }
+        let (mut near, mut far) = (0.0, 0.0);
+        for k in 0..3 {
+            let d_near = (lo[k] - c[k]).max(c[k] - hi[k]).max(0.0);
+            let d_far = (c[k] - lo[k]).max(hi[k] - c[k]);
+            near += d_near * d_near;
+            far += d_far * d_far;
+        }
+        let inv = 1.0 / (r * r);
+        upper += value_sq(near * inv);
+        lower += value_sq(far * inv);
+    }
+    // A margin well above the rounding of sums of a few hundred terms.
+    let margin = 1e-9 * (1.0 + upper);
+    upper + margin < iso || lower - margin > iso
+}
+
+/// Samples block `b` of the narrow band: skipped, or its node values
+/// splatted from the primitives reaching it (module doc).
+pub(super) fn sample_band(
+    field: &Field,
+    grid: &Grid,
+    lists: &BlockLists,
+    b: usize,
+    iso: Real,
+) -> Sampled {
+    let block = grid.block(b);
+    let list = lists.of(b);
+    if can_skip(field, grid, &block, list, iso) {
+        return Sampled::Skipped;
+    }
+    let [nx, ny, nz] = block.nodes();
+    let mut values = vec![0.0; nx * ny * nz];
+    let mut evaluations = 0;
+    let h = grid.h;
+    let xs: Vec<Real> = (0..nx)
+        .map(|i| grid.node(block.start[0] + i, 0, 0).x)
+        .collect();
+    for &i in list {
+        let prim = &field.primitives()[i as usize];
+        let (c, r) = prim.bounding_sphere();
+        let local = |k: usize, n: usize| {
+            let s = block.start[k] as Real;
+            let a = (((c[k] - r - grid.lo[k]) / h).floor() - s).max(0.0);
+            let b = (((c[k] + r - grid.lo[k]) / h).ceil() - s).min(n as Real - 1.0);
+            (a as usize, b as isize)
+        };
+        let ((i0, i1), (j0, j1), (k0, k1)) = (local(0, nx), local(1, ny), local(2, nz));
+        if i1 < i0 as isize || j1 < j0 as isize || k1 < k0 as isize {
+            continue;
+        }
+        let r2 = r * r;
+        let inv = 1.0 / r2;
+        let inv_h = 1.0 / h;
+        let point = matches!(prim.shape(), Shape::Point);
+        let [s0, s1, s2] = block.start;
+        for k in k0..=k1 as usize {
+            let dz = grid.lo.z + (s2 + k) as Real * h - c.z;
+            if dz * dz >= r2 {
+                continue;
+            }
+            for j in j0..=j1 as usize {
+                let dy = grid.lo.y + (s1 + j) as Real * h - c.y;
+                let dyz = dy * dy + dz * dz;
+                if dyz >= r2 {
+                    continue;
+                }
+                let row = (k * ny + j) * nx;
+                if point {
+                    // Only the chord of the row inside the sphere: nodes
+                    // floor(xa) + 1 ..= floor(xb) (floors by truncating
+                    // values >= 0); a node exactly on the sphere adds 0.
+                    let half = (r2 - dyz).sqrt();
+                    let xa = ((c.x - half - grid.lo.x) * inv_h - s0 as Real).max(-1.0);
+                    let xb = ((c.x + half - grid.lo.x) * inv_h - s0 as Real).max(-1.0);
+                    let a = ((xa + 1.0) as isize).max(i0 as isize) as usize;
+                    let b = ((xb + 1.0) as isize - 1).min(i1);
+                    if b < a as isize {
+                        continue;
+                    }
+                    let b = b as usize;
+                    // The node's x exactly as Grid::node computes it; the
+                    // kernel written branch-free so the loop vectorizes.
+                    for (v, x) in values[row + a..=row + b].iter_mut().zip(&xs[a..=b]) {
+                        let dx = x - c.x;
+                        let s = (dx * dx + dyz) * inv;
+                        let f = 1.0 + s * (-22.0 / 9.0 + s * (17.0 / 9.0 - s * (4.0 / 9.0)));
+                        *v += if s < 1.0 { f } else { 0.0 };
+                    }
+                    evaluations += b + 1 - a;
+                } else {
+                    for i in i0..=i1 as usize {
+                        let p = grid.node(s0 + i, s1 + j, s2 + k);
+                        values[row + i] += prim.field(&p);
+                        evaluations += 1;
+                    }
+                }
+            }
+        }
+    }
+    Sampled::Values(values, evaluations)
+}
+
+/// Samples block `b` of any field at every node (no band: the field's
+/// primitives are unknown).
+pub(super) fn sample_dense<F: ScalarField + ?Sized>(field: &F, grid: &Grid, b: usize) -> Sampled {
+    let block = grid.block(b);
+    let [nx, ny, nz] = block.nodes();
+    let mut values = Vec::with_capacity(nx * ny * nz);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let [a, bb, c] = block.start;
+                values.push(field.value(&grid.node(a + i, bb + j, c + k)));
+            }
+        }
+    }
+    let n = values.len();
+    Sampled::Values(values, n)
+}

@@ -1,0 +1,636 @@
+//! Polygonization of a field's iso-surface: narrow-band marching cubes
+//! over blocks, in parallel (DESIGN §5; seed 002 §6: "the object surface is
+//! an isosurface of the sum of all emitted potentials").
+//!
+//! Stages: (1) the region is the union of the primitives' support boxes
+//! ([`ScalarField::support_box`]), padded by one cell so the surface is
+//! closed, on a grid of cubic cells of the requested size in world units,
+//! cut into blocks of 16 x 8 x 8 cells; (2) `blocks`: for a [`Field`], only the
+//! blocks its primitives' supports reach and whose field bounds straddle
+//! the iso value are sampled, by splatting the primitives onto their
+//! nodes (the narrow band); any other [`ScalarField`] is sampled at every
+//! node; (3) marching cubes (`tables`, Lorensen & Cline 1987) runs per
+//! block, in parallel, each block's crossing points keyed by their global
+//! grid edge; (4) blocks are merged in order, points on edges shared by
+//! blocks welded by that key, so the mesh is the one a single pass over
+//! the whole grid gives, closed and the same for any number of threads;
+//! (5) vertex normals are the normalized analytic gradient,
+//! `-grad f / |grad f|` (outward).
+
+mod blocks;
+mod tables;
+
+use op_dynamics::{Point3, Real, Vec3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+use crate::error::PolygonizeError;
+use crate::field::{Field, ScalarField};
+use crate::kernel::ISO;
+use blocks::{BlockLists, Grid, Sampled};
+
+/// Parameters of [`polygonize`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PolygonizeParams {
+    /// Edge length of the cubic sampling cells, in world units, > 0. The
+    /// vertex error falls as its square (measured in the tests).
+    pub cell_size: Real,
+    /// Largest number of grid nodes allowed along the region's longest
+    /// axis (memory and time grow as its cube). Default: 512.
+    pub max_nodes_per_axis: usize,
+    /// The iso value: the surface is `{p : field(p) = iso}`, the inside
+    /// `field > iso`; finite and > 0. Default: [`ISO`] (an isolated point
+    /// primitive's skin at half its support radius).
+    pub iso: Real,
+}
+
+impl PolygonizeParams {
+    /// Cells of `cell_size` world units, other fields at their defaults.
+    pub fn with_cell_size(cell_size: Real) -> Self {
+        PolygonizeParams {
+            cell_size,
+            max_nodes_per_axis: 512,
+            iso: ISO,
+        }
+    }
+}
+
+/// A triangle mesh: vertex positions and unit normals (same length), and
+/// counter-clockwise triangles seen from outside.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    positions: Vec<Point3>,
+    normals: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// Vertex positions (world).
+    pub fn positions(&self) -> &[Point3] {
+        &self.positions
+    }
+
+    /// Unit outward vertex normals, one per position.
+    pub fn normals(&self) -> &[Vec3] {
+        &self.normals
+    }
+
+    /// Triangles as vertex indices, counter-clockwise seen from outside.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// Whether the mesh is empty (no triangles).
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// The enclosed volume, signed: positive for a closed mesh whose
+    /// triangles face outward.
+    pub fn signed_volume(&self) -> Real {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize].coords);
+                a.dot(&b.cross(&c)) / 6.0
+            })
+            .sum()
+    }
+
+    /// Whether the mesh is closed, manifold along edges and consistently
+    /// oriented: every directed edge occurs exactly once and its reverse
+    /// exactly once (so every edge bounds exactly two triangles, which
+    /// traverse it in opposite directions), and no triangle repeats a
+    /// vertex.
+    pub fn is_closed_oriented_manifold(&self) -> bool {
+        let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
+        for t in &self.triangles {
+            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+                return false;
+            }
+            for k in 0..3 {
+                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        directed
+            .iter()
+            .all(|(&(a, b), &n)| n == 1 && directed.get(&(b, a)) == Some(&1))
+    }
+}
+
+/// What a polygonization sampled, for measuring the narrow band.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PolygonizeStats {
+    /// Nodes of the whole padded grid.
+    pub grid_nodes: usize,
+    /// Blocks of the grid.
+    pub blocks: usize,
+    /// Blocks sampled (the rest cannot hold a crossing).
+    pub sampled_blocks: usize,
+    /// Nodes of the sampled blocks (nodes on block faces count once per
+    /// block).
+    pub sampled_nodes: usize,
+    /// Primitive (or, without a band, whole-field) evaluations.
+    pub field_evaluations: usize,
+}
+
+/// Polygonizes the iso-surface `field = params.iso` (the skin) at the
+/// resolution of `params` (module doc for the stages), sampling only the
+/// narrow band of blocks the primitives' supports reach. An empty field
+/// gives an empty mesh.
+pub fn polygonize(field: &Field, params: &PolygonizeParams) -> Result<Mesh, PolygonizeError> {
+    polygonize_with_stats(field, params).map(|(mesh, _)| mesh)
+}
+
+/// As [`polygonize`], with what was sampled.
+pub fn polygonize_with_stats(
+    field: &Field,
+    params: &PolygonizeParams,
+) -> Result<(Mesh, PolygonizeStats), PolygonizeError> {
+    let Some(grid) = grid(field, params, None)? else {
+        return Ok(Default::default());
+    };
+    let lists = BlockLists::new(field, &grid);
+    let iso = params.iso;
+    Ok(extract(field, &grid, iso, |b| {
+        blocks::sample_band(field, &grid, &lists, b, iso)
+    }))
+}
+
+/// As [`polygonize`], for any [`ScalarField`]: for instance the deformed
+/// skin of an object in contact, [`crate::DeformedField`]. Its primitives
+/// are unknown, so every node of the region is sampled.
+pub fn polygonize_field<F: ScalarField + ?Sized>(
+    field: &F,
+    params: &PolygonizeParams,
+) -> Result<Mesh, PolygonizeError> {
+    polygonize_region(field, params, None)
+}
+
+/// As [`polygonize_field`], over the part of the skin's region inside the
+/// box `clip = (lo, hi)` only (the whole region when `None`). The mesh is
+/// open where the box cuts the skin; its vertices sample the skin there
+/// (contact sampling near a collider). A box that misses the skin gives an
+/// empty mesh.
+pub fn polygonize_region<F: ScalarField + ?Sized>(
+    field: &F,
+    params: &PolygonizeParams,
+    clip: Option<(Point3, Point3)>,
+) -> Result<Mesh, PolygonizeError> {
+    let Some(grid) = grid(field, params, clip)? else {
+        return Ok(Mesh::default());
+    };
+    let (mesh, _) = extract(field, &grid, params.iso, |b| {
+        blocks::sample_dense(field, &grid, b)
+    });
+    Ok(mesh)
+}
+
+/// The padded node grid over the field's support box (clipped), or `None`
+/// when there is nothing to polygonize.
+fn grid<F: ScalarField + ?Sized>(
+    field: &F,
+    params: &PolygonizeParams,
+    clip: Option<(Point3, Point3)>,
+) -> Result<Option<Grid>, PolygonizeError> {
+    let h = params.cell_size;
+    if !(h.is_finite() && h > 0.0) {
+        return Err(PolygonizeError::InvalidCellSize(h));
+    }
+    if !(params.iso.is_finite() && params.iso > 0.0) {
+        return Err(PolygonizeError::InvalidIso(params.iso));
+    }
+    let Some((mut lo, mut hi)) = field.support_box() else {
+        return Ok(None);
+    };
+    if let Some((clo, chi)) = clip {
+        lo = lo.sup(&clo);
+        hi = hi.inf(&chi);
+        if (0..3).any(|k| lo[k].partial_cmp(&hi[k]) != Some(std::cmp::Ordering::Less)) {
+            return Ok(None);
+        }
+    }
+    let lo = lo - Vec3::repeat(h);
+    let dims = [0, 1, 2].map(|k| (((hi[k] + h - lo[k]) / h).ceil() as usize + 1).max(2));
+    let n = dims.into_iter().max().unwrap_or(2);
+    if n > params.max_nodes_per_axis {
+        return Err(PolygonizeError::TooManyNodes {
+            needed: n,
+            max: params.max_nodes_per_axis,
+        });
+    }
+    Ok(Some(Grid { lo, h, dims }))
+}
+
+/// One block's piece of the mesh: crossing points keyed by global edge
+/// (`shared`: the edge may be another block's too) and triangles over
+/// them.
+#[derive(Default)]
+struct Piece {
+    keys: Vec<(u64, bool)>,
+    positions: Vec<Point3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+/// Samples and marches every block in parallel, merges the pieces in block
+/// order (stages 2-5 of the module doc).
+fn extract<F: ScalarField + ?Sized>(
+    field: &F,
+    grid: &Grid,
+    iso: Real,
+    sample: impl Fn(usize) -> Sampled + Sync,
+) -> (Mesh, PolygonizeStats) {
+    let n_blocks: usize = grid.blocks().iter().product();
+    let pieces: Vec<(Piece, usize, usize)> = (0..n_blocks)
+        .into_par_iter()
+        .map(|b| match sample(b) {
+            Sampled::Skipped => (Piece::default(), 0, 0),
+            Sampled::Values(values, evaluations) => {
+                let n = values.len();
+                (march(grid, b, &values, iso), n, evaluations)
+            }
+        })
+        .collect();
+    let mut stats = PolygonizeStats {
+        grid_nodes: grid.dims.iter().product(),
+        blocks: n_blocks,
+        ..Default::default()
+    };
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    let mut welded: HashMap<u64, u32> = HashMap::new();
+    let mut local = Vec::new();
+    for (piece, nodes, evaluations) in &pieces {
+        stats.sampled_blocks += usize::from(*nodes > 0);
+        stats.sampled_nodes += nodes;
+        stats.field_evaluations += evaluations;
+        local.clear();
+        for (&(key, shared), p) in piece.keys.iter().zip(&piece.positions) {
+            let next = positions.len() as u32;
+            let index = if shared {
+                *welded.entry(key).or_insert(next)
+            } else {
+                next
+            };
+            if index == next {
+                positions.push(*p);
+            }
+            local.push(index);
+        }
+        triangles.extend(piece.triangles.iter().map(|t| t.map(|i| local[i as usize])));
+    }
+    let mut normals: Vec<Vec3> = positions
+        .par_iter()
+        .map(|p| {
+            let (_, g) = field.value_and_gradient(p);
+            -g.try_normalize(0.0).unwrap_or_else(Vec3::zeros)
+        })
+        .collect();
+    if normals.contains(&Vec3::zeros()) {
+        normals_where_flat(field, grid.h, &positions, &triangles, &mut normals);
+    }
+    let mesh = Mesh {
+        positions,
+        normals,
+        triangles,
+    };
+    (mesh, stats)
+}
+
+/// Where the gradient vanishes (a clipped field exactly on a collider's
+/// surface, where its normal is undefined), the gradient is taken a
+/// millionth of a cell outside, along the adjacent triangles' summed
+/// normal; failing that, that summed normal is used.
+fn normals_where_flat<F: ScalarField + ?Sized>(
+    field: &F,
+    h: Real,
+    positions: &[Point3],
+    triangles: &[[u32; 3]],
+    normals: &mut [Vec3],
+) {
+    let flat: Vec<bool> = normals.iter().map(|n| *n == Vec3::zeros()).collect();
+    let mut sums = vec![Vec3::zeros(); positions.len()];
+    for t in triangles {
+        if t.iter().any(|&i| flat[i as usize]) {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            let n = (b - a).cross(&(c - a));
+            for &i in t {
+                sums[i as usize] += n;
+            }
+        }
+    }
+    for (i, n) in normals.iter_mut().enumerate() {
+        if flat[i] {
+            let out = sums[i].try_normalize(0.0).unwrap_or_else(Vec3::zeros);
+            let (_, g) = field.value_and_gradient(&(positions[i] + out * (1e-6 * h)));
+            *n = (-g).try_normalize(0.0).unwrap_or(out);
+        }
+    }
+}
+
+/// Marching cubes over block `b` with node values `values` (x fastest).
+fn march(grid: &Grid, b: usize, values: &[Real], iso: Real) -> Piece {
+    let block = grid.block(b);
+    let [nx, ny, _] = block.nodes();
+    let [cx, cy, cz] = block.cells;
+    let cases = tables::cases();
+    let mut piece = Piece::default();
+    // Local vertex of each (node, axis) edge, or u32::MAX.
+    let mut slot = vec![u32::MAX; block.node_count() * 3];
+    let at = |i: usize, j: usize, k: usize| (k * ny + j) * nx + i;
+    let [gx, gy, _] = grid.dims;
+    for k in 0..cz {
+        for j in 0..cy {
+            for i in 0..cx {
+                let mut case = 0usize;
+                for c in 0..8u8 {
+                    let [a, bb, cc] = tables::corner_offset(c);
+                    if values[at(i + a, j + bb, k + cc)] > iso {
+                        case |= 1 << c;
+                    }
+                }
+                let tris = &cases[case];
+                if tris.is_empty() {
+                    continue;
+                }
+                for t in tris {
+                    let tri = t.map(|e| {
+                        let (c, axis) = tables::EDGES[e as usize];
+                        let [a, bb, cc] = tables::corner_offset(c);
+                        let node = [i + a, j + bb, k + cc];
+                        let s = at(node[0], node[1], node[2]) * 3 + axis as usize;
+                        if slot[s] == u32::MAX {
+                            slot[s] = piece.positions.len() as u32;
+                            let mut other = node;
+                            other[axis as usize] += 1;
+                            let v0 = values[at(node[0], node[1], node[2])];
+                            let v1 = values[at(other[0], other[1], other[2])];
+                            let g = [0, 1, 2].map(|d| block.start[d] + node[d]);
+                            let p0 = grid.node(g[0], g[1], g[2]);
+                            let mut p = p0;
+                            p[axis as usize] += (iso - v0) / (v1 - v0) * grid.h;
+                            let key = (((g[2] * gy + g[1]) * gx + g[0]) * 3 + axis as usize) as u64;
+                            // Shared with another block unless all four
+                            // cells around the edge are in this one.
+                            let shared = (0..3)
+                                .filter(|&d| d != axis as usize)
+                                .any(|d| node[d] == 0 || node[d] >= block.cells[d]);
+                            piece.keys.push((key, shared));
+                            piece.positions.push(p);
+                        }
+                        slot[s]
+                    });
+                    piece.triangles.push(tri);
+                }
+            }
+        }
+    }
+    piece
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::iso_radius;
+    use crate::primitives::Primitive;
+    use op_dynamics::Quat;
+
+    fn ball(centre: Point3, radius: Real) -> Field {
+        Field::new(vec![Primitive::point(Vec3::zeros(), radius).posed(
+            0,
+            &centre,
+            &Quat::identity(),
+        )])
+    }
+
+    /// Largest distance of a vertex from the exact sphere.
+    fn max_error(mesh: &Mesh, centre: &Point3, r: Real) -> Real {
+        mesh.positions()
+            .iter()
+            .map(|p| ((p - centre).norm() - r).abs())
+            .fold(0.0, Real::max)
+    }
+
+    #[test]
+    fn point_primitive_gives_closed_outward_sphere() {
+        let c = Point3::new(0.37, -1.1, 2.05);
+        let radius = 1.0;
+        let h = radius / 12.0;
+        let mesh = polygonize(&ball(c, radius), &PolygonizeParams::with_cell_size(h)).unwrap();
+        assert!(mesh.triangles().len() > 500);
+        assert!(mesh.is_closed_oriented_manifold());
+        let r = iso_radius(radius);
+        let exact = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+        let v = mesh.signed_volume();
+        assert!(
+            v > 0.0 && (v - exact).abs() < 0.05 * exact,
+            "{v} vs {exact}"
+        );
+        assert!(max_error(&mesh, &c, r) < 0.1 * h);
+        for (p, n) in mesh.positions().iter().zip(mesh.normals()) {
+            assert!((n.norm() - 1.0).abs() < 1e-12);
+            assert!(n.dot(&(p - c).normalize()) > 0.999);
+        }
+        for t in mesh.triangles() {
+            let [a, b, cc] = t.map(|i| mesh.positions()[i as usize]);
+            let face = (b - a).cross(&(cc - a));
+            let avg: Vec3 = t.iter().map(|&i| mesh.normals()[i as usize]).sum();
+            // Triangles the surface pinches to a point where it passes
+            // through a grid node have no direction: skip them.
+            assert!(face.norm() < 1e-12 * h * h || face.dot(&avg) >= 0.0);
+        }
+    }
+
+    /// Max and RMS vertex error against the exact sphere at `h = R/8, R/16,
+    /// R/32` (coarser grids are pre-asymptotic). Measured: max 2.95e-3,
+    /// 8.52e-4, 2.29e-4 (order 1.84); RMS 1.79e-3, 4.39e-4, 1.08e-4 (order
+    /// 2.03): second order, as expected of linear interpolation along edges.
+    #[test]
+    fn vertex_error_falls_as_cell_size_squared() {
+        let c = Point3::new(0.1, 0.2, -0.3);
+        let radius = 1.0;
+        let r = iso_radius(radius);
+        let hs = [radius / 8.0, radius / 16.0, radius / 32.0];
+        let errors: Vec<(Real, Real)> = hs
+            .iter()
+            .map(|&h| {
+                let params = PolygonizeParams::with_cell_size(h);
+                let mesh = polygonize(&ball(c, radius), &params).unwrap();
+                let e: Vec<Real> = mesh
+                    .positions()
+                    .iter()
+                    .map(|p| ((p - c).norm() - r).abs())
+                    .collect();
+                let rms = (e.iter().map(|x| x * x).sum::<Real>() / e.len() as Real).sqrt();
+                (max_error(&mesh, &c, r), rms)
+            })
+            .collect();
+        let order = |e0: Real, e2: Real| (e0 / e2).ln() / (hs[0] / hs[2]).ln();
+        let max_order = order(errors[0].0, errors[2].0);
+        let rms_order = order(errors[0].1, errors[2].1);
+        eprintln!("h {hs:?} (max, rms) {errors:?} orders {max_order:.2} {rms_order:.2}");
+        assert!(errors[0].0 > errors[1].0 && errors[1].0 > errors[2].0);
+        assert!(
+            max_order > 1.5 && rms_order > 1.5,
+            "{max_order} {rms_order}"
+        );
+    }
+
+    /// Point primitives of support `radius` on the lattice of spacing
+    /// `step` inside `keep`.
+    fn lattice(step: Real, n: i32, radius: Real, keep: impl Fn(&Point3) -> bool) -> Field {
+        let mut prims = Vec::new();
+        for k in -n..=n {
+            for j in -n..=n {
+                for i in -n..=n {
+                    // A small fixed jitter keeps nodes off symmetric spots.
+                    let p = Point3::new(i as Real, j as Real, k as Real) * step
+                        + Vec3::new(0.013, -0.007, 0.011) * step;
+                    if keep(&p) {
+                        let id = prims.len() as u32;
+                        prims.push(Primitive::point(Vec3::zeros(), radius).posed(
+                            id,
+                            &p,
+                            &Quat::identity(),
+                        ));
+                    }
+                }
+            }
+        }
+        Field::new(prims)
+    }
+
+    /// A sheet of square primitives, `n` by `n`, gently curved.
+    fn sheet(n: i32) -> Field {
+        let mut prims = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = (i as Real * 0.2, j as Real * 0.2);
+                let z = 0.1 * (x * 1.3).sin() * (y * 0.7).cos();
+                let q = Quat::from_scaled_axis(Vec3::new(0.05 * y.sin(), -0.1 * x.cos(), 0.0));
+                prims.push(Primitive::square(Vec3::z(), 0.1, 0.25).posed(
+                    prims.len() as u32,
+                    &Point3::new(x, y, z),
+                    &q,
+                ));
+            }
+        }
+        Field::new(prims)
+    }
+
+    fn torus() -> Field {
+        lattice(0.1, 14, 0.3, |p| {
+            let ring = (p.x * p.x + p.y * p.y).sqrt() - 0.9;
+            ring * ring + p.z * p.z < 0.3 * 0.3
+        })
+    }
+
+    fn test_fields() -> Vec<(&'static str, Field, Real)> {
+        vec![
+            (
+                "sphere of points",
+                lattice(0.1, 6, 0.3, |p| p.coords.norm() < 0.55),
+                0.04,
+            ),
+            ("sheet of squares", sheet(12), 0.03),
+            ("torus of points", torus(), 0.05),
+        ]
+    }
+
+    /// The narrow band is the dense grid with the blocks that cannot cross
+    /// skipped: same triangles, vertices within rounding.
+    #[test]
+    fn narrow_band_equals_dense_reference() {
+        for (name, field, h) in test_fields() {
+            for iso in [ISO, 1.5] {
+                let params = PolygonizeParams {
+                    iso,
+                    ..PolygonizeParams::with_cell_size(h)
+                };
+                let (band, stats) = polygonize_with_stats(&field, &params).unwrap();
+                let dense = polygonize_field(&field, &params).unwrap();
+                eprintln!(
+                    "{name} iso {iso}: {} triangles, {stats:?}",
+                    band.triangles().len()
+                );
+                assert!(band.triangles().len() > 200, "{name}");
+                assert_eq!(band.triangles(), dense.triangles(), "{name}");
+                assert_eq!(band.positions().len(), dense.positions().len());
+                for (a, b) in band.positions().iter().zip(dense.positions()) {
+                    assert!((a - b).norm() < 1e-9, "{name}: {a:?} vs {b:?}");
+                }
+                assert!(band.is_closed_oriented_manifold(), "{name}");
+                assert!(band.signed_volume() > 0.0);
+                assert!(
+                    name == "sheet of squares" || stats.sampled_blocks < stats.blocks,
+                    "{name}: no block skipped"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn same_mesh_at_one_and_two_threads() {
+        for (name, field, h) in test_fields() {
+            let params = PolygonizeParams::with_cell_size(h);
+            let run = |threads| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| polygonize(&field, &params).unwrap())
+            };
+            let one = run(1);
+            assert_eq!(one, run(2), "{name}");
+            assert_eq!(one, run(3), "{name}");
+        }
+    }
+
+    /// A hollow shell of point primitives, radius doubled: the area grows
+    /// 4x, the box ~5x (8x asymptotically; the support pads it); the
+    /// sampled nodes and evaluations follow the area. Measured: triangles
+    /// x3.86, nodes x4.09, evaluations x3.85, box x5.15; the large shell
+    /// samples 541 of 864 blocks (nodes on block faces counted per block).
+    #[test]
+    fn field_evaluations_follow_the_area() {
+        let shell = |rho: Real| {
+            let n = (rho / 0.1).ceil() as i32 + 1;
+            lattice(0.1, n, 0.3, |p| (p.coords.norm() - rho).abs() < 0.06)
+        };
+        let params = PolygonizeParams::with_cell_size(0.05);
+        let (small, s1) = polygonize_with_stats(&shell(1.0), &params).unwrap();
+        let (large, s2) = polygonize_with_stats(&shell(2.0), &params).unwrap();
+        assert!(small.is_closed_oriented_manifold() && large.is_closed_oriented_manifold());
+        let tri_ratio = large.triangles().len() as Real / small.triangles().len() as Real;
+        let node_ratio = s2.sampled_nodes as Real / s1.sampled_nodes as Real;
+        let eval_ratio = s2.field_evaluations as Real / s1.field_evaluations as Real;
+        let box_ratio = s2.grid_nodes as Real / s1.grid_nodes as Real;
+        eprintln!("{s1:?}\n{s2:?}\ntriangles x{tri_ratio:.2} nodes x{node_ratio:.2} evaluations x{eval_ratio:.2} box x{box_ratio:.2}");
+        assert!((3.5..4.5).contains(&tri_ratio));
+        assert!((3.0..5.0).contains(&node_ratio) && (3.0..5.0).contains(&eval_ratio));
+        assert!(box_ratio > 5.0 && node_ratio < 0.8 * box_ratio);
+    }
+
+    #[test]
+    fn empty_field_and_bad_parameters() {
+        let empty = polygonize(&Field::default(), &PolygonizeParams::with_cell_size(0.1)).unwrap();
+        assert!(empty.is_empty());
+        let f = ball(Point3::origin(), 1.0);
+        assert_eq!(
+            polygonize(&f, &PolygonizeParams::with_cell_size(0.0)),
+            Err(PolygonizeError::InvalidCellSize(0.0))
+        );
+        let bad_iso = PolygonizeParams {
+            iso: 0.0,
+            ..PolygonizeParams::with_cell_size(0.1)
+        };
+        assert_eq!(
+            polygonize(&f, &bad_iso),
+            Err(PolygonizeError::InvalidIso(0.0))
+        );
+        assert!(matches!(
+            polygonize(&f, &PolygonizeParams::with_cell_size(1e-3)),
+            Err(PolygonizeError::TooManyNodes { .. })
+        ));
+    }
+}
