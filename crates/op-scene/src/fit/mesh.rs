@@ -78,6 +78,17 @@ impl SurfaceMesh {
             max_distance,
         })
     }
+
+    /// Recomputes the Euler characteristic, the boundary loops and the
+    /// distances from `samples` after the faces changed.
+    pub(super) fn measure(&mut self, samples: &[Point3]) {
+        let t = Triangulation {
+            triangles: self.faces.clone(),
+        };
+        self.euler_characteristic = t.euler_characteristic();
+        self.boundary_loops = t.boundary_loops();
+        (self.rms_distance, self.max_distance) = distances(samples, &self.vertices, &self.faces);
+    }
 }
 
 /// RMS and largest distance from `samples` to the triangles (infinite when
@@ -97,11 +108,7 @@ pub(super) fn distances(
 
 /// Distance from each of `samples` to the triangles (infinite when there is
 /// no triangle).
-pub(super) fn sample_distances(
-    samples: &[Point3],
-    vertices: &[Point3],
-    faces: &[[u32; 3]],
-) -> Vec<Real> {
+pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 3]]) -> Vec<Real> {
     if faces.is_empty() {
         return vec![Real::INFINITY; samples.len()];
     }

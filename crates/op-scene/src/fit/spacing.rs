@@ -1,6 +1,10 @@
 //! Sample spacing: nearest-sample distances, merging, the cohesion rest distance.
 
 use std::collections::HashMap;
+use std::num::NonZeroUsize;
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
 
 use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
 use op_dynamics::{Point3, Real, Vec3};
@@ -86,6 +90,79 @@ impl KdTree<'_> {
         if diff.abs() < *best {
             self.nearest(far.0, far.1, q, skip, best);
         }
+    }
+}
+
+/// The `k` nearest other points of each point (kiddo's immutable k-d
+/// tree, queries in parallel, ordered collect): flat rows, nearest first,
+/// ties by index.
+pub(crate) struct Knn {
+    k: usize,
+    index: Vec<usize>,
+    distance: Vec<Real>,
+}
+
+impl Knn {
+    /// The `k` nearest others of each of `points` (fewer when there are at
+    /// most `k` points). Exact duplicates count as neighbours at distance 0.
+    pub(crate) fn new(points: &[Point3], k: usize) -> Knn {
+        let k = k.min(points.len().saturating_sub(1));
+        let entries: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
+        let rows: Vec<Vec<(Real, usize)>> = match (
+            NonZeroUsize::new(k + 1),
+            ImmutableKdTree::<Real, 3>::new_from_slice(&entries),
+        ) {
+            (Some(want), Ok(tree)) => entries
+                .par_iter()
+                .enumerate()
+                .map(|(i, q)| {
+                    let mut row: Vec<(Real, usize)> = tree
+                        .query(q)
+                        .nearest_n::<SquaredEuclidean<Real>>(want)
+                        .execute()
+                        .into_iter()
+                        .map(|r| (r.distance, r.item as usize))
+                        .filter(|&(_, j)| j != i)
+                        .collect();
+                    // Exact distances, deterministic ties.
+                    row.iter_mut()
+                        .for_each(|(d, j)| *d = (points[*j] - points[i]).norm());
+                    row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                    row.truncate(k);
+                    row
+                })
+                .collect(),
+            _ => vec![Vec::new(); points.len()],
+        };
+        let k = rows.iter().map(Vec::len).min().unwrap_or(0);
+        let mut index = Vec::with_capacity(k * points.len());
+        let mut distance = Vec::with_capacity(k * points.len());
+        for row in rows {
+            for &(d, j) in &row[..k] {
+                index.push(j);
+                distance.push(d);
+            }
+        }
+        Knn { k, index, distance }
+    }
+
+    /// Number of neighbours per point.
+    pub(crate) fn k(&self) -> usize {
+        self.k
+    }
+
+    /// The neighbours of point `i`, nearest first.
+    pub(crate) fn neighbours(&self, i: usize) -> &[usize] {
+        &self.index[i * self.k..(i + 1) * self.k]
+    }
+
+    /// The distance from each point to its `m`-th nearest other point
+    /// (`1 <= m <= k`).
+    pub(crate) fn distances_to(&self, m: usize) -> Vec<Real> {
+        self.distance
+            .chunks(self.k.max(1))
+            .map(|row| row[m - 1])
+            .collect()
     }
 }
 
