@@ -1,0 +1,283 @@
+//! The final pass of a fit: the holes (boundary loops) left after the
+//! relaxation and the triangulation (seed 000 §5) that are narrower than
+//! a threshold are closed with triangles, keeping every edge in at most
+//! two triangles.
+//!
+//! First the triangles on edges held by more than two triangles are
+//! dropped (the hole they leave is filled like any other). A hole is
+//! traced along the boundary edges against the faces' winding; its
+//! *width* is `4 A / P` (the diameter of a disc, the side of a square:
+//! `A` the norm of its vector area, `P` its perimeter). A hole narrower
+//! than the threshold is closed by ears (smallest angle first, in the
+//! plane normal to its vertices' mean normal) when it has at most 6
+//! corners, otherwise by a fan from a new vertex at its centroid moved
+//! onto the tangent plane of the nearest sample. An ear whose new edge
+//! already exists is skipped (it would make an edge in three triangles).
+
+use std::collections::{BTreeMap, HashMap};
+
+use op_dynamics::{Point3, Real, Vec3};
+
+use super::mesh::SurfaceMesh;
+
+/// Closes the holes of `mesh` narrower than `max_width` (unit spacing);
+/// `samples` with unit `normals` place the centre vertices of large
+/// holes. Returns the number of holes closed. The figures of `mesh` are
+/// not updated (see [`SurfaceMesh::measure`]).
+pub(super) fn fill_holes(
+    mesh: &mut SurfaceMesh,
+    max_width: Real,
+    samples: &[Point3],
+    normals: &[Vec3],
+) -> usize {
+    drop_overfull_edges(&mut mesh.faces);
+    let mut edges = edge_counts(&mesh.faces);
+    let mut closed = 0;
+    for hole in boundary_loops(&mesh.faces) {
+        if hole.len() < 3 || width(&mesh.vertices, &hole) >= max_width {
+            continue;
+        }
+        let before = mesh.faces.len();
+        if hole.len() <= 6 {
+            close_by_ears(mesh, &mut edges, hole, samples, normals);
+        } else {
+            close_by_fan(mesh, &mut edges, &hole, samples, normals);
+        }
+        if mesh.faces.len() > before {
+            closed += 1;
+        }
+    }
+    closed
+}
+
+/// Undirected edge key.
+fn key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+/// Number of triangles on each edge.
+fn edge_counts(faces: &[[u32; 3]]) -> HashMap<(u32, u32), usize> {
+    let mut e = HashMap::new();
+    for f in faces {
+        for k in 0..3 {
+            *e.entry(key(f[k], f[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    e
+}
+
+/// Drops the triangles on edges held by more than two.
+fn drop_overfull_edges(faces: &mut Vec<[u32; 3]>) {
+    let e = edge_counts(faces);
+    faces.retain(|f| (0..3).all(|k| e[&key(f[k], f[(k + 1) % 3])] <= 2));
+}
+
+/// The holes: loops of boundary half-edges, each reversed from its face's
+/// winding (so a triangle `[prev, cur, next]` on a hole is wound like the
+/// mesh). Deterministic (started from the smallest unused half-edge).
+fn boundary_loops(faces: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let e = edge_counts(faces);
+    let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            if e[&key(a, b)] == 1 {
+                next.entry(b).or_default().push(a);
+            }
+        }
+    }
+    next.values_mut().for_each(|v| v.sort_unstable());
+    let mut loops = Vec::new();
+    while let Some((&start, _)) = next.iter().find(|(_, v)| !v.is_empty()) {
+        let mut hole = vec![start];
+        let mut at = start;
+        while let Some(to) = next.get_mut(&at).and_then(Vec::pop) {
+            if to == start {
+                break;
+            }
+            hole.push(to);
+            at = to;
+            if hole.len() > faces.len() * 3 {
+                break;
+            }
+        }
+        loops.extend(split_at_pinches(hole));
+    }
+    loops
+}
+
+/// A traced loop split into simple loops where it visits a vertex twice
+/// (two holes touching at a vertex).
+fn split_at_pinches(hole: Vec<u32>) -> Vec<Vec<u32>> {
+    let mut out = Vec::new();
+    let mut path: Vec<u32> = Vec::new();
+    for v in hole {
+        if let Some(k) = path.iter().position(|&u| u == v) {
+            out.push(path.split_off(k));
+        }
+        path.push(v);
+    }
+    out.push(path);
+    out
+}
+
+/// `4 A / P` of the polygon `hole`.
+fn width(vertices: &[Point3], hole: &[u32]) -> Real {
+    let p = |k: usize| vertices[hole[k % hole.len()] as usize];
+    let c = centroid(vertices, hole);
+    let mut area = Vec3::zeros();
+    let mut perimeter = 0.0;
+    for k in 0..hole.len() {
+        area += (p(k) - c).cross(&(p(k + 1) - c)) * 0.5;
+        perimeter += (p(k + 1) - p(k)).norm();
+    }
+    4.0 * area.norm() / perimeter.max(1e-300)
+}
+
+fn centroid(vertices: &[Point3], hole: &[u32]) -> Point3 {
+    Point3::from(
+        hole.iter()
+            .fold(Vec3::zeros(), |s, &v| s + vertices[v as usize].coords)
+            / hole.len() as Real,
+    )
+}
+
+/// Closes `hole` by clipping its sharpest ear first.
+fn close_by_ears(
+    mesh: &mut SurfaceMesh,
+    edges: &mut HashMap<(u32, u32), usize>,
+    hole: Vec<u32>,
+    samples: &[Point3],
+    normals: &[Vec3],
+) {
+    let n = hole
+        .iter()
+        .fold(Vec3::zeros(), |s, &v| s + mesh.normals[v as usize]);
+    let mut hole = hole;
+    while hole.len() >= 3 {
+        let m = hole.len();
+        let angle = |k: usize| {
+            let (a, b, c) = (
+                mesh.vertices[hole[(k + m - 1) % m] as usize],
+                mesh.vertices[hole[k] as usize],
+                mesh.vertices[hole[(k + 1) % m] as usize],
+            );
+            let (e1, e2) = (c - b, a - b);
+            let s = n.dot(&e1.cross(&e2));
+            let a = s.atan2(e1.dot(&e2));
+            if a < 0.0 {
+                a + std::f64::consts::TAU
+            } else {
+                a
+            }
+        };
+        let mut order: Vec<usize> = (0..m).collect();
+        order.sort_by(|&a, &b| angle(a).total_cmp(&angle(b)).then(a.cmp(&b)));
+        let ear = order.into_iter().find(|&k| {
+            let (a, b, c) = (hole[(k + m - 1) % m], hole[k], hole[(k + 1) % m]);
+            let diagonal = edges.get(&key(a, c)).copied().unwrap_or(0);
+            a != b
+                && b != c
+                && a != c
+                && count(edges, a, b) <= 1
+                && count(edges, b, c) <= 1
+                && (diagonal == 0 || (m == 3 && diagonal <= 1))
+        });
+        let Some(k) = ear else {
+            // No ear can be clipped without an edge in three triangles:
+            // a fan from a new centre vertex (its edges are new).
+            close_by_fan(mesh, edges, &hole, samples, normals);
+            return;
+        };
+        let f = [hole[(k + m - 1) % m], hole[k], hole[(k + 1) % m]];
+        add_face(mesh, edges, f);
+        hole.remove(k);
+        if m == 3 {
+            return;
+        }
+    }
+}
+
+/// Closes `hole` by a fan from a new vertex at its centroid, moved onto
+/// the tangent plane of the nearest sample.
+fn close_by_fan(
+    mesh: &mut SurfaceMesh,
+    edges: &mut HashMap<(u32, u32), usize>,
+    hole: &[u32],
+    samples: &[Point3],
+    normals: &[Vec3],
+) {
+    let mut sorted = hole.to_vec();
+    sorted.sort_unstable();
+    sorted.dedup();
+    if sorted.len() < hole.len()
+        || (0..hole.len()).any(|k| count(edges, hole[k], hole[(k + 1) % hole.len()]) > 1)
+    {
+        // A pinched loop (a vertex twice): left open.
+        return;
+    }
+    let mut c = centroid(&mesh.vertices, hole);
+    if let Some(s) = (0..samples.len()).min_by(|&a, &b| {
+        (samples[a] - c)
+            .norm_squared()
+            .total_cmp(&(samples[b] - c).norm_squared())
+    }) {
+        c -= normals[s] * normals[s].dot(&(c - samples[s]));
+    }
+    let n = hole
+        .iter()
+        .fold(Vec3::zeros(), |s, &v| s + mesh.normals[v as usize]);
+    let v = mesh.vertices.len() as u32;
+    mesh.vertices.push(c);
+    mesh.normals
+        .push(n.try_normalize(1e-12).unwrap_or(Vec3::z()));
+    for k in 0..hole.len() {
+        add_face(mesh, edges, [hole[k], hole[(k + 1) % hole.len()], v]);
+    }
+}
+
+fn count(edges: &HashMap<(u32, u32), usize>, a: u32, b: u32) -> usize {
+    edges.get(&key(a, b)).copied().unwrap_or(0)
+}
+
+fn add_face(mesh: &mut SurfaceMesh, edges: &mut HashMap<(u32, u32), usize>, f: [u32; 3]) {
+    for k in 0..3 {
+        *edges.entry(key(f[k], f[(k + 1) % 3])).or_insert(0) += 1;
+    }
+    mesh.faces.push(f);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A square of 4 triangles around a centre with one removed: the
+    /// hole is found and closed.
+    #[test]
+    fn a_missing_triangle_is_filled() {
+        let vertices = vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(1.0, 1.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+            Point3::new(0.5, 0.5, 0.0),
+        ];
+        // Closed octahedron-like fan: a pyramid, both sides.
+        let mut faces = vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]];
+        faces.extend([[0, 2, 1], [0, 3, 2]]);
+        faces.remove(1);
+        let mut mesh = SurfaceMesh {
+            normals: vec![Vec3::z(); 5],
+            vertices,
+            faces,
+            euler_characteristic: 0,
+            boundary_loops: 0,
+            rms_distance: 0.0,
+            max_distance: 0.0,
+        };
+        assert_eq!(boundary_loops(&mesh.faces).len(), 1);
+        assert_eq!(fill_holes(&mut mesh, 10.0, &[], &[]), 1);
+        assert!(boundary_loops(&mesh.faces).is_empty());
+        assert!(edge_counts(&mesh.faces).values().all(|&c| c == 2));
+    }
+}

@@ -1,0 +1,240 @@
+//! The triangulated surface and its distance to the samples.
+
+use std::collections::HashMap;
+
+use op_dynamics::triangulation::{triangulate_points, Triangulation, TriangulationParams};
+use op_dynamics::{Point3, Real, Vec3};
+
+use super::FitError;
+
+/// A triangulated particle surface (seed 000 §5) and its distance to the
+/// data it interpolates: what [`fit`] reports, and what the fit scenes'
+/// figure tests measure on a run's final particles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceMesh {
+    /// Mesh vertices: the particles used by some triangle.
+    pub vertices: Vec<Point3>,
+    /// Unit normals of the vertices (the particle normals).
+    pub normals: Vec<Vec3>,
+    /// Triangles as indices into `vertices`, wound along the normals.
+    pub faces: Vec<[u32; 3]>,
+    /// `V - E + F` of the mesh.
+    pub euler_characteristic: i64,
+    /// Number of boundary loops of the mesh.
+    pub boundary_loops: usize,
+    /// RMS distance from the samples to the triangles (infinite without
+    /// a triangle).
+    pub rms_distance: Real,
+    /// Largest distance from a sample to the triangles.
+    pub max_distance: Real,
+}
+
+impl SurfaceMesh {
+    /// Triangulates particles at `positions` with unit `normals`
+    /// ([`triangulate_points`], mutual-neighbour distance `radius`) and
+    /// measures the distances from `samples` to the triangles.
+    ///
+    /// # Errors
+    /// An invalid radius (not finite or not > 0).
+    pub fn new(
+        positions: &[Point3],
+        normals: &[Vec3],
+        radius: Real,
+        samples: &[Point3],
+    ) -> Result<Self, FitError> {
+        let triangles = triangulate_points(
+            positions,
+            normals,
+            &TriangulationParams::with_radius(radius),
+        )?;
+        let mesh = Triangulation {
+            triangles: triangles.clone(),
+        };
+        let mut index = vec![u32::MAX; positions.len()];
+        let mut vertices = Vec::new();
+        let mut normals_out = Vec::new();
+        let faces: Vec<[u32; 3]> = triangles
+            .iter()
+            .map(|t| {
+                t.map(|v| {
+                    let v = v as usize;
+                    if index[v] == u32::MAX {
+                        index[v] = vertices.len() as u32;
+                        vertices.push(positions[v]);
+                        normals_out.push(normals[v]);
+                    }
+                    index[v]
+                })
+            })
+            .collect();
+        let (rms_distance, max_distance) = distances(samples, &vertices, &faces);
+        Ok(SurfaceMesh {
+            euler_characteristic: mesh.euler_characteristic(),
+            boundary_loops: mesh.boundary_loops(),
+            vertices,
+            normals: normals_out,
+            faces,
+            rms_distance,
+            max_distance,
+        })
+    }
+
+    /// Recomputes the Euler characteristic, the boundary loops and the
+    /// distances from `samples` after the faces changed.
+    pub(super) fn measure(&mut self, samples: &[Point3]) {
+        let t = Triangulation {
+            triangles: self.faces.clone(),
+        };
+        self.euler_characteristic = t.euler_characteristic();
+        self.boundary_loops = t.boundary_loops();
+        (self.rms_distance, self.max_distance) = distances(samples, &self.vertices, &self.faces);
+    }
+}
+
+/// RMS and largest distance from `samples` to the triangles (infinite when
+/// there is no triangle).
+pub(super) fn distances(
+    samples: &[Point3],
+    vertices: &[Point3],
+    faces: &[[u32; 3]],
+) -> (Real, Real) {
+    let d = sample_distances(samples, vertices, faces);
+    let sum: Real = d.iter().map(|x| x * x).sum();
+    (
+        (sum / samples.len() as Real).sqrt(),
+        d.into_iter().fold(0.0, Real::max),
+    )
+}
+
+/// Distance from each of `samples` to the triangles (infinite when there is
+/// no triangle).
+pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 3]]) -> Vec<Real> {
+    if faces.is_empty() {
+        return vec![Real::INFINITY; samples.len()];
+    }
+    // Triangles binned by their bounding boxes in a grid of the longest
+    // edge; a sample looks in its cell's 27 cells first, all triangles when
+    // that finds none.
+    let cell = faces
+        .iter()
+        .flat_map(|f| {
+            (0..3)
+                .map(move |k| (vertices[f[k] as usize] - vertices[f[(k + 1) % 3] as usize]).norm())
+        })
+        .fold(0.0, Real::max)
+        .max(1e-12);
+    let key = |p: &Vec3| [p.x, p.y, p.z].map(|c| (c / cell).floor() as i64);
+    let mut bins: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (t, f) in faces.iter().enumerate() {
+        let c = f
+            .iter()
+            .fold(Vec3::zeros(), |s, &v| s + vertices[v as usize].coords)
+            / 3.0;
+        bins.entry(key(&c)).or_default().push(t);
+    }
+    let tri_distance = |p: &Point3, t: usize| {
+        let f = faces[t];
+        point_triangle_distance(
+            p,
+            &vertices[f[0] as usize],
+            &vertices[f[1] as usize],
+            &vertices[f[2] as usize],
+        )
+    };
+    let mut out = Vec::with_capacity(samples.len());
+    for p in samples {
+        let k = key(&p.coords);
+        let mut best = Real::INFINITY;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(v) = bins.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                        for &t in v {
+                            best = best.min(tri_distance(p, t));
+                        }
+                    }
+                }
+            }
+        }
+        // A triangle whose centroid is outside the 27 cells has it at least
+        // `cell` from p, and its points within 2/3 of its longest edge
+        // (<= cell) of the centroid: at least `cell / 3` from p. Below
+        // that the nearest found is exact; otherwise check all.
+        if best > cell / 3.0 {
+            best = (0..faces.len())
+                .map(|t| tri_distance(p, t))
+                .fold(best, Real::min);
+        }
+        out.push(best);
+    }
+    out
+}
+
+/// Distance from `p` to the triangle `abc` (closest point by region,
+/// Ericson, Real-Time Collision Detection §5.1.5).
+pub fn point_triangle_distance(p: &Point3, a: &Point3, b: &Point3, c: &Point3) -> Real {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(&ap);
+    let d2 = ac.dot(&ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return ap.norm();
+    }
+    let bp = p - b;
+    let d3 = ab.dot(&bp);
+    let d4 = ac.dot(&bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return bp.norm();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (p - (a + ab * v)).norm();
+    }
+    let cp = p - c;
+    let d5 = ab.dot(&cp);
+    let d6 = ac.dot(&cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return cp.norm();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (p - (a + ac * w)).norm();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (p - (b + (c - b) * w)).norm();
+    }
+    let denom = va + vb + vc;
+    if denom == 0.0 || denom.is_nan() {
+        // Degenerate triangle: the nearest of its edges' end points.
+        return ap.norm().min(bp.norm()).min(cp.norm());
+    }
+    let v = vb / denom;
+    let w = vc / denom;
+    (p - (a + ab * v + ac * w)).norm()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn point_triangle_distance_regions() {
+        let (a, b, c) = (
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+        );
+        let d =
+            |x: Real, y: Real, z: Real| point_triangle_distance(&Point3::new(x, y, z), &a, &b, &c);
+        assert!((d(0.2, 0.2, 0.5) - 0.5).abs() < 1e-12);
+        assert!((d(-1.0, -1.0, 0.0) - 2f64.sqrt()).abs() < 1e-12);
+        assert!((d(0.5, -2.0, 0.0) - 2.0).abs() < 1e-12);
+        assert!((d(1.0, 1.0, 0.0) - 0.5f64.sqrt()).abs() < 1e-12);
+        assert!((d(3.0, 0.0, 4.0) - 20f64.sqrt()).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,210 @@
+//! Sample normals (seed 000 §7 needs an oriented particle per sample):
+//! local PCA, oriented consistently over the whole set by propagation
+//! along a minimum spanning tree of `1 - |n_i . n_j|` (Hoppe et al. 1992,
+//! "Surface reconstruction from unorganized points", §3.3).
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+use op_dynamics::{Point3, Real, Vec3};
+
+use super::spacing::{pairs, Knn};
+use super::FitError;
+
+/// Unit normals by local PCA over the points within `radius`, oriented by
+/// propagation along the maximum spanning tree of `|n_i . n_j|` (the
+/// scenes' `creation.fit`; [`super::fit`] uses [`knn_normals`]).
+///
+/// # Errors
+/// A point with fewer than 2 neighbours within `radius`.
+pub(crate) fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, FitError> {
+    let n = points.len();
+    let half = pairs(points, radius);
+    let mut rows: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (i, j) in half.iter_pairs() {
+        rows[i].push(j);
+        rows[j].push(i);
+    }
+    rows.iter_mut().for_each(|r| r.sort_unstable());
+    if let Some((i, row)) = rows.iter().enumerate().find(|(_, r)| r.len() < 2) {
+        return Err(FitError::Input(format!(
+            "sample {} has {} neighbours within {radius} spacings: cannot estimate its normal (give normals in the file, or a larger spacing)",
+            i + 1,
+            row.len()
+        )));
+    }
+    let mut normals: Vec<Vec3> = rows
+        .iter()
+        .enumerate()
+        .map(|(i, row)| pca_normal(points, i, row))
+        .collect();
+    orient(points, &rows, &mut normals, 0);
+    Ok(normals)
+}
+
+/// Unit normals from the `k` nearest samples (Hoppe et al. 1992 §3.2: the
+/// least-variance direction of the sample and its neighbours), oriented
+/// over the symmetric k-nearest-neighbour graph (§3.3) from the sample
+/// of largest `z`, whose normal is made to point along `+z` (outward on a
+/// closed surface). Independent of the particle spacing; no sample is
+/// refused (every sample has `k` nearest others when there are `k + 1`).
+pub(crate) fn knn_normals(points: &[Point3], knn: &Knn) -> Vec<Vec3> {
+    let n = points.len();
+    let mut normals: Vec<Vec3> = (0..n)
+        .map(|i| pca_normal(points, i, knn.neighbours(i)))
+        .collect();
+    let mut rows: Vec<Vec<usize>> = (0..n).map(|i| knn.neighbours(i).to_vec()).collect();
+    for i in 0..n {
+        for &j in knn.neighbours(i) {
+            rows[j].push(i);
+        }
+    }
+    rows.iter_mut().for_each(|r| {
+        r.sort_unstable();
+        r.dedup();
+    });
+    orient(points, &rows, &mut normals, 2);
+    normals
+}
+
+/// The share of `points` whose neighbourhood (the point and its `knn`
+/// neighbours) is a curve rather than a surface: its second principal
+/// variance below a tenth of the first (samples along a circle: about
+/// 0.03; on a surface sampled at random: about 0.5 and more).
+pub(crate) fn curve_like_share(points: &[Point3], knn: &Knn) -> Real {
+    let curve = (0..points.len())
+        .filter(|&i| {
+            let row = knn.neighbours(i);
+            let mean = row
+                .iter()
+                .fold(points[i].coords, |s, &j| s + points[j].coords)
+                / (row.len() + 1) as Real;
+            let mut cov = op_dynamics::Mat3::zeros();
+            for &k in std::iter::once(&i).chain(row) {
+                let d = points[k].coords - mean;
+                cov += d * d.transpose();
+            }
+            let mut e: Vec<Real> = cov.symmetric_eigenvalues().iter().copied().collect();
+            e.sort_by(|a, b| b.total_cmp(a));
+            e[1] < 0.1 * e[0]
+        })
+        .count();
+    curve as Real / points.len().max(1) as Real
+}
+
+/// The least-variance direction of `points[i]` and `points[row]`.
+fn pca_normal(points: &[Point3], i: usize, row: &[usize]) -> Vec3 {
+    let mean = row
+        .iter()
+        .fold(points[i].coords, |s, &j| s + points[j].coords)
+        / (row.len() + 1) as Real;
+    let mut cov = op_dynamics::Mat3::zeros();
+    for &k in std::iter::once(&i).chain(row) {
+        let d = points[k].coords - mean;
+        cov += d * d.transpose();
+    }
+    let eig = cov.symmetric_eigen();
+    let (k, _) = eig
+        .eigenvalues
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1).then(a.0.cmp(&b.0)))
+        .unwrap_or((0, &0.0));
+    eig.eigenvectors.column(k).normalize()
+}
+
+/// Orients `normals` by Prim's maximum spanning tree of `|n_i . n_j|`
+/// over the graph `rows` (the minimum spanning tree of Hoppe's
+/// `1 - |n_i . n_j|`), started in each connected component at its point
+/// of largest coordinate along `axis` (ties by index), whose normal is
+/// made to point along `+axis` (for `axis` 0, the x of the scenes: its
+/// largest component positive).
+fn orient(points: &[Point3], rows: &[Vec<usize>], normals: &mut [Vec3], axis: usize) {
+    let n = points.len();
+    let mut done = vec![false; n];
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| points[b][axis].total_cmp(&points[a][axis]).then(a.cmp(&b)));
+    for &start in &order {
+        if done[start] {
+            continue;
+        }
+        let s = normals[start];
+        let big = if axis == 0 {
+            (0..3)
+                .max_by(|&a, &b| s[a].abs().total_cmp(&s[b].abs()).then(b.cmp(&a)))
+                .unwrap_or(0)
+        } else {
+            axis
+        };
+        if s[big] < 0.0 {
+            normals[start] = -s;
+        }
+        done[start] = true;
+        let mut heap = BinaryHeap::new();
+        let push = |heap: &mut BinaryHeap<Edge>, normals: &[Vec3], i: usize| {
+            for &j in &rows[i] {
+                heap.push(Edge {
+                    weight: normals[i].dot(&normals[j]).abs(),
+                    from: i,
+                    to: j,
+                });
+            }
+        };
+        push(&mut heap, normals, start);
+        while let Some(e) = heap.pop() {
+            if done[e.to] {
+                continue;
+            }
+            done[e.to] = true;
+            if normals[e.from].dot(&normals[e.to]) < 0.0 {
+                normals[e.to] = -normals[e.to];
+            }
+            push(&mut heap, normals, e.to);
+        }
+    }
+}
+
+/// An edge of the orientation graph, ordered by weight then indices.
+#[derive(PartialEq)]
+struct Edge {
+    weight: Real,
+    from: usize,
+    to: usize,
+}
+
+impl Eq for Edge {}
+
+impl Ord for Edge {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.weight
+            .total_cmp(&other.weight)
+            .then(other.from.cmp(&self.from))
+            .then(other.to.cmp(&self.to))
+    }
+}
+
+impl PartialOrd for Edge {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pca_normals_of_a_plane_are_oriented_consistently() {
+        let pts: Vec<Point3> = (0..100)
+            .map(|k| {
+                Point3::new(
+                    (k % 10) as Real,
+                    (k / 10) as Real,
+                    0.01 * ((k * 7) % 3) as Real,
+                )
+            })
+            .collect();
+        let n = estimate_normals(&pts, 2.5).unwrap();
+        assert!(n.iter().all(|v| v.z > 0.99), "{n:?}");
+    }
+}

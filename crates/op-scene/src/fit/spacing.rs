@@ -1,0 +1,307 @@
+//! Sample spacing: nearest-sample distances, merging, the cohesion rest distance.
+
+use std::collections::HashMap;
+use std::num::NonZeroUsize;
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+
+use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
+use op_dynamics::{Point3, Real, Vec3};
+
+use super::input::{bits, distinct_points, median_of};
+use super::neighbourhood::Grid;
+use super::FitError;
+
+/// For each of the (distinct) `points`, the distance to its nearest other
+/// point, by a k-d tree (each node split at the median of its widest
+/// axis): O(n log n) for any distribution.
+pub(super) fn nearest_distances(points: &[Point3]) -> Vec<Real> {
+    let mut index: Vec<usize> = (0..points.len()).collect();
+    let mut axes = vec![0u8; points.len()];
+    build_kd(points, &mut index, &mut axes);
+    let tree = KdTree {
+        points,
+        index: &index,
+        axes: &axes,
+    };
+    (0..points.len())
+        .map(|i| {
+            let mut best = Real::INFINITY;
+            tree.nearest(0, points.len(), &points[i], i, &mut best);
+            best
+        })
+        .collect()
+}
+
+/// Orders `index` as an implicit k-d tree: the median of each range at its
+/// middle, split on the axis stored at the same place of `axes`.
+fn build_kd(points: &[Point3], index: &mut [usize], axes: &mut [u8]) {
+    if index.len() <= 1 {
+        return;
+    }
+    let (lo, hi) = index.iter().fold(
+        (
+            Vec3::repeat(Real::INFINITY),
+            Vec3::repeat(Real::NEG_INFINITY),
+        ),
+        |(lo, hi), &i| (lo.inf(&points[i].coords), hi.sup(&points[i].coords)),
+    );
+    let axis = (hi - lo).imax();
+    let mid = index.len() / 2;
+    index.select_nth_unstable_by(mid, |&a, &b| points[a][axis].total_cmp(&points[b][axis]));
+    axes[mid] = axis as u8;
+    let (left, right) = index.split_at_mut(mid);
+    let (left_axes, right_axes) = axes.split_at_mut(mid);
+    build_kd(points, left, left_axes);
+    build_kd(points, &mut right[1..], &mut right_axes[1..]);
+}
+
+/// An implicit k-d tree over `points` built by [`build_kd`].
+struct KdTree<'a> {
+    points: &'a [Point3],
+    index: &'a [usize],
+    axes: &'a [u8],
+}
+
+impl KdTree<'_> {
+    /// Lowers `best` to the distance from `q` to the nearest point of the
+    /// range `start..end` other than the point `skip`.
+    fn nearest(&self, start: usize, end: usize, q: &Point3, skip: usize, best: &mut Real) {
+        if start >= end {
+            return;
+        }
+        let mid = start + (end - start) / 2;
+        let i = self.index[mid];
+        if i != skip {
+            *best = best.min((self.points[i] - q).norm());
+        }
+        if end - start == 1 {
+            return;
+        }
+        let axis = self.axes[mid] as usize;
+        let diff = q[axis] - self.points[i][axis];
+        let (near, far) = if diff < 0.0 {
+            ((start, mid), (mid + 1, end))
+        } else {
+            ((mid + 1, end), (start, mid))
+        };
+        self.nearest(near.0, near.1, q, skip, best);
+        if diff.abs() < *best {
+            self.nearest(far.0, far.1, q, skip, best);
+        }
+    }
+}
+
+/// The `k` nearest other points of each point (kiddo's immutable k-d
+/// tree, queries in parallel, ordered collect): flat rows, nearest first,
+/// ties by index.
+pub(crate) struct Knn {
+    k: usize,
+    index: Vec<usize>,
+    distance: Vec<Real>,
+}
+
+impl Knn {
+    /// The `k` nearest others of each of `points` (fewer when there are at
+    /// most `k` points). Exact duplicates count as neighbours at distance 0.
+    pub(crate) fn new(points: &[Point3], k: usize) -> Knn {
+        let k = k.min(points.len().saturating_sub(1));
+        let entries: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
+        let rows: Vec<Vec<(Real, usize)>> = match (
+            NonZeroUsize::new(k + 1),
+            ImmutableKdTree::<Real, 3>::new_from_slice(&entries),
+        ) {
+            (Some(want), Ok(tree)) => entries
+                .par_iter()
+                .enumerate()
+                .map(|(i, q)| {
+                    let mut row: Vec<(Real, usize)> = tree
+                        .query(q)
+                        .nearest_n::<SquaredEuclidean<Real>>(want)
+                        .execute()
+                        .into_iter()
+                        .map(|r| (r.distance, r.item as usize))
+                        .filter(|&(_, j)| j != i)
+                        .collect();
+                    // Exact distances, deterministic ties.
+                    row.iter_mut()
+                        .for_each(|(d, j)| *d = (points[*j] - points[i]).norm());
+                    row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                    row.truncate(k);
+                    row
+                })
+                .collect(),
+            _ => vec![Vec::new(); points.len()],
+        };
+        let k = rows.iter().map(Vec::len).min().unwrap_or(0);
+        let mut index = Vec::with_capacity(k * points.len());
+        let mut distance = Vec::with_capacity(k * points.len());
+        for row in rows {
+            for &(d, j) in &row[..k] {
+                index.push(j);
+                distance.push(d);
+            }
+        }
+        Knn { k, index, distance }
+    }
+
+    /// Number of neighbours per point.
+    pub(crate) fn k(&self) -> usize {
+        self.k
+    }
+
+    /// The neighbours of point `i`, nearest first.
+    pub(crate) fn neighbours(&self, i: usize) -> &[usize] {
+        &self.index[i * self.k..(i + 1) * self.k]
+    }
+
+    /// The distance from each point to its `m`-th nearest other point
+    /// (`1 <= m <= k`).
+    pub(crate) fn distances_to(&self, m: usize) -> Vec<Real> {
+        self.distance
+            .chunks(self.k.max(1))
+            .map(|row| row[m - 1])
+            .collect()
+    }
+}
+
+/// Half pair list of `points` within `radius`.
+pub(super) fn pairs(points: &[Point3], radius: Real) -> PairList {
+    let mut half = PairList::new();
+    search(NeighbourBackend::CellList, points, radius, &mut half);
+    half
+}
+
+/// Median over the points of the distance to the nearest other point (0
+/// for a point with a duplicate), by a k-d tree over the distinct points.
+pub(crate) fn median_nearest_distance(points: &[Point3]) -> Result<Real, FitError> {
+    let distinct = distinct_points(points);
+    if distinct.len() < 2 {
+        return Err(FitError::Input(
+            "all samples coincide: no spacing can be estimated".into(),
+        ));
+    }
+    let nearest = nearest_distances(&distinct);
+    let mut count: HashMap<[u64; 3], usize> = HashMap::new();
+    for p in points {
+        *count.entry(bits(p)).or_default() += 1;
+    }
+    let all: Vec<Real> = distinct
+        .iter()
+        .zip(nearest)
+        .flat_map(|(p, d)| {
+            let k = count.get(&bits(p)).copied().unwrap_or(1);
+            std::iter::once(if k > 1 { 0.0 } else { d }).chain(std::iter::repeat_n(0.0, k - 1))
+        })
+        .collect();
+    let h = median_of(all);
+    if !(h.is_finite() && h > 0.0) {
+        return Err(FitError::Input(format!(
+            "the median nearest-sample distance is {h} (duplicate samples?): pass a spacing"
+        )));
+    }
+    Ok(h)
+}
+
+/// Indices of the points kept when each point within `dist` of an earlier
+/// kept point is merged into it.
+pub(super) fn merge_close(points: &[Point3], dist: Real) -> Vec<usize> {
+    let mut grid = Grid::new(&[], dist);
+    let mut kept = Vec::new();
+    for (k, p) in points.iter().enumerate() {
+        if grid.nearest_within(p, dist).is_none() {
+            grid.insert(*p);
+            kept.push(k);
+        }
+    }
+    kept
+}
+
+/// Mean distance between points and their neighbours within `ring`, when
+/// at least half of the points have one; otherwise 1 (the points are
+/// farther apart than the unit spacing, and the few close pairs would bias
+/// the mean up to `ring`).
+pub(super) fn first_ring_mean(points: &[Point3], ring: Real) -> Real {
+    let half = pairs(points, ring);
+    let mut has = vec![false; points.len()];
+    let (sum, count) = half.iter_pairs().fold((0.0, 0usize), |(s, c), (i, j)| {
+        has[i] = true;
+        has[j] = true;
+        (s + (points[i] - points[j]).norm(), c + 1)
+    });
+    if 2 * has.iter().filter(|&&h| h).count() < points.len() {
+        1.0
+    } else {
+        sum / count as Real
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_spacing_of_a_grid() {
+        let pts: Vec<Point3> = (0..100)
+            .map(|k| Point3::new((k % 10) as Real * 0.3, (k / 10) as Real * 0.3, 0.0))
+            .collect();
+        assert!((median_nearest_distance(&pts).unwrap() - 0.3).abs() < 1e-12);
+    }
+
+    /// Pseudo-random points (a fixed LCG) in a box of side `size`.
+    fn scattered(n: usize, size: Real) -> Vec<Point3> {
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as Real / (1u64 << 53) as Real * size
+        };
+        (0..n)
+            .map(|_| Point3::new(next(), next(), next()))
+            .collect()
+    }
+
+    /// The k-d tree's nearest distances equal brute force, also on planar
+    /// data (ties on one axis) and with a far outlier.
+    #[test]
+    fn kd_tree_nearest_distances_match_brute_force() {
+        let mut sets = vec![scattered(500, 1.0)];
+        let mut plane = scattered(300, 1.0);
+        plane.iter_mut().for_each(|p| p.z = 0.0);
+        sets.push(plane);
+        let mut outlier = scattered(100, 1e-3);
+        outlier.push(Point3::new(1e3, 0.0, 0.0));
+        sets.push(outlier);
+        for pts in sets {
+            let fast = nearest_distances(&pts);
+            for (i, p) in pts.iter().enumerate() {
+                let slow = pts
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != i)
+                    .map(|(_, q)| (q - p).norm())
+                    .fold(Real::INFINITY, Real::min);
+                assert_eq!(fast[i], slow, "point {i}");
+            }
+        }
+    }
+
+    /// Duplicates count as nearest distance 0 in the scene's spacing
+    /// estimate; `-0` equals `+0`; all coincident is an error.
+    #[test]
+    fn distinct_points_and_duplicates() {
+        let pts = vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(-0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(3.0, 0.0, 0.0),
+        ];
+        assert_eq!(distinct_points(&pts).len(), 3);
+        // Nearest: 0, 0, 1, 2: median (index 2 of 4) is 1.
+        assert_eq!(median_nearest_distance(&pts).unwrap(), 1.0);
+        let same = vec![Point3::new(1.0, 2.0, 3.0); 5];
+        assert!(median_nearest_distance(&same).is_err());
+    }
+}
