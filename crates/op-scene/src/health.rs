@@ -1,12 +1,12 @@
 //! The health report of a run: what a user must know before trusting
 //! exit 0.
 //!
-//! The runner ([`crate::run`]) watches every frame and writes what it saw
+//! The runner ([`crate::run()`]) watches every frame and writes what it saw
 //! into `summary.json`:
 //!
 //! - **pieces**: the connected components of each object's particles, two
 //!   particles joined when they are closer than the object material's
-//!   interaction range ([`op_dynamics::PreparedMaterial::cutoff`]), at
+//!   interaction range ([`op_dynamics::interactions::PreparedMaterial::cutoff`]), at
 //!   frame 0 and at the last frame. An object that ends in more pieces than
 //!   it started with broke (intended for tearing scenes, which say so in
 //!   their header; a warning either way, with the count).

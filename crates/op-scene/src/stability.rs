@@ -134,7 +134,7 @@ fn sample_scene(scene: &Scene) -> Scene {
     s
 }
 
-/// The bounded sample of a scene ([`sample_scene`], built and trimmed) and
+/// The bounded sample of a scene (see the module docs: built and trimmed) and
 /// its stable-step estimate: what `opsim check` reports without building
 /// the whole scene.
 pub struct Sample {

@@ -1,4 +1,4 @@
-//! The scene's stages (op-dynamics [`Driver`] stages acting on a
+//! The scene's stages (op-dynamics [`op_dynamics::driver::Driver`] stages acting on a
 //! [`SceneState`]), in the order they run:
 //!
 //! 1. [`FitRelease`] (edit): frees a fit's samples at their release time

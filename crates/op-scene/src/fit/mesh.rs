@@ -8,7 +8,7 @@ use op_dynamics::{Point3, Real, Vec3};
 use super::FitError;
 
 /// A triangulated particle surface (seed 000 §5) and its distance to the
-/// data it interpolates: what [`fit`] reports, and what the fit scenes'
+/// data it interpolates: what [`super::fit`] reports, and what the fit scenes'
 /// figure tests measure on a run's final particles.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceMesh {

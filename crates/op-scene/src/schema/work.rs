@@ -230,7 +230,7 @@ impl Scene {
             }
             if let Some(skin) = &o.skin {
                 let nodes = (extent + 2.0 * skin.radius) / skin.cell_size + 3.0;
-                if !(nodes <= MAX_SKIN_NODES_PER_AXIS) {
+                if nodes.is_nan() || nodes > MAX_SKIN_NODES_PER_AXIS {
                     return Err(SceneError::value(
                         file,
                         format!("{path}.skin.cell_size"),
@@ -253,7 +253,7 @@ impl Scene {
             if let Ok(shape) = t.shape.build() {
                 let aabb = shape.compute_local_aabb();
                 let size = (aabb.maxs - aabb.mins).length() as Real;
-                if !t.shape.is_unbounded() && !(size <= max) {
+                if !t.shape.is_unbounded() && (size.is_nan() || size > max) {
                     return Err(SceneError::value(
                         file,
                         format!("tools[{k}].shape"),
@@ -269,7 +269,7 @@ impl Scene {
             for (j, f) in t.path.keyframes.iter().enumerate() {
                 check(format!("tools[{k}].path[{j}].position"), &f.position)?;
                 let angle = f.rotation.iter().map(|c| c * c).sum::<Real>().sqrt();
-                if !(angle <= MAX_ROTATION) {
+                if angle.is_nan() || angle > MAX_ROTATION {
                     return Err(SceneError::value(
                         file,
                         format!("tools[{k}].path[{j}].rotation"),
