@@ -148,7 +148,11 @@ pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    if let Some(v) = bins.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                    if let Some(v) = bins.get(&[
+                        k[0].saturating_add(dx),
+                        k[1].saturating_add(dy),
+                        k[2].saturating_add(dz),
+                    ]) {
                         for &t in v {
                             best = best.min(tri_distance(p, t));
                         }

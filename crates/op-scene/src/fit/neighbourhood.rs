@@ -80,7 +80,11 @@ impl Grid {
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    let Some(v) = self.map.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
+                    let Some(v) = self.map.get(&[
+                        k[0].saturating_add(dx),
+                        k[1].saturating_add(dy),
+                        k[2].saturating_add(dz),
+                    ]) else {
                         continue;
                     };
                     for &(q, i) in v {
