@@ -619,19 +619,7 @@ pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
 mod tests {
     use super::*;
 
-    /// Pseudo-random points (a fixed LCG) in a box of side `size`.
-    fn scattered(n: usize, size: Real) -> Vec<Point3> {
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as Real / (1u64 << 53) as Real * size
-        };
-        (0..n)
-            .map(|_| Point3::new(next(), next(), next()))
-            .collect()
-    }
+    use crate::fit::shapes::scattered;
 
     /// A spacing is bounded by the diagonal and by the particle limit, and
     /// the error names both bounds.

@@ -215,6 +215,21 @@ fn project(p: &Point3, f: fn(&Point3) -> Real) -> Point3 {
     q
 }
 
+/// `n` pseudo-random points (a fixed linear congruential sequence, the same
+/// every call) in the box `[0, size]³`: unit tests' scattered data.
+pub fn scattered(n: usize, size: Real) -> Vec<Point3> {
+    let mut state = 12345u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as Real / (1u64 << 53) as Real * size
+    };
+    (0..n)
+        .map(|_| Point3::new(next(), next(), next()))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -249,19 +249,7 @@ mod tests {
         assert!((median_nearest_distance(&pts).unwrap() - 0.3).abs() < 1e-12);
     }
 
-    /// Pseudo-random points (a fixed LCG) in a box of side `size`.
-    fn scattered(n: usize, size: Real) -> Vec<Point3> {
-        let mut state = 12345u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as Real / (1u64 << 53) as Real * size
-        };
-        (0..n)
-            .map(|_| Point3::new(next(), next(), next()))
-            .collect()
-    }
+    use crate::fit::shapes::scattered;
 
     /// The k-d tree's nearest distances equal brute force, also on planar
     /// data (ties on one axis) and with a far outlier.
