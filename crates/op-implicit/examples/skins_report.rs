@@ -17,7 +17,6 @@
 
 use op_dynamics::{Point3, Quat, Real, Vec3};
 use op_implicit::{polygonize_with_stats, Field, PolygonizeParams, Primitive};
-use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -51,21 +50,10 @@ struct Tris {
 }
 
 impl Tris {
-    /// Every directed edge once and its reverse once, no repeated vertex
-    /// in a triangle: closed, edge-manifold, consistently oriented.
+    /// Closed, edge-manifold, consistently oriented
+    /// ([`op_implicit::is_closed_oriented_manifold`]).
     fn closed_manifold(&self) -> bool {
-        let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
-        for t in &self.triangles {
-            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
-                return false;
-            }
-            for k in 0..3 {
-                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
-            }
-        }
-        directed
-            .iter()
-            .all(|(&(a, b), &n)| n == 1 && directed.get(&(b, a)) == Some(&1))
+        op_implicit::is_closed_oriented_manifold(&self.triangles)
     }
 
     /// Euler characteristic V - E + F over the referenced vertices.

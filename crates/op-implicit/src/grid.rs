@@ -45,8 +45,11 @@ impl CellGrid {
         let dims_for = |cell: Real| -> [usize; 3] {
             [0, 1, 2].map(|k| ((extent[k] / cell).floor() as usize + 1).max(1))
         };
+        // Saturating: tiny primitives in a large extent ask for more cells
+        // than a usize counts, before the loop coarsens the grid.
+        let cells = |d: &[usize; 3]| d.iter().fold(1usize, |a, &n| a.saturating_mul(n));
         let mut dims = dims_for(cell);
-        while dims.iter().product::<usize>() > budget {
+        while cells(&dims) > budget {
             cell *= 1.5;
             dims = dims_for(cell);
         }
@@ -110,5 +113,23 @@ impl CellGrid {
         }
         let cell = (idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0];
         &self.items[self.starts[cell] as usize..self.starts[cell + 1] as usize]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Primitives far smaller than their extent (a skin radius of 1e-320,
+    /// found by the fuzz test, seed 7) coarsen the grid instead of
+    /// overflowing its cell count.
+    #[test]
+    fn tiny_spheres_in_a_large_extent_do_not_overflow() {
+        let spheres = vec![
+            (Point3::new(0.0, 0.0, 0.0), 1e-320),
+            (Point3::new(10.0, 10.0, 10.0), 1e-320),
+        ];
+        let grid = CellGrid::new(&spheres);
+        assert!(grid.dims.iter().product::<usize>() <= MAX_CELLS_PER_SPHERE * 2 + 1024);
     }
 }

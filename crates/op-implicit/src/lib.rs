@@ -47,8 +47,8 @@ pub use implicit_contact::{
 };
 pub use kernel::{iso_radius, ISO};
 pub use polygonize::{
-    polygonize, polygonize_field, polygonize_region, polygonize_with_stats, Mesh, PolygonizeParams,
-    PolygonizeStats,
+    is_closed_oriented_manifold, polygonize, polygonize_field, polygonize_region,
+    polygonize_with_stats, Mesh, PolygonizeParams, PolygonizeStats,
 };
 pub use primitives::{PosedPrimitive, Primitive, Shape};
 pub use skin::Skin;

@@ -91,6 +91,18 @@ impl SkinSpec {
     pub(crate) fn validate(&self, file: &str, path: &str) -> Result<(), SceneError> {
         positive(file, &format!("{path}.radius"), self.radius)?;
         positive(file, &format!("{path}.cell_size"), self.cell_size)?;
+        if self.radius < self.cell_size {
+            return Err(SceneError::value(
+                file,
+                format!("{path}.radius"),
+                crate::error::short(self.radius),
+                &format!(
+                    "must be at least the cell size {} (a skin thinner than a cell \
+                     cannot be polygonized)",
+                    crate::error::short(self.cell_size)
+                ),
+            ));
+        }
         if !(self.stiffness.is_finite() && self.stiffness >= 0.0) {
             return Err(SceneError::value(
                 file,

@@ -55,6 +55,25 @@ impl PolygonizeParams {
     }
 }
 
+/// Whether triangles (vertex indices) form a closed, edge-manifold,
+/// consistently oriented surface: every directed edge occurs exactly once
+/// and its reverse exactly once, and no triangle repeats a vertex. Any
+/// mesh's check, also one this crate did not make ([`Mesh`] uses it).
+pub fn is_closed_oriented_manifold(triangles: &[[u32; 3]]) -> bool {
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in triangles {
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            return false;
+        }
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+        }
+    }
+    directed
+        .iter()
+        .all(|(&(a, b), &n)| n == 1 && directed.get(&(b, a)) == Some(&1))
+}
+
 /// A triangle mesh: vertex positions and unit normals (same length), and
 /// counter-clockwise triangles seen from outside.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -103,18 +122,7 @@ impl Mesh {
     /// traverse it in opposite directions), and no triangle repeats a
     /// vertex.
     pub fn is_closed_oriented_manifold(&self) -> bool {
-        let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
-        for t in &self.triangles {
-            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
-                return false;
-            }
-            for k in 0..3 {
-                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
-            }
-        }
-        directed
-            .iter()
-            .all(|(&(a, b), &n)| n == 1 && directed.get(&(b, a)) == Some(&1))
+        is_closed_oriented_manifold(&self.triangles)
     }
 }
 
