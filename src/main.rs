@@ -64,8 +64,9 @@ enum Command {
         #[arg(long)]
         no_work_limits: bool,
         /// Largest number of particle-steps (particles times steps) the run
-        /// may take; a scene that needs more is refused before it starts.
-        /// Default: 1e12.
+        /// may take, and 30 times as many pair-steps (interacting pairs
+        /// times steps); a scene that needs more is refused before it
+        /// starts. Default: 1e12.
         #[arg(long)]
         max_particle_steps: Option<f64>,
         /// Print the seconds spent in each stage of the step at the end.
@@ -285,7 +286,7 @@ fn limits(no_work_limits: bool, max_particle_steps: Option<f64>) -> Result<op_sc
         if m.is_nan() || m <= 0.0 {
             return Err(anyhow!("--max-particle-steps {m}: must be > 0"));
         }
-        limits.max_particle_steps = m;
+        limits = limits.with_particle_steps(m);
     }
     Ok(limits)
 }

@@ -418,6 +418,26 @@ fn values_without_a_finite_run_are_refused() {
         assert!(msg.len() < 600, "case {k}: long message: {msg}");
         assert!(!msg.contains("0000000000"), "case {k}: long number: {msg}");
     }
+    // Pair work is bounded too: a torus shell packed at a tenth of its
+    // material's cut-off has hundreds of neighbours per particle (1.7e8
+    // particle-steps pass 1e9; about 1.7e11 pair-steps do not pass 3e10).
+    let torus = std::fs::read_to_string(repo().join("scenes/torus_shell.ron")).unwrap();
+    let dense = scene_file(
+        &dir,
+        "dense.ron",
+        &torus.replace("spacing: 1)", "spacing: 0.1)"),
+    );
+    let o = opsim(
+        &[
+            "check",
+            dense.to_str().unwrap(),
+            "--max-particle-steps",
+            "1e9",
+        ],
+        &dir,
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("pair-steps"), "{}", text(&o));
     // The documented particle limit is checked without making the
     // particles: `check` of ten million is as quick as of ten.
     let big = scene_file(

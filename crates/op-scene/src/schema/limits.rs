@@ -25,6 +25,11 @@ pub const MAX_SKIN_NODES_PER_AXIS: Real = 512.0;
 /// about `2 conduction dt` times the neighbour weights sub-steps per step.
 pub const MAX_CONDUCTION_STEP: Real = 100.0;
 
+/// Pair interactions a particle-step may cost within the default limits:
+/// a hexagonal sheet at its rest spacing with a cut-off of 2.5 spacings
+/// has about 20 neighbours per particle.
+pub const PAIRS_PER_PARTICLE_STEP: Real = 30.0;
+
 /// Bounds on the work a scene may ask for.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WorkLimits {
@@ -34,6 +39,14 @@ pub struct WorkLimits {
     /// Largest number of particle-steps (particles times steps). Default:
     /// 1e12 (about a day on this project's reference machine).
     pub max_particle_steps: Real,
+    /// Largest estimated number of pair-steps (interacting pairs times
+    /// steps): particles packed far closer than their material's cut-off
+    /// each interact with many neighbours, so particle-steps alone do not
+    /// bound the work. Estimated per object from its generator's spacing
+    /// and dimension (chains 1, sheets and shells 2) and its material's
+    /// interaction range; points files and lists are not estimated.
+    /// Default: [`PAIRS_PER_PARTICLE_STEP`] times `max_particle_steps`.
+    pub max_pair_steps: Real,
     /// Largest number of frames. Default: 1e6.
     pub max_frames: Real,
     /// Largest `creation.max_particles`. Default: 1e7.
@@ -45,6 +58,7 @@ impl Default for WorkLimits {
         WorkLimits {
             max_steps: 1e8,
             max_particle_steps: 1e12,
+            max_pair_steps: PAIRS_PER_PARTICLE_STEP * 1e12,
             max_frames: 1e6,
             max_created: 1e7,
         }
@@ -52,12 +66,21 @@ impl Default for WorkLimits {
 }
 
 impl WorkLimits {
+    /// These limits with `max_particle_steps` set to `n`, and the pair-step
+    /// limit with it ([`PAIRS_PER_PARTICLE_STEP`] pairs per particle-step).
+    pub fn with_particle_steps(mut self, n: Real) -> Self {
+        self.max_particle_steps = n;
+        self.max_pair_steps = PAIRS_PER_PARTICLE_STEP * n;
+        self
+    }
+
     /// No work limit (`--no-work-limits`): only what a finite run needs is
     /// checked.
     pub fn unlimited() -> Self {
         WorkLimits {
             max_steps: Real::INFINITY,
             max_particle_steps: Real::INFINITY,
+            max_pair_steps: Real::INFINITY,
             max_frames: Real::INFINITY,
             max_created: Real::INFINITY,
         }

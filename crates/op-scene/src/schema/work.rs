@@ -43,6 +43,57 @@ impl Scene {
         }
     }
 
+    /// Interacting pairs (each counted once) estimated from each lattice
+    /// generator's count, spacing and dimension and its material's
+    /// interaction range: a chain has `range / spacing` neighbours per
+    /// particle on each side, a hexagonal sheet or shell
+    /// `π range² / (0.866 spacing²)` within the range. Points files and
+    /// lists count one pair per particle.
+    pub(crate) fn estimated_pairs(&self) -> Real {
+        self.objects
+            .iter()
+            .map(|o| {
+                let range = self
+                    .materials
+                    .get(&o.material)
+                    .and_then(|m| m.prepare().ok())
+                    .map_or(0.0, |m| m.cutoff());
+                let (count, spacing, dim) = match &o.generator {
+                    Generator::Spiral { count, spacing, .. }
+                    | Generator::Chain { count, spacing, .. } => (*count as Real, *spacing, 1),
+                    Generator::HexSheet {
+                        nx, ny, spacing, ..
+                    } => ((nx * ny) as Real, *spacing, 2),
+                    Generator::SphereShell {
+                        radius, spacing, ..
+                    } => (
+                        4.0 * std::f64::consts::PI * (radius / spacing).powi(2),
+                        *spacing,
+                        2,
+                    ),
+                    Generator::TorusShell {
+                        major,
+                        minor,
+                        spacing,
+                        ..
+                    } => (
+                        4.0 * std::f64::consts::PI.powi(2) * major * minor / spacing.powi(2),
+                        *spacing,
+                        2,
+                    ),
+                    Generator::Points { .. } | Generator::List { .. } => return 0.0,
+                };
+                let ratio = range / spacing;
+                let per_particle = if dim == 1 {
+                    ratio
+                } else {
+                    0.5 * std::f64::consts::PI * ratio * ratio / 0.866
+                };
+                count * per_particle.max(1.0)
+            })
+            .sum()
+    }
+
     /// Checks the run's size against [`Scene::limits`] and the lengths
     /// against the scene's length scale; `total` is the particle count.
     pub(crate) fn validate_work(
@@ -120,6 +171,23 @@ impl Scene {
                     short(steps.ceil()),
                     short(particle_steps),
                     short(lim.max_particle_steps)
+                ),
+            ));
+        }
+        let pair_steps = steps * self.estimated_pairs();
+        if pair_steps > lim.max_pair_steps {
+            return Err(SceneError::value(
+                file,
+                "world.duration",
+                short(w.duration),
+                &format!(
+                    "makes {} steps of about {} interacting pairs (particles packed closely \
+                     for their material's cut-off), {} pair-steps, more than the limit of {} \
+                     {flag}",
+                    short(steps.ceil()),
+                    short(self.estimated_pairs().round()),
+                    short(pair_steps),
+                    short(lim.max_pair_steps)
                 ),
             ));
         }
