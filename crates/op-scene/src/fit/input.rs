@@ -159,12 +159,7 @@ pub(super) fn median_of(mut v: Vec<Real>) -> Real {
 /// principal axis through their mean): their largest distance from it if
 /// so.
 pub(super) fn collinear_within(points: &[Point3], tolerance: Real) -> Option<Real> {
-    let mean = points.iter().fold(Vec3::zeros(), |s, p| s + p.coords) / points.len() as Real;
-    let mut cov = op_dynamics::Mat3::zeros();
-    for p in points {
-        let d = p.coords - mean;
-        cov += d * d.transpose();
-    }
+    let (mean, cov) = super::normals::covariance(points.iter());
     let eig = cov.symmetric_eigen();
     let (k, _) = eig
         .eigenvalues

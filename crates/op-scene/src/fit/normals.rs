@@ -74,16 +74,7 @@ pub(crate) fn knn_normals(points: &[Point3], knn: &Knn) -> Vec<Vec3> {
 pub(crate) fn curve_like_share(points: &[Point3], knn: &Knn) -> Real {
     let curve = (0..points.len())
         .filter(|&i| {
-            let row = knn.neighbours(i);
-            let mean = row
-                .iter()
-                .fold(points[i].coords, |s, &j| s + points[j].coords)
-                / (row.len() + 1) as Real;
-            let mut cov = op_dynamics::Mat3::zeros();
-            for &k in std::iter::once(&i).chain(row) {
-                let d = points[k].coords - mean;
-                cov += d * d.transpose();
-            }
+            let (_, cov) = neighbourhood_covariance(points, i, knn.neighbours(i));
             let mut e: Vec<Real> = cov.symmetric_eigenvalues().iter().copied().collect();
             e.sort_by(|a, b| b.total_cmp(a));
             e[1] < 0.1 * e[0]
@@ -92,17 +83,35 @@ pub(crate) fn curve_like_share(points: &[Point3], knn: &Knn) -> Real {
     curve as Real / points.len().max(1) as Real
 }
 
-/// The least-variance direction of `points[i]` and `points[row]`.
-fn pca_normal(points: &[Point3], i: usize, row: &[usize]) -> Vec3 {
-    let mean = row
-        .iter()
-        .fold(points[i].coords, |s, &j| s + points[j].coords)
-        / (row.len() + 1) as Real;
+/// Mean and covariance (the sum of the outer products of the deviations)
+/// of `points`, summed in the order given.
+pub(super) fn covariance<'a>(
+    points: impl Iterator<Item = &'a Point3> + Clone,
+) -> (Vec3, op_dynamics::Mat3) {
+    let (sum, n) = points
+        .clone()
+        .fold((Vec3::zeros(), 0usize), |(s, n), p| (s + p.coords, n + 1));
+    let mean = sum / n.max(1) as Real;
     let mut cov = op_dynamics::Mat3::zeros();
-    for &k in std::iter::once(&i).chain(row) {
-        let d = points[k].coords - mean;
+    for p in points {
+        let d = p.coords - mean;
         cov += d * d.transpose();
     }
+    (mean, cov)
+}
+
+/// [`covariance`] of `points[i]` and its neighbours `points[row]`.
+fn neighbourhood_covariance(
+    points: &[Point3],
+    i: usize,
+    row: &[usize],
+) -> (Vec3, op_dynamics::Mat3) {
+    covariance(std::iter::once(&i).chain(row).map(|&k| &points[k]))
+}
+
+/// The least-variance direction of `points[i]` and `points[row]`.
+fn pca_normal(points: &[Point3], i: usize, row: &[usize]) -> Vec3 {
+    let (_, cov) = neighbourhood_covariance(points, i, row);
     let eig = cov.symmetric_eigen();
     let (k, _) = eig
         .eigenvalues
