@@ -102,12 +102,18 @@ pub trait Stage<C>: Send {
     /// When it runs.
     fn phase(&self) -> Phase;
 
-    /// Whether it runs before the next interval.
-    fn due(&self, world: &World, ctx: &C) -> bool;
+    /// Whether it runs before the next interval. Default: never (a
+    /// follower that only reacts through [`Stage::notify`] and
+    /// [`Stage::at_target`]).
+    fn due(&self, _world: &World, _ctx: &C) -> bool {
+        false
+    }
 
     /// The latest world time the world may reach before this stage must
-    /// run again (infinity: no constraint).
-    fn horizon(&self, world: &World, ctx: &C) -> Real;
+    /// run again. Default: infinity (no constraint).
+    fn horizon(&self, _world: &World, _ctx: &C) -> Real {
+        Real::INFINITY
+    }
 
     /// How far beyond [`Stage::horizon`] the interval may stretch when that
     /// reaches the target of [`Driver::advance_to`] (no sliver interval
@@ -121,7 +127,15 @@ pub trait Stage<C>: Send {
     /// Runs; `until` is the end of the coming interval (for a
     /// [`Phase::Edit`] stage, the target time: the interval is not known
     /// yet).
-    fn run(&mut self, world: &mut World, ctx: &mut C, until: Real) -> Result<Effects, StageError>;
+    /// Default: changes nothing.
+    fn run(
+        &mut self,
+        _world: &mut World,
+        _ctx: &mut C,
+        _until: Real,
+    ) -> Result<Effects, StageError> {
+        Ok(Effects::default())
+    }
 
     /// Told of the effects of the stages that ran before the interval.
     fn notify(

@@ -224,23 +224,6 @@ impl Stage<SceneState> for Skins {
         Phase::Edit
     }
 
-    fn due(&self, _world: &World, _ctx: &SceneState) -> bool {
-        false
-    }
-
-    fn horizon(&self, _world: &World, _ctx: &SceneState) -> Real {
-        Real::INFINITY
-    }
-
-    fn run(
-        &mut self,
-        _world: &mut World,
-        _ctx: &mut SceneState,
-        _until: Real,
-    ) -> Result<Effects, StageError> {
-        Ok(Effects::default())
-    }
-
     fn notify(
         &mut self,
         world: &World,
