@@ -103,6 +103,14 @@ enum Command {
         #[arg(long)]
         open: bool,
     },
+    /// Print the scene format as a JSON Schema (for editors that complete
+    /// and check JSON scenes), or with `--markdown` as the field reference
+    /// of `docs/scenes.md` (every field with type, unit, default, meaning).
+    Schema {
+        /// The Markdown field reference instead of the JSON Schema.
+        #[arg(long)]
+        markdown: bool,
+    },
     /// Render an OBJ frame, or a contact sheet of a run directory, to PNG.
     Render {
         /// An .obj file, or a run directory (its frames/ are used).
@@ -203,6 +211,15 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             spacing,
             open,
         }) => run_fit(&points, &out, spacing, open),
+        Some(Command::Schema { markdown }) => {
+            if markdown {
+                outln!("{}", op_scene::reference::field_reference().trim_end());
+            } else {
+                let schema = op_scene::reference::json_schema();
+                outln!("{}", serde_json::to_string_pretty(&schema)?);
+            }
+            Ok(())
+        }
         Some(Command::Render {
             input,
             out,

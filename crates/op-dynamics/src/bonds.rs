@@ -65,7 +65,7 @@ use crate::neighbours::{search, NeighbourBackend, PairList};
 use crate::particles::Particles;
 
 /// The bond rule of a material (see the [module docs](self)).
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct BondParams {
     /// Pairs within this distance when the world is built (or when one of

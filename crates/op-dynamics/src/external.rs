@@ -26,7 +26,7 @@ use crate::math::{Real, Vec3};
 /// that ends there and in none after. op-scene's force windows count from
 /// the end of the settle phase, so one starting at scene time 0 does not
 /// touch the settled state.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ForceWindow {
     /// Particle ids the force acts on (each gets the full force).
@@ -120,7 +120,7 @@ impl ForceWindow {
 }
 
 /// Global external actions and damping (seed 000 eq. 12-13).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ExternalParams {
     /// Gravity acceleration. Default: zero.

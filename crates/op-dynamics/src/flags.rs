@@ -3,7 +3,9 @@
 use serde::{Deserialize, Serialize};
 
 /// A small bit set of per-particle flags.
-#[derive(Copy, Clone, Default, PartialEq, Eq, Hash, Debug, Serialize, Deserialize)]
+#[derive(
+    Copy, Clone, Default, PartialEq, Eq, Hash, Debug, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(transparent)]
 pub struct Flags(u8);
 

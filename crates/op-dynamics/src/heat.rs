@@ -56,7 +56,7 @@ use crate::neighbours::PairList;
 use crate::tools::Tool;
 
 /// How heat moves in a world (seed 000 §6, §8).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct HeatParams {
     /// Conduction rate `c` between neighbours (>= 0, per unit time).
@@ -93,7 +93,7 @@ impl HeatParams {
 ///
 /// Strength `s(T) = 1 - (1 - residual) clamp(T / melting, 0, 1)`: full at
 /// `T <= 0`, falling linearly to `residual` at the melting temperature.
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct HeatResponse {
     /// Temperature at which the bonds are weakest, > 0.

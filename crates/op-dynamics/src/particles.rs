@@ -24,7 +24,7 @@ use crate::math::{tangent_axis, Point3, Quat, Real, Vec3};
 /// A hinge interacts completely with every standard particle; a standard
 /// particle of type `k` interacts completely with standard particles of the
 /// same `k` and with hinges; every other pair of the same object only repels.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum ParticleType {
     /// A standard particle of the given part number.
     Standard(u16),

@@ -84,7 +84,7 @@ use crate::particles::Particles;
 
 /// Plasticity of a material's remembered curvature (see the module docs).
 /// Needs the form term (`form > 0`) of the same material.
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Plasticity {
     /// Yield curvature `y` (1/length, finite, >= 0): a particle whose

@@ -21,7 +21,7 @@ use crate::tools::{Role, Tool, ToolParams, Tools};
 mod editing;
 
 /// Neighbour-list settings (seed 000 §4.2, DESIGN §3 "Neighbours").
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct NeighbourParams {
     /// Search structure for the per-step lists. Default: the measured
@@ -56,7 +56,7 @@ pub const MAX_SKIN: Real = 10.0;
 
 /// When a run is declared diverged (besides NaN / infinite values, which
 /// always are).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct DivergenceParams {
     /// Largest particle speed considered physical, > 0. Default: infinity.
@@ -72,7 +72,7 @@ impl Default for DivergenceParams {
 }
 
 /// Settings of a world.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct WorldParams {
     /// Time integration scheme. Default: velocity Verlet.

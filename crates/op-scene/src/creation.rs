@@ -40,7 +40,7 @@ use crate::schema::checks::positive;
 use crate::schema::FitSettings;
 
 /// The `creation` section of a scene: which rules, every how many steps.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CreationSettings {
     /// The rest spacing `r0` the rules' lengths are fractions of, > 0.

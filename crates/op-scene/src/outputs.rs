@@ -4,7 +4,9 @@
 use serde::{Deserialize, Serialize};
 
 /// How particles appear in the OBJ frames (seed 000 fig. 4).
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub enum ParticleOutput {
     /// Not written.
     None,
@@ -19,7 +21,7 @@ pub enum ParticleOutput {
 }
 
 /// The outputs a scene asks for.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Outputs {
     /// Particle geometry in each OBJ frame. Default: `Points`.

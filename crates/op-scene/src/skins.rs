@@ -51,7 +51,7 @@ use crate::schema::checks::positive;
 ///
 /// RON: `Square(half_side: 0.5)`, `Point`. JSON: `{"Square": {"half_side":
 /// 0.5}}`, `"Point"`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub enum SkinPrimitive {
     /// The square of seed 002 fig. 6: centred on the particle,
@@ -69,7 +69,7 @@ fn hundred() -> Real {
 }
 
 /// An object's implicit skin (seed 002 §6): one primitive per particle.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SkinSpec {
     /// The primitive attached to every particle. Required.

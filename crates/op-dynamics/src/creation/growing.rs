@@ -34,7 +34,7 @@ use crate::particles::{ParticleDesc, Particles};
 
 /// Parameters of the growing rule; lengths are fractions of `r0`, angles
 /// radians.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct GrowingParams {
     /// Neighbour radius, > 0. Default: 1.5 (the first ring of a hexagonal

@@ -37,7 +37,7 @@ use crate::neighbours::{search, NeighbourBackend, PairList};
 use crate::particles::Particles;
 
 /// Parameters of the merging rule, lengths as fractions of `r0`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MergingParams {
     /// Pairs closer than this merge, in (0, 1). Default: 0.3.

@@ -45,7 +45,7 @@ pub use merging::{Merge, MergingParams};
 pub use stretching::StretchingParams;
 
 /// The creation rules of a simulation.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CreationParams {
     /// Rest spacing `r0` (absolute length, > 0): every other length is a

@@ -46,7 +46,7 @@ use crate::neighbours::{search, NeighbourBackend, PairList};
 use crate::particles::{ParticleDesc, Particles};
 
 /// Parameters of the stretching rule, lengths as fractions of `r0`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct StretchingParams {
     /// Smallest pair distance that opens a gap, > 0. Default: 2.0.

@@ -43,7 +43,9 @@ use crate::math::{Real, Vec3};
 /// right after a rejection and a cut of at least 10% after each rejected
 /// attempt; a step clipped by the requested `dt` does not lower the next
 /// proposal.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(default, deny_unknown_fields)]
 pub struct AdaptiveParams {
     /// Relative tolerance (dimensionless) on positions, velocities and

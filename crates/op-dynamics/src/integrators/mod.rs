@@ -107,7 +107,9 @@ pub trait ForceField {
 }
 
 /// The time-stepping method.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 pub enum Scheme {
     /// Forward (explicit) Euler, the seeds' choice (seed 000 §4.1, after
     /// Press et al. 1988, "Numerical Recipes" §16.1): every update from the

@@ -85,7 +85,7 @@ pub const TABLE_ENERGY_TOLERANCE: Real = 1e-9;
 const MAX_TABLE_NODES: usize = 1_000_000;
 
 /// How the cohesion energy and force are evaluated.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum CohesionMode {
     /// Closed-form force, quadrature energy (reference; slower).
     Exact,
@@ -94,7 +94,7 @@ pub enum CohesionMode {
 }
 
 /// Parameters of the cohesion force (seed 002 §3).
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct CohesionParams {
     /// Scaling factor `E` (> 0): stiffness. Default: 200 (maximum

@@ -33,7 +33,7 @@ fn int_pow(mut x: Real, n: i32) -> Real {
 }
 
 /// Parameters of the Lennard-Jones spacing potential.
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct LennardJonesParams {
     /// Well depth `ε` (> 0): `U(r0) = -ε`. Default: 1.

@@ -26,7 +26,7 @@ use crate::plasticity::Plasticity;
 use serde::{Deserialize, Serialize};
 
 /// The interaction weights and parameters of a set of particles.
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Material {
     /// Spacing potential, or `None` for none. Default: cohesion with its

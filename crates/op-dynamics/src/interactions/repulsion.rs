@@ -14,7 +14,7 @@ use crate::math::Real;
 use serde::{Deserialize, Serialize};
 
 /// Parameters of the exponential repulsion.
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RepulsionParams {
     /// Energy `ε` at the contact distance (>= 0; 0 disables the

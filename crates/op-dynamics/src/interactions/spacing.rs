@@ -8,7 +8,7 @@ use crate::math::Real;
 use serde::{Deserialize, Serialize};
 
 /// Which spacing potential a material uses, with its parameters.
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum Spacing {
     /// Lennard-Jones `B/rⁿ - A/rᵐ` (seed 000 eq. 5).
     LennardJones(LennardJonesParams),

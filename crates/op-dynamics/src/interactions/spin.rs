@@ -24,7 +24,9 @@ use crate::math::{Real, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// Which spin potential to use.
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub enum SpinKind {
     /// `x² z` (seed 000 eq. 14).
     #[default]

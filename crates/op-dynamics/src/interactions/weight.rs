@@ -19,7 +19,7 @@ use crate::math::{Real, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// Shape of the orientation weight.
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub enum WeightShape {
     /// `K exp(-|r|²/2a²)`.
@@ -33,7 +33,7 @@ pub enum WeightShape {
 }
 
 /// Parameters of the orientation weight `ψ` (seed 000 eq. 10).
-#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct WeightParams {
     /// Amplitude `K` (> 0). Default: 1.

@@ -81,7 +81,9 @@ use crate::math::{Point3, Real};
 /// order, so it is the default. Both are 2-3x faster in Morton order than
 /// in random order: keep particles spatially sorted
 /// ([`spatial_order`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub enum NeighbourBackend {
     /// Sorted uniform cell list (cells >= radius, 27-cell stencil), parallel
     /// over particles. The default: fastest in the benchmark above.

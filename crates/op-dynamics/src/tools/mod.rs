@@ -36,7 +36,7 @@ pub use roles::Role;
 pub use shape::{parry_pose, ToolShape};
 
 /// A tool's description.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ToolParams {
     /// Name (for messages and outputs). Default: empty.

@@ -13,7 +13,7 @@ use crate::error::{self, ParamError};
 use crate::math::{Quat, Real, Vec3};
 
 /// A pose of the tool at a time.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Keyframe {
     /// Time of the keyframe.
@@ -29,7 +29,7 @@ pub struct Keyframe {
 
 /// The tool's motion: keyframes in increasing time. An empty path keeps
 /// the tool at the origin, unrotated; one keyframe keeps it there.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(transparent)]
 pub struct Path {
     /// Keyframes in strictly increasing time.

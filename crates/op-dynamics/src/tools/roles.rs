@@ -15,7 +15,7 @@ use crate::error::{self, ParamError};
 use crate::math::Real;
 
 /// A tool's role.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub enum Role {
     /// A solid obstacle: a penalty `E = k d² / 2` on the penetration

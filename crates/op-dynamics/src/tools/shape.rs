@@ -13,7 +13,7 @@ use crate::error::{self, ParamError};
 use crate::math::{Quat, Real, Vec3};
 
 /// A tool's shape in its own frame (the frame its path moves).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub enum ToolShape {
     /// The half-space below the plane through the origin with outward

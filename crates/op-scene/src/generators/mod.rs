@@ -55,7 +55,7 @@ impl Generated {
 }
 
 /// One explicit particle of [`Generator::List`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ListParticle {
     /// Position. Required.
@@ -80,7 +80,9 @@ fn plus_z() -> [Real; 3] {
 
 /// How the rest curvature of a [`Generator::Spiral`] varies along it, from
 /// `curvature_start` at the first particle to `curvature_end` at the last.
-#[derive(Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub enum CurvatureLaw {
     /// Linear in arc length: `κ(s) = κ_start + (κ_end - κ_start) s/L`.
     #[default]
@@ -92,7 +94,7 @@ pub enum CurvatureLaw {
 }
 
 /// How an object's particles are made.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub enum Generator {
     /// A planar curve integrated in arc length, `θ'(s) = κ(s)`, with the

@@ -42,7 +42,7 @@ use crate::error::SceneError;
 
 /// `creation.fit`: which object holds the samples, when they are
 /// released, open or closed data.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FitSettings {
     /// Name of the object whose particles are the samples. Required.

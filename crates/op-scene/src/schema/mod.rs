@@ -74,7 +74,7 @@ use crate::outputs::Outputs;
 use crate::skins::SkinSpec;
 
 /// A scene: what to simulate, for how long, and what to write.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Scene name: the summary's `scene` field and the default output
@@ -153,7 +153,7 @@ fn is_infinite(v: &Real) -> bool {
 }
 
 /// Time stepping, neighbour lists and global external actions.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct WorldSettings {
     /// Time integration scheme (`ExplicitEuler`, `SymplecticEuler`,
@@ -230,7 +230,7 @@ impl Default for WorldSettings {
 
 /// When a run is declared diverged (besides NaN / infinite values, which
 /// always are).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DivergenceSettings {
     /// Largest particle speed considered physical, > 0 (infinity disables
@@ -295,7 +295,7 @@ fn plus_z() -> [Real; 3] {
 
 /// One object: a set of particles made by a generator, sharing a material
 /// and an object id.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
     /// Object name, unique in the scene (OBJ object name, summary).
@@ -343,7 +343,7 @@ pub struct ObjectSpec {
 /// RON: `All`, `List([0, 5, 9])`, `Range(0, 10)`, `First(3)`, `Last(3)`.
 /// JSON: `"All"`, `{"List": [0, 5, 9]}`, `{"Range": [0, 10]}`,
 /// `{"First": 3}`, `{"Last": 3}`.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub enum Selection {
     /// Every particle.
@@ -423,7 +423,7 @@ impl Selection {
 
 /// Changes to some particles of an object, applied after generation in the
 /// order given. Unset fields leave the particles as they are.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Override {
     /// Which particles. Default: `All`.
@@ -456,7 +456,7 @@ pub struct Override {
 
 /// A force on some particles of an object over a time window (op-dynamics
 /// [`op_dynamics::ForceWindow`] over global particle ids).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ForceSpec {
     /// Name of the object. Required.
@@ -484,7 +484,7 @@ pub struct ForceSpec {
 /// objects without a skin, and on the skins of skinned objects (their skin
 /// samples inside the shape get a reaction `stiffness x depth` along its
 /// normal, seed 002 §6); attractors and movers act on particles.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ToolSpec {
     /// Name, for messages. Default: empty.
