@@ -330,9 +330,7 @@ fn strip_design_citations(s: &str) -> String {
         let before = out[..at].trim_end_matches([' ', '\n']);
         let (start, end) = if before.ends_with('(') && out[end..].starts_with(')') {
             (before.len() - 1, end + 1)
-        } else if out[end..].starts_with(": ") {
-            (at, end + 2)
-        } else if out[end..].starts_with(", ") {
+        } else if out[end..].starts_with(": ") || out[end..].starts_with(", ") {
             (at, end + 2)
         } else {
             (at, end)
