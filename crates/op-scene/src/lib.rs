@@ -13,6 +13,7 @@ pub mod fit;
 pub mod health;
 pub mod outputs;
 pub mod pointsets;
+pub mod presets;
 pub mod reference;
 pub mod render;
 pub mod run;

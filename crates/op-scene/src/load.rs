@@ -161,6 +161,7 @@ pub fn parse_unvalidated(text: &str, format: Format, origin: &str) -> Result<Sce
         })?,
     };
     scene.origin = origin.to_string();
+    crate::presets::resolve(&mut scene);
     Ok(scene)
 }
 

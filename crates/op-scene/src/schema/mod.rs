@@ -301,7 +301,10 @@ pub struct ObjectSpec {
     /// Object name, unique in the scene (OBJ object name, summary).
     /// Non-empty, no control characters. Required.
     pub name: String,
-    /// Name of its material: a key of [`Scene::materials`]. Required.
+    /// Name of its material: a key of [`Scene::materials`], or the name of
+    /// a preset ([`crate::presets`]: `cloth`, `elastic_shell`,
+    /// `shape_memory_wire`, `plastic_clay`; see `docs/units.md` for the
+    /// step and damping each was tested with). Required.
     pub material: String,
     /// How its particles are made. Required.
     pub generator: Generator,

@@ -249,8 +249,9 @@ impl Scene {
                 at("material"),
                 format!("{:?}", o.material),
                 &format!(
-                    "unknown material (defined materials: {})",
-                    quoted(self.materials.keys())
+                    "unknown material (defined materials: {}; presets: {})",
+                    quoted(self.materials.keys()),
+                    crate::presets::names()
                 ),
             ));
         }
