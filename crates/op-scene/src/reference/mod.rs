@@ -70,12 +70,11 @@ object with one key (`{\"HexSheet\": {\"nx\": 20, ...}}`), a unit variant a stri
 an absent option `null`.
 
 **Units.** The format has no fixed units: lengths (L), times (T), masses (M) and temperatures
-(Θ) are whatever the scene means them to be, consistently. The shipped scenes take the rest
-spacing of the particles as L = 1, a particle mass as M = 1 and a time in which the default
-cohesion oscillates about once as T = 1 (see `docs/units.md`). `×r0` means a multiple of the
-object's (or the creation rules') rest spacing; `1` means dimensionless; a force is M·L/T², an
+(Θ) are whatever the scene means them to be, consistently. Take the particle spacing as L = 1 and
+the particle mass as M = 1, as every default does; time then follows from the stiffnesses, and
+`docs/units.md` says how to choose a stable step, gravity and damping. `×r0` means a multiple of
+the object's (or the creation rules') rest spacing; `1` means dimensionless; a force is M·L/T², an
 energy M·L²/T², a linear stiffness M/T², a linear damping coefficient M/T.
-
 ";
 
 /// One section: a struct's field table, or an enum's variants.
