@@ -45,8 +45,9 @@ fn expected(text: &str) -> Vec<String> {
 
 #[test]
 fn shipped_scenes_run_without_unexpected_warnings() {
-    let mut scenes: Vec<PathBuf> = std::fs::read_dir(repo().join("scenes"))
-        .unwrap()
+    let mut scenes: Vec<PathBuf> = ["scenes", "scenes/cookbook"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(repo().join(d)).unwrap())
         .map(|e| e.unwrap().path())
         .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("ron" | "json")))
         .collect();

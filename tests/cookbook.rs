@@ -1,0 +1,271 @@
+//! The cookbook's scenes (`scenes/cookbook/`) each state one claim in their
+//! header (`// claim: ...`); these tests check it on the simulated state,
+//! frame by frame where the claim is about motion.
+
+mod figure_support;
+
+use std::path::Path;
+
+use figure_support::{build, components};
+use oriented_particles::op_dynamics::{Point3, Real, Vec3};
+use oriented_particles::op_scene::run::rest_shape_error;
+use oriented_particles::op_scene::{load_scene, BuiltScene, Scene};
+
+fn load(name: &str) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/cookbook/{name}.ron"));
+    load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// One frame of one object: positions and velocities.
+struct Frame {
+    x: Vec<Point3>,
+    v: Vec<Vec3>,
+    /// The runner's rest shape error (RMS distance to the rest shape after
+    /// the best rigid alignment, in rest spacings).
+    error: Real,
+}
+
+/// Runs `scene` frame by frame (after its settle phase) and records each
+/// object's particles at every frame.
+fn frames(scene: &Scene) -> (BuiltScene, Vec<Vec<Frame>>) {
+    let mut built = build(scene);
+    built.settle().expect("settles");
+    let t0 = built.settle;
+    let n = (built.duration * built.frame_rate).round() as usize;
+    let mut out: Vec<Vec<Frame>> = (0..built.objects.len()).map(|_| Vec::new()).collect();
+    for k in 0..=n {
+        built
+            .advance_to(t0 + k as Real / built.frame_rate)
+            .unwrap_or_else(|e| panic!("{}: {e}", scene.name));
+        let p = built.world.particles();
+        for (o, obj) in built.objects.iter().enumerate() {
+            let slots: Vec<usize> = obj.all_ids().filter_map(|id| p.slot_of(id)).collect();
+            out[o].push(Frame {
+                x: slots.iter().map(|&s| p.positions()[s]).collect(),
+                v: slots.iter().map(|&s| p.velocities()[s]).collect(),
+                error: rest_shape_error(&built, obj),
+            });
+        }
+    }
+    (built, out)
+}
+
+fn centroid(x: &[Point3]) -> Point3 {
+    Point3::from(x.iter().map(|p| p.coords).sum::<Vec3>() / x.len() as Real)
+}
+
+fn mean(v: &[Vec3]) -> Vec3 {
+    v.iter().sum::<Vec3>() / v.len() as Real
+}
+
+fn kinetic(f: &Frame) -> Real {
+    f.v.iter().map(|v| 0.5 * v.norm_squared()).sum()
+}
+
+/// The claim line of a cookbook scene's header.
+fn claim(name: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/cookbook/{name}.ron"));
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .find_map(|l| l.strip_prefix("// claim: "))
+        .unwrap_or_else(|| panic!("{name} states no claim"))
+        .to_string()
+}
+
+#[test]
+fn every_cookbook_scene_states_a_claim() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cookbook");
+    let mut n = 0;
+    for e in std::fs::read_dir(dir).unwrap() {
+        let name = e
+            .unwrap()
+            .path()
+            .file_stem()
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        assert!(!claim(&name).is_empty());
+        n += 1;
+    }
+    assert!(n >= 4, "{n} cookbook scenes");
+}
+
+/// `cloth_on_box`: on top, hanging over the four sides, one piece, at rest.
+#[test]
+fn cloth_rests_on_the_box_and_hangs_over_its_sides() {
+    println!("claim: {}", claim("cloth_on_box"));
+    let scene = load("cloth_on_box");
+    let (half, margin) = match (&scene.tools[0].shape, &scene.tools[0].role) {
+        (
+            oriented_particles::op_dynamics::tools::ToolShape::Cuboid { half_extents },
+            oriented_particles::op_dynamics::tools::Role::Obstacle { margin, .. },
+        ) => (*half_extents, *margin),
+        other => panic!("the box is a cuboid obstacle: {other:?}"),
+    };
+    let (_, frames) = frames(&scene);
+    let cloth = &frames[0];
+    let last = cloth.last().unwrap();
+    let top = half[2] + margin;
+    let on_top: Vec<&Point3> = last
+        .x
+        .iter()
+        .filter(|p| p.x.abs() < half[0] - 1.0 && p.y.abs() < half[1] - 1.0)
+        .collect();
+    let heights: Vec<Real> = on_top.iter().map(|p| p.z).collect();
+    let (lo, hi) = heights
+        .iter()
+        .fold((Real::MAX, Real::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+    println!(
+        "on top: {} particles at z {lo:.3}..{hi:.3} (top + margin {top})",
+        on_top.len()
+    );
+    assert!(on_top.len() > 100, "{} particles on top", on_top.len());
+    assert!(
+        lo > top - 0.15 && hi < top + 0.3,
+        "z {lo}..{hi} on top {top}"
+    );
+    for (axis, sign) in [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)] {
+        let hanging = last
+            .x
+            .iter()
+            .filter(|p| sign * p[axis] > half[axis] && p.z < top - 1.0)
+            .count();
+        println!("side {sign:+} axis {axis}: {hanging} particles hang below the top");
+        assert!(
+            hanging >= 10,
+            "side {sign:+} of axis {axis}: {hanging} hanging"
+        );
+    }
+    let c = centroid(&last.x);
+    assert!(
+        c.x.abs() < 1.0 && c.y.abs() < 1.0,
+        "the cloth slid: centroid {c}"
+    );
+    assert_eq!(components(&last.x, 1.5).len(), 1, "one piece");
+    let peak = cloth.iter().map(kinetic).fold(0.0, Real::max);
+    assert!(
+        kinetic(last) < 0.01 * peak,
+        "at rest: {} vs {peak}",
+        kinetic(last)
+    );
+}
+
+/// `wire_bend_release`: bent far from its rest shape, back below 0.01.
+#[test]
+fn wire_coils_back_after_release() {
+    println!("claim: {}", claim("wire_bend_release"));
+    let scene = load("wire_bend_release");
+    let (_, frames) = frames(&scene);
+    let worst = frames[0].iter().map(|f| f.error).fold(0.0, Real::max);
+    let end = frames[0].last().unwrap().error;
+    println!("rest shape error: worst {worst:.3}, final {end:.5}");
+    assert!(worst > 0.5, "the forces bend the wire: worst {worst}");
+    assert!(end < 0.01, "recovered: {end}");
+}
+
+/// Connected components of the graph joining points closer than `radius`:
+/// a component label per point.
+fn labels(points: &[Point3], radius: Real) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..points.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for i in 0..points.len() {
+        for j in i + 1..points.len() {
+            if (points[i] - points[j]).norm() < radius {
+                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    (0..points.len()).map(|i| root(&mut parent, i)).collect()
+}
+
+/// `sheet_tear`: two pieces, one in each hand.
+#[test]
+fn notched_sheet_tears_into_two_pieces_one_per_hand() {
+    println!("claim: {}", claim("sheet_tear"));
+    let scene = load("sheet_tear");
+    let (built, frames) = frames(&scene);
+    let last = frames[0].last().unwrap();
+    let t = built.world.time();
+    let hands: Vec<Point3> = built.tools[1..]
+        .iter()
+        .map(|tool| Point3::from(tool.pose(t).position))
+        .collect();
+    let label = labels(&last.x, 1.5);
+    let mut pieces: Vec<usize> = label.clone();
+    pieces.sort_unstable();
+    pieces.dedup();
+    let held: Vec<Vec<usize>> = hands
+        .iter()
+        .map(|h| {
+            let mut l: Vec<usize> = last
+                .x
+                .iter()
+                .zip(&label)
+                .filter(|(p, _)| (p.x - h.x).abs() < 0.8)
+                .map(|(_, &l)| l)
+                .collect();
+            l.sort_unstable();
+            l.dedup();
+            l
+        })
+        .collect();
+    let sizes: Vec<usize> = pieces
+        .iter()
+        .map(|&p| label.iter().filter(|&&l| l == p).count())
+        .collect();
+    println!("pieces {sizes:?}; held by the hands: {held:?}");
+    assert_eq!(pieces.len(), 2, "two pieces: {sizes:?}");
+    assert_eq!(held[0].len(), 1, "the left hand holds one piece");
+    assert_eq!(held[1].len(), 1, "the right hand holds one piece");
+    assert_ne!(held[0], held[1], "each hand holds its own piece");
+    assert!(
+        sizes.iter().all(|&s| s * 5 > last.x.len()),
+        "no shred: {sizes:?}"
+    );
+}
+
+/// `skinned_hit`: the sheet moves along the throw, the ball stays in front.
+#[test]
+fn skinned_ball_pushes_the_sheet_without_passing_through() {
+    println!("claim: {}", claim("skinned_hit"));
+    let scene = load("skinned_hit");
+    let (_, frames) = frames(&scene);
+    let (sheet, ball) = (&frames[0], &frames[1]);
+    let mut gap_min = Real::MAX;
+    for (s, b) in sheet.iter().zip(ball) {
+        // The sheet's plane is y = const: the ball's front particle stays
+        // on its side of the sheet's nearest particles.
+        let cs = centroid(&s.x);
+        let front = b.x.iter().map(|p| p.y).fold(Real::MIN, Real::max);
+        let sheet_near =
+            s.x.iter()
+                .filter(|p| (p.x - cs.x).abs() < 1.5 && (p.z - cs.z).abs() < 1.5)
+                .map(|p| p.y)
+                .fold(Real::MAX, Real::min);
+        gap_min = gap_min.min(sheet_near - front);
+    }
+    let push = centroid(&sheet.last().unwrap().x).y - centroid(&sheet[0].x).y;
+    let sheet_speed = mean(&sheet.last().unwrap().v).y;
+    println!(
+        "sheet moved {push:.3} along the throw (speed {sheet_speed:.3}); smallest gap {gap_min:.3}"
+    );
+    assert!(push > 0.5, "the sheet is pushed: {push}");
+    assert!(
+        gap_min > 0.2,
+        "the ball stays in front of the sheet: gap {gap_min}"
+    );
+    for (name, f) in [("sheet", sheet), ("ball", ball)] {
+        assert_eq!(
+            components(&f.last().unwrap().x, 1.5).len(),
+            1,
+            "{name} in one piece"
+        );
+    }
+}
