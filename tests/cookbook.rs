@@ -269,3 +269,20 @@ fn skinned_ball_pushes_the_sheet_without_passing_through() {
         );
     }
 }
+
+/// The scene shown in README.md is valid as printed (comments included).
+#[test]
+fn the_readme_scene_example_is_valid() {
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    let start = readme.find("```ron\n").expect("README shows a RON scene") + "```ron\n".len();
+    let len = readme[start..].find("```").unwrap();
+    let scene = oriented_particles::op_scene::parse_scene(
+        &readme[start..start + len],
+        oriented_particles::op_scene::Format::Ron,
+        "README.md",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.objects[0].material, "cloth");
+    assert!(scene.materials.contains_key("cloth"), "the preset resolves");
+}
