@@ -112,8 +112,14 @@ pub struct Primitive {
     /// The skeleton geometry in the primitive's frame.
     pub shape: Shape,
     /// Support radius `R` of the kernel, > 0: the field vanishes at scaled
-    /// distance `>= R` and the skin of an isolated primitive lies at `R/2`.
+    /// distance `>= R` and the skin of an isolated primitive of weight 1
+    /// lies at `R/2`.
     pub radius: Real,
+    /// Amplitude `w` of the kernel, > 0: the primitive's field is
+    /// `w f(d)`. Constructors set 1. A wider support with a weight below 1
+    /// blends neighbours more smoothly at the same skin size
+    /// ([`Primitive::weight_for_iso_distance`]).
+    pub weight: Real,
 }
 
 impl Primitive {
@@ -124,6 +130,7 @@ impl Primitive {
             rotation: Quat::identity(),
             shape: Shape::Point,
             radius,
+            weight: 1.0,
         }
     }
 
@@ -144,6 +151,7 @@ impl Primitive {
                 half_length: 0.5 * d.norm(),
             },
             radius,
+            weight: 1.0,
         }
     }
 
@@ -155,6 +163,7 @@ impl Primitive {
             rotation,
             shape: Shape::Rectangle { half_extents },
             radius,
+            weight: 1.0,
         }
     }
 
@@ -175,7 +184,23 @@ impl Primitive {
             rotation,
             shape: Shape::Ellipsoid { scales },
             radius,
+            weight: 1.0,
         }
+    }
+
+    /// The same primitive with amplitude `weight`.
+    pub fn with_weight(mut self, weight: Real) -> Self {
+        self.weight = weight;
+        self
+    }
+
+    /// The weight that puts the skin of an isolated primitive of support
+    /// `radius` at distance `distance` from its skeleton: `w f(distance) =
+    /// ISO`. With `distance = R/2` it is 1; a support `k` times wider at the
+    /// same skin distance takes `w = ISO / f(1/(2k))`, below 1 (Wyvill et
+    /// al.'s kernel, [`kernel`]). `distance` must be below `radius`.
+    pub fn weight_for_iso_distance(distance: Real, radius: Real) -> Real {
+        kernel::ISO / kernel::value(distance, radius)
     }
 
     /// Whether every number is finite, the radius positive and the shape's
@@ -185,6 +210,8 @@ impl Primitive {
             && self.rotation.coords.iter().all(|x| x.is_finite())
             && self.radius.is_finite()
             && self.radius > 0.0
+            && self.weight.is_finite()
+            && self.weight > 0.0
             && self.shape.is_valid()
     }
 
@@ -202,6 +229,7 @@ impl Primitive {
             shape: self.shape,
             inv_radius2: 1.0 / (self.radius * self.radius),
             bound: extent + factor * self.radius,
+            weight: self.weight,
         }
     }
 }
@@ -215,6 +243,7 @@ pub struct PosedPrimitive {
     shape: Shape,
     inv_radius2: Real,
     bound: Real,
+    weight: Real,
 }
 
 impl PosedPrimitive {
@@ -243,6 +272,12 @@ impl PosedPrimitive {
         &self.shape
     }
 
+    /// The kernel's amplitude `w` ([`Primitive::weight`]).
+    #[inline]
+    pub fn weight(&self) -> Real {
+        self.weight
+    }
+
     /// Centre and radius of a sphere holding the field's support.
     #[inline]
     pub fn bounding_sphere(&self) -> (Point3, Real) {
@@ -268,8 +303,8 @@ impl PosedPrimitive {
             return (0.0, Vec3::zeros());
         }
         (
-            kernel::value_sq(s),
-            g * (kernel::derivative_sq(s) * self.inv_radius2),
+            self.weight * kernel::value_sq(s),
+            g * (self.weight * kernel::derivative_sq(s) * self.inv_radius2),
         )
     }
 
@@ -278,7 +313,7 @@ impl PosedPrimitive {
     pub fn field(&self, p: &Point3) -> Real {
         let local = self.pose.inverse_transform_point(p).coords;
         let (d2, _) = self.shape.distance2_and_gradient(&local);
-        kernel::value_sq(d2 * self.inv_radius2)
+        self.weight * kernel::value_sq(d2 * self.inv_radius2)
     }
 }
 

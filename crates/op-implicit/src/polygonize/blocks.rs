@@ -190,8 +190,9 @@ fn can_skip(field: &Field, grid: &Grid, block: &Block, list: &[u32], iso: Real) 
     for &i in list {
         let prim = &field.primitives()[i as usize];
         let (c, r) = prim.bounding_sphere();
+        let w = prim.weight();
         if !matches!(prim.shape(), Shape::Point) {
-            upper += 1.0;
+            upper += w;
             continue;
         }
         let (mut near, mut far) = (0.0, 0.0);
@@ -202,8 +203,8 @@ fn can_skip(field: &Field, grid: &Grid, block: &Block, list: &[u32], iso: Real) 
             far += d_far * d_far;
         }
         let inv = 1.0 / (r * r);
-        upper += value_sq(near * inv);
-        lower += value_sq(far * inv);
+        upper += w * value_sq(near * inv);
+        lower += w * value_sq(far * inv);
     }
     // A margin well above the rounding of sums of a few hundred terms.
     let margin = 1e-9 * (1.0 + upper);

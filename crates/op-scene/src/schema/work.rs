@@ -297,21 +297,23 @@ impl Scene {
                 ));
             }
             if let Some(skin) = &o.skin {
-                let nodes = (extent + 2.0 * skin.radius) / skin.cell_size + 3.0;
+                let nodes = (extent + 2.0 * skin.support()) / skin.cell_size + 3.0;
                 if nodes.is_nan() || nodes > MAX_SKIN_NODES_PER_AXIS {
                     return Err(SceneError::value(
                         file,
                         format!("{path}.skin.cell_size"),
                         short(skin.cell_size),
                         &format!(
-                            "the skin of an object {} across with radius {} needs about {} grid \
+                            "the skin of an object {} across with support {} needs about {} grid \
                              nodes per axis at this cell size, more than the polygonizer's {}: \
                              use a cell size of at least {}",
                             short(extent),
-                            short(skin.radius),
+                            short(skin.support()),
                             short(nodes.ceil()),
                             MAX_SKIN_NODES_PER_AXIS,
-                            short((extent + 2.0 * skin.radius) / (MAX_SKIN_NODES_PER_AXIS - 3.0))
+                            short(
+                                (extent + 2.0 * skin.support()) / (MAX_SKIN_NODES_PER_AXIS - 3.0)
+                            )
                         ),
                     ));
                 }
