@@ -10,6 +10,7 @@ use std::process::ExitCode;
 
 use anyhow::{anyhow, Context, Result};
 use clap::{Parser, Subcommand};
+use op_scene::export::FrameFormat;
 use op_scene::render::{self, RenderOptions, Style};
 use op_scene::{BuiltScene, RunError, RunOptions};
 
@@ -72,6 +73,12 @@ enum Command {
         /// Print the seconds spent in each stage of the step at the end.
         #[arg(long)]
         profile: bool,
+        /// Frame file formats, comma-separated: obj (one y-up OBJ file per
+        /// object and frame, for Blender and other OBJ readers), ply
+        /// (binary PLY, z-up), vtu (particle state with attributes, for
+        /// ParaView).
+        #[arg(long, value_delimiter = ',', default_value = "obj", value_parser = parse_format)]
+        format: Vec<FrameFormat>,
     },
     /// Validate a scene, print what it enables and estimate its largest
     /// stable step (on a bounded sample of the scene: memory proportional to
@@ -170,7 +177,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                 "<demo: scenes/spiral.ron>",
             )?;
             let built = scene.build_for_run(None, None)?;
-            run_built(built, None, None, false)
+            run_built(built, None, None, &[FrameFormat::Obj], false)
         }
         Some(Command::Run {
             scene,
@@ -180,6 +187,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             no_work_limits,
             max_particle_steps,
             profile,
+            format,
         }) => {
             if let Some(k) = threads {
                 rayon::ThreadPoolBuilder::new()
@@ -190,7 +198,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             let frames = frames.map(|f| usize::try_from(f).unwrap_or(usize::MAX));
             let limits = limits(no_work_limits, max_particle_steps)?;
             let built = load(&scene, limits, frames)?;
-            run_built(built, out, frames, profile)
+            run_built(built, out, frames, &format, profile)
         }
         Some(Command::Check {
             scene,
@@ -275,6 +283,13 @@ fn run_fit(points: &Path, out: &Path, spacing: Option<f64>, open: bool) -> Resul
     Ok(())
 }
 
+/// `--format`'s parser: one format name.
+fn parse_format(name: &str) -> Result<FrameFormat, String> {
+    FrameFormat::from_name(name).ok_or_else(|| {
+        format!("unknown frame format {name:?}: use obj, ply or vtu (comma-separated for several)")
+    })
+}
+
 /// The work limits the flags ask for.
 fn limits(no_work_limits: bool, max_particle_steps: Option<f64>) -> Result<op_scene::WorkLimits> {
     let mut limits = if no_work_limits {
@@ -301,12 +316,14 @@ fn run_built(
     mut built: BuiltScene,
     out: Option<PathBuf>,
     frames: Option<usize>,
+    formats: &[FrameFormat],
     profile: bool,
 ) -> Result<(), Failure> {
     let out_dir = out.unwrap_or_else(|| Path::new("opsim-out").join(&built.name));
     let opts = RunOptions {
         out_dir: out_dir.clone(),
         frames,
+        formats: formats.to_vec(),
     };
     let bar = if std::io::stderr().is_terminal() {
         let b = indicatif::ProgressBar::new(0);

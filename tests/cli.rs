@@ -31,13 +31,31 @@ fn text(o: &Output) -> String {
     )
 }
 
-fn frames(dir: &Path) -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(dir.join("frames"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
+/// Every frame file of a run (`frames/<stem>/<stem>_00000.obj`, ...), in
+/// path order.
+fn frame_files(dir: &Path) -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(dir.join("frames")).unwrap() {
+        let path = e.unwrap().path();
+        if path.is_dir() {
+            v.extend(std::fs::read_dir(&path).unwrap().map(|e| e.unwrap().path()));
+        } else {
+            v.push(path);
+        }
+    }
     v.sort();
     v
+}
+
+/// The number of frames of a run: files per sequence folder, the same for
+/// every sequence.
+fn frame_count(dir: &Path) -> usize {
+    let counts: Vec<usize> = std::fs::read_dir(dir.join("frames"))
+        .unwrap()
+        .map(|e| std::fs::read_dir(e.unwrap().path()).unwrap().count())
+        .collect();
+    assert!(counts.windows(2).all(|w| w[0] == w[1]), "{counts:?}");
+    counts.first().copied().unwrap_or(0)
 }
 
 /// `opsim run SCENE --out OUT [extra..]` in `out`; returns the output.
@@ -84,12 +102,13 @@ fn run_writes_frames_metrics_and_summary() {
     let scene = repo().join("scenes/two_sheets.ron");
     let o = run_scene(&scene, &out, &["--frames", "4"]);
     assert!(o.status.success(), "{}", text(&o));
-    let f = frames(&out);
-    assert_eq!(f.len(), 4);
-    for path in &f {
-        let obj = wavefront_obj::obj::parse(std::fs::read_to_string(path).unwrap()).unwrap();
-        assert_eq!(obj.objects.len(), 2, "one OBJ object per scene object");
-        for (o, name) in obj.objects.iter().zip(["upper", "lower"]) {
+    assert_eq!(frame_count(&out), 4);
+    for k in 0..4 {
+        for name in ["upper", "lower"] {
+            let path = out.join(format!("frames/{name}/{name}_{k:05}.obj"));
+            let obj = wavefront_obj::obj::parse(std::fs::read_to_string(path).unwrap()).unwrap();
+            assert_eq!(obj.objects.len(), 1, "one OBJ object per file");
+            let o = &obj.objects[0];
             assert_eq!(o.name, name);
             // Discs: a centre and six rim vertices per particle, six triangles.
             assert_eq!(o.vertices.len(), 144 * 7);
@@ -138,8 +157,9 @@ fn same_frames_at_one_and_two_threads() {
         assert!(o.status.success(), "{}", text(&o));
         outs.push(out);
     }
-    let (a, b) = (frames(&outs[0]), frames(&outs[1]));
-    assert_eq!(a.len(), 6);
+    let (a, b) = (frame_files(&outs[0]), frame_files(&outs[1]));
+    assert_eq!(frame_count(&outs[0]), 6);
+    assert_eq!(a.len(), b.len());
     for (fa, fb) in a.iter().zip(&b) {
         assert!(
             std::fs::read(fa).unwrap() == std::fs::read(fb).unwrap(),
@@ -164,7 +184,7 @@ fn divergence_exits_3_and_keeps_valid_frames() {
     );
     let s = summary(&out);
     assert_eq!(s["diverged"], true);
-    for path in frames(&out) {
+    for path in frame_files(&out) {
         let t = std::fs::read_to_string(&path).unwrap();
         assert!(
             !t.contains("NaN") && !t.contains("inf"),
@@ -227,7 +247,7 @@ fn render_each_style() {
     let scene = repo().join("scenes/sheet.ron");
     let o = run_scene(&scene, &out, &["--frames", "2"]);
     assert!(o.status.success(), "{}", text(&o));
-    let frame = &frames(&out)[1];
+    let frame = &frame_files(&out)[1];
     for style in ["axes", "discs", "wireframe", "shaded"] {
         let png = out.join(format!("{style}.png"));
         let o = opsim(
@@ -326,7 +346,7 @@ fn one_particle(world: &str, extra: &str) -> String {
 fn assert_outputs_finite(out: &Path) {
     let mut files = vec![out.join("summary.json"), out.join("metrics.csv")];
     if out.join("frames").is_dir() {
-        files.extend(frames(out));
+        files.extend(frame_files(out));
     }
     for f in files.iter().filter(|f| f.is_file()) {
         let t = std::fs::read_to_string(f).unwrap().to_lowercase();
@@ -520,15 +540,11 @@ fn outputs_are_clean_and_never_written_through_links() {
     let out = dir.join("out");
     let o = run_scene(&scene, &out, &["--frames", "10"]);
     assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(frames(&out).len(), 10);
+    assert_eq!(frame_count(&out), 10);
     std::fs::write(out.join("notes.txt"), "mine").unwrap();
     let o = run_scene(&scene, &out, &["--frames", "3"]);
     assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(
-        frames(&out).len(),
-        3,
-        "frames of the previous run were kept"
-    );
+    assert_eq!(frame_count(&out), 3, "frames of the previous run were kept");
     assert_eq!(summary(&out)["frames"], 3);
     let rows = std::fs::read_to_string(out.join("metrics.csv")).unwrap();
     assert_eq!(rows.lines().count(), 4, "{rows}");
@@ -538,8 +554,9 @@ fn outputs_are_clean_and_never_written_through_links() {
     );
     let leftovers: Vec<_> = std::fs::read_dir(&out)
         .unwrap()
-        .chain(std::fs::read_dir(out.join("frames")).unwrap())
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .map(|e| e.unwrap().path())
+        .chain(frame_files(&out))
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
         .filter(|n| n.contains("tmp"))
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");

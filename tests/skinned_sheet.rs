@@ -26,6 +26,7 @@ fn run(name: &str, duration: Real) -> (Summary, Vec<Point3>, PathBuf) {
     let opts = RunOptions {
         out_dir: out.clone(),
         frames: None,
+        formats: vec![op_scene::export::FrameFormat::Obj],
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     let positions = built.world.particles().positions().to_vec();
