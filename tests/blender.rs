@@ -1,0 +1,247 @@
+//! Frames land in Blender complete and upright (issue 16): runs shipped
+//! scenes, imports every object's OBJ file of several frames headless with
+//! Blender's OBJ importer (and the legacy one when present), then the whole
+//! run with the add-on `tools/blender/opsim_import.py`, and checks every
+//! object's vertex, edge and face counts and its world-space bounds against
+//! the files (scene z-up is Blender's Z-up).
+//!
+//! Runs when `blender` is on PATH (`.ci/run` installs Debian's); skips with
+//! a note otherwise.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn blender_available() -> bool {
+    Command::new("blender")
+        .args(["-b", "--factory-startup", "--version"])
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// What an importer should show of one OBJ file: counts and scene bounds.
+#[derive(Debug)]
+struct Expected {
+    vertices: usize,
+    edges: usize,
+    faces: usize,
+    min: [f64; 3],
+    max: [f64; 3],
+}
+
+/// Reads one frame file as Blender should see it: `v` lines (converted
+/// back to scene coordinates, y-up to z-up), triangles, and edges (the
+/// `l` segments, or the distinct edges of the triangles).
+fn expected(path: &Path) -> Expected {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let (mut min, mut max) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    let (mut vertices, mut faces) = (0, 0);
+    let mut edges = BTreeSet::new();
+    let index = |t: &str| t.split('/').next().unwrap().parse::<usize>().unwrap();
+    for line in text.lines() {
+        let mut t = line.split_whitespace();
+        match t.next() {
+            Some("v") => {
+                let c: Vec<f64> = t.map(|x| x.parse().unwrap()).collect();
+                // OBJ (x, y, z) is scene (x, -z, y).
+                let scene = [c[0], -c[2], c[1]];
+                for k in 0..3 {
+                    min[k] = min[k].min(scene[k]);
+                    max[k] = max[k].max(scene[k]);
+                }
+                vertices += 1;
+            }
+            Some("f") => {
+                let v: Vec<usize> = t.map(index).collect();
+                for k in 0..v.len() {
+                    let (a, b) = (v[k], v[(k + 1) % v.len()]);
+                    edges.insert((a.min(b), a.max(b)));
+                }
+                faces += 1;
+            }
+            Some("l") => {
+                let v: Vec<usize> = t.map(index).collect();
+                assert_eq!(v.len(), 2, "{}: {line}", path.display());
+                edges.insert((v[0].min(v[1]), v[0].max(v[1])));
+            }
+            _ => {}
+        }
+    }
+    Expected {
+        vertices,
+        edges: edges.len(),
+        faces,
+        min,
+        max,
+    }
+}
+
+/// Runs `scene` for `frames` frames into a fresh folder.
+fn run(scene: &str, frames: usize, root: &Path) -> PathBuf {
+    let out = root.join(scene);
+    let o = Command::new(env!("CARGO_BIN_EXE_opsim"))
+        .args(["run", &format!("scenes/{scene}.ron"), "--out"])
+        .arg(&out)
+        .args(["--frames", &frames.to_string()])
+        .current_dir(repo())
+        .output()
+        .expect("run opsim");
+    assert!(
+        o.status.success(),
+        "{scene}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    out
+}
+
+/// Checks one object as an importer saw it against its file.
+fn check_object(what: &str, seen: &Value, want: &Expected, failures: &mut Vec<String>) {
+    let seen = seen.as_array().expect("a list of imported meshes");
+    if want.vertices == 0 {
+        // An importer makes no object of an empty file; the add-on shows
+        // an empty mesh.
+        if seen.iter().any(|m| m["vertices"] != 0) {
+            failures.push(format!("{what}: empty file, imported {seen:?}"));
+        }
+        return;
+    }
+    let [got] = seen.as_slice() else {
+        failures.push(format!("{what}: {} objects imported, want 1", seen.len()));
+        return;
+    };
+    let count = |k: &str| got[k].as_u64().unwrap() as usize;
+    let counts = (count("vertices"), count("edges"), count("faces"));
+    if counts != (want.vertices, want.edges, want.faces) {
+        failures.push(format!(
+            "{what}: imported (vertices, edges, faces) {counts:?}, file {:?}",
+            (want.vertices, want.edges, want.faces)
+        ));
+    }
+    // Upright: Blender's world coordinates are the scene's (z up).
+    let size = (0..3)
+        .map(|k| want.max[k] - want.min[k])
+        .fold(1.0, f64::max);
+    for (key, bound) in [("min", want.min), ("max", want.max)] {
+        for k in 0..3 {
+            let b = got[key][k].as_f64().unwrap();
+            if (b - bound[k]).abs() > 1e-4 * size {
+                failures.push(format!(
+                    "{what}: {key}[{k}] = {b} in Blender, {} in the scene",
+                    bound[k]
+                ));
+            }
+        }
+    }
+}
+
+#[test]
+fn runs_import_into_blender_complete_and_upright() {
+    if !blender_available() {
+        eprintln!("note: blender is not on PATH; skipping the Blender import test");
+        return;
+    }
+    let root = std::env::temp_dir().join(format!("opsim-blender-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    // Points and a triangulation; axes; discs with a tool; skins; a box tool.
+    let scenes = [
+        "sphere_surface",
+        "colliding_objects",
+        "fig_12_drape",
+        "ball_vs_spiral",
+        "sheet_on_box",
+    ];
+    let frames = [0usize, 1, 3];
+    let mut failures = Vec::new();
+    let mut table = Vec::new();
+    for scene in scenes {
+        let out = run(scene, 4, &root);
+        let summary: Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        let o = Command::new("blender")
+            .args(["-b", "--factory-startup", "--python"])
+            .arg(repo().join("tools/blender/check_run.py"))
+            .arg("--")
+            .arg(&out)
+            .args(frames.map(|k| k.to_string()))
+            .output()
+            .expect("run blender");
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        let Some(line) = stdout.lines().find_map(|l| l.strip_prefix("OPSIM-CHECK ")) else {
+            panic!(
+                "{scene}: blender printed no result (exit {:?}):\n{stdout}\n{}",
+                o.status.code(),
+                String::from_utf8_lossy(&o.stderr)
+            );
+        };
+        let seen: Value = serde_json::from_str(line).unwrap();
+        let sequences = summary["files"]["sequences"].as_array().unwrap();
+        let names: Vec<&str> = sequences
+            .iter()
+            .map(|s| s["name"].as_str().unwrap())
+            .collect();
+        let scene_info = &seen["addon_scene"];
+        let rate = summary["frame_rate"].as_f64().unwrap();
+        if (scene_info["fps"].as_f64().unwrap() - rate).abs() > 1e-6 * rate {
+            failures.push(format!(
+                "{scene}: add-on fps {}, run {rate}",
+                scene_info["fps"]
+            ));
+        }
+        if scene_info["frame_end"] != 3 || scene_info["frame_start"] != 0 {
+            failures.push(format!("{scene}: add-on frame range {scene_info}"));
+        }
+        let created: Vec<&str> = scene_info["objects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_str().unwrap())
+            .collect();
+        if created != names {
+            failures.push(format!(
+                "{scene}: add-on objects {created:?}, run {names:?}"
+            ));
+        }
+        let importers: Vec<&String> = seen
+            .as_object()
+            .unwrap()
+            .keys()
+            .filter(|k| *k != "addon_scene")
+            .collect();
+        assert!(importers.iter().any(|k| *k == "obj_import"));
+        assert!(importers.iter().any(|k| *k == "addon"));
+        for k in frames {
+            for s in sequences {
+                let (name, stem) = (s["name"].as_str().unwrap(), s["stem"].as_str().unwrap());
+                let file = out.join(format!("frames/{stem}/{stem}_{k:05}.obj"));
+                let want = expected(&file);
+                for importer in &importers {
+                    let got = &seen[importer.as_str()][k.to_string()][name];
+                    check_object(
+                        &format!("{scene} frame {k} {name} ({importer})"),
+                        got,
+                        &want,
+                        &mut failures,
+                    );
+                    if k == 3 && importer.as_str() == "addon" {
+                        table.push(format!(
+                            "{scene} {name}: file {} v {} f, Blender {} v {} f",
+                            want.vertices, want.faces, got[0]["vertices"], got[0]["faces"]
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&root);
+    for row in &table {
+        println!("{row}");
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
