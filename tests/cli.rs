@@ -92,6 +92,84 @@ fn no_argument_runs_the_demo() {
         .as_f64()
         .unwrap()
         .is_finite());
+    // The demo also draws its run: a 3 x 3 contact sheet, path printed.
+    let png = out.join("contact_sheet.png");
+    assert!(
+        text(&o).contains("contact sheet: opsim-out/spiral/contact_sheet.png"),
+        "{}",
+        text(&o)
+    );
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (3 * 360, 3 * 300));
+    let drawn = img
+        .pixels()
+        .filter(|p| i32::from(p.0[2]) > i32::from(p.0[0]) + 40)
+        .count();
+    assert!(drawn > 2000, "{drawn} particle pixels");
+}
+
+/// Mean picture row of the cloth's (blue) and the tool's (orange) pixels.
+fn rows_of_cloth_and_tool(png: &Path) -> (f64, f64) {
+    let img = image::open(png).unwrap().to_rgb8();
+    let (mut blue, mut orange) = ((0.0, 0.0), (0.0, 0.0));
+    for (_, y, p) in img.enumerate_pixels() {
+        let [r, _, b] = p.0.map(i32::from);
+        if b > r + 40 {
+            blue = (blue.0 + f64::from(y), blue.1 + 1.0);
+        } else if r > b + 40 {
+            orange = (orange.0 + f64::from(y), orange.1 + 1.0);
+        }
+    }
+    assert!(blue.1 > 100.0 && orange.1 > 100.0, "{blue:?} {orange:?}");
+    (blue.0 / blue.1, orange.0 / orange.1)
+}
+
+/// `render` shows a z-up scene upright by default (the cloth above the
+/// sphere it falls on), from any `--view`, and upside down when asked
+/// with `--up`; bad directions exit 2.
+#[test]
+fn render_is_upright_by_default_and_follows_view_and_up() {
+    let out = temp_dir("upright");
+    let scene = repo().join("scenes/fig_12_drape.ron");
+    let o = run_scene(&scene, &out, &["--frames", "1"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let render = |name: &str, extra: &[&str]| {
+        let png = out.join(name);
+        let mut args = vec![
+            "render", ".", "--out", name, "--width", "240", "--height", "180",
+        ];
+        args.extend_from_slice(extra);
+        let o = opsim(&args, &out);
+        assert!(o.status.success(), "{extra:?}: {}", text(&o));
+        rows_of_cloth_and_tool(&png)
+    };
+    let (cloth, tool) = render("default.png", &[]);
+    assert!(
+        cloth < tool,
+        "default view: cloth row {cloth}, sphere row {tool}"
+    );
+    let (cloth, tool) = render("side.png", &["--view", "0,1,0"]);
+    assert!(
+        cloth + 20.0 < tool,
+        "side view: cloth row {cloth}, sphere row {tool}"
+    );
+    let (cloth, tool) = render("flipped.png", &["--view", "0,1,0", "--up", "0,0,-1"]);
+    assert!(
+        cloth > tool + 20.0,
+        "upside down: cloth row {cloth}, sphere row {tool}"
+    );
+    for bad in [
+        vec!["--view", "0,0,0"],
+        vec!["--view", "1,2"],
+        vec!["--up", "0,0,x"],
+        vec!["--view", "0,0,-1", "--up", "0,0,1"],
+    ] {
+        let mut args = vec!["render", ".", "--out", "bad.png"];
+        args.extend_from_slice(&bad);
+        let o = opsim(&args, &out);
+        assert_eq!(o.status.code(), Some(2), "{bad:?}: {}", text(&o));
+        assert!(!out.join("bad.png").exists());
+    }
 }
 
 /// `run` writes the frames, metrics and summary; the OBJ frames re-read
