@@ -1,14 +1,15 @@
 # SPDX-License-Identifier: MIT OR Apache-2.0
-"""Headless check of an opsim run in Blender (used by tests/blender.rs).
+"""Headless check of opsim runs in Blender (used by tests/blender.rs).
 
-    blender -b --factory-startup --python tools/blender/check_run.py -- RUN FRAMES...
+    blender -b --factory-startup --python tools/blender/check_run.py -- RUN@K,K... ...
 
-For each listed frame, imports every sequence's OBJ file alone with
-Blender's OBJ importer (`wm.obj_import`, and the legacy `import_scene.obj`
-when this Blender has it), then imports the whole run with the add-on
-(opsim_import.py, beside this file) and steps to each listed frame. Prints
-one line `OPSIM-CHECK {json}` with, per importer, frame and object: vertex,
-edge and face counts and the world-space bounds of the vertices.
+For each run folder RUN and each listed frame K, imports every sequence's
+OBJ file alone with Blender's OBJ importer (`wm.obj_import`, and the legacy
+`import_scene.obj` when this Blender has it), then imports the whole run
+with the add-on (opsim_import.py, beside this file) and steps to each
+listed frame. Prints one line `OPSIM-CHECK {json}` per run with, per
+importer, frame and object: vertex, edge and face counts and the
+world-space bounds of the vertices.
 """
 
 import json
@@ -40,18 +41,18 @@ def clear():
         bpy.data.objects.remove(ob, do_unlink=True)
     for mesh in list(bpy.data.meshes):
         bpy.data.meshes.remove(mesh)
+    for c in list(bpy.data.collections):
+        bpy.data.collections.remove(c)
 
 
-def main():
-    args = sys.argv[sys.argv.index("--") + 1 :]
-    run, frames = args[0], [int(k) for k in args[1:]]
+def check(run, frames):
     with open(os.path.join(run, "summary.json"), encoding="utf-8") as f:
         summary = json.load(f)
     sequences = summary["files"]["sequences"]
     importers = {"obj_import": lambda p: bpy.ops.wm.obj_import(filepath=p)}
     if hasattr(bpy.ops.import_scene, "obj"):
         importers["legacy"] = lambda p: bpy.ops.import_scene.obj(filepath=p)
-    result = {}
+    result = {"run": run}
     for name, importer in importers.items():
         for k in frames:
             for seq in sequences:
@@ -76,7 +77,14 @@ def main():
         result.setdefault("addon", {})[str(k)] = {
             ob.name: [describe(ob)] for ob in created
         }
-    print("OPSIM-CHECK " + json.dumps(result))
+    clear()
+    print("OPSIM-CHECK " + json.dumps(result), flush=True)
+
+
+def main():
+    for arg in sys.argv[sys.argv.index("--") + 1 :]:
+        run, _, frames = arg.rpartition("@")
+        check(run, [int(k) for k in frames.split(",")])
 
 
 main()

@@ -41,8 +41,9 @@ pub(crate) fn frame_sets(dir: &Path) -> Result<Vec<FrameSet>, RenderError> {
 /// all objects in one [`ObjData`].
 ///
 /// # Errors
-/// As [`frame_sets`], [`RenderError::Empty`] when no file has number `k`,
-/// and [`ObjData::read`]'s errors.
+/// [`RenderError::Io`] if a folder cannot be read, [`RenderError::Empty`]
+/// when no OBJ file is found or none has number `k`, and
+/// [`ObjData::read`]'s errors.
 pub fn read_run_frame(dir: &Path, k: u64) -> Result<ObjData, RenderError> {
     let sets = frame_sets(dir)?;
     let (_, files) = sets
