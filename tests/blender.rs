@@ -1,11 +1,13 @@
 //! Frames land in Blender complete and upright (issue 16): runs every
-//! shipped scene (two frames, or the whole scene when its schedule needs
-//! it), imports every object's OBJ file of its first and last frame
-//! headless with Blender's OBJ importer (and the legacy one when present),
-//! then the whole run with the add-on `tools/blender/opsim_import.py`, and
-//! checks every object's vertex, edge and face counts and its world-space
-//! bounds against the files (scene z-up is Blender's Z-up), and the
-//! add-on's objects, frame rate and frame range against the summary.
+//! shipped scene with `--format obj,ply` (two frames, or the whole scene
+//! when its schedule needs it), imports every object's OBJ file of its
+//! first and last frame headless with Blender's OBJ importer (and the
+//! legacy one when present) and its PLY file with the PLY importer, then
+//! the whole run with the add-on `tools/blender/opsim_import.py` (from the
+//! OBJ and from the PLY frames), and checks every object's vertex, edge and
+//! face counts and its world-space bounds against the OBJ file (scene z-up
+//! is Blender's Z-up), and the add-on's objects, frame rate and frame range
+//! against the summary.
 //!
 //! Runs when `blender` is on PATH (`.ci/run` installs Debian's); skips with
 //! a note otherwise.
@@ -97,7 +99,7 @@ fn run(scene: &Path, root: &Path) -> (PathBuf, usize) {
             .arg(scene)
             .arg("--out")
             .arg(&out)
-            .args(["--threads", "1"])
+            .args(["--threads", "1", "--format", "obj,ply"])
             .args(extra)
             .output()
             .expect("run opsim")
@@ -221,37 +223,43 @@ fn shipped_scenes_import_into_blender_complete_and_upright() {
             .iter()
             .map(|s| s["name"].as_str().unwrap())
             .collect();
-        let scene_info = &seen["addon_scene"];
         let rate = summary["frame_rate"].as_f64().unwrap();
-        if (scene_info["fps"].as_f64().unwrap() - rate).abs() > 1e-6 * rate {
-            failures.push(format!(
-                "{scene}: add-on fps {}, run {rate}",
-                scene_info["fps"]
-            ));
-        }
         let last = frames[frames.len() - 1];
-        if scene_info["frame_end"] != last || scene_info["frame_start"] != 0 {
-            failures.push(format!("{scene}: add-on frame range {scene_info}"));
+        for key in ["addon_scene", "addon_ply_scene"] {
+            let scene_info = &seen[key];
+            if (scene_info["fps"].as_f64().unwrap() - rate).abs() > 1e-6 * rate {
+                failures.push(format!(
+                    "{scene}: {key} fps {}, run {rate}",
+                    scene_info["fps"]
+                ));
+            }
+            if scene_info["frame_end"] != last || scene_info["frame_start"] != 0 {
+                failures.push(format!("{scene}: {key} frame range {scene_info}"));
+            }
+            let created: Vec<&str> = scene_info["objects"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|n| n.as_str().unwrap())
+                .collect();
+            if created != names {
+                failures.push(format!("{scene}: {key} objects {created:?}, run {names:?}"));
+            }
         }
-        let created: Vec<&str> = scene_info["objects"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|n| n.as_str().unwrap())
-            .collect();
-        if created != names {
-            failures.push(format!(
-                "{scene}: add-on objects {created:?}, run {names:?}"
-            ));
-        }
+        // Every importer, the PLY ones included, must show the OBJ file's
+        // counts and bounds.
         let importers: Vec<&String> = seen
             .as_object()
             .unwrap()
             .keys()
-            .filter(|k| *k != "addon_scene" && *k != "run")
+            .filter(|k| !k.ends_with("_scene") && *k != "run")
             .collect();
-        assert!(importers.iter().any(|k| *k == "obj_import"));
-        assert!(importers.iter().any(|k| *k == "addon"));
+        for want in ["obj_import", "ply", "addon", "addon_ply"] {
+            assert!(
+                importers.iter().any(|k| *k == want),
+                "{want}: {importers:?}"
+            );
+        }
         for &k in frames {
             for s in sequences {
                 let (name, stem) = (s["name"].as_str().unwrap(), s["stem"].as_str().unwrap());

@@ -42,10 +42,20 @@ bl_info = {
 FRAMES_KEY = "opsim_frames"
 
 
+def has_operator(module, name):
+    """Whether `bpy.ops.<module>.<name>` exists in this Blender (attribute
+    access alone always succeeds)."""
+    try:
+        getattr(getattr(bpy.ops, module), name).get_rna_type()
+        return True
+    except (AttributeError, KeyError):
+        return False
+
+
 def _import_obj(path):
     """Imports one OBJ file with Blender's default OBJ axes; returns the new objects."""
     before = set(bpy.data.objects)
-    if hasattr(bpy.ops.wm, "obj_import"):
+    if has_operator("wm", "obj_import"):
         bpy.ops.wm.obj_import(filepath=path, forward_axis="NEGATIVE_Z", up_axis="Y")
     else:
         bpy.ops.import_scene.obj(filepath=path, axis_forward="-Z", axis_up="Y")
@@ -55,7 +65,7 @@ def _import_obj(path):
 def _import_ply(path):
     """Imports one PLY file (scene coordinates, z-up); returns the new objects."""
     before = set(bpy.data.objects)
-    if hasattr(bpy.ops.wm, "ply_import"):
+    if has_operator("wm", "ply_import"):
         bpy.ops.wm.ply_import(filepath=path, forward_axis="Y", up_axis="Z")
     else:
         bpy.ops.import_mesh.ply(filepath=path)

@@ -126,10 +126,10 @@ pub struct FrameWriter {
 
 impl FrameWriter {
     /// The writer of a scene's frames under `out` in `formats` (duplicates
-    /// ignored): a particle sequence per object unless
-    /// [`Outputs::particles`] is `None`, a skin sequence per skin, a
-    /// surface sequence per object when [`Outputs::triangulation`] is set,
-    /// a tool sequence per tool, in that order.
+    /// ignored): unless [`Outputs::particles`] is `None`, a particle
+    /// sequence per object and a skin sequence per skin; a surface sequence
+    /// per object when [`Outputs::triangulation`] is set; a tool sequence
+    /// per tool when any of these is written; in that order.
     pub fn new(
         out: &Path,
         formats: &[FrameFormat],
@@ -139,7 +139,8 @@ impl FrameWriter {
         outputs: &Outputs,
     ) -> Self {
         let mut named = Vec::new();
-        if outputs.particles != ParticleOutput::None {
+        let particles = outputs.particles != ParticleOutput::None;
+        if particles {
             for (k, o) in objects.iter().enumerate() {
                 named.push((
                     o.name.clone(),
@@ -147,9 +148,11 @@ impl FrameWriter {
                     Source::Particles(k),
                 ));
             }
-        }
-        for (k, s) in skins.iter().enumerate() {
-            named.push((s.name.clone(), SequenceKind::Skin, Source::Skin(k)));
+            // Skins are polygonized for the frames only with particles
+            // (`BuiltScene::stages`' `polygonize`).
+            for (k, s) in skins.iter().enumerate() {
+                named.push((s.name.clone(), SequenceKind::Skin, Source::Skin(k)));
+            }
         }
         if outputs.triangulation {
             for (k, o) in objects.iter().enumerate() {
@@ -160,12 +163,14 @@ impl FrameWriter {
                 ));
             }
         }
-        for (k, t) in tools.iter().enumerate() {
-            named.push((
-                geometry::tool_name(k, t),
-                SequenceKind::Tool,
-                Source::Tool(k),
-            ));
+        if particles || outputs.triangulation {
+            for (k, t) in tools.iter().enumerate() {
+                named.push((
+                    geometry::tool_name(k, t),
+                    SequenceKind::Tool,
+                    Source::Tool(k),
+                ));
+            }
         }
         let sources = named.iter().map(|n| n.2).collect();
         let sequences = layout::sequences(named.into_iter().map(|(n, kind, _)| (n, kind)));
