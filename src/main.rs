@@ -10,6 +10,8 @@ use std::process::ExitCode;
 
 use anyhow::{anyhow, Context, Result};
 use clap::{Parser, Subcommand};
+use op_scene::export::obj::scene_to_obj;
+use op_scene::export::FrameFormat;
 use op_scene::render::{self, RenderOptions, Style};
 use op_scene::{BuiltScene, RunError, RunOptions};
 
@@ -72,6 +74,12 @@ enum Command {
         /// Print the seconds spent in each stage of the step at the end.
         #[arg(long)]
         profile: bool,
+        /// Frame file formats, comma-separated: obj (one y-up OBJ file per
+        /// object and frame, for Blender and other OBJ readers), ply
+        /// (binary PLY, z-up), vtu (particle state with attributes, for
+        /// ParaView).
+        #[arg(long, value_delimiter = ',', default_value = "obj", value_parser = parse_format)]
+        format: Vec<FrameFormat>,
     },
     /// Validate a scene, print what it enables and estimate its largest
     /// stable step (on a bounded sample of the scene: memory proportional to
@@ -118,8 +126,9 @@ enum Command {
         /// Output PNG file.
         #[arg(long)]
         out: PathBuf,
-        /// Drawing style: axes, discs, wireframe or shaded.
-        #[arg(long, default_value = "discs")]
+        /// Drawing style: axes, discs, wireframe or shaded (faces; particles
+        /// as discs when no object has faces).
+        #[arg(long, default_value = "shaded")]
         style: Style,
         /// Picture width in pixels (per frame for a contact sheet).
         #[arg(long, default_value_t = 800)]
@@ -130,6 +139,16 @@ enum Command {
         /// Frames in a contact sheet.
         #[arg(long, default_value_t = 9)]
         frames: usize,
+        /// Direction the camera looks along, `X,Y,Z` in scene coordinates
+        /// (z-up), e.g. `0,0,-1` from above. Default: from the front
+        /// (-y side), 35 degrees to the right and 25 degrees above.
+        #[arg(long, value_parser = parse_direction, allow_hyphen_values = true)]
+        view: Option<[f64; 3]>,
+        /// Up direction of the picture, `X,Y,Z` in scene coordinates.
+        /// Default: the run's up (against its gravity, from summary.json),
+        /// else +z.
+        #[arg(long, value_parser = parse_direction, allow_hyphen_values = true)]
+        up: Option<[f64; 3]>,
     },
 }
 
@@ -178,7 +197,9 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                 "<demo: scenes/spiral.ron>",
             )?;
             let built = scene.build_for_run(None, None)?;
-            run_built(built, None, None, false)
+            let out = Path::new("opsim-out").join(&built.name);
+            run_built(built, Some(out.clone()), None, &[FrameFormat::Obj], false)?;
+            demo_contact_sheet(&out)
         }
         Some(Command::Run {
             scene,
@@ -188,6 +209,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             no_work_limits,
             max_particle_steps,
             profile,
+            format,
         }) => {
             if let Some(k) = threads {
                 rayon::ThreadPoolBuilder::new()
@@ -198,7 +220,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             let frames = frames.map(|f| usize::try_from(f).unwrap_or(usize::MAX));
             let limits = limits(no_work_limits, max_particle_steps)?;
             let built = load(&scene, limits, frames)?;
-            run_built(built, out, frames, profile)
+            run_built(built, out, frames, &format, profile)
         }
         Some(Command::Check {
             scene,
@@ -227,11 +249,18 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             width,
             height,
             frames,
+            view,
+            up,
         }) => {
+            // The frames are y-up OBJ files of a z-up scene: directions
+            // given in scene coordinates are converted like the frames.
+            let up = up.or_else(|| render::run_up_axis(&input));
             let opts = RenderOptions {
                 width,
                 height,
                 style,
+                view: view.map(scene_to_obj),
+                up: up.map(scene_to_obj),
                 ..Default::default()
             };
             let rendering = render::render_path(&input, &opts, frames)
@@ -244,6 +273,26 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             Ok(())
         }
     }
+}
+
+/// The demo's picture: a contact sheet of its run, `contact_sheet.png` in
+/// the run folder, seen from above (the demo spiral lies in the plane
+/// z = 0); prints its path.
+fn demo_contact_sheet(out: &Path) -> Result<(), Failure> {
+    let opts = RenderOptions {
+        width: 360,
+        height: 300,
+        style: render::Style::Discs,
+        view: Some(scene_to_obj([0.0, 0.0, -1.0])),
+        up: Some(scene_to_obj([0.0, 1.0, 0.0])),
+        ..Default::default()
+    };
+    let rendering = render::render_path(out, &opts, 9)
+        .with_context(|| format!("cannot render {}", out.display()))?;
+    let png = out.join("contact_sheet.png");
+    render::save_png(&rendering.image, &png)?;
+    outln!("contact sheet: {}", png.display());
+    Ok(())
 }
 
 /// `opsim fit`: read, fit, write the mesh, print the figures as JSON.
@@ -292,6 +341,28 @@ fn run_fit(points: &Path, out: &Path, spacing: Option<f64>, open: bool) -> Resul
     Ok(())
 }
 
+/// `--view` and `--up`'s parser: `X,Y,Z`, finite and not all zero.
+fn parse_direction(text: &str) -> Result<[f64; 3], String> {
+    let c: Vec<f64> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{text:?}: {e}; expected X,Y,Z"))?;
+    let v =
+        <[f64; 3]>::try_from(c).map_err(|_| format!("{text:?}: expected three numbers X,Y,Z"))?;
+    if v.iter().any(|x| !x.is_finite()) || v.iter().all(|&x| x == 0.0) {
+        return Err(format!("{text:?}: a direction must be finite and non-zero"));
+    }
+    Ok(v)
+}
+
+/// `--format`'s parser: one format name.
+fn parse_format(name: &str) -> Result<FrameFormat, String> {
+    FrameFormat::from_name(name).ok_or_else(|| {
+        format!("unknown frame format {name:?}: use obj, ply or vtu (comma-separated for several)")
+    })
+}
+
 /// The work limits the flags ask for.
 fn limits(no_work_limits: bool, max_particle_steps: Option<f64>) -> Result<op_scene::WorkLimits> {
     let mut limits = if no_work_limits {
@@ -318,12 +389,14 @@ fn run_built(
     mut built: BuiltScene,
     out: Option<PathBuf>,
     frames: Option<usize>,
+    formats: &[FrameFormat],
     profile: bool,
 ) -> Result<(), Failure> {
     let out_dir = out.unwrap_or_else(|| Path::new("opsim-out").join(&built.name));
     let opts = RunOptions {
         out_dir: out_dir.clone(),
         frames,
+        formats: formats.to_vec(),
     };
     let bar = if std::io::stderr().is_terminal() {
         let b = indicatif::ProgressBar::new(0);

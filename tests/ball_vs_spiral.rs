@@ -40,6 +40,7 @@ fn ball_hits_spiral_which_deforms_and_recovers() {
     let opts = RunOptions {
         out_dir: out.clone(),
         frames: None,
+        formats: vec![op_scene::export::FrameFormat::Obj],
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     assert!(!summary.diverged);
@@ -59,12 +60,17 @@ fn ball_hits_spiral_which_deforms_and_recovers() {
     assert!(spiral.rest_shape_error_max >= 0.2, "{spiral:?}");
     assert!(spiral.rest_shape_error_final <= 0.02, "{spiral:?}");
 
-    // The frames hold both skins as named objects with vertex normals.
-    let frame = std::fs::read_to_string(out.join("frames/frame_00010.obj")).expect("frame");
-    for name in ["o spiral_skin", "o ball_skin"] {
-        assert!(frame.lines().any(|l| l == name), "{name} missing");
+    // The frames hold both skins as named objects with vertex normals,
+    // one file each.
+    for name in ["spiral_skin", "ball_skin"] {
+        let path = out.join(format!("frames/{name}/{name}_00010.obj"));
+        let frame = std::fs::read_to_string(path).expect("frame");
+        assert!(
+            frame.lines().any(|l| l == format!("o {name}")),
+            "{name} missing"
+        );
+        assert!(frame.lines().any(|l| l.starts_with("vn ")));
     }
-    assert!(frame.lines().any(|l| l.starts_with("vn ")));
     let json = std::fs::read_to_string(out.join("summary.json")).expect("summary");
     let v: serde_json::Value = serde_json::from_str(&json).expect("json");
     assert!(v["contact"]["total_impulse"].as_f64().is_some());

@@ -31,13 +31,31 @@ fn text(o: &Output) -> String {
     )
 }
 
-fn frames(dir: &Path) -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(dir.join("frames"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
+/// Every frame file of a run (`frames/<stem>/<stem>_00000.obj`, ...), in
+/// path order.
+fn frame_files(dir: &Path) -> Vec<PathBuf> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(dir.join("frames")).unwrap() {
+        let path = e.unwrap().path();
+        if path.is_dir() {
+            v.extend(std::fs::read_dir(&path).unwrap().map(|e| e.unwrap().path()));
+        } else {
+            v.push(path);
+        }
+    }
     v.sort();
     v
+}
+
+/// The number of frames of a run: files per sequence folder, the same for
+/// every sequence.
+fn frame_count(dir: &Path) -> usize {
+    let counts: Vec<usize> = std::fs::read_dir(dir.join("frames"))
+        .unwrap()
+        .map(|e| std::fs::read_dir(e.unwrap().path()).unwrap().count())
+        .collect();
+    assert!(counts.windows(2).all(|w| w[0] == w[1]), "{counts:?}");
+    counts.first().copied().unwrap_or(0)
 }
 
 /// `opsim run SCENE --out OUT [extra..]` in `out`; returns the output.
@@ -74,6 +92,84 @@ fn no_argument_runs_the_demo() {
         .as_f64()
         .unwrap()
         .is_finite());
+    // The demo also draws its run: a 3 x 3 contact sheet, path printed.
+    let png = out.join("contact_sheet.png");
+    assert!(
+        text(&o).contains("contact sheet: opsim-out/spiral/contact_sheet.png"),
+        "{}",
+        text(&o)
+    );
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (3 * 360, 3 * 300));
+    let drawn = img
+        .pixels()
+        .filter(|p| i32::from(p.0[2]) > i32::from(p.0[0]) + 40)
+        .count();
+    assert!(drawn > 2000, "{drawn} particle pixels");
+}
+
+/// Mean picture row of the cloth's (blue) and the tool's (orange) pixels.
+fn rows_of_cloth_and_tool(png: &Path) -> (f64, f64) {
+    let img = image::open(png).unwrap().to_rgb8();
+    let (mut blue, mut orange) = ((0.0, 0.0), (0.0, 0.0));
+    for (_, y, p) in img.enumerate_pixels() {
+        let [r, _, b] = p.0.map(i32::from);
+        if b > r + 40 {
+            blue = (blue.0 + f64::from(y), blue.1 + 1.0);
+        } else if r > b + 40 {
+            orange = (orange.0 + f64::from(y), orange.1 + 1.0);
+        }
+    }
+    assert!(blue.1 > 100.0 && orange.1 > 100.0, "{blue:?} {orange:?}");
+    (blue.0 / blue.1, orange.0 / orange.1)
+}
+
+/// `render` shows a z-up scene upright by default (the cloth above the
+/// sphere it falls on), from any `--view`, and upside down when asked
+/// with `--up`; bad directions exit 2.
+#[test]
+fn render_is_upright_by_default_and_follows_view_and_up() {
+    let out = temp_dir("upright");
+    let scene = repo().join("scenes/fig_12_drape.ron");
+    let o = run_scene(&scene, &out, &["--frames", "1"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let render = |name: &str, extra: &[&str]| {
+        let png = out.join(name);
+        let mut args = vec![
+            "render", ".", "--out", name, "--width", "240", "--height", "180",
+        ];
+        args.extend_from_slice(extra);
+        let o = opsim(&args, &out);
+        assert!(o.status.success(), "{extra:?}: {}", text(&o));
+        rows_of_cloth_and_tool(&png)
+    };
+    let (cloth, tool) = render("default.png", &[]);
+    assert!(
+        cloth < tool,
+        "default view: cloth row {cloth}, sphere row {tool}"
+    );
+    let (cloth, tool) = render("side.png", &["--view", "0,1,0"]);
+    assert!(
+        cloth + 20.0 < tool,
+        "side view: cloth row {cloth}, sphere row {tool}"
+    );
+    let (cloth, tool) = render("flipped.png", &["--view", "0,1,0", "--up", "0,0,-1"]);
+    assert!(
+        cloth > tool + 20.0,
+        "upside down: cloth row {cloth}, sphere row {tool}"
+    );
+    for bad in [
+        vec!["--view", "0,0,0"],
+        vec!["--view", "1,2"],
+        vec!["--up", "0,0,x"],
+        vec!["--view", "0,0,-1", "--up", "0,0,1"],
+    ] {
+        let mut args = vec!["render", ".", "--out", "bad.png"];
+        args.extend_from_slice(&bad);
+        let o = opsim(&args, &out);
+        assert_eq!(o.status.code(), Some(2), "{bad:?}: {}", text(&o));
+        assert!(!out.join("bad.png").exists());
+    }
 }
 
 /// `run` writes the frames, metrics and summary; the OBJ frames re-read
@@ -84,12 +180,13 @@ fn run_writes_frames_metrics_and_summary() {
     let scene = repo().join("scenes/two_sheets.ron");
     let o = run_scene(&scene, &out, &["--frames", "4"]);
     assert!(o.status.success(), "{}", text(&o));
-    let f = frames(&out);
-    assert_eq!(f.len(), 4);
-    for path in &f {
-        let obj = wavefront_obj::obj::parse(std::fs::read_to_string(path).unwrap()).unwrap();
-        assert_eq!(obj.objects.len(), 2, "one OBJ object per scene object");
-        for (o, name) in obj.objects.iter().zip(["upper", "lower"]) {
+    assert_eq!(frame_count(&out), 4);
+    for k in 0..4 {
+        for name in ["upper", "lower"] {
+            let path = out.join(format!("frames/{name}/{name}_{k:05}.obj"));
+            let obj = wavefront_obj::obj::parse(std::fs::read_to_string(path).unwrap()).unwrap();
+            assert_eq!(obj.objects.len(), 1, "one OBJ object per file");
+            let o = &obj.objects[0];
             assert_eq!(o.name, name);
             // Discs: a centre and six rim vertices per particle, six triangles.
             assert_eq!(o.vertices.len(), 144 * 7);
@@ -138,8 +235,9 @@ fn same_frames_at_one_and_two_threads() {
         assert!(o.status.success(), "{}", text(&o));
         outs.push(out);
     }
-    let (a, b) = (frames(&outs[0]), frames(&outs[1]));
-    assert_eq!(a.len(), 6);
+    let (a, b) = (frame_files(&outs[0]), frame_files(&outs[1]));
+    assert_eq!(frame_count(&outs[0]), 6);
+    assert_eq!(a.len(), b.len());
     for (fa, fb) in a.iter().zip(&b) {
         assert!(
             std::fs::read(fa).unwrap() == std::fs::read(fb).unwrap(),
@@ -164,7 +262,7 @@ fn divergence_exits_3_and_keeps_valid_frames() {
     );
     let s = summary(&out);
     assert_eq!(s["diverged"], true);
-    for path in frames(&out) {
+    for path in frame_files(&out) {
         let t = std::fs::read_to_string(&path).unwrap();
         assert!(
             !t.contains("NaN") && !t.contains("inf"),
@@ -227,7 +325,7 @@ fn render_each_style() {
     let scene = repo().join("scenes/sheet.ron");
     let o = run_scene(&scene, &out, &["--frames", "2"]);
     assert!(o.status.success(), "{}", text(&o));
-    let frame = &frames(&out)[1];
+    let frame = &frame_files(&out)[1];
     for style in ["axes", "discs", "wireframe", "shaded"] {
         let png = out.join(format!("{style}.png"));
         let o = opsim(
@@ -326,7 +424,7 @@ fn one_particle(world: &str, extra: &str) -> String {
 fn assert_outputs_finite(out: &Path) {
     let mut files = vec![out.join("summary.json"), out.join("metrics.csv")];
     if out.join("frames").is_dir() {
-        files.extend(frames(out));
+        files.extend(frame_files(out));
     }
     for f in files.iter().filter(|f| f.is_file()) {
         let t = std::fs::read_to_string(f).unwrap().to_lowercase();
@@ -520,15 +618,11 @@ fn outputs_are_clean_and_never_written_through_links() {
     let out = dir.join("out");
     let o = run_scene(&scene, &out, &["--frames", "10"]);
     assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(frames(&out).len(), 10);
+    assert_eq!(frame_count(&out), 10);
     std::fs::write(out.join("notes.txt"), "mine").unwrap();
     let o = run_scene(&scene, &out, &["--frames", "3"]);
     assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(
-        frames(&out).len(),
-        3,
-        "frames of the previous run were kept"
-    );
+    assert_eq!(frame_count(&out), 3, "frames of the previous run were kept");
     assert_eq!(summary(&out)["frames"], 3);
     let rows = std::fs::read_to_string(out.join("metrics.csv")).unwrap();
     assert_eq!(rows.lines().count(), 4, "{rows}");
@@ -538,8 +632,9 @@ fn outputs_are_clean_and_never_written_through_links() {
     );
     let leftovers: Vec<_> = std::fs::read_dir(&out)
         .unwrap()
-        .chain(std::fs::read_dir(out.join("frames")).unwrap())
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .map(|e| e.unwrap().path())
+        .chain(frame_files(&out))
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
         .filter(|n| n.contains("tmp"))
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");

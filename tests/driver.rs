@@ -35,6 +35,7 @@ fn a_skinned_sheet_with_creation_heat_eraser_and_obstacle_runs_with_its_skin() {
     let opts = op_scene::RunOptions {
         out_dir: out.clone(),
         frames: None,
+        formats: vec![op_scene::export::FrameFormat::Obj],
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs to the end");
     assert!(!summary.diverged);
@@ -66,7 +67,8 @@ fn a_skinned_sheet_with_creation_heat_eraser_and_obstacle_runs_with_its_skin() {
         .iter()
         .all(|(id, _)| p.slot_of(*id).is_some()));
 
-    let mut frames: Vec<PathBuf> = std::fs::read_dir(out.join("frames"))
+    // The skin's own sequence: frames/sheet_skin/sheet_skin_00000.obj, ...
+    let mut frames: Vec<PathBuf> = std::fs::read_dir(out.join("frames/sheet_skin"))
         .unwrap()
         .map(|e| e.unwrap().path())
         .collect();
@@ -82,7 +84,7 @@ fn a_skinned_sheet_with_creation_heat_eraser_and_obstacle_runs_with_its_skin() {
         );
     }
     // The knife swept x = 3 (half width 0.9) until t = 1.5: at the end the
-    // skin has a slot there, with skin on both sides.
+    // skin has a slot there, with skin on both sides (OBJ x is scene x).
     let skin = objects(frames.last().unwrap())
         .remove("sheet_skin")
         .unwrap();

@@ -159,7 +159,15 @@ fn fit_scene_frames_are_identical_at_one_and_two_threads() {
             .output()
             .expect("run opsim");
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        last.push(std::fs::read(out.join("frames/frame_00025.obj")).expect("frame 25"));
+        let mut frame = Vec::new();
+        for e in std::fs::read_dir(out.join("frames")).expect("frames") {
+            let folder = e.expect("entry").path();
+            let stem = folder.file_name().unwrap().to_string_lossy().into_owned();
+            let file = folder.join(format!("{stem}_00025.obj"));
+            frame.push((stem, std::fs::read(file).expect("frame 25")));
+        }
+        frame.sort();
+        last.push(frame);
     }
     let _ = std::fs::remove_dir_all(&root);
     assert_eq!(last[0], last[1]);

@@ -238,17 +238,21 @@ fn non_finite_outputs(out: &Path) -> Vec<PathBuf> {
             bad.push(metrics);
         }
     }
-    if let Ok(d) = std::fs::read_dir(out.join("frames")) {
-        for f in d.map(|e| e.unwrap().path()) {
-            let t = std::fs::read_to_string(&f).unwrap_or_default();
-            let ok = t
-                .lines()
-                .filter(|l| l.starts_with("v ") || l.starts_with("vn "))
-                .flat_map(|l| l.split_whitespace().skip(1))
-                .all(finite);
-            if !ok {
-                bad.push(f);
-            }
+    // Frame files: frames/<stem>/<stem>_00000.obj, one folder per object.
+    let files = std::fs::read_dir(out.join("frames"))
+        .into_iter()
+        .flatten()
+        .flat_map(|e| std::fs::read_dir(e.unwrap().path()).into_iter().flatten())
+        .map(|e| e.unwrap().path());
+    for f in files {
+        let t = std::fs::read_to_string(&f).unwrap_or_default();
+        let ok = t
+            .lines()
+            .filter(|l| l.starts_with("v ") || l.starts_with("vn "))
+            .flat_map(|l| l.split_whitespace().skip(1))
+            .all(finite);
+        if !ok {
+            bad.push(f);
         }
     }
     bad

@@ -15,15 +15,39 @@ fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// FNV-1a over the run's frames, in name order.
+/// Every file under `dir`, recursively.
+fn files_under(dir: &std::path::Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    for e in std::fs::read_dir(dir).into_iter().flatten() {
+        let path = e.unwrap().path();
+        if path.is_dir() {
+            files.extend(files_under(&path));
+        } else {
+            files.push(path);
+        }
+    }
+    files
+}
+
+/// FNV-1a over the run's frame files (every file under `frames/`, one per
+/// object and frame), each its path relative to `frames/` then its bytes,
+/// in path order; then the number of files.
 fn frames_hash(out: &std::path::Path) -> String {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(out.join("frames"))
-        .map(|d| d.map(|e| e.unwrap().path()).collect())
-        .unwrap_or_default();
+    let root = out.join("frames");
+    let mut files = files_under(&root);
     files.sort();
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for f in &files {
-        for b in std::fs::read(f).unwrap() {
+        let name = f
+            .strip_prefix(&root)
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        for b in name
+            .into_bytes()
+            .into_iter()
+            .chain(std::fs::read(f).unwrap())
+        {
             h ^= u64::from(b);
             h = h.wrapping_mul(0x0100_0000_01b3);
         }

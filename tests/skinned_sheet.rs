@@ -26,13 +26,15 @@ fn run(name: &str, duration: Real) -> (Summary, Vec<Point3>, PathBuf) {
     let opts = RunOptions {
         out_dir: out.clone(),
         frames: None,
+        formats: vec![op_scene::export::FrameFormat::Obj],
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     let positions = built.world.particles().positions().to_vec();
     (summary, positions, out)
 }
 
-/// Vertices of OBJ object `name` in `obj` text.
+/// Vertices of OBJ object `name` in `obj` text, in scene coordinates (the
+/// files are y-up, the scenes z-up).
 fn object_vertices(obj: &str, name: &str) -> Vec<[Real; 3]> {
     let mut inside = false;
     let mut out = Vec::new();
@@ -42,15 +44,16 @@ fn object_vertices(obj: &str, name: &str) -> Vec<[Real; 3]> {
         } else if inside {
             if let Some(v) = line.strip_prefix("v ") {
                 let c: Vec<Real> = v.split_whitespace().map(|x| x.parse().unwrap()).collect();
-                out.push([c[0], c[1], c[2]]);
+                out.push(op_scene::export::obj::obj_to_scene([c[0], c[1], c[2]]));
             }
         }
     }
     out
 }
 
-fn last_frame(out: &Path) -> String {
-    let mut frames: Vec<_> = std::fs::read_dir(out.join("frames"))
+/// The last frame file of sequence `stem`.
+fn last_frame(out: &Path, stem: &str) -> String {
+    let mut frames: Vec<_> = std::fs::read_dir(out.join("frames").join(stem))
         .unwrap()
         .map(|e| e.unwrap().path())
         .collect();
@@ -79,7 +82,7 @@ fn sheet_lands_on_the_box_and_its_overhang_bends_down() {
     assert!(low < -0.5, "the free edge bends down: lowest {low}");
     // The exported skin lies on the box where it presses on it (clipped at
     // the collider surface), never inside it.
-    let skin = object_vertices(&last_frame(&out), "sheet_skin");
+    let skin = object_vertices(&last_frame(&out, "sheet_skin"), "sheet_skin");
     assert!(!skin.is_empty());
     let over_box = skin.iter().filter(|v| v[0].abs() < 2.9 && v[1].abs() < 4.9);
     let lowest = over_box.map(|v| v[2]).fold(Real::MAX, Real::min);
@@ -107,6 +110,6 @@ fn sheet_drapes_over_the_sphere_without_entering_it() {
     assert!(top > 2.2 && top < 3.0, "top of the sheet at {top}");
     let rim = p.iter().map(|q| q.z).fold(Real::MAX, Real::min);
     assert!(rim < top - 1.0, "rim at {rim}, top at {top}");
-    assert!(last_frame(&out).contains("o sheet_skin"));
+    assert!(last_frame(&out, "sheet_skin").contains("o sheet_skin"));
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -1,5 +1,5 @@
-//! The runner (DESIGN §6): steps a built scene frame by frame, writes OBJ
-//! frames, `metrics.csv` and `summary.json`, and detects divergence (NaN,
+//! The runner (DESIGN §6): steps a built scene frame by frame, writes the
+//! frame files ([`crate::export`]), `metrics.csv` and `summary.json`, and detects divergence (NaN,
 //! infinities, speeds above the limit, runaway energy) without ever writing
 //! a bad frame: frames already on disk stay valid and the summary says
 //! `diverged: true`.
@@ -14,9 +14,9 @@ use serde::Serialize;
 
 use crate::built::{BuiltObject, BuiltScene};
 use crate::error::short;
-use crate::export::{frame_name, write_atomically, write_frame};
+use crate::export::layout::{is_sequence_file, is_vtu_file};
+use crate::export::{write_atomically, FrameFormat, FrameWriter, Sequence};
 use crate::health::{energy_floor, Health, ENERGY_GAIN_WARNING};
-use crate::outputs::ParticleOutput;
 use crate::skins::ContactStats;
 
 /// How to run a scene.
@@ -27,6 +27,9 @@ pub struct RunOptions {
     /// Number of frames to write, overriding the scene's duration: frame 0
     /// is the initial state, then one every `1 / frame_rate`.
     pub frames: Option<usize>,
+    /// Frame file formats (`opsim run --format`); OBJ alone is the default
+    /// of the CLI. Duplicates are ignored; none writes no frame file.
+    pub formats: Vec<FrameFormat>,
 }
 
 /// Per-object figures of a run.
@@ -100,6 +103,14 @@ pub struct Summary {
     pub stages: std::collections::BTreeMap<String, f64>,
     /// Frames written.
     pub frames: usize,
+    /// Frames per unit of scene time (the scene's `world.frame_rate`):
+    /// frame `k` is at scene time `k / frame_rate`.
+    pub frame_rate: Real,
+    /// The scene's up direction in scene coordinates: against gravity, or
+    /// `+z` in a scene without gravity. Scenes are z-up by convention.
+    pub up: [Real; 3],
+    /// The frame files: formats, axis conventions and sequences.
+    pub files: FrameFiles,
     /// Rayon threads used.
     pub threads: usize,
     /// What the scene computes: [`BuiltScene::stages`] (the world's
@@ -116,6 +127,26 @@ pub struct Summary {
     pub bonds_broken: Option<u64>,
     /// Per-object figures.
     pub objects: Vec<ObjectSummary>,
+}
+
+/// The frame files of a run, as `summary.json` describes them for the
+/// tools that read them (the Blender add-on, `opsim render`).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct FrameFiles {
+    /// Formats written, e.g. `["obj", "ply"]`.
+    pub formats: Vec<FrameFormat>,
+    /// Axis convention per format: `"y_up"` for OBJ (scene `(x, y, z)`
+    /// written as `(x, z, -y)`), `"z_up"` (scene coordinates) for PLY and
+    /// VTU.
+    pub axes: std::collections::BTreeMap<String, String>,
+    /// One sequence per scene object's particles, skin, triangulation and
+    /// tool: frame `k` of format `ext` is
+    /// `frames/<stem>/<stem>_<k:05>.<ext>`.
+    pub sequences: Vec<Sequence>,
+    /// The particle state files, when VTU is written:
+    /// `vtu/state_<k:05>.vtu`, listed in `vtu/state.vtu.series`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vtu_series: Option<String>,
 }
 
 /// Why a run stopped early.
@@ -170,14 +201,18 @@ pub fn rest_shape_error(scene: &BuiltScene, object: &BuiltObject) -> Real {
     rest_shape_rms(&rest, &current) / object.rest_spacing.max(Real::MIN_POSITIVE)
 }
 
-/// Makes `out_dir` ready for a run: creates it (and `frames/` when frames
-/// are written), refuses symbolic links where opsim writes, and removes the
-/// files a previous run left there (only the names opsim writes:
-/// `summary.json`, `metrics.csv`, `frames/frame_*.obj` and opsim's
-/// temporary files), so frames of two runs never mix.
-pub fn prepare_output(out_dir: &Path, write_frames: bool) -> Result<(), RunError> {
+/// Makes `out_dir` ready for a run: creates it and `folders` (the frame
+/// folders, [`FrameWriter::folders`]), refuses symbolic links where opsim
+/// writes, and removes the files a previous run left there (only the names
+/// opsim writes: `summary.json`, `metrics.csv`, the sequence files
+/// `frames/<stem>/<stem>_<digits>.obj|ply` (and the emptied folders), the
+/// older layout's `frames/frame_*.obj`, `vtu/state_*.vtu`,
+/// `vtu/state.vtu.series` and opsim's temporary files), so frames of two
+/// runs never mix.
+pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunError> {
     fs::create_dir_all(out_dir).map_err(io(out_dir))?;
     let frames_dir = out_dir.join("frames");
+    let vtu_dir = out_dir.join("vtu");
     let link = |p: &Path| {
         fs::symlink_metadata(p)
             .map(|m| m.file_type().is_symlink())
@@ -185,34 +220,61 @@ pub fn prepare_output(out_dir: &Path, write_frames: bool) -> Result<(), RunError
     };
     for p in [
         frames_dir.clone(),
+        vtu_dir.clone(),
         out_dir.join("metrics.csv"),
         out_dir.join("summary.json"),
-    ] {
-        if link(&p) {
-            return Err(RunError::Symlink { path: p });
+    ]
+    .iter()
+    .chain(folders)
+    {
+        if link(p) {
+            return Err(RunError::Symlink { path: p.clone() });
         }
     }
-    let ours = |name: &str| crate::export::is_temporary(name);
-    for (dir, frame_files) in [(out_dir.to_path_buf(), false), (frames_dir.clone(), true)] {
-        let Ok(entries) = fs::read_dir(&dir) else {
-            continue;
+    let temporary = crate::export::is_temporary;
+    let clean = |dir: &Path, ours: &dyn Fn(&str) -> bool| -> Result<bool, RunError> {
+        let Ok(entries) = fs::read_dir(dir) else {
+            return Ok(false);
         };
+        let mut left = false;
         for e in entries {
-            let e = e.map_err(io(&dir))?;
+            let e = e.map_err(io(dir))?;
             let name = e.file_name().to_string_lossy().into_owned();
-            let is_frame = frame_files && name.starts_with("frame_") && name.ends_with(".obj");
-            let is_output = !frame_files && (name == "summary.json" || name == "metrics.csv");
-            if is_frame || is_output || ours(&name) {
+            if ours(&name) || temporary(&name) {
                 let path = e.path();
                 if link(&path) {
                     return Err(RunError::Symlink { path });
                 }
                 fs::remove_file(&path).map_err(io(&path))?;
+            } else {
+                left = true;
+            }
+        }
+        Ok(left)
+    };
+    clean(out_dir, &|name| {
+        name == "summary.json" || name == "metrics.csv"
+    })?;
+    clean(&vtu_dir, &is_vtu_file)?;
+    if let Ok(entries) = fs::read_dir(&frames_dir) {
+        for e in entries {
+            let e = e.map_err(io(&frames_dir))?;
+            let path = e.path();
+            if !e.file_type().map_err(io(&path))?.is_dir() {
+                continue;
+            }
+            let stem = e.file_name().to_string_lossy().into_owned();
+            let left = clean(&path, &|name| is_sequence_file(name, &stem))?;
+            if !left {
+                fs::remove_dir(&path).map_err(io(&path))?;
             }
         }
     }
-    if write_frames {
-        fs::create_dir_all(&frames_dir).map_err(io(&frames_dir))?;
+    clean(&frames_dir, &|name| {
+        name.starts_with("frame_") && name.ends_with(".obj")
+    })?;
+    for dir in folders {
+        fs::create_dir_all(dir).map_err(io(dir))?;
     }
     Ok(())
 }
@@ -270,10 +332,16 @@ pub fn run(
     on_frame: &mut dyn FnMut(usize, usize),
 ) -> Result<Summary, RunError> {
     let clock = Instant::now();
-    let frames_dir = opts.out_dir.join("frames");
-    let write_frames =
-        scene.outputs.particles != ParticleOutput::None || scene.outputs.triangulation;
-    prepare_output(&opts.out_dir, write_frames)?;
+    let mut writer = FrameWriter::new(
+        &opts.out_dir,
+        &opts.formats,
+        &scene.objects,
+        &scene.skins,
+        &scene.tools,
+        &scene.outputs,
+    );
+    let write_frames = writer.writes_anything();
+    prepare_output(&opts.out_dir, &writer.folders())?;
     let total = opts
         .frames
         .unwrap_or_else(|| (scene.duration * scene.frame_rate).round() as usize + 1)
@@ -391,9 +459,9 @@ pub fn run(
         measure_seconds += measuring.elapsed().as_secs_f64();
         let exporting = Instant::now();
         if write_frames {
-            let path = frames_dir.join(frame_name(k));
-            if let Err(e) = write_frame(
-                &path,
+            if let Err((path, e)) = writer.write_frame(
+                k,
+                scene.scene_time(),
                 &scene.world,
                 &scene.objects,
                 &scene.skins,
@@ -461,6 +529,25 @@ pub fn run(
             ])
             .collect(),
         frames: written,
+        frame_rate: scene.frame_rate,
+        up: up_direction(scene),
+        files: FrameFiles {
+            formats: writer.formats().to_vec(),
+            axes: writer
+                .formats()
+                .iter()
+                .map(|f| (f.extension().to_string(), f.axes().to_string()))
+                .collect(),
+            sequences: if writer.formats().iter().any(|f| *f != FrameFormat::Vtu) {
+                writer.sequences().to_vec()
+            } else {
+                Vec::new()
+            },
+            vtu_series: writer
+                .formats()
+                .contains(&FrameFormat::Vtu)
+                .then(|| "vtu/state.vtu.series".to_string()),
+        },
         threads: rayon::current_num_threads(),
         enabled: scene.stages(),
         contact: scene.has_contact().then_some(scene.contact),
@@ -504,6 +591,15 @@ pub fn run(
     }
 }
 
+/// The scene's up direction: against gravity, `+z` without gravity.
+fn up_direction(scene: &BuiltScene) -> [Real; 3] {
+    let g = scene.world.params().external.gravity();
+    match (-g).try_normalize(0.0) {
+        Some(u) if u.iter().all(|c| c.is_finite()) => u.into(),
+        _ => [0.0, 0.0, 1.0],
+    }
+}
+
 /// An error and its sources, `: `-separated (one line for the summary).
 fn error_chain(e: &RunError) -> String {
     let mut text = e.to_string();
@@ -538,6 +634,7 @@ mod tests {
         let opts = RunOptions {
             out_dir: dir.clone(),
             frames: Some(17),
+            formats: vec![crate::export::FrameFormat::Obj],
         };
         let result = run(&mut built, &opts, &mut |_, _| {});
         let _ = fs::remove_dir_all(&dir);

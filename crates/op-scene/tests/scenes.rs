@@ -563,6 +563,7 @@ fn settle_phase_shifts_forces_and_sets_the_rest_shape() {
         &op_scene::RunOptions {
             out_dir: dir.clone(),
             frames: None,
+            formats: vec![op_scene::export::FrameFormat::Obj],
         },
         &mut |_, _| {},
     )

@@ -66,14 +66,36 @@ impl CameraSpec {
         Self::frame_points_from(points, aspect, DEFAULT_AZIMUTH_DEG, DEFAULT_ELEVATION_DEG)
     }
 
-    /// Like [`CameraSpec::frame_points`] from a chosen direction (degrees;
-    /// elevation is clamped to `[-85, 85]`). Non-finite points are ignored; no
-    /// point, or all at one place, is framed as a unit cube around it.
+    /// Like [`CameraSpec::frame_points`] from a chosen direction (degrees,
+    /// about world `+y`; elevation is clamped to `[-85, 85]`). Non-finite
+    /// points are ignored; no point, or all at one place, is framed as a
+    /// unit cube around it.
     pub fn frame_points_from(
         points: &[[f64; 3]],
         aspect: f64,
         azimuth_deg: f64,
         elevation_deg: f64,
+    ) -> Self {
+        let (az, el) = (
+            azimuth_deg.to_radians(),
+            elevation_deg.clamp(-85.0, 85.0).to_radians(),
+        );
+        let to_eye = V3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
+        Self::frame_points_along(points, aspect, (-to_eye).into(), [0.0, 1.0, 0.0])
+    }
+
+    /// The view of a point set looking along `view` (from the eye towards
+    /// the points) with `up` pointing up in the picture, at the distance
+    /// where all points fit with a small margin, centred on their picture.
+    /// A zero or non-finite `view` looks along `-z`; an `up` that is zero,
+    /// not finite or parallel to `view` is replaced by the world axis least
+    /// aligned with `view`. Non-finite points are ignored; no point, or all
+    /// at one place, is framed as a unit cube around it.
+    pub fn frame_points_along(
+        points: &[[f64; 3]],
+        aspect: f64,
+        view: [f64; 3],
+        up: [f64; 3],
     ) -> Self {
         let finite = || {
             points
@@ -96,13 +118,15 @@ impl CameraSpec {
         } else {
             0.0
         };
-        let (az, el) = (
-            azimuth_deg.to_radians(),
-            elevation_deg.clamp(-85.0, 85.0).to_radians(),
-        );
-        let to_eye = V3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
-        let forward = -to_eye;
-        let right = forward.cross(&V3::y()).normalize();
+        let forward = unit(V3::from(view)).unwrap_or(-V3::z());
+        let right = unit(forward.cross(&V3::from(up)))
+            .filter(|r| r.cross(&forward).norm() > 1e-6)
+            .unwrap_or_else(|| {
+                let least = (0..3)
+                    .min_by(|&a, &b| forward[a].abs().total_cmp(&forward[b].abs()))
+                    .unwrap_or(0);
+                forward.cross(&V3::ith(least, 1.0)).normalize()
+            });
         let cam_up = right.cross(&forward);
         let aspect = if aspect.is_finite() && aspect > 0.0 {
             aspect
@@ -135,11 +159,11 @@ impl CameraSpec {
             // One point (or none): a unit cube around it.
             0.5 * 3f64.sqrt() / ty.min(tx) + 0.5
         };
-        let eye = center + to_eye * distance;
+        let eye = center - forward * distance;
         CameraSpec {
             eye: eye.into(),
             target: center.into(),
-            up: [0.0, 1.0, 0.0],
+            up: cam_up.into(),
             fov_y_deg: DEFAULT_FOV_Y_DEG,
         }
     }
@@ -176,6 +200,12 @@ impl CameraSpec {
         }
         Ok(())
     }
+}
+
+/// `v` normalized, `None` when it is zero or not finite.
+fn unit(v: V3) -> Option<V3> {
+    let n = v.norm();
+    (n.is_finite() && n > 0.0).then(|| v / n)
 }
 
 /// A validated camera bound to a picture size (in raster pixels).

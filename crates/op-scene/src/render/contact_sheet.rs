@@ -1,22 +1,24 @@
 //! Contact sheets: frames of a run in a grid, seen from one fixed camera.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use image::RgbImage;
 
 use super::error::RenderError;
-use super::obj::ObjData;
+use super::run_dir::{frame_sets, read_frame};
 use super::{auto_camera, check_area, render_with_camera, RenderOptions, Rendering};
 
 /// Renders a grid of at most `max_frames` frames chosen evenly (first and last
-/// included) from the `*.obj` files of `dir`, or of `dir/frames` when `dir` has
-/// none, sorted by name with numbers in numeric order.
+/// included) from the frames of `dir`: its `*.obj` files (one frame each,
+/// sorted by name with numbers in numeric order), else the numbered files of
+/// its subfolders or of `dir/frames`'s (one file per object, those with the
+/// same number making one frame: the layout `opsim run` writes).
 ///
 /// Each cell is `opts.width x opts.height` and is labelled with the frame's
 /// index (the number in its file name, else its rank). The grid has
 /// [`sheet_grid`]`(n)` columns and rows for `n` frames. The camera is
-/// `opts.camera`, or frames the union of all chosen frames' bounding boxes, so
-/// motion shows.
+/// `opts.camera`, or frames the whole run (the chosen frames and up to 64
+/// frames spread over it), so motion shows and stays in the picture.
 ///
 /// # Errors
 /// [`RenderError::BadOption`] for `max_frames == 0`, bad options or a sheet larger
@@ -30,6 +32,10 @@ pub fn render_contact_sheet(
 ) -> Result<RgbImage, RenderError> {
     contact_sheet(dir, opts, max_frames).map(|r| r.image)
 }
+
+/// Frames (at most) whose bounds the automatic camera of a contact sheet
+/// frames, spread evenly over the run.
+const FRAMED_FRAMES: usize = 64;
 
 /// Columns and rows of the contact sheet of `frames` frames (`ceil(sqrt(n))` columns).
 pub fn sheet_grid(frames: usize) -> (usize, usize) {
@@ -53,7 +59,7 @@ pub(crate) fn contact_sheet(
     if max_frames == 0 {
         return Err(RenderError::option("max_frames", "0; allowed: 1 or more"));
     }
-    let files = frame_files(dir)?;
+    let files = frame_sets(dir)?;
     let chosen = choose(files.len(), max_frames);
     let (cols, rows) = sheet_grid(chosen.len());
     let (w, h) = (opts.width as usize, opts.height as usize);
@@ -61,7 +67,7 @@ pub(crate) fn contact_sheet(
 
     let mut frames = Vec::with_capacity(chosen.len());
     for &i in &chosen {
-        frames.push((i, ObjData::read(&files[i])?));
+        frames.push((i, read_frame(&files[i].1)?));
     }
     let spec = match opts.camera {
         Some(spec) => spec,
@@ -72,7 +78,15 @@ pub(crate) fn contact_sheet(
                     dir.display()
                 )));
             }
-            auto_camera(frames.iter().map(|(_, d)| d), opts)
+            // Frame the whole run: the shown frames and up to
+            // `FRAMED_FRAMES` more spread over it.
+            let mut framed = Vec::new();
+            for i in choose(files.len(), FRAMED_FRAMES) {
+                if !chosen.contains(&i) {
+                    framed.push(read_frame(&files[i].1)?);
+                }
+            }
+            auto_camera(frames.iter().map(|(_, d)| d).chain(&framed), opts)
         }
     };
 
@@ -95,7 +109,7 @@ pub(crate) fn contact_sheet(
         for (x, y, px) in r.image.enumerate_pixels() {
             sheet.put_pixel(x0 as u32 + x, y0 as u32 + y, *px);
         }
-        let label = frame_number(&files[*rank]).unwrap_or(*rank as u64);
+        let label = files[*rank].0.unwrap_or(*rank as u64);
         draw_number(
             &mut sheet,
             label,
@@ -110,62 +124,6 @@ pub(crate) fn contact_sheet(
         image: sheet,
         notes,
     })
-}
-
-/// `*.obj` files of `dir`, else of `dir/frames`, in frame order.
-fn frame_files(dir: &Path) -> Result<Vec<PathBuf>, RenderError> {
-    let mut files = obj_files(dir)?;
-    let sub = dir.join("frames");
-    if files.is_empty() && sub.is_dir() {
-        files = obj_files(&sub)?;
-    }
-    if files.is_empty() {
-        return Err(RenderError::empty(format!(
-            "no .obj files in {} or {}",
-            dir.display(),
-            sub.display()
-        )));
-    }
-    files.sort_by_cached_key(|p| sort_key(p));
-    Ok(files)
-}
-
-fn obj_files(dir: &Path) -> Result<Vec<PathBuf>, RenderError> {
-    let entries = std::fs::read_dir(dir).map_err(|e| RenderError::io(dir, e))?;
-    let mut out = Vec::new();
-    for entry in entries {
-        let path = entry.map_err(|e| RenderError::io(dir, e))?.path();
-        let is_obj = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-        if is_obj && path.is_file() {
-            out.push(path);
-        }
-    }
-    Ok(out)
-}
-
-/// The trailing number of a file stem (`frame_00012.obj` -> 12).
-fn frame_number(path: &Path) -> Option<u64> {
-    let stem = path.file_stem()?.to_str()?;
-    let digits = stem.len() - stem.trim_end_matches(|c: char| c.is_ascii_digit()).len();
-    stem[stem.len() - digits..].parse().ok()
-}
-
-/// Sort key: stem without its trailing number, the number, then the full name.
-fn sort_key(path: &Path) -> (String, Option<u64>, String) {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let stem = path
-        .file_stem()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let prefix = stem
-        .trim_end_matches(|c: char| c.is_ascii_digit())
-        .to_string();
-    (prefix, frame_number(path), name)
 }
 
 /// `min(m, n)` indices out of `0..n`, evenly spread, first and last included
@@ -255,6 +213,7 @@ fn draw_number(img: &mut RgbImage, value: u64, x: usize, y: usize, scale: usize,
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::PathBuf;
 
     #[test]
     fn grid_shapes() {
@@ -279,6 +238,7 @@ mod tests {
 
     #[test]
     fn numeric_file_order() {
+        use super::super::run_dir::{frame_number, sort_key};
         let mut names: Vec<PathBuf> = ["f10.obj", "f9.obj", "f100.obj", "a.obj"]
             .iter()
             .map(PathBuf::from)

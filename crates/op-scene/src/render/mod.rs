@@ -19,6 +19,7 @@ mod contact_sheet;
 mod error;
 mod obj;
 mod raster;
+mod run_dir;
 mod styles;
 
 use std::io::Write;
@@ -29,6 +30,7 @@ pub use contact_sheet::{render_contact_sheet, sheet_grid};
 pub use error::RenderError;
 pub use image::RgbImage;
 pub use obj::{ObjData, ObjObject, MAX_OBJ_FILE_BYTES};
+pub use run_dir::{read_run_frame, run_up_axis};
 pub use styles::Style;
 
 use camera::Camera;
@@ -51,8 +53,19 @@ pub struct RenderOptions {
     pub style: Style,
     /// Background colour. Default: white.
     pub background: [u8; 3],
-    /// Camera; `None` frames the data's bounding box automatically. Default: `None`.
+    /// Camera; `None` frames the data automatically, looking along
+    /// [`RenderOptions::view`] with [`RenderOptions::up`] up. Default: `None`.
     pub camera: Option<CameraSpec>,
+    /// Direction the automatic camera looks along (from the eye towards
+    /// the data), in the data's coordinates; `None`: from azimuth
+    /// [`DEFAULT_AZIMUTH_DEG`] and elevation [`DEFAULT_ELEVATION_DEG`]
+    /// about `up`, from the `+z` side (the front of a z-up scene written
+    /// y-up). Default: `None`.
+    pub view: Option<[f64; 3]>,
+    /// Up direction of the automatic camera's picture, in the data's
+    /// coordinates; `None`: `+y`, the up axis of OBJ files (scene `+z` in
+    /// opsim's frames). Default: `None`.
+    pub up: Option<[f64; 3]>,
 }
 
 impl Default for RenderOptions {
@@ -63,6 +76,8 @@ impl Default for RenderOptions {
             style: Style::default(),
             background: [255, 255, 255],
             camera: None,
+            view: None,
+            up: None,
         }
     }
 }
@@ -85,8 +100,37 @@ impl RenderOptions {
         if let Some(cam) = &self.camera {
             cam.validate()?;
         }
+        for (name, v) in [("view", self.view), ("up", self.up)] {
+            if let Some(v) = v {
+                let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                if !(norm.is_finite() && norm > 0.0) {
+                    return Err(RenderError::option(
+                        name,
+                        format!("{v:?}; a direction must be finite and non-zero"),
+                    ));
+                }
+            }
+        }
+        if let (Some(v), Some(u)) = (self.view, self.up) {
+            let c = [
+                v[1] * u[2] - v[2] * u[1],
+                v[2] * u[0] - v[0] * u[2],
+                v[0] * u[1] - v[1] * u[0],
+            ];
+            let (nv, nu) = (norm(v), norm(u));
+            if norm(c) <= 1e-6 * nv * nu {
+                return Err(RenderError::option(
+                    "up",
+                    format!("{u:?} is parallel to the view direction {v:?}"),
+                ));
+            }
+        }
         Ok(())
     }
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
 
 fn check_area(width: u64, height: u64) -> Result<(), RenderError> {
@@ -126,7 +170,8 @@ pub fn render(data: &ObjData, opts: &RenderOptions) -> Result<Rendering, RenderE
     render_with_camera(data, opts, &spec)
 }
 
-/// The automatic camera fitted to all vertices of `frames`.
+/// The automatic camera fitted to all vertices of `frames`, looking along
+/// [`RenderOptions::view`] with [`RenderOptions::up`] up.
 pub(crate) fn auto_camera<'a>(
     frames: impl IntoIterator<Item = &'a ObjData>,
     opts: &RenderOptions,
@@ -136,7 +181,35 @@ pub(crate) fn auto_camera<'a>(
         .flat_map(|d| d.objects())
         .flat_map(|o| o.vertices().iter().copied())
         .collect();
-    CameraSpec::frame_points(&points, f64::from(opts.width) / f64::from(opts.height))
+    let up = opts.up.unwrap_or([0.0, 1.0, 0.0]);
+    let view = opts.view.unwrap_or_else(|| default_view(up));
+    CameraSpec::frame_points_along(
+        &points,
+        f64::from(opts.width) / f64::from(opts.height),
+        view,
+        up,
+    )
+}
+
+/// The default view direction about `up`: from azimuth
+/// [`DEFAULT_AZIMUTH_DEG`] and elevation [`DEFAULT_ELEVATION_DEG`], the
+/// azimuth measured from the `+z` side (`+x` when `up` is along `z`)
+/// towards `up x front`. With `up = +y` it is [`CameraSpec::frame_box`]'s.
+pub fn default_view(up: [f64; 3]) -> [f64; 3] {
+    use nalgebra::Vector3;
+    let u = Vector3::from(up).try_normalize(0.0).unwrap_or(Vector3::y());
+    let front = [Vector3::z(), Vector3::x()]
+        .into_iter()
+        .map(|a| a - u * u.dot(&a))
+        .find(|f| f.norm() > 1e-3)
+        .map_or(Vector3::z(), |f| f.normalize());
+    let side = u.cross(&front);
+    let (az, el) = (
+        DEFAULT_AZIMUTH_DEG.to_radians(),
+        DEFAULT_ELEVATION_DEG.to_radians(),
+    );
+    let to_eye = el.cos() * (az.sin() * side + az.cos() * front) + el.sin() * u;
+    (-to_eye).into()
 }
 
 /// Renders `data` into a picture of `opts.width x opts.height`.

@@ -1,0 +1,219 @@
+//! What one frame file holds: the geometry of one thing of the scene (an
+//! object's particles, a skin, a triangulation, a tool) at the world's
+//! current state, in scene coordinates, independent of the file format.
+
+use op_dynamics::triangulation::{triangulate_points, TriangulationParams};
+use op_dynamics::{Real, Tool, Vec3, World};
+use op_implicit::Mesh;
+
+use crate::built::BuiltObject;
+use crate::outputs::{Outputs, ParticleOutput};
+
+/// One mesh of a frame, in scene coordinates (z-up): vertices with one
+/// normal each, triangles and line segments over them.
+///
+/// Every vertex is either used by an element or the mesh has no element at
+/// all (a point cloud): OBJ importers keep loose vertices only in a file
+/// that has nothing else, so a mesh never mixes the two, and the vertex
+/// and face counts of a file are those an importer shows.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameMesh {
+    /// Object name (the OBJ `o` name).
+    pub name: String,
+    /// Vertex positions.
+    pub vertices: Vec<Vec3>,
+    /// Unit normal of each vertex (same length as `vertices`).
+    pub normals: Vec<Vec3>,
+    /// Triangles, as vertex indices, wound along the normals.
+    pub triangles: Vec<[u32; 3]>,
+    /// Line segments, as vertex indices.
+    pub lines: Vec<[u32; 2]>,
+}
+
+impl FrameMesh {
+    fn named(name: String) -> Self {
+        FrameMesh {
+            name,
+            ..FrameMesh::default()
+        }
+    }
+
+    fn push(&mut self, x: Vec3, n: Vec3) -> u32 {
+        self.vertices.push(x);
+        self.normals.push(n);
+        (self.vertices.len() - 1) as u32
+    }
+
+    /// Keeps only the triangles of three distinct vertices and the vertices
+    /// they use (renumbered in their order), so that no vertex is loose.
+    fn compact_triangles(&mut self) {
+        self.triangles
+            .retain(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
+        let mut new_index = vec![u32::MAX; self.vertices.len()];
+        for t in &self.triangles {
+            for &v in t {
+                new_index[v as usize] = 0;
+            }
+        }
+        let (mut vertices, mut normals) = (Vec::new(), Vec::new());
+        for (k, slot) in new_index.iter_mut().enumerate() {
+            if *slot == 0 {
+                *slot = vertices.len() as u32;
+                vertices.push(self.vertices[k]);
+                normals.push(self.normals[k]);
+            }
+        }
+        for t in &mut self.triangles {
+            *t = t.map(|v| new_index[v as usize]);
+        }
+        self.vertices = vertices;
+        self.normals = normals;
+    }
+}
+
+/// Two unit vectors spanning the plane perpendicular to `n`.
+fn tangent_pair(n: &Vec3) -> (Vec3, Vec3) {
+    let a = if n.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
+    let t = (a - n * n.dot(&a)).normalize();
+    (t, n.cross(&t))
+}
+
+/// The particles of one scene object at the world's current state, drawn
+/// as [`Outputs::particles`] asks: loose vertices (`Points`), hexagonal
+/// discs of 7 vertices and 6 triangles (`Discs`) or the particle frame as
+/// 4 vertices and 3 segments (`Axes`); normals are the particle normals.
+pub fn object_geometry(world: &World, object: &BuiltObject, outputs: &Outputs) -> FrameMesh {
+    let p = world.particles();
+    let size = outputs.glyph_size * object.rest_spacing;
+    let mut mesh = FrameMesh::named(object.name.clone());
+    for id in object.all_ids() {
+        let Some(s) = p.slot_of(id) else { continue };
+        let x = p.positions()[s].coords;
+        let q = p.orientations()[s];
+        let n = q * p.normal_axes()[s];
+        match outputs.particles {
+            ParticleOutput::None => {}
+            ParticleOutput::Points => {
+                mesh.push(x, n);
+            }
+            ParticleOutput::Discs => {
+                let (t, b) = tangent_pair(&n);
+                let c = mesh.push(x, n);
+                for k in 0..6 {
+                    let a = k as Real * std::f64::consts::PI / 3.0;
+                    mesh.push(x + size * (a.cos() * t + a.sin() * b), n);
+                }
+                for k in 0..6 {
+                    mesh.triangles.push([c, c + 1 + k, c + 1 + (k + 1) % 6]);
+                }
+            }
+            ParticleOutput::Axes => {
+                let tx = q * p.tangent_axes()[s];
+                let ty = n.cross(&tx);
+                let c = mesh.push(x, n);
+                for axis in [tx, ty, n] {
+                    let k = mesh.push(x + size * axis, n);
+                    mesh.lines.push([c, k]);
+                }
+            }
+        }
+    }
+    mesh
+}
+
+/// The mesh `name` of a polygonized skin: its triangles with per-vertex
+/// normals (analytic field gradient); degenerate triangles and unused
+/// vertices left out.
+pub fn mesh_geometry(name: &str, mesh: &Mesh) -> FrameMesh {
+    let mut out = FrameMesh {
+        name: name.to_string(),
+        vertices: mesh.positions().iter().map(|p| p.coords).collect(),
+        normals: mesh.normals().to_vec(),
+        triangles: mesh.triangles().to_vec(),
+        lines: Vec::new(),
+    };
+    out.compact_triangles();
+    out
+}
+
+/// The name of tool `k` in the frames: `tool_<name>`, `tool_<k>` when
+/// unnamed.
+pub fn tool_name(k: usize, tool: &Tool) -> String {
+    match tool.params().name.as_str() {
+        "" => format!("tool_{k}"),
+        n => format!("tool_{n}"),
+    }
+}
+
+/// The mesh [`tool_name`] of tool `k` at world time `t`: flat-shaded
+/// triangles (three vertices each, with the face normal). Planes are drawn
+/// as a square of half side 10.
+pub fn tool_geometry(k: usize, tool: &Tool, t: Real) -> FrameMesh {
+    let (v, tris) = tool.surface_mesh(t, 10.0);
+    let mut mesh = FrameMesh::named(tool_name(k, tool));
+    for tri in &tris {
+        let [a, b, c] = tri.map(|i| v[i as usize].coords);
+        let n = (b - a)
+            .cross(&(c - a))
+            .try_normalize(0.0)
+            .unwrap_or_default();
+        let f = [a, b, c].map(|x| mesh.push(x, n));
+        mesh.triangles.push(f);
+    }
+    mesh
+}
+
+/// The mesh `<object>_surface`: the triangles of
+/// [`op_dynamics::triangulation`] over the object's live particles (mutual
+/// neighbours within `triangulation_radius` rest spacings, wound along the
+/// particle normals), with the particles they use as vertices (original
+/// then created, in that order) and their normals. Particles in no
+/// triangle are left out (they are in the particles' own mesh).
+pub fn surface_geometry(world: &World, object: &BuiltObject, outputs: &Outputs) -> FrameMesh {
+    let p = world.particles();
+    let slots: Vec<usize> = object.all_ids().filter_map(|id| p.slot_of(id)).collect();
+    let positions: Vec<_> = slots.iter().map(|&s| p.positions()[s]).collect();
+    let normals: Vec<Vec3> = slots.iter().map(|&s| p.normal(s)).collect();
+    let params =
+        TriangulationParams::with_radius(outputs.triangulation_radius * object.rest_spacing);
+    // The radius is validated with the scene; a non-finite spacing leaves
+    // the surface without triangles rather than failing the frame.
+    let triangles = triangulate_points(&positions, &normals, &params).unwrap_or_default();
+    let mut mesh = FrameMesh {
+        name: surface_name(object),
+        vertices: positions.iter().map(|q| q.coords).collect(),
+        normals,
+        triangles,
+        lines: Vec::new(),
+    };
+    mesh.compact_triangles();
+    mesh
+}
+
+/// The name of an object's triangulation in the frames: `<object>_surface`.
+pub fn surface_name(object: &BuiltObject) -> String {
+    format!("{}_surface", object.name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn compaction_drops_loose_vertices_and_degenerate_triangles() {
+        let mut m = FrameMesh::named("m".into());
+        for k in 0..5 {
+            m.push(Vec3::new(k as Real, 0.0, 0.0), Vec3::z());
+        }
+        m.triangles = vec![[1, 2, 4], [2, 2, 3]];
+        m.compact_triangles();
+        assert_eq!(m.vertices.len(), 3);
+        assert_eq!(m.normals.len(), 3);
+        assert_eq!(m.triangles, vec![[0, 1, 2]]);
+        assert_eq!(m.vertices[2].x, 4.0);
+    }
+}

@@ -1,0 +1,286 @@
+//! Frame files (DESIGN §6): what a run writes per frame, in the formats
+//! asked for ([`FrameFormat`]: OBJ by default, binary PLY, VTU).
+//!
+//! Layout under the output directory (see [`layout`]):
+//!
+//! - `frames/<stem>/<stem>_00000.obj` (and `.ply`): one file per frame for
+//!   each sequence ([`Sequence`]): every scene object's particles (as
+//!   [`Outputs::particles`] asks), every skin `<object>_skin`, every
+//!   triangulation `<object>_surface` (when [`Outputs::triangulation`] is
+//!   set) and every tool `tool_<name>`. One object per file, because OBJ
+//!   importers (Blender's among them) drop the loose vertices of a point
+//!   cloud that shares its file with other objects; each sequence is then
+//!   also what sequence loaders (Blender add-ons, Houdini, ParaView) take;
+//! - `vtu/state_00000.vtu` and `vtu/state.vtu.series`: every particle
+//!   with its attributes ([`vtu`]).
+//!
+//! Axes: scenes are z-up. OBJ files are written y-up (scene `(x, y, z)`
+//! as `(x, z, -y)`, see [`obj`]), the convention of OBJ and of Blender's
+//! OBJ importer, so frames import upright; PLY and VTU files hold scene
+//! coordinates (Blender's PLY importer and ParaView take z-up as is).
+//! `summary.json` names the formats, their axes and the sequences.
+//!
+//! Every file is written atomically (temporary file + rename,
+//! [`write_atomically`]), so a file on disk is always complete.
+
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use op_dynamics::{Real, Tool, World};
+
+use crate::built::BuiltObject;
+use crate::outputs::{Outputs, ParticleOutput};
+use crate::skins::{BuiltSkin, SkinTool};
+
+pub mod geometry;
+pub mod layout;
+pub mod obj;
+pub mod ply;
+pub mod vtu;
+
+pub use geometry::FrameMesh;
+pub use layout::{FrameFormat, Sequence, SequenceKind};
+
+/// Writes `bytes_fn`'s output to `path` atomically: a temporary file in the
+/// same directory, flushed and synced, then renamed over `path`. The
+/// temporary file is created exclusively (`create_new`: it fails rather than
+/// follow a symbolic link or reuse a file someone else made) under a name
+/// no other process can predict (process id, a counter and the clock's
+/// nanoseconds), and removed when anything fails.
+pub fn write_atomically(
+    path: &Path,
+    bytes_fn: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let (tmp, file) = create_temporary(dir, &name)?;
+    let result = (|| {
+        let mut w = BufWriter::new(file);
+        bytes_fn(&mut w)?;
+        w.flush()?;
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Whether `file_name` is one of [`write_atomically`]'s temporary files.
+pub fn is_temporary(file_name: &str) -> bool {
+    file_name.starts_with('.') && file_name.ends_with(".opsim-tmp")
+}
+
+/// A new temporary file `.{name}.{pid}-{counter}-{nanos}.opsim-tmp` in `dir`,
+/// created exclusively; retried under a new name if one exists.
+fn create_temporary(dir: &Path, name: &str) -> std::io::Result<(PathBuf, fs::File)> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let mut last = None;
+    for _ in 0..16 {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.subsec_nanos());
+        let k = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let tmp = dir.join(format!(
+            ".{name}.{}-{k}-{nanos}.opsim-tmp",
+            std::process::id()
+        ));
+        match fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+        {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(e),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(last.unwrap_or_else(|| std::io::Error::other("cannot create a temporary file")))
+}
+
+/// What a sequence is drawn from.
+#[derive(Copy, Clone, Debug)]
+enum Source {
+    Particles(usize),
+    Skin(usize),
+    Surface(usize),
+    Tool(usize),
+}
+
+/// Writes a run's frames: the sequences of a scene in the chosen formats,
+/// fixed when the run starts.
+#[derive(Debug)]
+pub struct FrameWriter {
+    out: PathBuf,
+    formats: Vec<FrameFormat>,
+    sequences: Vec<Sequence>,
+    sources: Vec<Source>,
+    vtu_files: Vec<(String, Real)>,
+}
+
+impl FrameWriter {
+    /// The writer of a scene's frames under `out` in `formats` (duplicates
+    /// ignored): unless [`Outputs::particles`] is `None`, a particle
+    /// sequence per object and a skin sequence per skin; a surface sequence
+    /// per object when [`Outputs::triangulation`] is set; a tool sequence
+    /// per tool when any of these is written; in that order.
+    pub fn new(
+        out: &Path,
+        formats: &[FrameFormat],
+        objects: &[BuiltObject],
+        skins: &[BuiltSkin],
+        tools: &[Tool],
+        outputs: &Outputs,
+    ) -> Self {
+        let mut named = Vec::new();
+        let particles = outputs.particles != ParticleOutput::None;
+        if particles {
+            for (k, o) in objects.iter().enumerate() {
+                named.push((
+                    o.name.clone(),
+                    SequenceKind::Particles,
+                    Source::Particles(k),
+                ));
+            }
+            // Skins are polygonized for the frames only with particles
+            // (`BuiltScene::stages`' `polygonize`).
+            for (k, s) in skins.iter().enumerate() {
+                named.push((s.name.clone(), SequenceKind::Skin, Source::Skin(k)));
+            }
+        }
+        if outputs.triangulation {
+            for (k, o) in objects.iter().enumerate() {
+                named.push((
+                    geometry::surface_name(o),
+                    SequenceKind::Surface,
+                    Source::Surface(k),
+                ));
+            }
+        }
+        if particles || outputs.triangulation {
+            for (k, t) in tools.iter().enumerate() {
+                named.push((
+                    geometry::tool_name(k, t),
+                    SequenceKind::Tool,
+                    Source::Tool(k),
+                ));
+            }
+        }
+        let sources = named.iter().map(|n| n.2).collect();
+        let sequences = layout::sequences(named.into_iter().map(|(n, kind, _)| (n, kind)));
+        let mut formats = formats.to_vec();
+        formats.sort();
+        formats.dedup();
+        FrameWriter {
+            out: out.to_path_buf(),
+            formats,
+            sequences,
+            sources,
+            vtu_files: Vec::new(),
+        }
+    }
+
+    /// The sequences, in the order they are written.
+    pub fn sequences(&self) -> &[Sequence] {
+        &self.sequences
+    }
+
+    /// The formats written, in order.
+    pub fn formats(&self) -> &[FrameFormat] {
+        &self.formats
+    }
+
+    /// Whether a frame writes any file.
+    pub fn writes_anything(&self) -> bool {
+        self.formats.contains(&FrameFormat::Vtu)
+            || (!self.sequences.is_empty() && !self.formats.is_empty())
+    }
+
+    /// The folders the frames go to (created by the runner).
+    pub fn folders(&self) -> Vec<PathBuf> {
+        let mut dirs: Vec<PathBuf> = if self
+            .formats
+            .iter()
+            .any(|f| matches!(f, FrameFormat::Obj | FrameFormat::Ply))
+        {
+            self.sequences.iter().map(|s| s.folder(&self.out)).collect()
+        } else {
+            Vec::new()
+        };
+        if self.formats.contains(&FrameFormat::Vtu) {
+            dirs.push(self.out.join("vtu"));
+        }
+        dirs
+    }
+
+    /// Writes frame `k` at scene time `time`: every sequence's file in each
+    /// mesh format (skins polygonized at their current pose, deformed where
+    /// they touch another skin and clipped where they press on an obstacle
+    /// tool), then the VTU state and its series file. A failure leaves the
+    /// files already written complete.
+    #[allow(clippy::too_many_arguments)]
+    pub fn write_frame(
+        &mut self,
+        k: usize,
+        time: Real,
+        world: &World,
+        objects: &[BuiltObject],
+        skins: &[BuiltSkin],
+        skin_tools: &[SkinTool],
+        tools: &[Tool],
+        outputs: &Outputs,
+    ) -> Result<(), (PathBuf, std::io::Error)> {
+        let mesh_formats: Vec<FrameFormat> = self
+            .formats
+            .iter()
+            .copied()
+            .filter(|f| *f != FrameFormat::Vtu)
+            .collect();
+        if !mesh_formats.is_empty() {
+            for (seq, source) in self.sequences.iter().zip(&self.sources) {
+                let at = |f| seq.path(&self.out, k, f);
+                let mesh = match *source {
+                    Source::Particles(o) => geometry::object_geometry(world, &objects[o], outputs),
+                    Source::Surface(o) => geometry::surface_geometry(world, &objects[o], outputs),
+                    Source::Tool(t) => geometry::tool_geometry(t, &tools[t], world.time()),
+                    Source::Skin(s) => {
+                        let skin = &skins[s];
+                        let mesh = skin
+                            .mesh_in(skins, skin_tools, world.time())
+                            .map_err(|e| (at(mesh_formats[0]), std::io::Error::other(e)))?;
+                        geometry::mesh_geometry(&skin.name, &mesh)
+                    }
+                };
+                for &f in &mesh_formats {
+                    let path = at(f);
+                    write_atomically(&path, |w| match f {
+                        FrameFormat::Ply => ply::write(&mesh, w),
+                        _ => obj::write(&mesh, w),
+                    })
+                    .map_err(|e| (path, e))?;
+                }
+            }
+        }
+        if self.formats.contains(&FrameFormat::Vtu) {
+            let path = layout::vtu_path(&self.out, k);
+            let title = format!("opsim frame {k}, t = {time}");
+            write_atomically(&path, |w| vtu::write(world, objects, &title, w))
+                .map_err(|e| (path.clone(), e))?;
+            let name = path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            self.vtu_files.push((name, time));
+            let series = layout::vtu_series_path(&self.out);
+            write_atomically(&series, |w| vtu::write_series(&self.vtu_files, w))
+                .map_err(|e| (series.clone(), e))?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,232 @@
+//! `opsim run --format obj,ply,vtu` (issue 16): binary PLY frame sequences
+//! and VTU particle state parse back with the crates that wrote them, with
+//! the counts of the OBJ frames and every per-particle attribute.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use ply_rs_bw::ply::{DefaultElement, Property};
+use vtkio::model::{Attribute, DataSet, IOBuffer, Piece};
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn opsim(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_opsim"))
+        .args(args)
+        .current_dir(repo())
+        .output()
+        .expect("run opsim")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("opsim-formats-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// `(vertices, faces, lines)` of an OBJ frame file.
+fn obj_counts(path: &Path) -> (usize, usize, usize) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let count = |p: &str| text.lines().filter(|l| l.starts_with(p)).count();
+    (count("v "), count("f "), count("l "))
+}
+
+fn ply(path: &Path) -> ply_rs_bw::ply::Ply<DefaultElement> {
+    let mut f = std::fs::File::open(path).unwrap();
+    ply_rs_bw::parser::Parser::<DefaultElement>::new()
+        .read_ply(&mut f)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn float(e: &DefaultElement, key: &str) -> f64 {
+    match e[key] {
+        Property::Float(v) => f64::from(v),
+        ref p => panic!("{key}: {p:?}"),
+    }
+}
+
+/// The f64 values of a VTU point array, and its component count.
+fn array<'a>(attrs: &'a [Attribute], name: &str) -> (&'a IOBuffer, u32) {
+    for a in attrs {
+        if let Attribute::DataArray(d) = a {
+            if d.name == name {
+                return (&d.data, d.elem.num_comp());
+            }
+        }
+    }
+    panic!("no point array {name}");
+}
+
+fn floats(b: &IOBuffer) -> Vec<f64> {
+    match b {
+        IOBuffer::F64(v) => v.clone(),
+        other => panic!("expected Float64, got {other:?}"),
+    }
+}
+
+fn ints(b: &IOBuffer) -> Vec<i32> {
+    match b {
+        IOBuffer::I32(v) => v.clone(),
+        other => panic!("expected Int32, got {other:?}"),
+    }
+}
+
+#[test]
+fn ply_and_vtu_frames_parse_back_with_counts_and_attributes() {
+    let out = temp_dir("all");
+    let o = opsim(&[
+        "run",
+        "scenes/hinge_spiral.ron",
+        "--out",
+        out.to_str().unwrap(),
+        "--frames",
+        "3",
+        "--format",
+        "obj,ply,vtu",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        summary["files"]["formats"],
+        serde_json::json!(["obj", "ply", "vtu"])
+    );
+    assert_eq!(summary["files"]["axes"]["obj"], "y_up");
+    assert_eq!(summary["files"]["axes"]["ply"], "z_up");
+    let particles = summary["objects"][0]["particles"].as_u64().unwrap() as usize;
+    for k in 0..3 {
+        // PLY: the OBJ frame's counts, in scene coordinates (OBJ is y-up).
+        let obj = out.join(format!("frames/spiral/spiral_{k:05}.obj"));
+        let (v, f, l) = obj_counts(&obj);
+        let path = out.join(format!("frames/spiral/spiral_{k:05}.ply"));
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(bytes.starts_with(b"ply\nformat binary_little_endian 1.0\n"));
+        let p = ply(&path);
+        assert_eq!(p.payload["vertex"].len(), v, "{}", path.display());
+        assert_eq!(p.payload["face"].len(), f);
+        assert_eq!(p.payload["edge"].len(), l);
+        assert_eq!(v, 7 * particles, "discs: 7 vertices per particle");
+        let first_obj: Vec<f64> = std::fs::read_to_string(&obj)
+            .unwrap()
+            .lines()
+            .find_map(|l| l.strip_prefix("v "))
+            .unwrap()
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        let e = &p.payload["vertex"][0];
+        let scene = [float(e, "x"), float(e, "y"), float(e, "z")];
+        let expected = [first_obj[0], -first_obj[2], first_obj[1]];
+        for c in 0..3 {
+            assert!(
+                (scene[c] - expected[c]).abs() < 2e-6,
+                "{scene:?} {expected:?}"
+            );
+        }
+        let n = [float(e, "nx"), float(e, "ny"), float(e, "nz")];
+        assert!(((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() - 1.0).abs() < 1e-5);
+        match &p.payload["face"][0]["vertex_indices"] {
+            Property::ListInt(t) => assert_eq!(t.len(), 3),
+            other => panic!("{other:?}"),
+        }
+
+        // VTU: every particle with its attributes.
+        let path = out.join(format!("vtu/state_{k:05}.vtu"));
+        let vtk = vtkio::Vtk::import(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+            panic!("not an unstructured grid");
+        };
+        let Piece::Inline(piece) = &pieces[0] else {
+            panic!("not inline");
+        };
+        assert_eq!(piece.num_points(), particles);
+        assert_eq!(piece.cells.types.len(), particles);
+        let attrs = &piece.data.point;
+        for (name, comps) in [
+            ("orientation", 4),
+            ("normal", 3),
+            ("velocity", 3),
+            ("rest_curvature", 1),
+            ("temperature", 1),
+        ] {
+            let (b, c) = array(attrs, name);
+            assert_eq!(c, comps, "{name}");
+            let v = floats(b);
+            assert_eq!(v.len(), comps as usize * particles, "{name}");
+            assert!(v.iter().all(|x| x.is_finite()), "{name}");
+        }
+        let q = floats(array(attrs, "orientation").0);
+        for c in q.chunks(4) {
+            let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+            assert!((norm - 1.0).abs() < 1e-9, "{c:?}");
+        }
+        // The spiral's rest curvature runs from 0.25 to 0.7.
+        let kappa = floats(array(attrs, "rest_curvature").0);
+        assert!(
+            kappa.iter().all(|&x| (0.2..=0.75).contains(&x)),
+            "{kappa:?}"
+        );
+        // Standard(1) x6, the hinge (-1), Standard(2) x6 (seed 002 §5).
+        let kinds = ints(array(attrs, "type").0);
+        assert_eq!(kinds.iter().filter(|&&t| t == -1).count(), 1, "{kinds:?}");
+        assert_eq!(kinds.iter().filter(|&&t| t == 1).count(), 6, "{kinds:?}");
+        assert_eq!(kinds.iter().filter(|&&t| t == 2).count(), 6, "{kinds:?}");
+        assert!(ints(array(attrs, "object").0).iter().all(|&o| o == 0));
+        assert_eq!(ints(array(attrs, "id").0).len(), particles);
+    }
+    let series: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("vtu/state.vtu.series")).unwrap())
+            .unwrap();
+    let files = series["files"].as_array().unwrap();
+    assert_eq!(files.len(), 3);
+    let rate = summary["frame_rate"].as_f64().unwrap();
+    for (k, f) in files.iter().enumerate() {
+        assert_eq!(f["name"], format!("state_{k:05}.vtu"));
+        assert!((f["time"].as_f64().unwrap() - k as f64 / rate).abs() < 1e-9);
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn vtu_alone_writes_no_mesh_frames_and_an_unknown_format_is_refused() {
+    let out = temp_dir("vtu");
+    let o = opsim(&[
+        "run",
+        "scenes/two_sheets.ron",
+        "--out",
+        out.to_str().unwrap(),
+        "--frames",
+        "2",
+        "--format",
+        "vtu",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!out.join("frames").exists());
+    let vtk = vtkio::Vtk::import(out.join("vtu/state_00001.vtu")).unwrap();
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        panic!("not an unstructured grid");
+    };
+    let Piece::Inline(piece) = &pieces[0] else {
+        panic!("not inline");
+    };
+    assert_eq!(piece.num_points(), 288);
+    let objects = ints(array(&piece.data.point, "object").0);
+    assert_eq!(objects.iter().filter(|&&o| o == 1).count(), 144);
+    let o = opsim(&[
+        "run",
+        "scenes/two_sheets.ron",
+        "--out",
+        out.to_str().unwrap(),
+        "--format",
+        "obj,stl",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("stl") && err.contains("obj, ply or vtu"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
