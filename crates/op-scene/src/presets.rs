@@ -68,7 +68,8 @@ impl Preset {
 pub const PRESETS: &[Preset] = &[
     Preset {
         name: "cloth",
-        summary: "a sheet that bends freely, keeps its area and drapes: Lennard-Jones spacing, weak \
+        summary:
+            "a sheet that bends freely, keeps its area and drapes: Lennard-Jones spacing, weak \
                   co-planarity, explicit bonds so folded layers slide over each other",
         material_ron: "(spacing: LennardJones((epsilon: 10, r0: 1, cutoff: 1.5)), \
                        coplanarity: 0.5, bonds: (radius: 1.2))",
