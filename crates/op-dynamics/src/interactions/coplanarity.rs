@@ -2,10 +2,11 @@
 //!
 //! Zero when `j` lies in i's tangent plane. Normalized variant (seed 002
 //! footnote 6, DESIGN §3): `φ_P / |r|² = cos²` of the angle between `n_i`
-//! and `r`, dimensionless. The weighted energy is `α_P φ_P ψ`; force and
-//! torque follow from the gradients returned here (App. B of seed 000 gives
-//! them for the raw variant: `f_P = -n_i (n_i·r) ψ - ...`; we derive them from
-//! the energy instead, see [`super::pair`]).
+//! and `r`, dimensionless (faded out near coincidence, where it has no
+//! limit: [`super::material`] docs). The weighted energy is `α_P φ_P ψ`;
+//! force and torque follow from the gradients returned here (App. B of seed
+//! 000 gives them for the raw variant: `f_P = -n_i (n_i·r) ψ - ...`; we
+//! derive them from the energy instead, see [`super::pair`]).
 
 use super::pair::{PairGeometry, TermGrad};
 use crate::math::Vec3;

@@ -34,6 +34,25 @@ pub fn smooth_fall(x: Real) -> (Real, Real) {
     }
 }
 
+/// The C2 quintic smoothstep rising from 0 at `x <= 0` to 1 at `x >= 1`
+/// (`1 - smooth_fall(x)`, evaluated directly so that it is exact to
+/// relative round-off near 0, where it grows like `10 x³`): returns
+/// `(S(x), S'(x))`.
+#[inline]
+pub fn smooth_rise(x: Real) -> (Real, Real) {
+    if x <= 0.0 {
+        (0.0, 0.0)
+    } else if x >= 1.0 {
+        (1.0, 0.0)
+    } else {
+        let y = 1.0 - x;
+        (
+            x * x * x * (10.0 - 15.0 * x + 6.0 * x * x),
+            30.0 * x * x * y * y,
+        )
+    }
+}
+
 /// A taper `s(r)`: 1 up to `r_on`, quintic fall to 0 at `r_c`, 0 beyond.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Taper {
@@ -113,6 +132,22 @@ mod tests {
         assert!(smooth_fall(1e-4).1.abs() < 1e-6);
         assert!(smooth_fall(1.0 - 1e-4).1.abs() < 1e-6);
         assert_eq!(smooth_fall(0.5).0, 0.5);
+    }
+
+    #[test]
+    fn smooth_rise_complements_smooth_fall() {
+        for k in 0..=100 {
+            let x = -0.1 + 1.2 * k as Real / 100.0;
+            let (r, dr) = smooth_rise(x);
+            let (f, df) = smooth_fall(x);
+            assert!(
+                (r + f - 1.0).abs() < 1e-15 && (dr + df).abs() < 1e-13,
+                "x = {x}"
+            );
+        }
+        // Relative accuracy near 0, where 1 - smooth_fall would cancel.
+        let (r, _) = smooth_rise(1e-6);
+        assert!((r / 1e-17 - 1.0).abs() < 1e-5, "{r}");
     }
 
     #[test]

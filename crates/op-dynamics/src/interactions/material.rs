@@ -8,10 +8,30 @@
 //! Default: cohesion spacing, every orientation weight 0 (a scene enables
 //! the terms it uses), normalized terms, default repulsion, no friction,
 //! no bonds.
+//!
+//! # Near coincidence
+//!
+//! The normalized co-planarity and co-circularity terms (and the normalized
+//! spin potential) depend on `r` only through its direction `r/|r|`: they
+//! have no limit at `r = 0` and their gradients grow like `1/|r|`. Where the
+//! spacing core lets particles overlap (cohesion with a large `α`, DESIGN
+//! §8), a pair passing close to coincidence swept its direction through
+//! half a turn within a few steps and the term's energy (up to `4 α ψ` per
+//! side) jumped by whatever the step missed: a free shell of the
+//! `elastic_shell` preset gained energy by bursts and tore apart at any
+//! step size. These terms are therefore faded to zero below the
+//! coincidence radius `r_near = NEAR_FRACTION · r_w` (`r_w` the bottom of
+//! the spacing well, about `r0`; the weight's width `a` without spacing)
+//! by the C2 quintic rise [`super::cutoff::smooth_rise`] of `|r|/r_near`,
+//! so the energy, force and torque are continuous and bounded through
+//! coincidence. Pairs at or beyond `r_near` (every pair of a material at
+//! rest) are evaluated exactly as before. The raw terms, co-normality and
+//! the form term are regular at `r = 0` and are not faded.
 
 use super::cocircularity;
 use super::conormality;
 use super::coplanarity;
+use super::cutoff::smooth_rise;
 use super::form;
 use super::pair::{OrientationGrad, PairGeometry, TermGrad};
 use super::repulsion::{Repulsion, RepulsionParams};
@@ -24,6 +44,11 @@ use crate::heat::HeatResponse;
 use crate::math::{Real, Vec3};
 use crate::plasticity::Plasticity;
 use serde::{Deserialize, Serialize};
+
+/// The coincidence radius below which the normalized direction terms fade
+/// to zero, as a fraction of the bottom of the spacing well `r_w` (of the
+/// weight's width `a` without spacing); see the module docs.
+pub const NEAR_FRACTION: Real = 0.25;
 
 /// The interaction weights and parameters of a set of particles.
 #[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -154,8 +179,15 @@ impl Material {
             || self.form > 0.0
             || self.spin > 0.0;
         let well = spacing.as_ref().map_or((0.0, 0.0), SpacingKernel::well);
+        let near = NEAR_FRACTION
+            * if spacing.is_some() {
+                well.0
+            } else {
+                self.weight.a
+            };
         Ok(PreparedMaterial {
             well,
+            near,
             spacing,
             weight: self.weight.prepare().map_err(|e| e.within("weight"))?,
             w_p: self.coplanarity,
@@ -183,6 +215,8 @@ pub struct PreparedMaterial {
     spacing: Option<SpacingKernel>,
     /// Position and value of the spacing potential's minimum.
     well: (Real, Real),
+    /// The coincidence radius `r_near` (module docs).
+    near: Real,
     weight: Weight,
     w_p: Real,
     w_n: Real,
@@ -347,9 +381,12 @@ impl PreparedMaterial {
         }
         let mut phi = TermGrad::default();
         let norm = self.normalized;
+        // Fade of the normalized direction terms near coincidence (module
+        // docs); `None` at and beyond `r_near`, where nothing changes.
+        let fade = self.near_fade(g.dist);
         if self.w_p > 0.0 {
             let t = if norm {
-                coplanarity::normalized(g)
+                faded(coplanarity::normalized(g), fade, g)
             } else {
                 coplanarity::raw(g)
             };
@@ -360,7 +397,7 @@ impl PreparedMaterial {
         }
         if self.w_c > 0.0 {
             let t = if norm {
-                cocircularity::normalized(g)
+                faded(cocircularity::normalized(g), fade, g)
             } else {
                 cocircularity::raw(g)
             };
@@ -380,7 +417,9 @@ impl PreparedMaterial {
         out.d_nj = phi.d_nj * w.psi;
         if self.w_s > 0.0 {
             let s = spin::eval(self.spin_kind, norm, g);
-            out.spin_torque = spin::torque(&g.n_i, &g.t_i, &(s.d_t * (self.w_s * w.psi)));
+            // A rotation about n_i leaves |r| unchanged: the fade only scales.
+            let f = fade.map_or(1.0, |(f, _)| f);
+            out.spin_torque = spin::torque(&g.n_i, &g.t_i, &(s.d_t * (self.w_s * w.psi * f)));
         }
         out
     }
@@ -392,7 +431,41 @@ impl PreparedMaterial {
             return 0.0;
         }
         let w = self.weight.eval(&g.r, g.dist, &g.n_i);
-        self.w_s * w.psi * spin::eval(self.spin_kind, self.normalized, g).energy
+        let f = self.near_fade(g.dist).map_or(1.0, |(f, _)| f);
+        self.w_s * w.psi * f * spin::eval(self.spin_kind, self.normalized, g).energy
+    }
+
+    /// The coincidence radius `r_near` below which the normalized direction
+    /// terms fade to zero (module docs).
+    pub fn near_radius(&self) -> Real {
+        self.near
+    }
+
+    /// `Some((S, dS/dr))`, the fade of the normalized direction terms at
+    /// `dist < r_near`; `None` for the raw terms or at and beyond `r_near`.
+    #[inline]
+    fn near_fade(&self, dist: Real) -> Option<(Real, Real)> {
+        if self.normalized && dist < self.near {
+            let (s, ds) = smooth_rise(dist / self.near);
+            Some((s, ds / self.near))
+        } else {
+            None
+        }
+    }
+}
+
+/// A direction term `φ(r/|r|, n_i, n_j)` multiplied by the fade `S(|r|)`:
+/// `∂(Sφ)/∂r = S ∂φ/∂r + φ S' r/|r|`. Unchanged for `fade == None`.
+#[inline]
+fn faded(t: TermGrad, fade: Option<(Real, Real)>, g: &PairGeometry) -> TermGrad {
+    match fade {
+        None => t,
+        Some((s, ds)) => TermGrad {
+            energy: t.energy * s,
+            d_r: t.d_r * s + g.r * (t.energy * ds / g.dist),
+            d_ni: t.d_ni * s,
+            d_nj: t.d_nj * s,
+        },
     }
 }
 
@@ -553,6 +626,91 @@ mod tests {
                 e.contains("must") || e.contains(">"),
                 "says what is allowed: {e}"
             );
+        }
+    }
+
+    /// Normalized co-planarity and co-circularity depend on `r` only
+    /// through its direction: a pair passing close to coincidence saw its
+    /// energy jump by up to `4 α ψ` per side between two steps, and a free
+    /// sphere of the `elastic_shell` preset gained energy by bursts and tore
+    /// apart. Below `r_near` they now fade to zero: energy and gradients
+    /// vanish at coincidence, stay bounded (`~ α/r_near`, not `~ α/|r|`) and
+    /// match finite differences; from `r_near` on nothing changes.
+    #[test]
+    fn normalized_direction_terms_fade_to_zero_at_coincidence() {
+        use crate::interactions::cohesion::CohesionParams as Cp;
+        use crate::interactions::pair::{evaluate_pair, Coupling};
+        use crate::interactions::test_support::{check_fd, check_momentum, geometry, Rng};
+        let (w_p, w_c) = (0.7, 5.0);
+        let shell = Material {
+            spacing: Some(Spacing::Cohesion(Cp {
+                cutoff: Some(1.5),
+                ..Default::default()
+            })),
+            coplanarity: w_p,
+            cocircularity: w_c,
+            ..Material::default()
+        }
+        .prepare()
+        .unwrap();
+        let bare = Material {
+            weight: WeightParams {
+                a: 0.8,
+                shape: WeightShape::Anisotropic { b: 0.5 },
+                ..Default::default()
+            },
+            coplanarity: w_p,
+            cocircularity: w_c,
+            ..Material::empty()
+        }
+        .prepare()
+        .unwrap();
+        // r_near: a quarter of the well's position (about r0), or of `a`.
+        let r_w = shell.spacing_well().0;
+        assert!((r_w - 1.0).abs() < 1e-6, "{r_w}");
+        assert_eq!(shell.near_radius(), NEAR_FRACTION * r_w);
+        assert_eq!(bare.near_radius(), NEAR_FRACTION * 0.8);
+        let c = Coupling::Complete { oriented: true };
+        let mut rng = Rng::new(41);
+        for m in [&shell, &bare] {
+            let near = m.near_radius();
+            let mut worst: Real = 0.0;
+            for k in 0..400 {
+                let dist = near * (k as Real + 0.5) / 400.0;
+                let (bi, bj) = crate::interactions::test_support::random_pair(&mut rng, dist);
+                // Finite differences (steps 1e-4) need |r| well above the step.
+                if k % 8 == 4 && k >= 40 {
+                    check_fd(m, m, &bi, &bj, c);
+                    check_momentum(m, m, &bi, &bj, c);
+                }
+                let r = bj.p - bi.p;
+                let g = geometry(r, bi.normal(), bj.normal(), bi.tangent(), 0.0);
+                let o = m.orientation(&g);
+                // Bounded: |d(Sφ)/dr| <= (max S' φ + max S/r |∇φ|) ψ <= 17.1 α / r_near.
+                worst = worst.max(o.d_r.norm() * near / (w_p + w_c));
+                let res = evaluate_pair(&bi.view(m), &bj.view(m), c);
+                assert!(res.force_i.norm().is_finite());
+            }
+            assert!(worst < 18.0, "gradient {worst} alpha / r_near");
+            // At coincidence: no energy, no force, no torque.
+            for _ in 0..50 {
+                let (bi, bj) = crate::interactions::test_support::random_pair(&mut rng, 1e-9);
+                let g = geometry(bj.p - bi.p, bi.normal(), bj.normal(), bi.tangent(), 0.0);
+                let o = m.orientation(&g);
+                // (Unfaded, |∂φ/∂r| would be up to 8 α ψ / |r| ~ 1e11 here.)
+                assert!(o.energy.abs() < 1e-20, "{o:?}");
+                assert!(o.d_r.norm() < 1e-12 && o.d_ni.norm() < 1e-20, "{o:?}");
+            }
+            // From r_near on: the terms exactly as before.
+            for k in 1..50 {
+                let dist = near * (1.0 + k as Real / 10.0);
+                let (bi, bj) = crate::interactions::test_support::random_pair(&mut rng, dist);
+                let g = geometry(bj.p - bi.p, bi.normal(), bj.normal(), bi.tangent(), 0.0);
+                let psi = m.orientation_weight(&g.r, g.dist, &g.n_i);
+                let (p, q) = (coplanarity::normalized(&g), cocircularity::normalized(&g));
+                let phi = (0.0 + w_p * p.energy) + w_c * q.energy;
+                assert_eq!(m.orientation(&g).energy, psi * phi);
+            }
         }
     }
 }

@@ -47,7 +47,11 @@
 //!
 //! Orientation terms are weighted by `ψ` ([`weight`], seed 000 eq. 10) and
 //! every term is tapered to zero at its cut-off ([`cutoff`]), so energy and
-//! force are continuous when a pair leaves the neighbour radius.
+//! force are continuous when a pair leaves the neighbour radius. The
+//! normalized co-planarity, co-circularity and spin terms, which depend on
+//! the direction of `r` only, also fade to zero below a coincidence radius
+//! (a quarter of the spacing's rest distance, see [`material`]), so they
+//! stay continuous and bounded when particles overlap.
 //!
 //! Forces and torques are never typed in from the papers' tables (which
 //! contain typos): each term returns its gradients with respect to `r`,

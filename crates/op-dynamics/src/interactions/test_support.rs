@@ -308,8 +308,8 @@ pub fn check_momentum(
 
 /// FD (and, without spin, momentum) checks of a material's orientation
 /// terms for isotropic and anisotropic weights, raw and normalized, same
-/// and different materials on both sides, distances inside and in the
-/// taper region. Spin materials also check: no force, torques along the
+/// and different materials on both sides, distances inside, in the
+/// taper region and within the coincidence radius. Spin materials also check: no force, torques along the
 /// normals.
 pub fn term_suite(base: Material, seed: u64) {
     let mut rng = Rng::new(seed);
@@ -342,10 +342,14 @@ pub fn term_suite(base: Material, seed: u64) {
             };
             let (pm, po) = (m.prepare().unwrap(), other.prepare().unwrap());
             let rc = pm.cutoff();
-            for case in 0..40 {
-                // Every fourth configuration lies in the taper region.
+            for case in 0..48 {
+                // Every fourth configuration lies in the taper region, and
+                // every sixth within the coincidence radius, where the
+                // normalized direction terms fade out (`material` docs).
                 let dist = if case % 4 == 0 {
                     rng.range(0.8 * rc, rc)
+                } else if case % 6 == 1 {
+                    rng.range(0.01, 1.0) * pm.near_radius()
                 } else {
                     rng.range(0.4, rc)
                 };
