@@ -250,12 +250,21 @@ impl ForceContext<'_> {
                     let (friction, nv, tv) = (self.friction, normals, tangents);
                     if let Some(b) = bonds {
                         let pair = |i: usize, j: usize| {
-                            oriented_pair(a, m, b, friction, heated, cutoff2, nv, tv, s, i, j)
+                            oriented_pair::<false>(
+                                a, m, b, friction, heated, cutoff2, nv, tv, s, i, j,
+                            )
+                        };
+                        accumulate::<true, _, _>(list, blocks, pair, out);
+                    } else if !heated && uniform_oriented(a) {
+                        let pair = |i: usize, j: usize| {
+                            oriented_pair::<true>(
+                                a, m, &Unbonded, friction, false, cutoff2, nv, tv, s, i, j,
+                            )
                         };
                         accumulate::<true, _, _>(list, blocks, pair, out);
                     } else {
                         let pair = |i: usize, j: usize| {
-                            oriented_pair(
+                            oriented_pair::<false>(
                                 a, m, &Unbonded, friction, heated, cutoff2, nv, tv, s, i, j,
                             )
                         };
@@ -370,7 +379,7 @@ impl BondLookup for Bonds {
 /// Coupling of two particles: object membership, then typing, then bonds,
 /// then orientation (seed 002 §5; unoriented particles drop orientation
 /// terms; bond-governed pairs that are not bonded only repel).
-#[inline]
+#[inline(always)]
 pub(crate) fn coupling(
     a: &Attributes<'_>,
     bonds: &impl BondLookup,
@@ -401,6 +410,12 @@ fn uniform_spacing(a: &Attributes<'_>) -> bool {
         && a.materials.iter().all(|&m| m == 0)
         && a.objects.iter().all(|&x| x == o)
         && a.kinds.iter().all(|&x| x == k)
+}
+
+/// [`uniform_spacing`] and no particle unoriented: every pair is complete
+/// and oriented, of material 0.
+fn uniform_oriented(a: &Attributes<'_>) -> bool {
+    uniform_spacing(a) && a.flags.iter().all(|f| !f.contains(Flags::UNORIENTED))
 }
 
 /// The per-particle sums a force evaluation fills.
@@ -745,9 +760,13 @@ fn view(
 /// The oriented kernel's pair: the full interaction of the pair's coupling
 /// (weakened by heat when `heated`) plus inter-particle friction; zero
 /// beyond the cut-off.
+///
+/// `UNIFORM`: every particle has material 0, one object, one type and is
+/// oriented, the world is not heated ([`uniform_oriented`]): every pair is
+/// complete and oriented, without per-pair lookups.
 #[allow(clippy::too_many_arguments)]
-#[inline]
-fn oriented_pair(
+#[inline(always)]
+fn oriented_pair<const UNIFORM: bool>(
     a: &Attributes<'_>,
     materials: &[PreparedMaterial],
     bonds: &impl BondLookup,
@@ -766,16 +785,21 @@ fn oriented_pair(
     if d2 > cutoff2 {
         return None;
     }
-    let (mi, mj) = (
-        &materials[a.materials[i] as usize],
-        &materials[a.materials[j] as usize],
-    );
-    let c = coupling(a, bonds, i, j);
+    let (mi, mj, c) = if UNIFORM {
+        let m = &materials[0];
+        (m, m, Coupling::Complete { oriented: true })
+    } else {
+        (
+            &materials[a.materials[i] as usize],
+            &materials[a.materials[j] as usize],
+            coupling(a, bonds, i, j),
+        )
+    };
     let (vi, vj) = (
         view(p[i], normals[i], tangents[i], a.curvatures[i], mi),
         view(p[j], normals[j], tangents[j], a.curvatures[j], mj),
     );
-    let res = if heated && matches!(c, Coupling::Complete { .. }) {
+    let res = if !UNIFORM && heated && matches!(c, Coupling::Complete { .. }) {
         evaluate_pair_weakened(&vi, &vj, c, strength(a, mi, mj, heated, i, j))
     } else {
         evaluate_pair(&vi, &vj, c)

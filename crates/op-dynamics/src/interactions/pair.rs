@@ -177,7 +177,15 @@ pub fn evaluate_spacing_sq(
         return (0.0, Vec3::zeros());
     }
     let inv_d2 = 1.0 / d2;
-    let (u, g) = half_sum(mi, mj, d2, |m, d2| m.spacing_eval_sq(d2, inv_d2));
+    let (u, g) = if std::ptr::eq(mi, mj) {
+        mi.spacing_eval_sq(d2, inv_d2)
+    } else {
+        let (a, b) = (
+            mi.spacing_eval_sq(d2, inv_d2),
+            mj.spacing_eval_sq(d2, inv_d2),
+        );
+        (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1))
+    };
     (u, r * (-g))
 }
 
@@ -221,7 +229,7 @@ pub fn evaluate_spacing_weakened(
 /// `n_i·r`, `n_j·r` and the cross products `r × n_i`, `r × n_j`,
 /// `n_i × n_j`), and the weight `ψ` is evaluated once when both particles
 /// share an isotropic material ([`PreparedMaterial::direction`]).
-#[inline]
+#[inline(always)]
 pub fn evaluate_pair_weakened(
     i: &ParticleView,
     j: &ParticleView,
