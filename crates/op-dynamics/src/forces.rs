@@ -3,7 +3,7 @@
 //! identical at any thread count.
 //!
 //! The scheme is "fixed blocks, ordered merge" (STYLE): particles are cut
-//! into blocks of [`BLOCK`] consecutive slots (a constant, not a function of
+//! into blocks of `BLOCK` (2048) consecutive slots (a constant, not a function of
 //! the thread count; the world keeps particles in spatial order, so a block
 //! is a compact region). Each block, in parallel, visits the half-list rows
 //! of its particles in order and evaluates every pair once: the pair's

@@ -228,7 +228,7 @@ pub fn evaluate_spacing_weakened(
 /// (`|r|²`, one division `1/|r|²`, one square root, the dot products
 /// `n_i·r`, `n_j·r` and the cross products `r × n_i`, `r × n_j`,
 /// `n_i × n_j`), and the weight `ψ` is evaluated once when both particles
-/// share an isotropic material ([`PreparedMaterial::direction`]).
+/// share an isotropic material (`PreparedMaterial::direction`, crate-private).
 #[inline(always)]
 pub fn evaluate_pair_weakened(
     i: &ParticleView,
