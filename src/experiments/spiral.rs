@@ -397,6 +397,7 @@ impl SpiralRecipe {
             kind: Default::default(),
             velocity: [0.0; 3],
             angular_velocity: [0.0; 3],
+            velocities: None,
             overrides: Vec::new(),
             skin: None,
         }

@@ -2,16 +2,23 @@
 //! `E_ji` evaluated there (DESIGN §3), in parallel with results bitwise
 //! identical at any thread count.
 //!
-//! The scheme is "parallel map, ordered collect" (STYLE): the half neighbour
-//! list is flat, so a parallel pass over *pairs* writes each pair's result
-//! into its own slot of a pair buffer; a second parallel pass over
-//! *particles* gathers, in a fixed order, the contributions of the pairs
-//! where the particle is second (the transposed index, ascending source)
-//! and then of those where it is first (its row). No locks, no atomics, no
-//! scheduling dependence, no allocation once the buffers are sized. On one
-//! thread the pairs are scattered straight into the particle sums instead,
-//! which adds the same terms in the same order: the same bits, without the
-//! buffer's memory traffic.
+//! The scheme is "fixed blocks, ordered merge" (STYLE): particles are cut
+//! into blocks of `BLOCK` (2048) consecutive slots (a constant, not a function of
+//! the thread count; the world keeps particles in spatial order, so a block
+//! is a compact region). Each block, in parallel, visits the half-list rows
+//! of its particles in order and evaluates every pair once: the pair's
+//! share for its first particle goes into that particle's running sum, the
+//! share for the second particle into the block's own accumulator when it
+//! lies in the block, or into the block's *spill* (target slot and
+//! contribution, in visiting order) when it lies in a later block. A second
+//! parallel pass over blocks adds to each particle the spills aimed at it,
+//! from the earlier blocks in ascending order. Every particle's sum is thus
+//! added in one fixed order: its in-block incoming pairs (ascending source),
+//! then its own row (list order), then its incoming pairs from earlier
+//! blocks (ascending source). No locks, no atomics, no per-pair buffer: the
+//! only memory beyond the sums is the spills (pairs crossing a block
+//! boundary, a fraction of all pairs), the same at any thread count. A world
+//! of at most one block adds exactly as a serial scatter would.
 //!
 //! Two kernels are compiled and one is chosen when the world is built
 //! (pay for what you use): [`Kernel::Spacing`] touches positions only;
@@ -29,10 +36,10 @@ use crate::flags::Flags;
 use crate::heat::pair_strength;
 use crate::integrators::StateRef;
 use crate::interactions::{
-    evaluate_pair, evaluate_pair_weakened, evaluate_spacing, evaluate_spacing_weakened, Coupling,
-    ParticleView, PreparedMaterial,
+    evaluate_pair, evaluate_pair_weakened, evaluate_spacing_sq, evaluate_spacing_weakened,
+    Coupling, ParticleView, PreparedMaterial, SpacingKernel,
 };
-use crate::math::{Real, Vec3};
+use crate::math::{Point3, Real, Vec3};
 use crate::neighbours::NeighbourList;
 use crate::particles::Attributes;
 use crate::tools::Tools;
@@ -49,7 +56,11 @@ pub enum Kernel {
     Oriented,
 }
 
-/// Result slot of one pair in the oriented kernel.
+/// Particles per accumulation block (see the module docs). A constant:
+/// the order of every sum depends on it, never on the thread count.
+pub(crate) const BLOCK: usize = 2048;
+
+/// Result of one pair in the oriented kernel.
 #[derive(Copy, Clone, Debug, Default)]
 struct OrientedPair {
     force_j: Vec3,
@@ -58,15 +69,30 @@ struct OrientedPair {
     energy: Real,
 }
 
+/// One block's accumulators (see the module docs).
+#[derive(Default)]
+struct BlockScratch {
+    /// Incoming force and torque of each particle of the block from the
+    /// block's own rows.
+    local: Vec<(Vec3, Vec3)>,
+    /// Contributions to particles of later blocks, in visiting order, then
+    /// stably sorted by target block: target slots and forces (and torques,
+    /// oriented kernel only).
+    spill_targets: Vec<u32>,
+    spill_forces: Vec<Vec3>,
+    spill_torques: Vec<Vec3>,
+    /// Visiting order of the spill, grouped by target block.
+    order: Vec<u32>,
+    /// Start of each later block's group in `order` (block `b + 1 + g`
+    /// at `starts[g]`), and a cursor per group while sorting.
+    starts: Vec<u32>,
+    cursor: Vec<u32>,
+}
+
 /// Scratch buffers of the force evaluation, owned by the world.
 #[derive(Default)]
 pub(crate) struct ForceScratch {
-    /// Source particle of each pair of the current list.
-    sources: Vec<u32>,
-    /// Rebuild count of the list `sources` was made for.
-    sources_for: u64,
-    spacing_pairs: Vec<Option<SpacingPair>>,
-    oriented_pairs: Vec<Option<OrientedPair>>,
+    blocks: Vec<BlockScratch>,
     normals: Vec<Vec3>,
     tangents: Vec<Vec3>,
     /// Potential energy attributed to each particle (its row's pairs).
@@ -77,15 +103,6 @@ pub(crate) struct ForceScratch {
     pub evaluations: u64,
     /// Seconds spent updating neighbour lists (accumulated).
     pub neighbour_seconds: f64,
-}
-
-impl ForceScratch {
-    /// Forgets the pair sources cached for the current neighbour list (the
-    /// world replaced the list: its rebuild count starts again).
-    pub(crate) fn forget_list(&mut self) {
-        self.sources.clear();
-        self.sources_for = u64::MAX;
-    }
 }
 
 /// Everything the internal force evaluation reads besides the state.
@@ -181,10 +198,7 @@ impl ForceContext<'_> {
     ) {
         let n = s.positions.len();
         let ForceScratch {
-            sources,
-            sources_for,
-            spacing_pairs,
-            oriented_pairs,
+            blocks,
             normals,
             tangents,
             energies,
@@ -204,10 +218,6 @@ impl ForceContext<'_> {
                 let clock = std::time::Instant::now();
                 list.update(s.positions);
                 *neighbour_seconds += clock.elapsed().as_secs_f64();
-                let serial = rayon::current_num_threads() == 1;
-                if !serial {
-                    refresh_sources(sources, sources_for, list);
-                }
                 let a = &self.attributes;
                 let m = self.materials;
                 let cutoff2 = list.cutoff() * list.cutoff();
@@ -218,21 +228,21 @@ impl ForceContext<'_> {
                 };
                 let heated = self.heated;
                 let bonds = self.bonds;
+                let list = &*list;
                 if let (Kernel::Spacing, Some(b)) = (kernel, bonds) {
                     let pair = |i: usize, j: usize| spacing_pair(a, m, b, heated, cutoff2, s, i, j);
-                    accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
+                    accumulate::<false, _, _>(list, blocks, pair, out);
                 } else if kernel == Kernel::Spacing {
                     if uniform_spacing(a) && !heated {
-                        // One material, every pair complete: the dedicated
-                        // spacing loop, small enough to be inlined whole.
-                        let (m0, p) = (&m[0], s.positions);
-                        let pair = |i: usize, j: usize| uniform_spacing_pair(m0, cutoff2, p, i, j);
-                        accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
+                        // One material, every pair complete: a dedicated
+                        // loop per spacing potential (monomorphized, no
+                        // per-pair dispatch).
+                        uniform_spacing_pass(&m[0], cutoff2, s.positions, list, blocks, out);
                     } else {
                         let pair = |i: usize, j: usize| {
                             spacing_pair(a, m, &Unbonded, heated, cutoff2, s, i, j)
                         };
-                        accumulate::<false, _, _>(list, sources, spacing_pairs, serial, pair, out);
+                        accumulate::<false, _, _>(list, blocks, pair, out);
                     }
                 } else {
                     frames(normals, tangents, a, s);
@@ -240,16 +250,25 @@ impl ForceContext<'_> {
                     let (friction, nv, tv) = (self.friction, normals, tangents);
                     if let Some(b) = bonds {
                         let pair = |i: usize, j: usize| {
-                            oriented_pair(a, m, b, friction, heated, cutoff2, nv, tv, s, i, j)
+                            oriented_pair::<false>(
+                                a, m, b, friction, heated, cutoff2, nv, tv, s, i, j,
+                            )
                         };
-                        accumulate::<true, _, _>(list, sources, oriented_pairs, serial, pair, out);
+                        accumulate::<true, _, _>(list, blocks, pair, out);
+                    } else if !heated && uniform_oriented(a) {
+                        let pair = |i: usize, j: usize| {
+                            oriented_pair::<true>(
+                                a, m, &Unbonded, friction, false, cutoff2, nv, tv, s, i, j,
+                            )
+                        };
+                        accumulate::<true, _, _>(list, blocks, pair, out);
                     } else {
                         let pair = |i: usize, j: usize| {
-                            oriented_pair(
+                            oriented_pair::<false>(
                                 a, m, &Unbonded, friction, heated, cutoff2, nv, tv, s, i, j,
                             )
                         };
-                        accumulate::<true, _, _>(list, sources, oriented_pairs, serial, pair, out);
+                        accumulate::<true, _, _>(list, blocks, pair, out);
                     }
                 }
             }
@@ -331,15 +350,6 @@ impl ForceContext<'_> {
     }
 }
 
-/// Recomputes the source particle of every pair after a list rebuild.
-fn refresh_sources(sources: &mut Vec<u32>, sources_for: &mut u64, list: &NeighbourList) {
-    if *sources_for == list.rebuilds() && sources.len() == list.pairs().num_pairs() {
-        return;
-    }
-    list.pairs().sources_into(sources);
-    *sources_for = list.rebuilds();
-}
-
 /// The bond lookup of the pair kernels ([`crate::bonds`]): whether a pair
 /// that membership and typing would couple completely keeps its complete
 /// interaction.
@@ -369,7 +379,7 @@ impl BondLookup for Bonds {
 /// Coupling of two particles: object membership, then typing, then bonds,
 /// then orientation (seed 002 §5; unoriented particles drop orientation
 /// terms; bond-governed pairs that are not bonded only repel).
-#[inline]
+#[inline(always)]
 pub(crate) fn coupling(
     a: &Attributes<'_>,
     bonds: &impl BondLookup,
@@ -400,6 +410,12 @@ fn uniform_spacing(a: &Attributes<'_>) -> bool {
         && a.materials.iter().all(|&m| m == 0)
         && a.objects.iter().all(|&x| x == o)
         && a.kinds.iter().all(|&x| x == k)
+}
+
+/// [`uniform_spacing`] and no particle unoriented: every pair is complete
+/// and oriented, of material 0.
+fn uniform_oriented(a: &Attributes<'_>) -> bool {
+    uniform_spacing(a) && a.flags.iter().all(|f| !f.contains(Flags::UNORIENTED))
 }
 
 /// The per-particle sums a force evaluation fills.
@@ -464,13 +480,11 @@ impl PairOut for OrientedPair {
 }
 
 /// Evaluates every listed pair once and sums the contributions per
-/// particle: incoming pairs first (ascending source), then the particle's
-/// own row (list order). `TORQUES` is false for kernels without torques.
+/// particle, block by block (see the module docs). `TORQUES` is false for
+/// kernels without torques.
 fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> Option<O> + Sync>(
     list: &NeighbourList,
-    sources: &[u32],
-    buffer: &mut Vec<Option<O>>,
-    serial: bool,
+    blocks: &mut Vec<BlockScratch>,
     pair: P,
     out: Sums<'_>,
 ) {
@@ -481,67 +495,163 @@ fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> Option<O> 
         torques,
         energies,
     } = out;
-    if serial {
-        forces.iter_mut().for_each(|f| *f = Vec3::zeros());
-        torques.iter_mut().for_each(|t| *t = Vec3::zeros());
-        for i in 0..forces.len() {
-            let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
-            for k in pairs.row_range(i) {
-                let j = nbrs[k] as usize;
-                let Some(o) = pair(i, j) else { continue };
-                fo -= o.force_j();
-                eo += o.energy();
-                forces[j] += o.force_j();
-                if TORQUES {
-                    to += o.torque_i();
-                    torques[j] += o.torque_j();
-                }
-            }
-            forces[i] += fo;
-            if TORQUES {
-                torques[i] += to;
-            }
-            energies[i] = eo;
-        }
-        return;
+    let n = forces.len();
+    let nblocks = n.div_ceil(BLOCK);
+    if blocks.len() < nblocks {
+        blocks.resize_with(nblocks, BlockScratch::default);
     }
-    buffer.resize(nbrs.len(), None);
-    buffer
+    let blocks = &mut blocks[..nblocks];
+    // Pass 1: every block's rows; own-row and in-block sums, spills.
+    let work =
+        |b: usize, block: &mut BlockScratch, f: &mut [Vec3], t: &mut [Vec3], e: &mut [Real]| {
+            let b0 = b * BLOCK;
+            let b1 = b0 + f.len();
+            block.local.clear();
+            block.local.resize(f.len(), (Vec3::zeros(), Vec3::zeros()));
+            block.spill_targets.clear();
+            block.spill_forces.clear();
+            block.spill_torques.clear();
+            for i in b0..b1 {
+                let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
+                // The row is sorted: targets in this block, then later ones.
+                let row = &nbrs[pairs.row_range(i)];
+                let split = row.partition_point(|&j| (j as usize) < b1);
+                for &j in &row[..split] {
+                    let j = j as usize;
+                    let Some(o) = pair(i, j) else { continue };
+                    let fj = o.force_j();
+                    fo -= fj;
+                    eo += o.energy();
+                    let l = &mut block.local[j - b0];
+                    l.0 += fj;
+                    if TORQUES {
+                        to += o.torque_i();
+                        l.1 += o.torque_j();
+                    }
+                }
+                for &j in &row[split..] {
+                    let Some(o) = pair(i, j as usize) else {
+                        continue;
+                    };
+                    let fj = o.force_j();
+                    fo -= fj;
+                    eo += o.energy();
+                    block.spill_targets.push(j);
+                    block.spill_forces.push(fj);
+                    if TORQUES {
+                        to += o.torque_i();
+                        block.spill_torques.push(o.torque_j());
+                    }
+                }
+                let (fin, tin) = block.local[i - b0];
+                f[i - b0] = fin + fo;
+                t[i - b0] = if TORQUES { tin + to } else { Vec3::zeros() };
+                e[i - b0] = eo;
+            }
+            // Group the spill by target block, keeping the visiting order
+            // within each group (a counting sort of the visiting indices).
+            let first = b + 1;
+            block.starts.clear();
+            block.starts.resize(nblocks - first + 1, 0);
+            for &j in &block.spill_targets {
+                block.starts[j as usize / BLOCK - first + 1] += 1;
+            }
+            for g in 1..block.starts.len() {
+                block.starts[g] += block.starts[g - 1];
+            }
+            block.order.clear();
+            block.order.resize(block.spill_targets.len(), 0);
+            block.cursor.clear();
+            block.cursor.extend_from_slice(&block.starts);
+            for (k, &j) in block.spill_targets.iter().enumerate() {
+                let c = &mut block.cursor[j as usize / BLOCK - first];
+                block.order[*c as usize] = k as u32;
+                *c += 1;
+            }
+        };
+    blocks
         .par_iter_mut()
-        .with_min_len(256)
+        .zip(forces.par_chunks_mut(BLOCK))
+        .zip(torques.par_chunks_mut(BLOCK))
+        .zip(energies.par_chunks_mut(BLOCK))
         .enumerate()
-        .for_each(|(k, o)| *o = pair(sources[k] as usize, nbrs[k] as usize));
-    let buffer = &*buffer;
+        .for_each(|(b, (((block, f), t), e))| work(b, block, f, t, e));
+    // Pass 2: each block adds the spills aimed at it, earlier blocks first.
+    let blocks = &*blocks;
     forces
-        .par_iter_mut()
-        .zip(torques.par_iter_mut())
-        .zip(energies.par_iter_mut())
+        .par_chunks_mut(BLOCK)
+        .zip(torques.par_chunks_mut(BLOCK))
         .enumerate()
-        .with_min_len(256)
-        .for_each(|(i, ((f, t), e))| {
-            let (mut fin, mut tin) = (Vec3::zeros(), Vec3::zeros());
-            for &k in pairs.incoming(i) {
-                let Some(o) = &buffer[k as usize] else {
-                    continue;
-                };
-                fin += o.force_j();
-                if TORQUES {
-                    tin += o.torque_j();
+        .for_each(|(target, (f, t))| {
+            let t0 = target * BLOCK;
+            for (b, src) in blocks[..target].iter().enumerate() {
+                let g = target - (b + 1);
+                let range = src.starts[g] as usize..src.starts[g + 1] as usize;
+                for &k in &src.order[range] {
+                    let k = k as usize;
+                    let j = src.spill_targets[k] as usize - t0;
+                    f[j] += src.spill_forces[k];
+                    if TORQUES {
+                        t[j] += src.spill_torques[k];
+                    }
                 }
             }
-            let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
-            for k in pairs.row_range(i) {
-                let Some(o) = &buffer[k] else { continue };
-                fo -= o.force_j();
-                eo += o.energy();
-                if TORQUES {
-                    to += o.torque_i();
-                }
-            }
-            *f = fin + fo;
-            *t = if TORQUES { tin + to } else { Vec3::zeros() };
-            *e = eo;
         });
+}
+
+/// The uniform spacing kernel ([`uniform_spacing`]) for one material: the
+/// pass monomorphized per spacing potential.
+fn uniform_spacing_pass(
+    m: &PreparedMaterial,
+    cutoff2: Real,
+    p: &[Point3],
+    list: &NeighbourList,
+    blocks: &mut Vec<BlockScratch>,
+    out: Sums<'_>,
+) {
+    #[inline(always)]
+    fn pair(
+        eval: impl Fn(Real, Real) -> (Real, Real),
+        cutoff2: Real,
+        p: &[Point3],
+        i: usize,
+        j: usize,
+    ) -> Option<SpacingPair> {
+        let r = p[j] - p[i];
+        let d2 = r.norm_squared();
+        // Coincident (d2 = 0) and NaN pairs contribute nothing.
+        if d2 > cutoff2 || d2.is_nan() || d2 <= 0.0 {
+            return None;
+        }
+        let (energy, g) = eval(d2, 1.0 / d2);
+        Some(SpacingPair {
+            force_j: r * (-g),
+            energy,
+        })
+    }
+    match m.spacing() {
+        Some(SpacingKernel::LennardJones(l)) if l.is_12_6() => {
+            let f = |i, j| pair(|d2, inv| l.eval_sq_12_6(d2, inv), cutoff2, p, i, j);
+            accumulate::<false, _, _>(list, blocks, f, out);
+        }
+        Some(SpacingKernel::LennardJones(l)) => {
+            let f = |i, j| pair(|d2, inv| l.eval_sq(d2, inv), cutoff2, p, i, j);
+            accumulate::<false, _, _>(list, blocks, f, out);
+        }
+        Some(SpacingKernel::Cohesion(c)) => {
+            let eval = |d2: Real, inv: Real| {
+                let r = d2.sqrt();
+                let (u, du) = c.eval(r);
+                (u, du * (r * inv))
+            };
+            let f = |i, j| pair(eval, cutoff2, p, i, j);
+            accumulate::<false, _, _>(list, blocks, f, out);
+        }
+        None => {
+            let f = |i, j| pair(|_, _| (0.0, 0.0), cutoff2, p, i, j);
+            accumulate::<false, _, _>(list, blocks, f, out);
+        }
+    }
 }
 
 /// World normals and tangents of every particle at state `s`.
@@ -559,25 +669,6 @@ fn frames(normals: &mut Vec<Vec3>, tangents: &mut Vec<Vec3>, a: &Attributes<'_>,
             *nv = q * a.normal_axes[i];
             *tv = q * a.tangent_axes[i];
         });
-}
-
-/// The spacing kernel's pair when every particle has the same material and
-/// every pair interacts completely ([`uniform_spacing`]).
-#[inline]
-fn uniform_spacing_pair(
-    m: &PreparedMaterial,
-    cutoff2: Real,
-    p: &[crate::math::Point3],
-    i: usize,
-    j: usize,
-) -> Option<SpacingPair> {
-    let r = p[j] - p[i];
-    let d2 = r.norm_squared();
-    if d2 > cutoff2 {
-        return None;
-    }
-    let (energy, force_j) = evaluate_spacing(m, m, &r, d2.sqrt());
-    Some(SpacingPair { force_j, energy })
 }
 
 /// The heat strength of the pair `(i, j)` when the world is `heated`
@@ -624,7 +715,6 @@ fn spacing_pair(
     if d2 > cutoff2 {
         return None;
     }
-    let dist = d2.sqrt();
     let (mi, mj) = (
         &materials[a.materials[i] as usize],
         &materials[a.materials[j] as usize],
@@ -633,9 +723,9 @@ fn spacing_pair(
         Coupling::Complete { .. } => {
             let st = strength(a, mi, mj, heated, i, j);
             if st < 1.0 {
-                evaluate_spacing_weakened(mi, mj, &r, dist, st)
+                evaluate_spacing_weakened(mi, mj, &r, d2.sqrt(), st)
             } else {
-                evaluate_spacing(mi, mj, &r, dist)
+                evaluate_spacing_sq(mi, mj, &r, d2)
             }
         }
         Coupling::RepulsionOnly => {
@@ -670,9 +760,13 @@ fn view(
 /// The oriented kernel's pair: the full interaction of the pair's coupling
 /// (weakened by heat when `heated`) plus inter-particle friction; zero
 /// beyond the cut-off.
+///
+/// `UNIFORM`: every particle has material 0, one object, one type and is
+/// oriented, the world is not heated ([`uniform_oriented`]): every pair is
+/// complete and oriented, without per-pair lookups.
 #[allow(clippy::too_many_arguments)]
-#[inline]
-fn oriented_pair(
+#[inline(always)]
+fn oriented_pair<const UNIFORM: bool>(
     a: &Attributes<'_>,
     materials: &[PreparedMaterial],
     bonds: &impl BondLookup,
@@ -691,16 +785,21 @@ fn oriented_pair(
     if d2 > cutoff2 {
         return None;
     }
-    let (mi, mj) = (
-        &materials[a.materials[i] as usize],
-        &materials[a.materials[j] as usize],
-    );
-    let c = coupling(a, bonds, i, j);
+    let (mi, mj, c) = if UNIFORM {
+        let m = &materials[0];
+        (m, m, Coupling::Complete { oriented: true })
+    } else {
+        (
+            &materials[a.materials[i] as usize],
+            &materials[a.materials[j] as usize],
+            coupling(a, bonds, i, j),
+        )
+    };
     let (vi, vj) = (
         view(p[i], normals[i], tangents[i], a.curvatures[i], mi),
         view(p[j], normals[j], tangents[j], a.curvatures[j], mj),
     );
-    let res = if heated && matches!(c, Coupling::Complete { .. }) {
+    let res = if !UNIFORM && heated && matches!(c, Coupling::Complete { .. }) {
         evaluate_pair_weakened(&vi, &vj, c, strength(a, mi, mj, heated, i, j))
     } else {
         evaluate_pair(&vi, &vj, c)

@@ -687,11 +687,11 @@ impl World {
         let mut report = StepReport::default();
         let clock = std::time::Instant::now();
         if let Some(list) = self.pipeline.neighbours.as_mut() {
-            if self.params.neighbours.reorder && list.needs_rebuild(self.particles.positions()) {
+            if self.params.neighbours.reorder && list.rebuild_due(self.particles.positions()) {
                 let order = spatial_order(self.particles.positions(), list.cutoff() + list.skin());
                 self.particles.permute(&order);
                 list.rebuild(self.particles.positions());
-                self.integrator.invalidate();
+                self.integrator.permute(&order);
                 report.reordered = true;
             }
         }

@@ -455,6 +455,65 @@ fn overrides_and_selections_apply() {
     }
 }
 
+/// Per-particle initial velocities (issue 18): drawn at a temperature
+/// (net momentum removed, kinetic temperature exact, added to the uniform
+/// `velocity`, deterministic) or read from a points file (one per particle,
+/// the count checked).
+#[test]
+fn initial_velocities_from_a_temperature_or_a_file() {
+    let text = |velocities: &str| {
+        format!(
+            r#"(
+            name: "v",
+            materials: {{"m": (spacing: LennardJones((cutoff: 1.5)))}},
+            objects: [(name: "a", material: "m", generator: Chain(count: 40, spacing: 1),
+                       mass: 2, velocity: (1, 0, 0), velocities: Some({velocities}))],
+        )"#
+        )
+    };
+    let velocities = |b: &BuiltScene| -> Vec<Vec3> {
+        let p = b.world.particles();
+        (0..40u32)
+            .map(|id| p.velocities()[p.slot_of(id).unwrap()])
+            .collect()
+    };
+    let hot = velocities(&build_ron(&text("Temperature(t: 1.44, seed: 87287)")));
+    let mean = hot.iter().fold(Vec3::zeros(), |s, v| s + v) / 40.0;
+    assert!((mean - Vec3::x()).norm() < 1e-12, "{mean}");
+    let t: Real = hot
+        .iter()
+        .map(|v| 2.0 * (v - mean).norm_squared())
+        .sum::<Real>()
+        / 117.0;
+    assert!((t - 1.44).abs() < 1e-12, "{t}");
+    assert_eq!(
+        hot,
+        velocities(&build_ron(&text("Temperature(t: 1.44, seed: 87287)")))
+    );
+    assert_ne!(
+        hot,
+        velocities(&build_ron(&text("Temperature(t: 1.44, seed: 1)")))
+    );
+
+    let dir = std::env::temp_dir().join(format!("op-scene-velocities-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let lines: String = (0..40).map(|k| format!("{k} 0.5 -{k}\n")).collect();
+    std::fs::write(dir.join("v.xyz"), lines).unwrap();
+    let scene = dir.join("s.ron");
+    std::fs::write(&scene, text(r#"File("v.xyz")"#)).unwrap();
+    let from_file = velocities(&build(&scene));
+    for (k, v) in from_file.iter().enumerate() {
+        assert_eq!(*v, Vec3::new(k as Real + 1.0, 0.5, -(k as Real)));
+    }
+    std::fs::write(dir.join("v.xyz"), "1 2 3\n").unwrap();
+    let err = load_scene(&scene).unwrap_err().to_string();
+    assert!(
+        err.contains("velocities.File") && err.contains("40 particles"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn particles_are_oriented_from_their_normal_axis() {
     let built = build_ron(

@@ -246,6 +246,7 @@ pub fn triangle_scene(p: Real) -> Scene {
             kind: Default::default(),
             velocity: [0.0; 3],
             angular_velocity: [0.0; 3],
+            velocities: None,
             overrides: Vec::new(),
             skin: None,
         }],

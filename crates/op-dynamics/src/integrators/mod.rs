@@ -369,6 +369,29 @@ impl Integrator {
         self.momenta.invalidate();
     }
 
+    /// Follows a reordering of the particles (new slot `s` holds the
+    /// particle of old slot `order[s]`, [`crate::Particles::permute`]) that
+    /// changed nothing else: velocity Verlet's cached forces, torques and
+    /// angular momenta move with their particles instead of being
+    /// recomputed (other schemes forget their cache, as
+    /// [`Integrator::invalidate`]).
+    pub fn permute(&mut self, order: &[u32]) {
+        fn apply(v: &mut Vec<Vec3>, order: &[u32]) {
+            if v.len() == order.len() {
+                *v = order.iter().map(|&k| v[k as usize]).collect();
+            }
+        }
+        let n = order.len();
+        let verlet = matches!(self.scheme, Scheme::VelocityVerlet);
+        if verlet && self.cache_valid && self.forces.len() == n && self.torques.len() == n {
+            apply(&mut self.forces, order);
+            apply(&mut self.torques, order);
+        } else {
+            self.cache_valid = false;
+        }
+        self.momenta.permute(order);
+    }
+
     /// Forget the cached forces only: the force field changed (external
     /// forces cleared, curvatures or temperatures updated) but the state
     /// did not, so velocity Verlet keeps carrying its angular momenta.

@@ -94,6 +94,16 @@ impl Momenta {
     pub(crate) fn invalidate(&mut self) {
         self.valid = false;
     }
+
+    /// Moves the momenta with their particles ([`super::Integrator::permute`]).
+    pub(crate) fn permute(&mut self, order: &[u32]) {
+        if !(self.valid && self.l.len() == order.len() && self.w.len() == order.len()) {
+            self.valid = false;
+            return;
+        }
+        self.l = order.iter().map(|&k| self.l[k as usize]).collect();
+        self.w = order.iter().map(|&k| self.w[k as usize]).collect();
+    }
 }
 
 /// First half of a step for one particle: half kick with the force and

@@ -17,7 +17,7 @@ use crate::math::Real;
 
 /// The C2 quintic smoothstep falling from 1 at `x <= 0` to 0 at `x >= 1`:
 /// returns `(s(x), s'(x))`.
-#[inline]
+#[inline(always)]
 pub fn smooth_fall(x: Real) -> (Real, Real) {
     if x <= 0.0 {
         (1.0, 0.0)
@@ -87,7 +87,7 @@ impl Taper {
     }
 
     /// `(s(r), ds/dr)`.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, r: Real) -> (Real, Real) {
         if r <= self.r_on {
             (1.0, 0.0)

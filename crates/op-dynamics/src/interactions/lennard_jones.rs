@@ -103,13 +103,27 @@ impl LennardJonesParams {
             (Some(n), Some(m)) => Some((n, m)),
             _ => None,
         };
+        let scale = self.epsilon / (self.n - self.m);
+        let taper = Taper::new(self.cutoff, self.taper);
+        // Even integer exponents: powers of `(r0/r)^2`, no square root.
+        let even = match integer_exponents {
+            Some((n, m)) if n % 2 == 0 && m % 2 == 0 => Some((n / 2, m / 2)),
+            _ => None,
+        };
         Ok(LennardJones {
-            scale: self.epsilon / (self.n - self.m),
+            scale,
             r0: self.r0,
             n: self.n,
             m: self.m,
             integer_exponents,
-            taper: Taper::new(self.cutoff, self.taper),
+            taper,
+            even,
+            r0_sq: self.r0 * self.r0,
+            c_n: scale * self.m,
+            c_m: scale * self.n,
+            c_g: scale * self.n * self.m / (self.r0 * self.r0),
+            r_on_sq: taper.r_on() * taper.r_on(),
+            rc_sq: self.cutoff * self.cutoff,
         })
     }
 }
@@ -124,6 +138,16 @@ pub struct LennardJones {
     m: Real,
     integer_exponents: Option<(i32, i32)>,
     taper: Taper,
+    /// `(n/2, m/2)` when both exponents are even integers.
+    even: Option<(i32, i32)>,
+    /// Constants folded for [`Self::eval_sq`]: `r0²`, `scale·m`,
+    /// `scale·n`, `scale·n·m / r0²`, `r_on²`, `r_c²`.
+    r0_sq: Real,
+    c_n: Real,
+    c_m: Real,
+    c_g: Real,
+    r_on_sq: Real,
+    rc_sq: Real,
 }
 
 impl LennardJones {
@@ -152,6 +176,74 @@ impl LennardJones {
         let u = self.scale * (self.m * xn - self.n * xm);
         let du = self.scale * self.n * self.m * (xm - xn) / r;
         self.taper.apply(r, u, du)
+    }
+
+    /// `(U(r), U'(r)/r)` from `d2 = r²` and `inv_d2 = 1/r²` (`r > 0`),
+    /// tapered; zero beyond the cut-off. The force on `j` is
+    /// `-(U'(r)/r) (p_j - p_i)`. With even integer exponents (12-6) no
+    /// division and, before the taper starts, no square root: powers of
+    /// `x² = r0² / r²` (the pair kernel's fast path).
+    #[inline(always)]
+    pub fn eval_sq(&self, d2: Real, inv_d2: Real) -> (Real, Real) {
+        match self.even {
+            Some((6, 3)) => self.eval_sq_12_6(d2, inv_d2),
+            Some((hn, hm)) => self.eval_sq_even(d2, inv_d2, |x2| {
+                let xm = int_pow(x2, hm);
+                let xn = if hn == 2 * hm {
+                    xm * xm
+                } else {
+                    int_pow(x2, hn)
+                };
+                (xn, xm)
+            }),
+            None => {
+                if d2 >= self.rc_sq {
+                    return (0.0, 0.0);
+                }
+                let r = d2.sqrt();
+                let (u, du) = self.eval(r);
+                (u, du * (r * inv_d2))
+            }
+        }
+    }
+
+    /// True for the classic 12-6 exponents ([`Self::eval_sq_12_6`]).
+    #[inline]
+    pub fn is_12_6(&self) -> bool {
+        self.even == Some((6, 3))
+    }
+
+    /// [`Self::eval_sq`] for `n = 12`, `m = 6` (check [`Self::is_12_6`]):
+    /// the powers unrolled, for the dedicated spacing loop.
+    #[inline(always)]
+    pub fn eval_sq_12_6(&self, d2: Real, inv_d2: Real) -> (Real, Real) {
+        self.eval_sq_even(d2, inv_d2, |x2| {
+            let x6 = x2 * x2 * x2;
+            (x6 * x6, x6)
+        })
+    }
+
+    /// The even-exponent body: `powers(x²) = (x^n, x^m)`.
+    #[inline(always)]
+    fn eval_sq_even(
+        &self,
+        d2: Real,
+        inv_d2: Real,
+        powers: impl Fn(Real) -> (Real, Real),
+    ) -> (Real, Real) {
+        if d2 >= self.rc_sq {
+            return (0.0, 0.0);
+        }
+        let x2 = self.r0_sq * inv_d2;
+        let (xn, xm) = powers(x2);
+        let u = self.c_n * xn - self.c_m * xm;
+        let g = self.c_g * (xm - xn) * x2;
+        if d2 <= self.r_on_sq {
+            return (u, g);
+        }
+        let r = d2.sqrt();
+        let (s, ds) = self.taper.eval(r);
+        (u * s, g * s + u * ds * (r * inv_d2))
     }
 
     /// The maximum attraction: the force `-U'` is most negative at
@@ -192,6 +284,28 @@ mod tests {
         assert!(l.eval(1.29).0 > u && l.eval(1.31).0 > u);
         let (u, du) = lj().eval(1.0);
         assert!((u + 1.0).abs() < 1e-15 && du.abs() < 1e-14);
+    }
+
+    /// The squared-distance fast path is the same potential: 12-6, an even
+    /// pair with `n != 2m`, and a fractional pair (the fallback).
+    #[test]
+    fn eval_sq_matches_eval() {
+        for (n, m) in [(12.0, 6.0), (10.0, 4.0), (9.0, 4.5)] {
+            let l = LennardJonesParams {
+                n,
+                m,
+                ..Default::default()
+            }
+            .prepare()
+            .unwrap();
+            for k in 0..300 {
+                let r = 0.6 + 2.0 * k as Real / 299.0;
+                let (u, du) = l.eval(r);
+                let (us, g) = l.eval_sq(r * r, 1.0 / (r * r));
+                assert!((u - us).abs() <= 1e-12 * (1.0 + u.abs()), "{n} {m} {r}");
+                assert!((du / r - g).abs() <= 1e-12 * (1.0 + g.abs()), "{n} {m} {r}");
+            }
+        }
     }
 
     #[test]

@@ -209,6 +209,17 @@ impl Material {
     }
 }
 
+/// One direction of the fused pair kernel
+/// ([`PreparedMaterial::direction`]).
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub(crate) struct Direction {
+    pub energy: Real,
+    pub g_r: Real,
+    pub g_e: Real,
+    pub g_n: Real,
+    pub b: Real,
+}
+
 /// A validated material with its tables built and its enabled terms fixed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PreparedMaterial {
@@ -335,6 +346,111 @@ impl PreparedMaterial {
     #[inline]
     pub fn bonds(&self) -> Option<&BondParams> {
         self.bonds.as_ref()
+    }
+
+    /// This material's spacing potential as `(U(r), U'(r)/r)` from
+    /// `d2 = r²` and `inv_d2 = 1/r²` ([`SpacingKernel::eval_sq`]); zero
+    /// without spacing.
+    #[inline(always)]
+    pub fn spacing_eval_sq(&self, d2: Real, inv_d2: Real) -> (Real, Real) {
+        match &self.spacing {
+            Some(s) => s.eval_sq(d2, inv_d2),
+            None => (0.0, 0.0),
+        }
+    }
+
+    /// The orientation weight `ψ`'s parameters.
+    #[inline]
+    pub fn weight(&self) -> &Weight {
+        &self.weight
+    }
+
+    /// True when the spin torque is on.
+    #[inline]
+    pub(crate) fn has_spin(&self) -> bool {
+        self.w_s > 0.0
+    }
+
+    /// The spin torque on the emitter of `g` under the weight `psi`
+    /// (already weakened by heat, if any).
+    #[inline]
+    pub(crate) fn spin_torque(&self, g: &PairGeometry, psi: Real) -> Vec3 {
+        let s = spin::eval(self.spin_kind, self.normalized, g);
+        // A rotation about n_i leaves |r| unchanged: the fade only scales.
+        let f = self.near_fade(g.dist).map_or(1.0, |(f, _)| f);
+        spin::torque(&g.n_i, &g.t_i, &(s.d_t * (self.w_s * psi * f)))
+    }
+
+    /// One direction of the fused pair kernel ([`super::pair`]): the
+    /// orientation energy `E = ψ Φ` this material's emitter `e` gives the
+    /// pair, and the scalars of its gradients, in the emitter's frame
+    /// (`r_e = p_receiver - p_e`):
+    ///
+    /// - `∂E/∂r_e = g_r r_e + g_e n_e + g_n n_r`;
+    /// - torque on the emitter `g_e (r_e × n_e) + b (n_e × n_r)`;
+    /// - torque on the receiver `g_n (r_e × n_r) - b (n_e × n_r)`.
+    ///
+    /// Every term of [`Self::orientation`] (spin excepted) reduces to
+    /// these five scalars: `∂Φ/∂n_e = A r_e + B (n_e - n_r)` and
+    /// `∂Φ/∂n_r = C r_e - B (n_e - n_r)`, where `A` and `C` are also the
+    /// `n_e` and `n_r` coefficients of `∂Φ/∂r_e`, and `n × n = 0` removes
+    /// the rest from the torques. Inputs: `d2 = |r|²`, `inv_d2`,
+    /// `z_e = n_e·r_e`, `z_r = n_r·r_e`, `dd = |n_e - n_r|²`; `r` and
+    /// `d = ±(n_e - n_r)` with the sign of `r_e` (only `|κ r_e + n_e - n_r|`
+    /// is read from them, for the form term), the emitter's curvature, and
+    /// its weight `(ψ, w_r, w_n)` ([`Weight::eval_scalar`]).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(crate) fn direction(
+        &self,
+        dist: Real,
+        inv_d2: Real,
+        z_e: Real,
+        z_r: Real,
+        dd: Real,
+        r: &Vec3,
+        d: &Vec3,
+        kappa: Real,
+        (psi, wr, wn): (Real, Real, Real),
+    ) -> Direction {
+        let pn = if self.normalized { inv_d2 } else { 1.0 };
+        let c = z_e + z_r;
+        let phi_p = z_e * z_e * pn;
+        let phi_c = c * c * pn;
+        let (a_f, v2) = if self.w_f > 0.0 {
+            // The raw form term is the normalized one over κ² (zero for
+            // κ = 0).
+            let a_f = if self.normalized {
+                self.w_f
+            } else if kappa == 0.0 {
+                0.0
+            } else {
+                self.w_f / (kappa * kappa)
+            };
+            (a_f, (r * kappa + d).norm_squared())
+        } else {
+            (0.0, 0.0)
+        };
+        // The normalized direction terms fade out near coincidence (module
+        // docs, "Near coincidence"): `(S, S')`, exactly `(1, 0)` at and
+        // beyond `r_near`, where every product below is unchanged.
+        let (fs, fds) = self.near_fade(dist).unwrap_or((1.0, 0.0));
+        let pc = self.w_p * phi_p + self.w_c * phi_c;
+        let phi = fs * (self.w_p * phi_p) + self.w_n * dd + fs * (self.w_c * phi_c) + a_f * v2;
+        let nr = if self.normalized { inv_d2 } else { 0.0 };
+        // `∂(S Φ)/∂r = S ∂Φ/∂r + Φ S' r/|r|`: the second part is along `r`.
+        let rr = 2.0 * (a_f * kappa * kappa - nr * (fs * pc)) + fds * pc * (dist * inv_d2);
+        let rc = 2.0 * pn * self.w_c * c * fs;
+        let rf = 2.0 * a_f * kappa;
+        let rne = 2.0 * pn * self.w_p * z_e * fs + rc + rf;
+        let rnr = rc - rf;
+        Direction {
+            energy: psi * phi,
+            g_r: psi * rr + phi * wr,
+            g_e: psi * rne + phi * wn,
+            g_n: psi * rnr,
+            b: psi * (2.0 * (self.w_n + a_f)),
+        }
     }
 
     /// This material's spacing potential `(U(r), dU/dr)` (not halved);

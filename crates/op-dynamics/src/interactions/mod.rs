@@ -82,8 +82,9 @@ pub use cutoff::Taper;
 pub use lennard_jones::{LennardJones, LennardJonesParams};
 pub use material::{Material, PreparedMaterial};
 pub use pair::{
-    evaluate_pair, evaluate_pair_weakened, evaluate_spacing, evaluate_spacing_weakened, Coupling,
-    OrientationGrad, PairGeometry, PairResult, ParticleView, TermGrad,
+    evaluate_pair, evaluate_pair_weakened, evaluate_spacing, evaluate_spacing_sq,
+    evaluate_spacing_weakened, Coupling, OrientationGrad, PairGeometry, PairResult, ParticleView,
+    TermGrad,
 };
 pub use repulsion::{Repulsion, RepulsionParams};
 pub use spacing::{Spacing, SpacingKernel};

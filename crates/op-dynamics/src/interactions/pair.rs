@@ -25,7 +25,7 @@
 //!
 //! Coincident particles (`|r| = 0`, direction undefined) contribute nothing.
 
-use super::material::PreparedMaterial;
+use super::material::{Direction, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
 
 /// The geometry of an ordered pair as seen from the emitter `i`.
@@ -131,24 +131,25 @@ pub struct PairResult {
 
 /// `½(f_i(r) + f_j(r))` of two per-material radial potentials, evaluated
 /// once when both particles share the material.
-#[inline]
+#[inline(always)]
 fn half_sum(
     mi: &PreparedMaterial,
     mj: &PreparedMaterial,
-    dist: Real,
+    x: Real,
     f: impl Fn(&PreparedMaterial, Real) -> (Real, Real),
 ) -> (Real, Real) {
     if std::ptr::eq(mi, mj) {
-        f(mi, dist)
+        f(mi, x)
     } else {
-        let (a, b) = (f(mi, dist), f(mj, dist));
+        let (a, b) = (f(mi, x), f(mj, x));
         (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1))
     }
 }
 
 /// Spacing-only fast path (no orientation data touched): returns the pair
 /// spacing energy `½(U_i + U_j)` and the force on `j`; the force on `i` is
-/// its negative. `r = p_j - p_i`, `dist = |r|`; zero when `dist == 0`.
+/// its negative. `r = p_j - p_i`; `dist = |r|` is only tested (zero or NaN
+/// gives zero): the kernel works from `|r|²` ([`evaluate_spacing_sq`]).
 #[inline]
 pub fn evaluate_spacing(
     mi: &PreparedMaterial,
@@ -159,8 +160,33 @@ pub fn evaluate_spacing(
     if dist.is_nan() || dist <= 0.0 {
         return (0.0, Vec3::zeros());
     }
-    let (u, du) = half_sum(mi, mj, dist, PreparedMaterial::spacing_eval);
-    (u, r * (-du / dist))
+    evaluate_spacing_sq(mi, mj, r, r.norm_squared())
+}
+
+/// [`evaluate_spacing`] from `d2 = |r|²` (zero when `d2` is 0 or NaN): one
+/// division `1/d2` shared by both materials, no square root for
+/// Lennard-Jones before its taper ([`PreparedMaterial::spacing_eval_sq`]).
+#[inline(always)]
+pub fn evaluate_spacing_sq(
+    mi: &PreparedMaterial,
+    mj: &PreparedMaterial,
+    r: &Vec3,
+    d2: Real,
+) -> (Real, Vec3) {
+    if d2.is_nan() || d2 <= 0.0 {
+        return (0.0, Vec3::zeros());
+    }
+    let inv_d2 = 1.0 / d2;
+    let (u, g) = if std::ptr::eq(mi, mj) {
+        mi.spacing_eval_sq(d2, inv_d2)
+    } else {
+        let (a, b) = (
+            mi.spacing_eval_sq(d2, inv_d2),
+            mj.spacing_eval_sq(d2, inv_d2),
+        );
+        (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1))
+    };
+    (u, r * (-g))
 }
 
 /// Energy, forces and torques of the unordered pair `(i, j)` (see the
@@ -197,7 +223,13 @@ pub fn evaluate_spacing_weakened(
 /// as deep (core unchanged), the orientation terms and spin torques scaled
 /// by `s`. Repulsion-only pairs are not weakened. `s = 1` is exactly
 /// [`evaluate_pair`].
-#[inline]
+///
+/// Both directions `E_ij` and `E_ji` come from one shared geometry
+/// (`|r|²`, one division `1/|r|²`, one square root, the dot products
+/// `n_i·r`, `n_j·r` and the cross products `r × n_i`, `r × n_j`,
+/// `n_i × n_j`), and the weight `ψ` is evaluated once when both particles
+/// share an isotropic material (`PreparedMaterial::direction`, crate-private).
+#[inline(always)]
 pub fn evaluate_pair_weakened(
     i: &ParticleView,
     j: &ParticleView,
@@ -205,13 +237,14 @@ pub fn evaluate_pair_weakened(
     s: Real,
 ) -> PairResult {
     let r = j.position - i.position;
-    let dist = r.norm();
+    let d2 = r.norm_squared();
     let mut out = PairResult::default();
-    if dist.is_nan() || dist <= 0.0 {
+    if d2.is_nan() || d2 <= 0.0 {
         return out;
     }
     let oriented = match coupling {
         Coupling::RepulsionOnly => {
+            let dist = d2.sqrt();
             let (u, du) = half_sum(
                 i.material,
                 j.material,
@@ -227,65 +260,96 @@ pub fn evaluate_pair_weakened(
     };
     let weak = s < 1.0;
     let (u, f_j) = if weak {
-        evaluate_spacing_weakened(i.material, j.material, &r, dist, s)
+        evaluate_spacing_weakened(i.material, j.material, &r, d2.sqrt(), s)
     } else {
-        evaluate_spacing(i.material, j.material, &r, dist)
+        evaluate_spacing_sq(i.material, j.material, &r, d2)
     };
     out.energy = u;
-    let mut f_j = f_j;
-    if oriented {
-        // E_ij: i emits.
-        let mi = i.material;
-        if mi.has_orientation_terms() && dist < mi.orientation_cutoff() {
-            let g = PairGeometry {
-                r,
-                dist,
-                n_i: i.normal,
-                n_j: j.normal,
-                t_i: i.tangent,
-                kappa_i: i.kappa,
-            };
-            let o = weaken(mi.orientation(&g), weak, s);
-            out.energy += o.energy;
-            f_j -= o.d_r;
-            out.torque_i += o.d_ni.cross(&i.normal) + o.spin_torque;
-            out.torque_j += o.d_nj.cross(&j.normal);
-        }
-        // E_ji: j emits, seen from j (r -> -r).
-        let mj = j.material;
-        if mj.has_orientation_terms() && dist < mj.orientation_cutoff() {
-            let g = PairGeometry {
-                r: -r,
-                dist,
-                n_i: j.normal,
-                n_j: i.normal,
-                t_i: j.tangent,
-                kappa_i: j.kappa,
-            };
-            let o = weaken(mj.orientation(&g), weak, s);
-            out.energy += o.energy;
-            f_j += o.d_r;
-            out.torque_j += o.d_ni.cross(&j.normal) + o.spin_torque;
-            out.torque_i += o.d_nj.cross(&i.normal);
-        }
-    }
     out.force_j = f_j;
-    out.force_i = -f_j;
+    if oriented {
+        oriented_terms(i, j, &r, d2, weak.then_some(s), &mut out);
+    }
+    out.force_i = -out.force_j;
     out
 }
 
-/// An orientation contribution scaled by the strength `s` when `weak`.
-#[inline]
-fn weaken(o: OrientationGrad, weak: bool, s: Real) -> OrientationGrad {
-    if !weak {
-        return o;
+/// The orientation terms of both directions, added to `out` (energy, force
+/// on `j`, torques); `s` weakens them by heat.
+#[inline(always)]
+fn oriented_terms(
+    i: &ParticleView,
+    j: &ParticleView,
+    r: &Vec3,
+    d2: Real,
+    s: Option<Real>,
+    out: &mut PairResult,
+) {
+    let (mi, mj) = (i.material, j.material);
+    let dist = d2.sqrt();
+    let on_i = mi.has_orientation_terms() && dist < mi.orientation_cutoff();
+    let on_j = mj.has_orientation_terms() && dist < mj.orientation_cutoff();
+    if !(on_i || on_j) {
+        return;
     }
-    OrientationGrad {
-        energy: s * o.energy,
-        d_r: o.d_r * s,
-        d_ni: o.d_ni * s,
-        d_nj: o.d_nj * s,
-        spin_torque: o.spin_torque * s,
+    let inv_d2 = 1.0 / d2;
+    let inv_dist = dist * inv_d2;
+    let (ni, nj) = (&i.normal, &j.normal);
+    let (zi, zj) = (ni.dot(r), nj.dot(r));
+    let d = ni - nj;
+    let dd = d.norm_squared();
+    let weight = |m: &PreparedMaterial, z: Real| {
+        let (psi, wr, wn) = m.weight().eval_scalar(d2, dist, inv_dist, z);
+        match s {
+            Some(s) => (s * psi, s * wr, s * wn),
+            None => (psi, wr, wn),
+        }
+    };
+    let mut wi = (0.0, 0.0, 0.0);
+    let mut di = Direction::default();
+    if on_i {
+        wi = weight(mi, zi);
+        di = mi.direction(dist, inv_d2, zi, zj, dd, r, &d, i.kappa, wi);
+    }
+    let mut wj = (0.0, 0.0, 0.0);
+    let mut dj = Direction::default();
+    if on_j {
+        // Seen from j: r -> -r, so n_j·r_e = -zj and n_i·r_e = -zi.
+        wj = if on_i && std::ptr::eq(mi, mj) && mi.weight().is_isotropic() {
+            wi
+        } else {
+            weight(mj, -zj)
+        };
+        dj = mj.direction(dist, inv_d2, -zj, -zi, dd, r, &d, j.kappa, wj);
+    }
+    let rxi = r.cross(ni);
+    let rxj = r.cross(nj);
+    let nxn = ni.cross(nj);
+    let bt = di.b + dj.b;
+    out.energy += di.energy + dj.energy;
+    out.force_j += r * (-di.g_r - dj.g_r) + ni * (dj.g_n - di.g_e) + nj * (dj.g_e - di.g_n);
+    out.torque_i += rxi * (di.g_e - dj.g_n) + nxn * bt;
+    out.torque_j += rxj * (di.g_n - dj.g_e) - nxn * bt;
+    if on_i && mi.has_spin() {
+        let g = PairGeometry {
+            r: *r,
+            dist,
+            n_i: *ni,
+            n_j: *nj,
+            t_i: i.tangent,
+            kappa_i: i.kappa,
+        };
+        out.torque_i += mi.spin_torque(&g, wi.0);
+    }
+    if on_j && mj.has_spin() {
+        let g = PairGeometry {
+            r: -r,
+            dist,
+            n_i: *nj,
+            n_j: *ni,
+            t_i: j.tangent,
+            kappa_i: j.kappa,
+        };
+        out.torque_j += mj.spin_torque(&g, wj.0);
     }
 }
 
@@ -436,6 +500,87 @@ mod tests {
                     };
                     check_fd(&mi, &mj, &bi, &bj, COMPLETE);
                     check_fd(&mj, &mi, &bj, &bi, COMPLETE);
+                }
+            }
+        }
+    }
+
+    /// The fused kernel against the term-by-term reference
+    /// ([`PreparedMaterial::orientation`] of each direction, as the kernel
+    /// was before issue 18): same energy, forces and torques to round-off,
+    /// for every term, both normalizations and weight shapes, spin, heat.
+    #[test]
+    fn fused_kernel_matches_the_term_by_term_reference() {
+        fn reference(i: &ParticleView, j: &ParticleView, s: Real) -> PairResult {
+            let r = j.position - i.position;
+            let dist = r.norm();
+            let (u, mut f_j) = if s < 1.0 {
+                evaluate_spacing_weakened(i.material, j.material, &r, dist, s)
+            } else {
+                evaluate_spacing(i.material, j.material, &r, dist)
+            };
+            let mut out = PairResult {
+                energy: u,
+                ..Default::default()
+            };
+            for (e, rcv, re, sign) in [(i, j, r, -1.0), (j, i, -r, 1.0)] {
+                let m = e.material;
+                if !(m.has_orientation_terms() && dist < m.orientation_cutoff()) {
+                    continue;
+                }
+                let g = PairGeometry {
+                    r: re,
+                    dist,
+                    n_i: e.normal,
+                    n_j: rcv.normal,
+                    t_i: e.tangent,
+                    kappa_i: e.kappa,
+                };
+                let o = m.orientation(&g);
+                out.energy += s * o.energy;
+                f_j += o.d_r * (sign * s);
+                let te = (o.d_ni.cross(&e.normal) + o.spin_torque) * s;
+                let tr = o.d_nj.cross(&rcv.normal) * s;
+                if sign < 0.0 {
+                    out.torque_i += te;
+                    out.torque_j += tr;
+                } else {
+                    out.torque_j += te;
+                    out.torque_i += tr;
+                }
+            }
+            out.force_j = f_j;
+            out.force_i = -f_j;
+            out
+        }
+        let mut rng = Rng::new(29);
+        for normalized in [false, true] {
+            for anisotropic in [false, true] {
+                let mi = all_terms(normalized, anisotropic, 0.6).prepare().unwrap();
+                let mj = all_terms(normalized, !anisotropic, 0.2).prepare().unwrap();
+                for (a, b) in [(&mi, &mi), (&mi, &mj), (&mj, &mi)] {
+                    for s in [1.0, 0.4] {
+                        for _ in 0..40 {
+                            let d = rng.range(0.4, 2.6);
+                            let (bi, bj) = random_pair(&mut rng, d);
+                            let (vi, vj) = (bi.view(a), bj.view(b));
+                            let got = evaluate_pair_weakened(&vi, &vj, COMPLETE, s);
+                            let want = reference(&vi, &vj, s);
+                            let scale = 1.0
+                                + want.energy.abs()
+                                + want.force_j.norm()
+                                + want.torque_i.norm()
+                                + want.torque_j.norm();
+                            assert!((got.energy - want.energy).abs() <= 1e-12 * scale);
+                            for (g, w) in [
+                                (got.force_j, want.force_j),
+                                (got.torque_i, want.torque_i),
+                                (got.torque_j, want.torque_j),
+                            ] {
+                                assert!((g - w).norm() <= 1e-12 * scale, "{g} vs {w}");
+                            }
+                        }
+                    }
                 }
             }
         }

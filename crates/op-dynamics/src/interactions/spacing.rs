@@ -66,6 +66,21 @@ impl SpacingKernel {
         }
     }
 
+    /// `(U(r), U'(r)/r)` from `d2 = r²` and `inv_d2 = 1/r²` (`r > 0`):
+    /// Lennard-Jones without square root or division
+    /// ([`LennardJones::eval_sq`]), cohesion through [`Self::eval`].
+    #[inline(always)]
+    pub fn eval_sq(&self, d2: Real, inv_d2: Real) -> (Real, Real) {
+        match self {
+            SpacingKernel::LennardJones(l) => l.eval_sq(d2, inv_d2),
+            SpacingKernel::Cohesion(c) => {
+                let r = d2.sqrt();
+                let (u, du) = c.eval(r);
+                (u, du * (r * inv_d2))
+            }
+        }
+    }
+
     /// The cut-off radius.
     #[inline]
     pub fn cutoff(&self) -> Real {

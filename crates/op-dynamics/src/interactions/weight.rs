@@ -134,6 +134,38 @@ impl Weight {
         self.anisotropic
     }
 
+    /// True when `ψ` depends on the distance only (the same for both
+    /// directions of a pair of one material).
+    #[inline]
+    pub fn is_isotropic(&self) -> bool {
+        !self.anisotropic
+    }
+
+    /// [`Self::eval`] as scalars, for the fused pair kernel: `(ψ, w_r, w_n)`
+    /// with `∂ψ/∂r = w_r r + w_n n_i` and `∂ψ/∂n_i = w_n r`, from
+    /// `d2 = |r|²`, `dist = |r|`, `inv_dist = 1/|r|` and `z = n_i·r`
+    /// (`w_n = 0` for the isotropic shape). Zero at and beyond the cut-off.
+    #[inline(always)]
+    pub fn eval_scalar(&self, d2: Real, dist: Real, inv_dist: Real, z: Real) -> (Real, Real, Real) {
+        if dist >= self.taper.cutoff() {
+            return (0.0, 0.0, 0.0);
+        }
+        let (s, ds) = self.taper.eval(dist);
+        let mut expo = -0.5 * d2 * self.inv_a2;
+        if self.anisotropic {
+            expo -= self.c * z * z;
+        }
+        let psi0 = self.k * expo.exp();
+        let psi = psi0 * s;
+        let wr = psi0 * (ds * inv_dist) - psi * self.inv_a2;
+        let wn = if self.anisotropic {
+            -2.0 * self.c * z * psi
+        } else {
+            0.0
+        };
+        (psi, wr, wn)
+    }
+
     /// `ψ(r)` and its gradients for `r = p_j - p_i` (`dist = |r| > 0`) and
     /// the emitter's normal `n_i`. Zero at and beyond the cut-off.
     #[inline]

@@ -136,6 +136,9 @@ pub struct NeighbourList {
     pairs: PairList,
     built: bool,
     rebuilds: u64,
+    /// Largest displacement from the reference positions at the last
+    /// [`NeighbourList::rebuild_due`] call.
+    last_shift: Real,
 }
 
 /// Relative slack on the `skin / 2` rebuild threshold: rebuilding slightly
@@ -173,6 +176,7 @@ impl NeighbourList {
             pairs: PairList::new(),
             built: false,
             rebuilds: 0,
+            last_shift: 0.0,
         })
     }
 
@@ -196,6 +200,43 @@ impl NeighbourList {
         !self.built || positions.len() != self.reference.len() || self.moved_too_far(positions)
     }
 
+    /// True when [`NeighbourList::needs_rebuild`] is, or when the measured
+    /// motion predicts that it will be before the next call: the largest
+    /// displacement `d` from the reference positions, grown by twice its
+    /// growth since the previous call (one step of motion, with margin for
+    /// acceleration), exceeds half the skin. The world calls it once per
+    /// step, before integrating, so that rebuilds happen there, where
+    /// particles can be re-sorted in spatial order, rather than inside a
+    /// force evaluation (which still rebuilds, exactly when needed, if the
+    /// prediction was short).
+    pub fn rebuild_due(&mut self, positions: &[Point3]) -> bool {
+        if self.needs_rebuild(positions) {
+            return true;
+        }
+        let d = self.max_displacement(positions);
+        let growth = (d - self.last_shift).max(0.0);
+        self.last_shift = d;
+        d + 2.0 * growth > 0.5 * self.skin * (1.0 - THRESHOLD_SLACK)
+    }
+
+    /// The largest distance of a finite position from its reference.
+    fn max_displacement(&self, positions: &[Point3]) -> Real {
+        positions
+            .par_iter()
+            .zip(self.reference.par_iter())
+            .with_min_len(4096)
+            .map(|(p, q)| {
+                let d2 = (p - q).norm_squared();
+                if d2.is_nan() {
+                    0.0
+                } else {
+                    d2
+                }
+            })
+            .reduce(|| 0.0, Real::max)
+            .sqrt()
+    }
+
     /// Marks the list stale: the next [`update`](Self::update) rebuilds it
     /// (the world calls this when particles are inserted or removed, since
     /// slots then no longer match the reference positions).
@@ -211,6 +252,7 @@ impl NeighbourList {
         self.reference.extend_from_slice(positions);
         self.built = true;
         self.rebuilds += 1;
+        self.last_shift = 0.0;
     }
 
     /// True when some particle moved more than `skin / 2` (less a

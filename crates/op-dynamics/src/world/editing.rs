@@ -177,7 +177,6 @@ impl World {
             }
         } else {
             self.pipeline.neighbours = config.neighbour_list(&self.params.neighbours);
-            self.pipeline.scratch.forget_list();
         }
         self.pipeline.kernel = config.kernel;
         self.pipeline.friction = config.friction;

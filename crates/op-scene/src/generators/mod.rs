@@ -573,6 +573,26 @@ impl Generator {
     }
 }
 
+/// The velocities file `p` of [`crate::schema::Velocities::File`] at field
+/// path `path`: its points, as vectors, finite.
+pub(crate) fn read_velocities(
+    base_dir: Option<&Path>,
+    p: &Path,
+    file: &str,
+    path: &str,
+) -> Result<Vec<op_dynamics::Vec3>, SceneError> {
+    let set = points::read_points(&resolve(base_dir, p), file, path, p, MAX_PARTICLES)?;
+    let v: Vec<op_dynamics::Vec3> = set.positions.iter().map(|q| q.coords).collect();
+    if let Some(k) = v.iter().position(|x| !x.iter().all(|c| c.is_finite())) {
+        return Err(SceneError::invalid(
+            file,
+            path,
+            format!("velocity {k} is not finite"),
+        ));
+    }
+    Ok(v)
+}
+
 /// The points file `p` of a `Points` generator at field path `path`.
 fn read_points(
     p: &Path,

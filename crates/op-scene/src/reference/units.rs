@@ -147,6 +147,8 @@ pub const UNITS: &[(&str, &str)] = &[
     ("ToolShape.ConvexHull.points", "L"),
     ("ToolShape.TriMesh.triangles", "index"),
     ("ToolShape.TriMesh.vertices", "L"),
+    ("Velocities.Temperature.seed", "seed"),
+    ("Velocities.Temperature.t", "M·L²/T² (k_B = 1)"),
     ("WeightParams.a", "L"),
     ("WeightParams.cutoff", "L"),
     ("WeightParams.k", "1"),

@@ -293,6 +293,28 @@ fn plus_z() -> [Real; 3] {
     [0.0, 0.0, 1.0]
 }
 
+/// Per-particle initial velocities of an object ([`ObjectSpec::velocities`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub enum Velocities {
+    /// A points file (`.xyz`, `.ply`, `.obj`; relative to the scene file)
+    /// whose `i`-th point is the velocity of the object's `i`-th particle in
+    /// generation order; it holds exactly one point per particle. RON:
+    /// `velocities: Some(File("v.xyz"))`.
+    File(std::path::PathBuf),
+    /// Maxwell-Boltzmann velocities at temperature `t` (`k_B = 1`, each
+    /// particle's mass), drawn from `seed`, then, as LAMMPS' `velocity
+    /// create`, the object's net momentum removed and the velocities scaled
+    /// so its kinetic temperature (`3N - 3` degrees of freedom) is `t`
+    /// exactly. RON: `velocities: Some(Temperature(t: 1.44, seed: 87287))`.
+    Temperature {
+        /// Temperature, >= 0.
+        t: Real,
+        /// Seed of the draw.
+        seed: u64,
+    },
+}
+
 /// One object: a set of particles made by a generator, sharing a material
 /// and an object id.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -329,6 +351,11 @@ pub struct ObjectSpec {
     /// Initial angular velocity (world frame). Default: zero.
     #[serde(default)]
     pub angular_velocity: [Real; 3],
+    /// Per-particle initial velocities, added to `velocity`: from a file
+    /// or drawn at a temperature (to reproduce a peer's benchmark, e.g.
+    /// LAMMPS' `velocity create`). Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocities: Option<Velocities>,
     /// Per-particle changes, applied in order after generation.
     /// Default: none.
     #[serde(default)]

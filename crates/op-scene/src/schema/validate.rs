@@ -268,6 +268,26 @@ impl Scene {
                 "makes no particle: an object needs at least one",
             ));
         }
+        match &o.velocities {
+            None => {}
+            Some(super::Velocities::Temperature { t, .. }) => {
+                non_negative(file, &at("velocities.Temperature.t"), *t)?;
+            }
+            Some(super::Velocities::File(p)) => {
+                let v =
+                    crate::generators::read_velocities(base_dir, p, file, &at("velocities.File"))?;
+                if v.len() != count {
+                    return Err(SceneError::invalid(
+                        file,
+                        at("velocities.File"),
+                        format!(
+                            "holds {} velocities; the generator makes {count} particles",
+                            v.len()
+                        ),
+                    ));
+                }
+            }
+        }
         if let Some(skin) = &o.skin {
             skin.validate(file, &at("skin"))?;
         }
