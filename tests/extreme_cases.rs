@@ -126,15 +126,17 @@ fn mass_ratio_of_a_million_is_reported() {
 #[test]
 fn curvature_radius_of_a_hundredth_r0_is_reported() {
     // The form energy at r0 is (kappa r0)^2 = 1e4 times its scale: the
-    // chain tears into pairs, each held about 1e-4 r0 apart by cohesion
-    // against the form term, far too stiff for velocity Verlet at dt 1e-3:
-    // the pairs keep tumbling with bounded, integrator-pumped energy. Only
-    // the scene's opt-in energy-gain check (divergence.energy_gain) sees
-    // it; the adaptive scheme settles it (about 190 s).
+    // chain tears into pairs that cohesion lets come within about 0.01 r0.
+    // Until the normalized orientation terms faded out near coincidence
+    // (below a quarter of the well's distance, op-dynamics material docs)
+    // the pairs kept tumbling with energy pumped by velocity Verlet, which
+    // only the scene's opt-in energy-gain check saw; now they come to rest
+    // and the run reports where: nearest neighbours far below r0, no
+    // energy gain, finite.
     let run = run_case("tight_curvature", full());
     match &run.outcome {
-        ExtremeOutcome::Diverged(m) => assert!(m.contains("energy gain"), "{m}"),
-        other => panic!("expected the energy-gain report, got {other:?}"),
+        ExtremeOutcome::Settled(m) => assert!(m.contains("nearest neighbours"), "{m}"),
+        other => panic!("expected the settled report, got {other:?}"),
     }
 }
 
