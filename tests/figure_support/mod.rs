@@ -70,9 +70,9 @@ pub fn plane_fit(points: &[Point3]) -> (Vec3, Real) {
     (normal, rms)
 }
 
-/// Sizes, largest first, of the connected components of the graph joining
-/// points closer than `radius` (brute force: the figures are small).
-pub fn components(points: &[Point3], radius: Real) -> Vec<usize> {
+/// Connected components of the graph joining points closer than `radius`
+/// (brute force: the figures are small): a component label per point.
+pub fn labels(points: &[Point3], radius: Real) -> Vec<usize> {
     let mut parent: Vec<usize> = (0..points.len()).collect();
     fn root(parent: &mut [usize], mut i: usize) -> usize {
         while parent[i] != i {
@@ -89,9 +89,15 @@ pub fn components(points: &[Point3], radius: Real) -> Vec<usize> {
             }
         }
     }
+    (0..points.len()).map(|i| root(&mut parent, i)).collect()
+}
+
+/// Sizes, largest first, of the connected components of the graph joining
+/// points closer than `radius` ([`labels`]).
+pub fn components(points: &[Point3], radius: Real) -> Vec<usize> {
     let mut sizes = vec![0; points.len()];
-    for i in 0..points.len() {
-        sizes[root(&mut parent, i)] += 1;
+    for l in labels(points, radius) {
+        sizes[l] += 1;
     }
     let mut sizes: Vec<usize> = sizes.into_iter().filter(|&s| s > 0).collect();
     sizes.sort_unstable_by(|a, b| b.cmp(a));
