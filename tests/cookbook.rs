@@ -6,7 +6,7 @@ mod figure_support;
 
 use std::path::Path;
 
-use figure_support::{build, components};
+use figure_support::{build, components, labels};
 use oriented_particles::op_dynamics::{Point3, Real, Vec3};
 use oriented_particles::op_scene::run::rest_shape_error;
 use oriented_particles::op_scene::{load_scene, BuiltScene, Scene};
@@ -161,28 +161,6 @@ fn wire_coils_back_after_release() {
     println!("rest shape error: worst {worst:.3}, final {end:.5}");
     assert!(worst > 0.5, "the forces bend the wire: worst {worst}");
     assert!(end < 0.01, "recovered: {end}");
-}
-
-/// Connected components of the graph joining points closer than `radius`:
-/// a component label per point.
-fn labels(points: &[Point3], radius: Real) -> Vec<usize> {
-    let mut parent: Vec<usize> = (0..points.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for i in 0..points.len() {
-        for j in i + 1..points.len() {
-            if (points[i] - points[j]).norm() < radius {
-                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
-    (0..points.len()).map(|i| root(&mut parent, i)).collect()
 }
 
 /// `sheet_tear`: two pieces, one in each hand.
