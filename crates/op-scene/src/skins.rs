@@ -101,6 +101,14 @@ pub struct SkinSpec {
     /// size `radius / 2` rules).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thickness: Option<Real>,
+    /// Iterations of Taubin's volume-preserving smoothing applied to the
+    /// skin's mesh in the written frames (op-implicit
+    /// `polygonize::smoothing`), at most 100: it removes small bumps (half
+    /// of seeded 2% noise in 10 iterations) without shrinking the skin;
+    /// contact and the field are unchanged. Default: 0 (the exact iso
+    /// surface).
+    #[serde(default)]
+    pub smoothing: u32,
 }
 
 /// Default [`SkinSpec::smoothness`]: 1, the plain kernel of Lombardo &
@@ -162,6 +170,14 @@ impl SkinSpec {
                     ),
                 ));
             }
+        }
+        if self.smoothing > 100 {
+            return Err(SceneError::value(
+                file,
+                format!("{path}.smoothing"),
+                self.smoothing,
+                "must be at most 100 iterations",
+            ));
         }
         if !(self.stiffness.is_finite() && self.stiffness >= 0.0) {
             return Err(SceneError::value(
@@ -269,6 +285,8 @@ pub struct BuiltSkin {
     /// The primitive each particle of the object carries (in its body
     /// frame).
     pub primitive: Primitive,
+    /// Taubin iterations of the exported mesh ([`SkinSpec::smoothing`]).
+    pub smoothing: usize,
 }
 
 impl BuiltSkin {
@@ -289,6 +307,7 @@ impl BuiltSkin {
             cell_size: spec.cell_size,
             stiffness: spec.stiffness * spec.slope_ratio(),
             primitive: prim,
+            smoothing: spec.smoothing as usize,
         })
     }
 
@@ -356,7 +375,7 @@ impl BuiltSkin {
             o.object != self.object
                 && boxes_overlap(own.support_box(), o.skin.field().support_box())
         });
-        match (other, colliders.is_empty()) {
+        let mut mesh = match (other, colliders.is_empty()) {
             (Some(o), true) => {
                 polygonize_field(&ContactPair::new(own, o.skin.field()).deformed_a(), &params)
             }
@@ -366,7 +385,9 @@ impl BuiltSkin {
             }
             (None, true) => polygonize(own, &params),
             (None, false) => polygonize_field(&ClippedField::new(own, colliders, slope), &params),
-        }
+        }?;
+        mesh.taubin_smooth(self.smoothing);
+        Ok(mesh)
     }
 }
 
@@ -518,6 +539,7 @@ mod tests {
             stiffness: 100.0,
             smoothness: 1.0,
             thickness: None,
+            smoothing: 0,
         };
         let skins = (0..2u32)
             .map(|k| {
@@ -616,6 +638,7 @@ mod tests {
             stiffness: 100.0,
             smoothness,
             thickness: None,
+            smoothing: 0,
         }
     }
 
@@ -662,6 +685,7 @@ mod tests {
                 stiffness: 100.0,
                 smoothness: 2.0,
                 thickness: Some(thickness),
+                smoothing: 0,
             };
             let mesh = skin_of(&at, &spec, 1.0);
             let top: Vec<Real> = mesh

@@ -18,6 +18,7 @@
 //! `-grad f / |grad f|` (outward).
 
 mod blocks;
+pub mod smoothing;
 mod tables;
 
 use op_dynamics::{Point3, Real, Vec3};

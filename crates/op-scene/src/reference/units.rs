@@ -131,6 +131,7 @@ pub const UNITS: &[(&str, &str)] = &[
     ("SkinPrimitive.Square.half_side", "L"),
     ("SkinSpec.cell_size", "L"),
     ("SkinSpec.radius", "L"),
+    ("SkinSpec.smoothing", "iterations"),
     ("SkinSpec.smoothness", "1"),
     ("SkinSpec.stiffness", "M·L/T²"),
     ("SkinSpec.thickness", "L"),
