@@ -242,7 +242,7 @@ impl SkinSpec {
 /// The field of `primitive` (weight 1) at distance `height` above the
 /// centre of a flat hexagonal layer of such primitives at spacing
 /// `spacing`, the layer perpendicular to `normal_axis` (the primitives'
-/// normal axis), wide enough to cover the support.
+/// normal axis), wide enough to cover the support (up to 64 rings).
 fn layer_field(primitive: &Primitive, normal_axis: Vec3, spacing: Real, height: Real) -> Real {
     let n = normal_axis.normalize();
     let u = n.cross(&Vec3::x());
@@ -253,7 +253,9 @@ fn layer_field(primitive: &Primitive, normal_axis: Vec3, spacing: Real, height: 
     }
     .normalize();
     let v = n.cross(&u);
-    let rings = (primitive.radius / spacing).ceil() as i64 + 2;
+    // Two rings beyond the support; at most 64 (a support of more than 62
+    // spacings is truncated there, which thickens the skin a little).
+    let rings = ((primitive.radius / spacing).ceil() as i64 + 2).min(64);
     let probe = Point3::from(n * height);
     let mut sum = 0.0;
     for j in -rings..=rings {

@@ -18,14 +18,7 @@ use serde_json::Value;
 /// by file pattern (a scene file itself has no `$schema` field: unknown
 /// fields are refused).
 pub fn json_schema() -> Value {
-    let mut schema = schemars::schema_for!(crate::Scene).to_value();
-    if let Some(obj) = schema.as_object_mut() {
-        obj.insert(
-            "$id".into(),
-            Value::String("https://github.com/oriented-particles/opsim/scene.schema.json".into()),
-        );
-    }
-    schema
+    schemars::schema_for!(crate::Scene).to_value()
 }
 
 /// The Markdown field reference (`docs/scenes.md`, `opsim schema
