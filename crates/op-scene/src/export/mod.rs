@@ -39,6 +39,19 @@ pub mod obj;
 pub mod ply;
 pub mod vtu;
 
+/// A sized writer over a `dyn Write`, for the format crates whose writers
+/// take a sized `W: Write` (obj-exporter, ply-rs-bw).
+struct SizedWriter<'a>(&'a mut dyn Write);
+
+impl Write for SizedWriter<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()
+    }
+}
+
 pub use geometry::FrameMesh;
 pub use layout::{FrameFormat, Sequence, SequenceKind};
 

@@ -79,19 +79,7 @@ pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
         material_library: None,
         objects: vec![object(mesh)],
     };
-    obj_exporter::export(&set, &mut WriteAdapter(w))
-}
-
-/// `obj_exporter::export` wants a sized writer.
-struct WriteAdapter<'a>(&'a mut dyn Write);
-
-impl Write for WriteAdapter<'_> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.write(buf)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.0.flush()
-    }
+    obj_exporter::export(&set, &mut super::SizedWriter(w))
 }
 
 #[cfg(test)]

@@ -133,20 +133,8 @@ fn model(mesh: &FrameMesh) -> Ply<Element> {
 pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
     let mut ply = model(mesh);
     ply_rs_bw::writer::Writer::new()
-        .write_ply(&mut WriteAdapter(w), &mut ply)
+        .write_ply(&mut super::SizedWriter(w), &mut ply)
         .map(|_| ())
-}
-
-/// ply-rs-bw wants a sized writer.
-struct WriteAdapter<'a>(&'a mut dyn Write);
-
-impl Write for WriteAdapter<'_> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.0.write(buf)
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.0.flush()
-    }
 }
 
 #[cfg(test)]
