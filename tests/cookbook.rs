@@ -150,6 +150,81 @@ fn cloth_rests_on_the_box_and_hangs_over_its_sides() {
     );
 }
 
+/// `ball_bounce`: squashed at impact, round in the air, at least three
+/// bounces of falling height, at rest on the ground, round, one piece.
+#[test]
+fn solid_ball_bounces_and_comes_to_rest_round() {
+    println!("claim: {}", claim("ball_bounce"));
+    let scene = load("ball_bounce");
+    let margin = match &scene.tools[0].role {
+        oriented_particles::op_dynamics::tools::Role::Obstacle { margin, .. } => *margin,
+        other => panic!("the ground is an obstacle: {other:?}"),
+    };
+    let (_, frames) = frames(&scene);
+    let ball = &frames[0];
+    let lowest = |f: &Frame| f.x.iter().map(|p| p.z).fold(Real::MAX, Real::min);
+    // Height over width of the ball's bounding box: 1 for the round ball.
+    let aspect = |f: &Frame| {
+        let span = |c: usize| {
+            let (lo, hi) = f.x.iter().fold((Real::MAX, Real::MIN), |(a, b), p| {
+                (a.min(p[c]), b.max(p[c]))
+            });
+            hi - lo
+        };
+        span(2) / span(0).max(span(1))
+    };
+    // A frame touches the ground when its lowest particle is within the
+    // obstacle's margin; it is in the air when clear of it by 0.1.
+    let touching: Vec<bool> = ball.iter().map(|f| lowest(f) < margin).collect();
+    let mut apexes = Vec::new();
+    let mut squash = Real::MAX;
+    let mut k = touching.iter().position(|&t| t).expect("the ball lands");
+    while k < ball.len() {
+        // Leave the ground, rise, and come back.
+        let Some(off) = (k..ball.len()).find(|&j| lowest(&ball[j]) > margin + 0.1) else {
+            break;
+        };
+        squash = (k..off).map(|j| aspect(&ball[j])).fold(squash, Real::min);
+        let Some(back) = (off..ball.len()).find(|&j| touching[j]) else {
+            break;
+        };
+        let apex = (off..back).map(|j| lowest(&ball[j])).fold(0.0, Real::max);
+        let in_air = (off..back)
+            .map(|j| aspect(&ball[j]))
+            .fold(Real::MAX, Real::min);
+        println!(
+            "bounce {}: apex of the lowest point {apex:.3}, height/width in the air >= {in_air:.3}",
+            apexes.len() + 1
+        );
+        assert!(in_air > 0.97, "round again in the air: {in_air}");
+        apexes.push(apex);
+        k = back;
+    }
+    println!("squashed to height/width {squash:.3} on impact");
+    assert!(squash < 0.95, "the ball squashes on impact: {squash}");
+    assert!(apexes.len() >= 3, "{} bounces", apexes.len());
+    assert!(
+        apexes.windows(2).all(|w| w[1] < w[0]),
+        "each bounce lower: {apexes:?}"
+    );
+    let last = ball.last().unwrap();
+    let peak = ball.iter().map(kinetic).fold(0.0, Real::max);
+    println!(
+        "end: lowest point {:.3}, height/width {:.3}, rest shape error {:.4}, kinetic {:.2e} of peak {peak:.2}",
+        lowest(last),
+        aspect(last),
+        last.error,
+        kinetic(last)
+    );
+    assert!(
+        lowest(last) < margin && lowest(last) > 0.0,
+        "rests on the ground"
+    );
+    assert!(kinetic(last) < 1e-3 * peak, "at rest");
+    assert!(last.error < 0.05, "round: rest shape error {}", last.error);
+    assert_eq!(components(&last.x, 1.3).len(), 1, "one piece");
+}
+
 /// `wire_bend_release`: bent far from its rest shape, back below 0.01.
 #[test]
 fn wire_coils_back_after_release() {

@@ -170,6 +170,15 @@ impl Scaling {
                 spacing: spacing * s,
                 center: p(center),
             },
+            Generator::SolidBall {
+                radius,
+                spacing,
+                center,
+            } => Generator::SolidBall {
+                radius: radius * s,
+                spacing: spacing * s,
+                center: p(center),
+            },
             Generator::TorusShell {
                 major,
                 minor,

@@ -100,6 +100,16 @@ fn sample_generator(g: &Generator) -> Generator {
                 *radius = (*radius * (n as Real / count).sqrt()).max(2.0 * *spacing);
             }
         }
+        Generator::SolidBall {
+            radius, spacing, ..
+        } => {
+            // Count ∝ (radius / spacing)³: shrink the radius, not below
+            // two spacings.
+            let count = crate::generators::solid_ball_estimate(*radius, *spacing);
+            if count > n as Real {
+                *radius = (*radius * (n as Real / count).cbrt()).max(2.0 * *spacing);
+            }
+        }
         Generator::TorusShell {
             major,
             minor,

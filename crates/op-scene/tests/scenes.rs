@@ -966,6 +966,16 @@ const BAD_SCENES: &[(&str, Expect, &[&str])] = &[
         Expect::Invalid,
         &["SphereShell.spacing", "at most 10000000"],
     ),
+    (
+        "too_big_solid_ball.ron",
+        Expect::Invalid,
+        &["SolidBall.spacing", "at most 10000000"],
+    ),
+    (
+        "zero_spacing_solid_ball.ron",
+        Expect::Invalid,
+        &["generator.SolidBall.spacing = 0: must be finite and > 0"],
+    ),
     ("no_objects.json", Expect::Invalid, &["objects: is empty"]),
     (
         "bad_name.ron",

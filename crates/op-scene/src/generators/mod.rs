@@ -15,6 +15,7 @@
 
 mod points;
 mod shapes;
+mod solid;
 
 use std::path::{Path, PathBuf};
 
@@ -25,6 +26,7 @@ use crate::error::SceneError;
 use crate::schema::checks;
 
 pub use points::resolve;
+pub(crate) use solid::solid_ball_estimate;
 
 /// Largest number of particles a scene may generate (all objects
 /// together). Larger requests are rejected before anything is allocated.
@@ -186,6 +188,22 @@ pub enum Generator {
         #[serde(default = "zero3")]
         center: [Real; 3],
     },
+    /// A solid ball: the face-centred cubic packing (every interior
+    /// particle has twelve neighbours at `spacing`, the next ones at
+    /// `spacing √2`) of the points within `radius` of the centre, about
+    /// `4/3 π (radius/spacing)³ √2` particles. Normals point away from the
+    /// centre, curvature 0. Give its material a spacing cut-off (or bond
+    /// radius) between `spacing` and `spacing √2`, so that each particle
+    /// keeps the same twelve partners: an elastic solid.
+    SolidBall {
+        /// Radius, > 0.
+        radius: Real,
+        /// Distance between nearest neighbours, > 0.
+        spacing: Real,
+        /// Centre (a particle sits there). Default: origin.
+        #[serde(default = "zero3")]
+        center: [Real; 3],
+    },
     /// A ring torus about `axis`: rings of constant tube angle `v` about
     /// `spacing √3/2` apart, each holding about `2π(R + r cos v)/spacing`
     /// particles, alternate rings shifted half a step. Outward normals;
@@ -233,6 +251,7 @@ impl Generator {
             Generator::HexSheet { .. } => "HexSheet",
             Generator::Chain { .. } => "Chain",
             Generator::SphereShell { .. } => "SphereShell",
+            Generator::SolidBall { .. } => "SolidBall",
             Generator::TorusShell { .. } => "TorusShell",
             Generator::Points { .. } => "Points",
             Generator::List { .. } => "List",
@@ -246,6 +265,7 @@ impl Generator {
             | Generator::HexSheet { spacing, .. }
             | Generator::Chain { spacing, .. }
             | Generator::SphereShell { spacing, .. }
+            | Generator::SolidBall { spacing, .. }
             | Generator::TorusShell { spacing, .. } => Some(*spacing),
             Generator::Points { .. } | Generator::List { .. } => None,
         }
@@ -393,6 +413,18 @@ impl Generator {
                 }
                 Ok(())
             }
+            Generator::SolidBall {
+                radius,
+                spacing,
+                center,
+            } => {
+                checks::positive(file, &at("radius"), *radius)?;
+                checks::positive(file, &at("spacing"), *spacing)?;
+                checks::finite3(file, &at("center"), center)?;
+                let n = solid::solid_ball_estimate(*radius, *spacing);
+                checks::count_at_most(file, &at("spacing"), n, max, "this radius and spacing")?;
+                Ok(())
+            }
             Generator::TorusShell {
                 major,
                 minor,
@@ -459,6 +491,11 @@ impl Generator {
             Generator::SphereShell {
                 radius, spacing, ..
             } => shapes::sphere_count(*radius, *spacing) as usize,
+            Generator::SolidBall {
+                radius,
+                spacing,
+                center,
+            } => solid::solid_ball(*radius, *spacing, center).len(),
             Generator::TorusShell {
                 major,
                 minor,
@@ -548,6 +585,11 @@ impl Generator {
                 *radius,
                 center,
             ),
+            Generator::SolidBall {
+                radius,
+                spacing,
+                center,
+            } => solid::solid_ball(*radius, *spacing, center),
             Generator::TorusShell {
                 major,
                 minor,

@@ -81,13 +81,22 @@ impl Scene {
                         *spacing,
                         2,
                     ),
+                    Generator::SolidBall {
+                        radius, spacing, ..
+                    } => (
+                        crate::generators::solid_ball_estimate(*radius, *spacing),
+                        *spacing,
+                        3,
+                    ),
                     Generator::Points { .. } | Generator::List { .. } => return 0.0,
                 };
                 let ratio = range / spacing;
-                let per_particle = if dim == 1 {
-                    ratio
-                } else {
-                    0.5 * std::f64::consts::PI * ratio * ratio / 0.866
+                let per_particle = match dim {
+                    1 => ratio,
+                    2 => 0.5 * std::f64::consts::PI * ratio * ratio / 0.866,
+                    // Half the face-centred cubic packing's particles
+                    // within the range: 2/3 π ratio³ √2.
+                    _ => 2.0 / 3.0 * std::f64::consts::PI * ratio.powi(3) * 2f64.sqrt(),
                 };
                 count * per_particle.max(1.0)
             })
@@ -274,6 +283,7 @@ impl Scene {
                 Generator::Spiral { center, .. }
                 | Generator::HexSheet { center, .. }
                 | Generator::SphereShell { center, .. }
+                | Generator::SolidBall { center, .. }
                 | Generator::TorusShell { center, .. } => check(at("center"), center)?,
                 Generator::Chain { start, .. } => check(at("start"), start)?,
                 Generator::List { particles } => {
@@ -371,7 +381,7 @@ fn object_extent(
         Generator::HexSheet {
             nx, ny, spacing, ..
         } => (*nx.max(ny)) as Real * spacing,
-        Generator::SphereShell { radius, .. } => 2.0 * radius,
+        Generator::SphereShell { radius, .. } | Generator::SolidBall { radius, .. } => 2.0 * radius,
         Generator::TorusShell { major, minor, .. } => 2.0 * (major + minor),
         Generator::List { .. } | Generator::Points { .. } => {
             let positions = g.generate(base_dir, file, path)?.positions;
