@@ -1,8 +1,8 @@
 //! `opsim`: run oriented-particle scenes, check them, render pictures.
 //!
-//! Thin by design (STYLE, after ripgrep): parse flags into validated
+//! Thin by design (after ripgrep): parse flags into validated
 //! arguments in one place, call op-scene, print the error chain, map errors
-//! to exit codes (DESIGN §6): 0 done, 2 bad input, 3 simulation diverged.
+//! to exit codes (README "Running scenes"): 0 done, 2 bad input, 3 simulation diverged.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};

@@ -1,5 +1,5 @@
 //! Measured orders of accuracy of every integrator on a full world (a
-//! reduced work-precision sweep, DESIGN §7): the seed spiral released from
+//! reduced work-precision sweep, docs/model.md §6): the seed spiral released from
 //! its analytic shape without damping, friction or load (ten oriented
 //! particles with cohesion, form and co-planarity: smooth,
 //! velocity-independent forces, rotations included), compared at scene

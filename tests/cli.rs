@@ -1,4 +1,4 @@
-//! End-to-end tests of the `opsim` binary (DESIGN §6 contract): run the real
+//! End-to-end tests of the `opsim` binary (README "Running scenes"): run the real
 //! binary in temporary directories and check exit codes, files and values.
 
 use std::path::{Path, PathBuf};

@@ -1,5 +1,5 @@
 //! The surface figures of seed 000 (Szeliski & Tonnesen 1992; issue 7,
-//! DESIGN §4): welding (fig. 6), cloth draping, plastic deformation and
+//! seed 000 §6-8): welding (fig. 6), cloth draping, plastic deformation and
 //! tearing (fig. 12) as scenes (`scenes/fig_06_*.ron`, `scenes/fig_12_*.ron`)
 //! run the way `opsim run` runs them, each with a check of what the figure
 //! claims. Durations are the scenes' own unless
@@ -343,7 +343,7 @@ fn fig_12a_cloth_drapes_over_the_sphere() {
     assert!(peak > 0.0 && last < 0.01 * peak, "{last} vs peak {peak}");
 }
 
-/// A dented shell's state at one instant: rest shape error (DESIGN §7) and
+/// A dented shell's state at one instant: rest shape error (docs/model.md §6) and
 /// how far its pushed side (the particles within 1 of the +x axis, on the
 /// +x side) reaches out from the centre.
 #[derive(Clone, Copy, Debug)]

@@ -1,4 +1,4 @@
-//! Point-set interpolation (seed 000 §7, DESIGN §6 `opsim fit`): sampled
+//! Point-set interpolation (seed 000 §7, README "Running scenes", `opsim fit`): sampled
 //! spheres and tori give closed meshes of the right Euler characteristic
 //! close to the true surface; an open patch keeps a hole wider than the
 //! search range and closes one narrower; bad files exit with code 2, and

@@ -1,4 +1,4 @@
-//! Shape memory (seed 002 §5, fig. 5; DESIGN §7-8): the spiral that
+//! Shape memory (seed 002 §5, fig. 5; docs/model.md §6-7): the spiral that
 //! uncoils under opposing end forces and recovers its shape, the same
 //! recovery for other spirals from the same parameter recipe and for the
 //! seed spiral scaled by dimensional analysis, a hinged spiral that stays

@@ -19,14 +19,14 @@
 //! What stays different is the shape of the well: Lennard-Jones is stiff at
 //! rest (`U''(r0) = 72 ε / r0²`) with a hard core, cohesion has zero
 //! stiffness at rest (`f'(r0) = 0`) and a soft core whose repulsion peaks
-//! and then decays under strong compression (DESIGN §8).
+//! and then decays under strong compression (docs/model.md §7).
 
 use op_dynamics::interactions::{CohesionParams, LennardJonesParams, Spacing};
 use op_dynamics::Real;
 
 /// The cohesion parameters of the comparison: `E = 200`, `r0 = 1`,
 /// `α = 16`, cut-off `1.5 r0` (next neighbours of a hexagonal lattice
-/// only, DESIGN §8), i.e. the default cohesion with a shorter cut-off.
+/// only, docs/model.md §7), i.e. the default cohesion with a shorter cut-off.
 pub fn reference_cohesion() -> CohesionParams {
     CohesionParams {
         e: 200.0,

@@ -1,4 +1,4 @@
-//! The experiments of seed 002 §3 and §5 (DESIGN §7): cohesion against
+//! The experiments of seed 002 §3 and §5 (docs/model.md §6): cohesion against
 //! Lennard-Jones, and the spiral that uncoils and recovers. Shared by the
 //! integration tests (`tests/shape_memory.rs`, `tests/cohesion_vs_lj.rs`)
 //! and the report generator (`examples/shape_memory_report.rs`).

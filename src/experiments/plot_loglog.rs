@@ -1,6 +1,5 @@
-//! Log-log work-precision plots for the reports (DESIGN §7 "Error against
-//! run time"): one series per method, points joined in order, an optional
-//! horizontal spread bar per point (e.g. min-max of repeated timings),
+//! Log-log work-precision plots for the reports (docs/model.md §6): one series per method, points
+//! joined in order, an optional horizontal spread bar per point (e.g. min-max of repeated timings),
 //! highlighted points (e.g. the Pareto front) drawn with a ring, and
 //! horizontal reference lines (e.g. a target error). Hand-written SVG like
 //! [`super::plot`].

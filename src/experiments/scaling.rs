@@ -1,4 +1,4 @@
-//! Changing a scene's units by dimensional analysis (DESIGN §3, §8).
+//! Changing a scene's units by dimensional analysis (docs/model.md §3, §7).
 //!
 //! A scene expressed in units `(L, M, T)` describes the same motion in
 //! units `(L/s, M/m, T/t)` when every parameter is multiplied by

@@ -1,4 +1,4 @@
-//! The spiral that uncoils and recovers (seed 002 §5, fig. 5; DESIGN §7-8).
+//! The spiral that uncoils and recovers (seed 002 §5, fig. 5; docs/model.md §6-7).
 //!
 //! A planar spiral of oriented particles held by cohesion, the form
 //! (shape memory) term, co-planarity and inter-particle friction is pulled
@@ -12,7 +12,7 @@
 //! rule instead of per-case tuning. [`run_spiral`] runs a scene and
 //! records the rest shape error and the end-to-end distance over time.
 //!
-//! **What the recipe has to get right** (DESIGN §8, measured in
+//! **What the recipe has to get right** (docs/model.md §7, measured in
 //! `reports/shape_memory.md`):
 //!
 //! - *Reach.* Cohesion and the orientation weight are cut off at 1.5 rest
@@ -185,8 +185,8 @@ impl Units {
     }
 }
 
-/// One parameter recipe for every spiral (DESIGN §8 "not tuned to one
-/// case"): dimensionless constants, each multiplied by the [`Units`]
+/// One parameter recipe for every spiral (not tuned to one case;
+/// docs/model.md §7): dimensionless constants, each multiplied by the [`Units`]
 /// that give it its dimension. The defaults are the documented recipe.
 ///
 /// | constant | scene parameter | unit |
@@ -209,7 +209,7 @@ impl Units {
 /// The orientation weight is isotropic with width `a = L` and amplitude 1.
 /// Both cut-offs are `1.5 L`: cohesion and the orientation terms act on
 /// next neighbours along the spiral only (particle `i+2` is at least
-/// `2 sin(1) L ≈ 1.68 L` away for `|κ| L <= 1`, DESIGN §8).
+/// `2 sin(1) L ≈ 1.68 L` away for `|κ| L <= 1`, docs/model.md §7).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpiralRecipe {
     /// Cohesion scaling factor `E`, in `M/(L T²)`.

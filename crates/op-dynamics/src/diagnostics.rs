@@ -1,4 +1,4 @@
-//! Diagnostics (DESIGN §7): kinetic (translational + rotational), potential
+//! Diagnostics (docs/model.md §6): kinetic (translational + rotational), potential
 //! and total energy, linear and angular momentum, the oscillation measure of
 //! seed 002 §3, and the rest shape error used by the shape-memory tests.
 
@@ -67,7 +67,7 @@ pub fn oscillation(before: &[Point3], after: &[Point3]) -> Real {
 }
 
 /// RMS distance between `current` and `rest` after the best rigid alignment
-/// (Kabsch), the rest shape error of DESIGN §6 before division by r0.
+/// (Kabsch), the rest shape error of docs/model.md §6 before division by r0.
 pub fn rest_shape_rms(rest: &[Point3], current: &[Point3]) -> Real {
     let n = rest.len().min(current.len());
     if n == 0 {

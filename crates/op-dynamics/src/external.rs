@@ -10,7 +10,7 @@ use crate::math::{Real, Vec3};
 
 /// A force applied to a set of particles during a time window, with an
 /// optional linear ramp at both ends (ramped loading and unloading avoid
-/// the dynamic overshoot of step loads, DESIGN §8).
+/// the dynamic overshoot of step loads, docs/model.md §7).
 ///
 /// The magnitude factor is 0 before `start`, rises linearly to 1 over
 /// `ramp`, stays 1, and falls linearly to 0 over `ramp` ending at `end`.

@@ -1,8 +1,8 @@
 //! Internal force evaluation: every pair visited once, both `E_ij` and
-//! `E_ji` evaluated there (DESIGN §3), in parallel with results bitwise
+//! `E_ji` evaluated there (docs/model.md §2), in parallel with results bitwise
 //! identical at any thread count.
 //!
-//! The scheme is "fixed blocks, ordered merge" (STYLE): particles are cut
+//! The scheme is "fixed blocks, ordered merge": particles are cut
 //! into blocks of `BLOCK` (2048) consecutive slots (a constant, not a function of
 //! the thread count; the world keeps particles in spatial order, so a block
 //! is a compact region). Each block, in parallel, visits the half-list rows

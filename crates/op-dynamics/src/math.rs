@@ -1,6 +1,6 @@
 //! Scalar and linear-algebra aliases used throughout the workspace.
 //!
-//! The simulation is 3-D and `f64` everywhere (DESIGN §2): stiff cases and
+//! The simulation is 3-D and `f64` everywhere (docs/model.md §1): stiff cases and
 //! error measurements need the precision.
 
 /// The scalar type of the simulation.

@@ -1,5 +1,5 @@
 //! The particle store: a structure of arrays with private fields and slice
-//! accessors (DESIGN §3, STYLE "For this workspace").
+//! accessors (docs/model.md §2).
 //!
 //! Each particle is a full frame (seed 002 §5): position `p`, velocity `v`,
 //! unit quaternion `q`, world angular velocity `w`, mass, diagonal body

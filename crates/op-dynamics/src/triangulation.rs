@@ -1,5 +1,5 @@
 //! Triangulation of an oriented particle surface for rendering (seed 000
-//! §5, DESIGN §4).
+//! §5).
 //!
 //! **Rule** (seed 000 §5): a triangle of *mutual neighbours* (every pair
 //! of its three particles within [`TriangulationParams::radius`]) is kept

@@ -20,7 +20,7 @@ use crate::tools::{Role, Tool, ToolParams, Tools};
 
 mod editing;
 
-/// Neighbour-list settings (seed 000 §4.2, DESIGN §3 "Neighbours").
+/// Neighbour-list settings (seed 000 §4.2, docs/model.md §5).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct NeighbourParams {
@@ -868,7 +868,7 @@ impl World {
     }
 
     /// Energies, momenta and the oscillation measure at the current state
-    /// (DESIGN §7). Costs one force evaluation for the potential energy.
+    /// (docs/model.md §6). Costs one force evaluation for the potential energy.
     pub fn diagnostics(&mut self) -> Diagnostics {
         let potential = self.evaluate_forces().2;
         let mut d = diagnostics::kinematic(&self.particles);

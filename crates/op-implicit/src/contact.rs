@@ -1,5 +1,5 @@
-//! Contact of a skin against a rigid parry collider (seed 002 §6, DESIGN
-//! §5; Gascuel 1993 with only the deformable skin compressed).
+//! Contact of a skin against a rigid parry collider (seed 002 §6;
+//! Gascuel 1993 with only the deformable skin compressed).
 //!
 //! The skin is sampled (for instance at the vertices of its polygonization,
 //! [`crate::Mesh::positions`]). Each sample inside the collider gets the
@@ -131,7 +131,7 @@ pub fn collider_reactions(
 
 /// A skin pressed against rigid colliders, deformed so that it lies on
 /// their surfaces where it would enter them (Gascuel with only the
-/// deformable skin compressed, DESIGN §5): the exported skin of an object
+/// deformable skin compressed, seed 002 §6): the exported skin of an object
 /// on an obstacle. With `s_k` the signed distance to collider `k`
 /// (positive outside) and `g` a slope,
 /// `f'(p) = min(f(p), min_k (ISO + g s_k(p)))`: continuous, equal to `f`

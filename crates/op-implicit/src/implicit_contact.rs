@@ -1,6 +1,6 @@
 //! Contact between two implicit objects: Gascuel's exact contact surface
 //! (Gascuel 1993, "An implicit formulation for precise contact modeling
-//! between flexible solids", SIGGRAPH 93; DESIGN §5, seed 002 §6: "exact
+//! between flexible solids", SIGGRAPH 93; seed 002 §6: "exact
 //! contact surfaces are modelled by adding negative terms to the
 //! potentials").
 //!
@@ -51,7 +51,7 @@ use crate::error::PolygonizeError;
 use crate::field::{Field, ScalarField, ValueGradient};
 use crate::kernel::ISO;
 
-/// The optional bulge of Gascuel's propagation region (DESIGN §5).
+/// The optional bulge of Gascuel's propagation region (Gascuel 1993).
 ///
 /// Outside the other object B (`s = -e_B > 0`, the distance to the
 /// interpenetration boundary measured in B's field units, i.e. about the

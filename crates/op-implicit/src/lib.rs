@@ -1,6 +1,6 @@
 //! # op-implicit: implicit skins on oriented-particle skeletons
 //!
-//! Seed 002 §6 and DESIGN §5: skeleton primitives posed in particle frames,
+//! Seed 002 §6: skeleton primitives posed in particle frames,
 //! a compact-support field kernel (Wyvill 1986), the summed field with
 //! analytic gradient, and polygonization of its iso-surface (narrow-band
 //! marching cubes over blocks, in parallel).
@@ -20,7 +20,7 @@
 //!   with [`Reactions::apply`] (`World::add_external_force`).
 //!
 //! - [`ContactPair`] is the contact between two implicit objects (Gascuel
-//!   1993, DESIGN §5): [`ContactPair::deformed_a`] / [`ContactPair::deformed_b`]
+//!   1993): [`ContactPair::deformed_a`] / [`ContactPair::deformed_b`]
 //!   are the deformed fields (exact contact surface, optional
 //!   propagation-region [`Bulge`]), polygonized with [`polygonize_field`];
 //!   [`ContactPair::reactions`] gives equal and opposite reactions on both

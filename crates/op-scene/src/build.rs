@@ -1,6 +1,6 @@
 //! Scene → world: generate particles, apply overrides, map names to
 //! indices, and build an op-dynamics [`World`] holding only what the scene
-//! uses (DESIGN §6).
+//! uses (README "Running scenes").
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

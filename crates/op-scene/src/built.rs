@@ -22,7 +22,7 @@ pub struct BuiltObject {
     /// when [`BuiltScene::settle`] runs a settle phase.
     pub rest: Vec<Point3>,
     /// Mean nearest-neighbour distance of `rest`: the `r0` that divides
-    /// the rest shape error (DESIGN §6).
+    /// the rest shape error (docs/model.md §6).
     pub rest_spacing: Real,
     /// Ids of the particles the creation rules added to the object, in
     /// creation order (see [`crate::creation`]); they have no rest

@@ -1,4 +1,4 @@
-//! Errors of loading, validating and building a scene (DESIGN §6): each
+//! Errors of loading, validating and building a scene (README "Running scenes"): each
 //! names the file, then the line and column or the field path, then what is
 //! wrong and what would be valid. Nothing in the scene layer panics on bad
 //! input; it returns one of these.

@@ -1,5 +1,5 @@
 //! Reading scene files: RON or JSON by extension, parsed into one schema,
-//! then validated (DESIGN §6).
+//! then validated (README "Running scenes").
 
 use std::path::Path;
 

@@ -1,4 +1,4 @@
-//! What a run writes (DESIGN §6): particle geometry in the OBJ frames and
+//! What a run writes (README "Running scenes"): particle geometry in the OBJ frames and
 //! the metrics table. The runner writes only what is asked for.
 
 use serde::{Deserialize, Serialize};

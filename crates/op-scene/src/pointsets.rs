@@ -1,5 +1,5 @@
 //! Point sets read from files for point-set interpolation (seed 000 §7,
-//! DESIGN §6 `opsim fit`): `.xyz` text, `.ply` (ascii and
+//! README "Running scenes", `opsim fit`): `.xyz` text, `.ply` (ascii and
 //! binary_little_endian) and `.obj` (`v` and `vn` lines).
 //!
 //! Entry points: [`read_point_set`] (by extension) and the parsers

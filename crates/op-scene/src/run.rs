@@ -1,4 +1,4 @@
-//! The runner (DESIGN §6): steps a built scene frame by frame, writes the
+//! The runner (README "Running scenes"): steps a built scene frame by frame, writes the
 //! frame files ([`crate::export`]), `metrics.csv` and `summary.json`, and detects divergence (NaN,
 //! infinities, speeds above the limit, runaway energy) without ever writing
 //! a bad frame: frames already on disk stay valid and the summary says

@@ -1,4 +1,4 @@
-//! Implicit skins of scene objects and their contact (DESIGN §5, seed 002
+//! Implicit skins of scene objects and their contact (seed 002
 //! §6 fig. 6).
 //!
 //! An object with a [`SkinSpec`] gets one op-implicit skeleton primitive
@@ -344,7 +344,7 @@ impl BuiltSkin {
     }
 
     /// The skin's mesh at its current pose, deformed by contact (Gascuel,
-    /// DESIGN §5): when another skin of `skins` overlaps its support, the
+    /// seed 002 §6): when another skin of `skins` overlaps its support, the
     /// exported surface is the deformed field's, so two skins in contact
     /// meet on one contact surface (no gap, no overlap); with several
     /// overlapping skins, the first one in scene order deforms it. Then

@@ -1,5 +1,5 @@
-//! The cases of the work-precision study (DESIGN §7 "Error against run
-//! time"): a scene, the scene times it is sampled at, the steps and
+//! The cases of the work-precision study (docs/model.md §6, error
+//! against run time): a scene, the scene times it is sampled at, the steps and
 //! tolerances swept, and the reference method. The list is data
 //! ([`case_table`]): a scene file becomes a case with one [`CaseEntry`].
 
@@ -262,7 +262,7 @@ pub fn triangle_scene(p: Real) -> Scene {
 /// The seed spiral of [`SpiralRecipe`] (cohesion, form, co-planarity;
 /// `scenes/spiral.ron` without its settle phase, damping, friction and
 /// end forces), released at rest from its analytic shape, which is close
-/// to but not at rest (DESIGN §8): it oscillates about its rest shape,
+/// to but not at rest (docs/model.md §7): it oscillates about its rest shape,
 /// rotating its particles, with its energy conserved. Every force is
 /// smooth and independent of velocities, so each scheme should show its
 /// nominal order.

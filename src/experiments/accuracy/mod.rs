@@ -1,4 +1,4 @@
-//! Work-precision measurements (DESIGN §7 "Error against run time"): each
+//! Work-precision measurements (docs/model.md §6): each
 //! case of [`case::case_table`] is run with every integrator at several
 //! steps (and the adaptive scheme at several tolerances), sampled at fixed
 //! scene times, and compared with a converged reference run of the same

@@ -1,5 +1,5 @@
 //! One run of a case with one method, sampled at fixed scene times, and
-//! its errors against a reference run (DESIGN §7).
+//! its errors against a reference run (docs/model.md §6).
 
 use std::time::Instant;
 

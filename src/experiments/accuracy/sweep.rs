@@ -1,6 +1,6 @@
 //! A case swept over methods: the reference and its convergence check,
 //! every measurement, the Pareto front of (wall time, error) and the time
-//! each integrator needs to reach an error (DESIGN §7).
+//! each integrator needs to reach an error (docs/model.md §6).
 
 use op_dynamics::Real;
 

@@ -22,7 +22,7 @@
 //! cohesion force has zero slope at rest (`f'(r0) = 0`), so its stiffness
 //! is that of the starting compression.
 //!
-//! **Outcome of one run** (DESIGN §7). *Diverged*: [`World::step`] reports
+//! **Outcome of one run** (docs/model.md §6). *Diverged*: [`World::step`] reports
 //! it (non-finite state or a speed above `1e3`), or the pair is pulled
 //! beyond the cut-off with more total energy than it started with: the
 //! probe is damped and unforced, so its energy can only decrease, and a

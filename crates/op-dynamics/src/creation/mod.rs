@@ -1,4 +1,4 @@
-//! Particle creation rules (seed 000 §7, DESIGN §4): surfaces that stretch
+//! Particle creation rules (seed 000 §7): surfaces that stretch
 //! and grow.
 //!
 //! - [`stretching`]: two neighbours `d_min <= d <= d_max` apart with no

@@ -1,4 +1,4 @@
-//! Time integrators for oriented particles (DESIGN §3 "Dynamics", seed 000 §4).
+//! Time integrators for oriented particles (docs/model.md §4, seed 000 §4).
 //!
 //! Each particle is a rigid body with position `p`, velocity `v`,
 //! orientation unit quaternion `q` (a full frame), WORLD-frame angular

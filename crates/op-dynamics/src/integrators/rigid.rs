@@ -3,7 +3,7 @@
 //! and the truncated inverse differential of the exponential map used by the
 //! Runge–Kutta–Munthe-Kaas schemes.
 //!
-//! Conventions (DESIGN §3): angular velocities and torques are in the WORLD
+//! Conventions (docs/model.md §2): angular velocities and torques are in the WORLD
 //! frame; `inertia` holds the principal moments `(I_x, I_y, I_z)` in the
 //! BODY frame of the orientation `q`, so the world inertia tensor is
 //! `R(q) diag(I) R(q)ᵀ`.

@@ -2,7 +2,7 @@
 //!
 //! Zero when the normals are antisymmetric with respect to `r`, the natural
 //! configuration of normals on a sphere. Normalized variant (seed 002
-//! footnote 6, DESIGN §3): `φ_C / |r|²`, dimensionless; it has no limit at
+//! footnote 6, docs/model.md §3): `φ_C / |r|²`, dimensionless; it has no limit at
 //! `r = 0`, so the material fades it out near coincidence
 //! ([`super::material`] docs).
 

@@ -56,7 +56,7 @@
 //!
 //! Default cut-off: where `|f|` falls to [`AUTO_CUTOFF_RATIO`] (1e-6) of the
 //! maximum attraction. Reach and core softness are traded against each other
-//! by `α` (DESIGN §8): a large `α` narrows the well and shortens the reach
+//! by `α` (docs/model.md §7): a large `α` narrows the well and shortens the reach
 //! but softens the repulsive core.
 
 use super::cutoff::{validate_fraction, Taper};
@@ -176,7 +176,7 @@ fn bisect(mut lo: Real, mut hi: Real, below: impl Fn(Real) -> bool) -> Real {
 impl CohesionParams {
     /// `(r_m, f_max)`: where the untapered force is most attractive and the
     /// magnitude of that attraction. Useful to match Lennard-Jones to
-    /// cohesion (same maximum attraction, DESIGN §8). Needs `r0`, `alpha`
+    /// cohesion (same maximum attraction, docs/model.md §7). Needs `r0`, `alpha`
     /// and `e` valid.
     pub fn max_attraction(&self) -> (Real, Real) {
         let u = max_attraction_offset(self.r0, self.alpha);

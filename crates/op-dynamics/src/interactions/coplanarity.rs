@@ -1,7 +1,7 @@
 //! Co-planarity (seed 000 eq. 6): `φ_P = (n_i · r)²`.
 //!
 //! Zero when `j` lies in i's tangent plane. Normalized variant (seed 002
-//! footnote 6, DESIGN §3): `φ_P / |r|² = cos²` of the angle between `n_i`
+//! footnote 6, docs/model.md §3): `φ_P / |r|² = cos²` of the angle between `n_i`
 //! and `r`, dimensionless (faded out near coincidence, where it has no
 //! limit: [`super::material`] docs). The weighted energy is `α_P φ_P ψ`;
 //! force and torque follow from the gradients returned here (App. B of seed

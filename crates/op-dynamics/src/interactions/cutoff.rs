@@ -6,7 +6,7 @@
 //! is 0 beyond. The tapered potential `U s` and its derivative
 //! `U' s + U s'` are then continuous (with their first derivatives) at the
 //! cut-off, so forces and energies have no jump when a pair leaves the
-//! neighbour radius (DESIGN §3).
+//! neighbour radius (docs/model.md §5).
 //!
 //! Parameter structs give the taper as a *fraction* of the cut-off radius
 //! (`r_on = r_c (1 - taper)`), which is scale independent: scaling a scene's

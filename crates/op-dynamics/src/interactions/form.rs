@@ -10,7 +10,7 @@
 //! - raw: `|r + R_i (n_i - n_j)|²` (length²). Undefined for `κ_i = 0`
 //!   (infinite radius): we then contribute **zero** (use the normalized
 //!   variant, or co-normality and co-planarity, for flat regions).
-//! - normalized (DESIGN §3): `|κ_i r + (n_i - n_j)|²`, the raw term divided
+//! - normalized (docs/model.md §3): `|κ_i r + (n_i - n_j)|²`, the raw term divided
 //!   by `R_i²`. Dimensionless and well defined for `κ_i = 0`, where it is
 //!   co-normality. (Seed 002 footnote 6 divides by `(R|r|)²`, which is not
 //!   scale invariant.)

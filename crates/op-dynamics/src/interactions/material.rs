@@ -14,8 +14,8 @@
 //! The normalized co-planarity and co-circularity terms (and the normalized
 //! spin potential) depend on `r` only through its direction `r/|r|`: they
 //! have no limit at `r = 0` and their gradients grow like `1/|r|`. Where the
-//! spacing core lets particles overlap (cohesion with a large `α`, DESIGN
-//! §8), a pair passing close to coincidence swept its direction through
+//! spacing core lets particles overlap (cohesion with a large `α`,
+//! docs/model.md §7), a pair passing close to coincidence swept its direction through
 //! half a turn within a few steps and the term's energy (up to `4 α ψ` per
 //! side) jumped by whatever the step missed: a free shell of the
 //! `elastic_shell` preset gained energy by bursts and tore apart at any
@@ -73,7 +73,7 @@ pub struct Material {
     /// Which spin potential. Default: `MinCurvature` (seed 000 eq. 14).
     pub spin_kind: SpinKind,
     /// Use the normalized (dimensionless, roughly scale independent)
-    /// orientation terms (DESIGN §3). Default: true.
+    /// orientation terms (docs/model.md §3). Default: true.
     pub normalized: bool,
     /// Exponential repulsion for pairs that do not interact completely.
     /// Default: strength 1 at contact distance 1, decay 0.1, cut-off 2.

@@ -1,5 +1,5 @@
 //! Pair interactions of oriented particles: energies, and the forces and
-//! torques derived from them (DESIGN §3; seed 000 §3 and App. B, seed 002
+//! torques derived from them (docs/model.md §3; seed 000 §3 and App. B, seed 002
 //! §3-5).
 //!
 //! # Entry points

@@ -1,6 +1,6 @@
 //! The pair entry point: energy, forces and torques of one unordered pair,
 //! visited once, with both directions `E_ij` and `E_ji` evaluated
-//! (seed 000 eq. 11 and App. B, seed 002 §4-5, DESIGN §3).
+//! (seed 000 eq. 11 and App. B, seed 002 §4-5, docs/model.md §3).
 //!
 //! Conventions: for an ordered pair `i` emits and `j` feels, `r = p_j - p_i`,
 //! `n = R(q) a`, `t = R(q) tangent_axis(a)`. Every force and torque is
@@ -640,7 +640,7 @@ mod tests {
         }
     }
 
-    /// DESIGN §3: with normalized terms, scaling every length by `s` (and
+    /// docs/model.md §3: with normalized terms, scaling every length by `s` (and
     /// each parameter by dimensional analysis: lengths by `s`, cohesion
     /// `α` by `1/s²` and `E` by `1/s³`, curvatures by `1/s`) leaves energies
     /// and torques unchanged and scales forces by `1/s`.

@@ -1,4 +1,4 @@
-//! Neighbour lists: radius queries with a skin (seed 000 §4.2, DESIGN §3).
+//! Neighbour lists: radius queries with a skin (seed 000 §4.2, docs/model.md §5).
 //!
 //! - [`PairList`]: the flat (CSR) **half** list every consumer reads: row
 //!   `i` holds the neighbours `j > i` (ascending), plus the transposed

@@ -1,4 +1,4 @@
-//! Tools (seed 000 §6, DESIGN §4): rigid parry shapes with scripted motion
+//! Tools (seed 000 §6): rigid parry shapes with scripted motion
 //! that act on the particles near them — solid obstacles, attractors and
 //! movers. Each acts through a potential energy of the particle position
 //! ([`roles`]); the world adds the tool forces and energies in every force

@@ -1,5 +1,5 @@
 //! Polygonization of a field's iso-surface: narrow-band marching cubes
-//! over blocks, in parallel (DESIGN §5; seed 002 §6: "the object surface is
+//! over blocks, in parallel (seed 002 §6: "the object surface is
 //! an isosurface of the sum of all emitted potentials").
 //!
 //! Stages: (1) the region is the union of the primitives' support boxes

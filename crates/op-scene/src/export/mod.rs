@@ -1,4 +1,4 @@
-//! Frame files (DESIGN §6): what a run writes per frame, in the formats
+//! Frame files (README "Running scenes"): what a run writes per frame, in the formats
 //! asked for ([`FrameFormat`]: OBJ by default, binary PLY, VTU).
 //!
 //! Layout under the output directory (see [`layout`]):

@@ -1,4 +1,4 @@
-//! Point-set interpolation with oriented particles (seed 000 §7, DESIGN §4
+//! Point-set interpolation with oriented particles (seed 000 §7
 //! and §6 `opsim fit`).
 //!
 //! Entry point: [`fit`] with [`FitParams`]; [`write_obj`] writes the mesh.

@@ -110,8 +110,8 @@ pub enum Generator {
     /// The total turning is `(κ_start + κ_end)/2 · (count-1) spacing`;
     /// more than one turn (2π) makes successive turns come close and
     /// interact, which is rarely what is wanted. The analytic shape is
-    /// close to, not exactly at, the rest shape of the form term (DESIGN
-    /// §8): settle first if a reference is needed.
+    /// close to, not exactly at, the rest shape of the form term (docs/model.md
+    /// §7): settle first if a reference is needed.
     Spiral {
         /// Number of particles, >= 2.
         count: usize,

@@ -65,7 +65,7 @@ an absent option `null`.
 **Units.** The format has no fixed units: lengths (L), times (T), masses (M) and temperatures
 (Θ) are whatever the scene means them to be, consistently. Take the particle spacing as L = 1 and
 the particle mass as M = 1, as every default does; time then follows from the stiffnesses, and
-`docs/units.md` says how to choose a stable step, gravity and damping. `×r0` means a multiple of
+[units.md](units.md) says how to choose a stable step, gravity and damping. `×r0` means a multiple of
 the object's (or the creation rules') rest spacing; `1` means dimensionless; a force is M·L/T², an
 energy M·L²/T², a linear stiffness M/T², a linear damping coefficient M/T.
 ";
@@ -270,7 +270,7 @@ fn description(s: &Value) -> Option<String> {
     ] {
         text = text.replace(from, to);
     }
-    let text = strip_design_citations(&text);
+    let text = relative_doc_links(&text);
     Some(text)
 }
 
@@ -310,33 +310,33 @@ fn strip_links(s: &str) -> String {
     out
 }
 
-/// Removes citations of the design notes (`DESIGN §n`), which are not part
-/// of the repository: `(DESIGN §3)` goes whole, `DESIGN §8: x` keeps `x`.
-fn strip_design_citations(s: &str) -> String {
-    let mut out = s.to_string();
-    while let Some(at) = out.find("DESIGN §") {
-        let mut end = at + "DESIGN §".len();
-        while out[end..].starts_with(|c: char| c.is_ascii_digit() || c == '.') {
-            end += 1;
-        }
-        let before = out[..at].trim_end_matches([' ', '\n']);
-        let (start, end) = if before.ends_with('(') && out[end..].starts_with(')') {
-            (before.len() - 1, end + 1)
-        } else if out[end..].starts_with(": ") || out[end..].starts_with(", ") {
-            (at, end + 2)
-        } else {
-            (at, end)
-        };
-        let start = if out[..start].ends_with(' ')
-            && start > 0
-            && out[end..].starts_with([')', '.', ',', ' '])
-        {
-            start - 1
-        } else {
-            start
-        };
-        out.replace_range(start..end, "");
+/// Citations of this repository's docs, written from the repository root
+/// in doc comments (`docs/model.md §7`), as links relative to `docs/`,
+/// where the reference lives (`[model.md §7](model.md)`).
+fn relative_doc_links(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    let mut rest = s;
+    while let Some(at) = rest.find("docs/") {
+        out.push_str(&rest[..at]);
+        let tail = &rest[at + "docs/".len()..];
+        let name_len = tail
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '.'))
+            .unwrap_or(tail.len());
+        let name = tail[..name_len].trim_end_matches('.');
+        let after = &tail[name.len()..];
+        let section_len = after
+            .strip_prefix(" §")
+            .map(|x| {
+                " §".len()
+                    + x.find(|c: char| !(c.is_ascii_digit() || c == '-' || c == '.'))
+                        .unwrap_or(x.len())
+            })
+            .unwrap_or(0);
+        let section = after[..section_len].trim_end_matches('.');
+        out.push_str(&format!("[{name}{section}]({name})"));
+        rest = &after[section.len()..];
     }
+    out.push_str(rest);
     out
 }
 
@@ -456,7 +456,7 @@ mod tests {
     #[test]
     fn the_reference_has_no_internal_citations_or_rustdoc_links() {
         let md = field_reference();
-        assert!(!md.contains("DESIGN §"), "a DESIGN citation leaked");
+        assert!(!md.contains("DESIGN"), "a citation of notes outside the repository");
         assert!(!md.contains("[`"), "a rustdoc link leaked");
         assert!(!md.contains("crate::"), "a crate path leaked");
         assert!(md.contains("## Material"));
@@ -480,14 +480,14 @@ mod tests {
     }
 
     #[test]
-    fn design_citations_are_removed_cleanly() {
+    fn doc_citations_become_relative_links() {
         assert_eq!(
-            strip_design_citations("terms (DESIGN §3). Default"),
-            "terms. Default"
+            relative_doc_links("rest (docs/model.md §7: a spiral)."),
+            "rest ([model.md §7](model.md): a spiral)."
         );
         assert_eq!(
-            strip_design_citations("rest (DESIGN §8: a spiral)"),
-            "rest (a spiral)"
+            relative_doc_links("see docs/units.md."),
+            "see [units.md](units.md)."
         );
         assert_eq!(
             strip_links("see [`crate::creation`] and [x](y)"),

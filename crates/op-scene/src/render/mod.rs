@@ -1,4 +1,4 @@
-//! Pictures of OBJ frames: the drawing half of `opsim render` (DESIGN §6).
+//! Pictures of OBJ frames: the drawing half of `opsim render` (README "Running scenes").
 //!
 //! Entry points:
 //! - [`render_obj_file`] / [`render_data`]: one frame in one [`Style`] (seed 000

@@ -1,4 +1,4 @@
-//! The scene schema (DESIGN §6): one serde description read from RON or
+//! The scene schema (docs/scenes.md): one serde description read from RON or
 //! JSON. Every struct denies unknown fields; every optional field documents
 //! its default.
 //!
@@ -173,7 +173,7 @@ pub struct WorldSettings {
     /// `start` and `end` count from the end of the settle phase), and takes
     /// the settled positions as the rest shape (the reference of the rest
     /// shape error and its rest spacing). Generated shapes are close to, not
-    /// exactly at, rest (DESIGN §8: a spiral made from its analytic
+    /// exactly at, rest (docs/model.md §7: a spiral made from its analytic
     /// curvature); settling first makes the reference a true rest state.
     /// Times in `metrics.csv` and `summary.json` count from the end of the
     /// settle phase. Building a scene does not settle it; see
@@ -325,7 +325,7 @@ pub struct ObjectSpec {
     pub name: String,
     /// Name of its material: a key of [`Scene::materials`], or the name of
     /// a preset ([`crate::presets`]: `cloth`, `elastic_shell`,
-    /// `shape_memory_wire`, `plastic_clay`; see `docs/units.md` for the
+    /// `shape_memory_wire`, `plastic_clay`; see docs/units.md for the
     /// step and damping each was tested with). Required.
     pub material: String,
     /// How its particles are made. Required.
