@@ -14,11 +14,14 @@
 //!    and drops those of merged ones;
 //! 2. the interval's end is the earliest [`Stage::horizon`] (and the
 //!    target time);
-//! 3. every due [`Phase::Forces`] stage runs: it adds external forces and
-//!    torques held over the interval
-//!    ([`World::hold_external_forces_until`]);
-//! 4. the world advances to the interval's end
-//!    ([`World::advance_to`], landing on it exactly).
+//! 3. every due [`Phase::Forces`] stage runs: it computes the forces it
+//!    adds over the interval (an explicit coupling, such as skin contact,
+//!    evaluated once per interval) and offers them as a force
+//!    [`Contributor`] ([`Stage::contributor`]);
+//! 4. the world advances to the interval's end with the stages'
+//!    contributors acting in every force evaluation
+//!    ([`World::advance_to_with`], landing on it exactly; the contributors'
+//!    order is that of [`crate::contributors`]).
 //!
 //! [`Driver::advance_to`] repeats this until the target time, then runs
 //! every stage's [`Stage::at_target`] (skins follow the particles, dropping
@@ -29,6 +32,7 @@
 
 use std::time::Instant;
 
+use crate::contributors::Contributor;
 use crate::world::{Divergence, World};
 use crate::Real;
 
@@ -135,6 +139,13 @@ pub trait Stage<C>: Send {
         _until: Real,
     ) -> Result<Effects, StageError> {
         Ok(Effects::default())
+    }
+
+    /// The forces it adds in every force evaluation of the coming interval,
+    /// if any (a [`Phase::Forces`] stage offers what its
+    /// [`Stage::run`] computed). Default: none.
+    fn contributor(&self) -> Option<&dyn Contributor> {
+        None
     }
 
     /// Told of the effects of the stages that ran before the interval.
@@ -263,7 +274,7 @@ impl<C> Driver<C> {
                 )
                 .into());
             }
-            // 3. Forces held over it.
+            // 3. The forces of the interval, offered as contributors.
             for k in 0..self.stages.len() {
                 if self.stages[k].phase() != Phase::Forces || !self.stages[k].due(world, ctx) {
                     continue;
@@ -275,9 +286,11 @@ impl<C> Driver<C> {
                     world.invalidate_forces();
                 }
             }
-            // 4. The world's steps.
+            // 4. The world's steps, with the stages' contributors.
+            let contributors: Vec<&dyn Contributor> =
+                self.stages.iter().filter_map(|s| s.contributor()).collect();
             let clock = Instant::now();
-            let stepped = world.advance_to(target);
+            let stepped = world.advance_to_with(target, &contributors);
             self.world_seconds += clock.elapsed().as_secs_f64();
             stepped?;
         }

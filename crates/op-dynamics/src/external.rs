@@ -3,7 +3,11 @@
 //! force/torque accumulator other crates (op-implicit contact, tools) use to
 //! act on particles during the next step.
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+
+use crate::contributors::{Contribution, Contributor, ContributorInput};
+use crate::interactions::PreparedMaterial;
 
 use crate::error::{self, ParamError};
 use crate::math::{Real, Vec3};
@@ -220,6 +224,128 @@ impl ExternalAccumulator {
             self.forces.iter_mut().for_each(|f| *f = Vec3::zeros());
             self.torques.iter_mut().for_each(|t| *t = Vec3::zeros());
             self.active = false;
+        }
+    }
+}
+
+impl Contributor for ExternalAccumulator {
+    fn name(&self) -> &str {
+        "pending forces"
+    }
+
+    fn is_active(&self) -> bool {
+        self.active
+    }
+
+    fn adds_torque(&self) -> bool {
+        self.active && self.torques.iter().any(|t| *t != Vec3::zeros())
+    }
+
+    /// Adds each particle's pending force and torque (by id).
+    fn contribute(&self, input: &ContributorInput<'_>, out: &mut Contribution<'_>) {
+        if !self.active {
+            return;
+        }
+        let ids = input.attributes.ids;
+        out.forces
+            .par_iter_mut()
+            .zip(out.torques.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (f, tq))| {
+                let (fe, te) = self.get(ids[i]);
+                *f += fe;
+                *tq += te;
+            });
+    }
+}
+
+/// Gravity, linear and angular damping (seed 000 eq. 12-13: `m g - β0 v`,
+/// `-β1 ω`) and the cold drag of heated materials
+/// ([`crate::heat::HeatResponse::cold_drag`]), as one contributor: each
+/// particle gets `m g - (β0 + drag) v` and `-β1 ω`.
+pub struct UniformField<'a> {
+    params: &'a ExternalParams,
+    /// Some material in use has a cold drag (and the world has heat).
+    cold_drag: bool,
+}
+
+impl<'a> UniformField<'a> {
+    /// The field of `params`; `heated`: some material in use weakens with
+    /// heat (its cold drag is then read per particle).
+    pub fn new(params: &'a ExternalParams, materials: &[PreparedMaterial], heated: bool) -> Self {
+        let cold_drag = heated
+            && materials
+                .iter()
+                .any(|m| m.heat_response().is_some_and(|h| h.cold_drag > 0.0));
+        UniformField { params, cold_drag }
+    }
+}
+
+impl Contributor for UniformField<'_> {
+    fn name(&self) -> &str {
+        "gravity and damping"
+    }
+
+    fn is_active(&self) -> bool {
+        self.params.gravity() != Vec3::zeros()
+            || self.params.linear_damping != 0.0
+            || self.params.angular_damping != 0.0
+            || self.cold_drag
+    }
+
+    fn contribute(&self, input: &ContributorInput<'_>, out: &mut Contribution<'_>) {
+        if !self.is_active() {
+            return;
+        }
+        let g = self.params.gravity();
+        let b0 = self.params.linear_damping;
+        let b1 = self.params.angular_damping;
+        let a = input.attributes;
+        let s = &input.state;
+        let drag = |i: usize| {
+            input.materials[a.materials[i] as usize]
+                .heat_response()
+                .map_or(0.0, |h| h.drag(a.temperatures[i]))
+        };
+        out.forces
+            .par_iter_mut()
+            .zip(out.torques.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (f, tq))| {
+                let b = if self.cold_drag { b0 + drag(i) } else { b0 };
+                *f += a.masses[i] * g - b * s.velocities[i];
+                *tq -= b1 * s.angular_velocities[i];
+            });
+    }
+}
+
+/// The force windows of a world ([`ForceWindow`]) as a contributor.
+pub struct ForceWindows<'a>(pub &'a [ForceWindow]);
+
+impl Contributor for ForceWindows<'_> {
+    fn name(&self) -> &str {
+        "force windows"
+    }
+
+    fn is_active(&self) -> bool {
+        !self.0.is_empty()
+    }
+
+    fn contribute(&self, input: &ContributorInput<'_>, out: &mut Contribution<'_>) {
+        for w in self.0 {
+            let k = match input.step_start {
+                Some(t0) => w.factor_within(input.t, t0),
+                None => w.factor(input.t),
+            };
+            if k != 0.0 {
+                let fw = k * Vec3::from(w.force);
+                for &id in &w.particles {
+                    // Removed particles (World::remove_particles) are skipped.
+                    if let Some(slot) = input.slot(id) {
+                        out.forces[slot] += fw;
+                    }
+                }
+            }
         }
     }
 }

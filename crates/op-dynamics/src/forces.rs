@@ -31,7 +31,8 @@
 use rayon::prelude::*;
 
 use crate::bonds::Bonds;
-use crate::external::{ExternalAccumulator, ExternalParams};
+use crate::contributors::{Contribution, Contributor, ContributorInput};
+use crate::external::{ExternalAccumulator, ExternalParams, ForceWindows, UniformField};
 use crate::flags::Flags;
 use crate::heat::pair_strength;
 use crate::integrators::StateRef;
@@ -126,6 +127,9 @@ pub(crate) struct ForceContext<'a> {
     /// step (plain [`crate::external::ForceWindow::factor`]).
     pub step_start: Option<Real>,
     pub accumulator: &'a ExternalAccumulator,
+    /// The caller's contributors for this interval
+    /// ([`crate::World::advance_to_with`]).
+    pub extra: &'a [&'a dyn Contributor],
     pub tools: &'a Tools,
     pub scratch: &'a mut ForceScratch,
 }
@@ -156,6 +160,7 @@ impl Pipeline {
         attributes: Attributes<'a>,
         external: &'a ExternalParams,
         accumulator: &'a ExternalAccumulator,
+        extra: &'a [&'a dyn Contributor],
     ) -> ForceContext<'a> {
         ForceContext {
             kernel: self.kernel,
@@ -169,6 +174,7 @@ impl Pipeline {
             external,
             step_start: None,
             accumulator,
+            extra,
             tools: &self.tools,
             scratch: &mut self.scratch,
         }
@@ -273,79 +279,47 @@ impl ForceContext<'_> {
                 }
             }
         }
-        if !self.tools.is_empty() {
-            self.tools
-                .add(t, s, &self.attributes, forces, &mut energies[..]);
+        let input = ContributorInput {
+            t,
+            step_start: self.step_start,
+            state: s,
+            attributes: &self.attributes,
+            materials: self.materials,
+        };
+        let mut out = Contribution {
+            forces: &mut *forces,
+            torques: &mut *torques,
+            energies: &mut energies[..],
+        };
+        // The order of the module docs of `crate::contributors`.
+        let uniform = UniformField::new(self.external, self.materials, self.heated);
+        let windows = ForceWindows(&self.external.forces);
+        let built_in: [&dyn Contributor; 3] = [self.tools, &uniform, self.accumulator];
+        for c in built_in
+            .into_iter()
+            .chain(self.extra.iter().copied())
+            .chain(std::iter::once(&windows as &dyn Contributor))
+        {
+            if c.is_active() {
+                c.contribute(&input, &mut out);
+            }
         }
         *potential = energies.iter().sum();
-        self.add_external(t, s, forces, torques);
+        if self.has_fixed {
+            fix(&self.attributes, forces, torques);
+        }
     }
+}
 
-    /// Gravity, force windows, damping (with the cold drag of heated
-    /// materials), pending accumulator; fixed particles get zero force /
-    /// torque (seed 000 eq. 12-13).
-    fn add_external(&self, t: Real, s: StateRef<'_>, forces: &mut [Vec3], torques: &mut [Vec3]) {
-        let g = self.external.gravity();
-        let b0 = self.external.linear_damping;
-        let b1 = self.external.angular_damping;
-        let a = &self.attributes;
-        let acc = self.accumulator;
-        // Cold drag (crate::heat::HeatResponse::cold_drag): only when some
-        // material in use has one.
-        let cold_drag = self.heated
-            && self
-                .materials
-                .iter()
-                .any(|m| m.heat_response().is_some_and(|h| h.cold_drag > 0.0));
-        let drag = |i: usize| {
-            self.materials[a.materials[i] as usize]
-                .heat_response()
-                .map_or(0.0, |h| h.drag(a.temperatures[i]))
-        };
-        let uniform = g != Vec3::zeros() || b0 != 0.0 || b1 != 0.0 || acc.is_active() || cold_drag;
-        if uniform {
-            forces
-                .par_iter_mut()
-                .zip(torques.par_iter_mut())
-                .enumerate()
-                .for_each(|(i, (f, tq))| {
-                    let b = if cold_drag { b0 + drag(i) } else { b0 };
-                    *f += a.masses[i] * g - b * s.velocities[i];
-                    *tq -= b1 * s.angular_velocities[i];
-                    if acc.is_active() {
-                        let (fe, te) = acc.get(a.ids[i]);
-                        *f += fe;
-                        *tq += te;
-                    }
-                });
+/// Fixed particles get zero force or torque (seed 000 eq. 12-13 with the
+/// particle held).
+fn fix(a: &Attributes<'_>, forces: &mut [Vec3], torques: &mut [Vec3]) {
+    for (i, fl) in a.flags.iter().enumerate() {
+        if fl.contains(Flags::FIXED_POSITION) {
+            forces[i] = Vec3::zeros();
         }
-        for w in &self.external.forces {
-            let k = match self.step_start {
-                Some(t0) => w.factor_within(t, t0),
-                None => w.factor(t),
-            };
-            if k != 0.0 {
-                let fw = k * Vec3::from(w.force);
-                for &id in &w.particles {
-                    // Removed particles (World::remove_particles) are skipped.
-                    if let Some(&slot) = a.slot_of.get(id as usize) {
-                        if slot != crate::particles::Particles::REMOVED {
-                            forces[slot as usize] += fw;
-                        }
-                    }
-                }
-            }
-        }
-        if !self.has_fixed {
-            return;
-        }
-        for (i, fl) in a.flags.iter().enumerate() {
-            if fl.contains(Flags::FIXED_POSITION) {
-                forces[i] = Vec3::zeros();
-            }
-            if fl.contains(Flags::FIXED_ORIENTATION) {
-                torques[i] = Vec3::zeros();
-            }
+        if fl.contains(Flags::FIXED_ORIENTATION) {
+            torques[i] = Vec3::zeros();
         }
     }
 }

@@ -21,6 +21,7 @@
 #![warn(missing_docs)]
 
 pub mod bonds;
+pub mod contributors;
 pub mod creation;
 pub mod diagnostics;
 pub mod driver;

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::bonds::Bonds;
+use crate::contributors::Contributor;
 use crate::diagnostics::{self, Diagnostics};
 use crate::error::{self, ParamError};
 use crate::external::{ExternalAccumulator, ExternalParams};
@@ -385,9 +386,6 @@ pub struct World {
     torques: Vec<Vec3>,
     prev_positions: Vec<Point3>,
     time: Real,
-    /// Pending external forces are held until this time (see
-    /// [`World::hold_external_forces_until`]).
-    hold_until: Real,
     steps: u64,
     dt_next: Real,
     report: StepReport,
@@ -463,7 +461,6 @@ impl World {
             torques: vec![Vec3::zeros(); n],
             prev_positions: particles.positions().to_vec(),
             time: 0.0,
-            hold_until: Real::NEG_INFINITY,
             steps: 0,
             dt_next: params.dt,
             report: StepReport::default(),
@@ -621,21 +618,12 @@ impl World {
 
     /// Adds a force and a torque (world frame, torque about the particle's
     /// position) to particle `id`, held constant during the next step and
-    /// then cleared. This is how other crates (op-implicit contact, tools)
-    /// act on particles.
+    /// then cleared (the "pending forces" contributor,
+    /// [`crate::contributors`]). To act over a longer interval, pass a
+    /// [`Contributor`] to [`World::advance_to_with`] instead.
     pub fn add_external_force(&mut self, id: u32, force: Vec3, torque: Vec3) {
         self.may_rotate |= torque != Vec3::zeros();
         self.accumulator.add(id, force, torque);
-    }
-
-    /// Holds the pending external forces ([`World::add_external_force`])
-    /// over every step until the world time reaches `t`, instead of the
-    /// next step only: an explicit coupling evaluated once per interval
-    /// `[now, t]` (op-scene's skin contact) then acts over all of it, also
-    /// when an adaptive scheme covers the interval in several steps. They
-    /// are cleared after the step that reaches `t`.
-    pub fn hold_external_forces_until(&mut self, t: Real) {
-        self.hold_until = t;
     }
 
     /// Advances by one step: the configured `dt`, or the adaptive
@@ -656,34 +644,61 @@ impl World {
     /// the positions before and after the step).
     pub fn step(&mut self) -> Result<&StepReport, Divergence> {
         let dt = self.dt_next.min(self.params.dt);
-        self.step_by(dt, false)
+        self.step_by(dt, false, &[])
     }
 
     /// Advances until `t_end`, landing on it exactly: the last step is
     /// shortened (a shortened step does not change the adaptive
     /// controller's suggestion for the next one).
     pub fn advance_to(&mut self, t_end: Real) -> Result<(), Divergence> {
+        self.advance_to_with(t_end, &[])
+    }
+
+    /// [`World::advance_to`] with `extra` contributors acting in every force
+    /// evaluation of the interval (after the pending forces, before the
+    /// force windows; [`crate::contributors`]): an explicit coupling
+    /// evaluated once per interval (op-scene's skin contact) acts over all
+    /// of it, also when an adaptive scheme takes several steps. Cached
+    /// forces are dropped when the interval ends if some of them was
+    /// active: the next interval's contributions differ.
+    pub fn advance_to_with(
+        &mut self,
+        t_end: Real,
+        extra: &[&dyn Contributor],
+    ) -> Result<(), Divergence> {
+        if extra.iter().any(|c| c.is_active() && c.adds_torque()) {
+            self.may_rotate = true;
+        }
+        let active = extra.iter().any(|c| c.is_active());
         loop {
             let remaining = t_end - self.time;
             if remaining <= 1e-12 * self.params.dt {
+                if active {
+                    self.integrator.invalidate_forces();
+                }
                 return Ok(());
             }
             let h = self.dt_next.min(self.params.dt);
             // A step within 1e-6 of the remaining time takes all of it, so
             // round-off in the accumulated time never leaves a sliver step.
             if remaining <= h * (1.0 + 1e-6) {
-                self.step_by(remaining, true)?;
+                self.step_by(remaining, true, extra)?;
                 if self.time < t_end && self.report.dt == remaining {
                     // Land exactly despite round-off in `time + dt`.
                     self.time = t_end;
                 }
             } else {
-                self.step_by(h, false)?;
+                self.step_by(h, false, extra)?;
             }
         }
     }
 
-    fn step_by(&mut self, dt: Real, clipped: bool) -> Result<&StepReport, Divergence> {
+    fn step_by(
+        &mut self,
+        dt: Real,
+        clipped: bool,
+        extra: &[&dyn Contributor],
+    ) -> Result<&StepReport, Divergence> {
         let mut report = StepReport::default();
         let clock = std::time::Instant::now();
         if let Some(list) = self.pipeline.neighbours.as_mut() {
@@ -706,9 +721,9 @@ impl World {
         let rotating = self.pipeline.kernel == Kernel::Oriented || self.may_rotate;
         self.integrator.set_translation_only(!rotating);
         let (state, bodies, attributes) = self.particles.split();
-        let mut ctx = self
-            .pipeline
-            .context(attributes, &self.params.external, &self.accumulator);
+        let mut ctx =
+            self.pipeline
+                .context(attributes, &self.params.external, &self.accumulator, extra);
         ctx.step_start = Some(self.time);
         let info = self
             .integrator
@@ -725,8 +740,7 @@ impl World {
         if !clipped || info.dt_taken < dt {
             self.dt_next = info.dt_next;
         }
-        let held = self.time < self.hold_until - 1e-12 * self.params.dt;
-        if self.accumulator.is_active() && !held {
+        if self.accumulator.is_active() {
             self.accumulator.clear();
             self.integrator.invalidate_forces();
         }
@@ -860,9 +874,9 @@ impl World {
     pub fn evaluate_forces(&mut self) -> (&[Vec3], &[Vec3], Real) {
         let state = self.particles.state();
         let attributes = self.particles.attributes();
-        let mut ctx = self
-            .pipeline
-            .context(attributes, &self.params.external, &self.accumulator);
+        let mut ctx =
+            self.pipeline
+                .context(attributes, &self.params.external, &self.accumulator, &[]);
         ctx.evaluate(self.time, state, &mut self.forces, &mut self.torques);
         (&self.forces, &self.torques, self.pipeline.scratch.potential)
     }

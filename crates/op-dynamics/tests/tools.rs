@@ -311,10 +311,11 @@ fn tools_are_deterministic_across_thread_counts() {
     assert_eq!(run(1), run(2));
 }
 
-/// A held external force acts over every step of its interval, also when
-/// the adaptive scheme takes several, and is cleared after it.
+/// A contributor passed for an interval acts over every step of it, also
+/// when the adaptive scheme takes several, and not after it; a pending
+/// force (`add_external_force`) acts over one step only.
 #[test]
-fn held_external_forces_act_over_the_whole_interval() {
+fn interval_contributors_act_over_the_whole_interval() {
     let params = WorldParams {
         scheme: Scheme::Adaptive(op_dynamics::AdaptiveParams::default()),
         dt: 0.05,
@@ -322,14 +323,24 @@ fn held_external_forces_act_over_the_whole_interval() {
     };
     let p = particles(&[Point3::origin()], |_| 0);
     let mut w = World::new(p, &[Material::empty()], params).unwrap();
-    w.add_external_force(0, Vec3::new(2.0, 0.0, 0.0), Vec3::zeros());
-    w.hold_external_forces_until(1.0);
-    w.advance_to(1.0).unwrap();
+    let mut held = op_dynamics::external::ExternalAccumulator::new(1);
+    held.add(0, Vec3::new(2.0, 0.0, 0.0), Vec3::zeros());
+    w.advance_to_with(1.0, &[&held]).unwrap();
     assert!(w.steps() >= 20);
     let v = w.particles().velocities()[0];
     assert!((v - Vec3::new(2.0, 0.0, 0.0)).norm() < 1e-12, "{v}");
     w.advance_to(2.0).unwrap();
     assert_eq!(w.particles().velocities()[0], v);
+    // One step of a pending force: dv = F dt / m.
+    let steps = w.steps();
+    w.add_external_force(0, Vec3::new(0.0, 1.0, 0.0), Vec3::zeros());
+    w.advance_to(3.0).unwrap();
+    assert!(w.steps() > steps + 1);
+    let dv = w.particles().velocities()[0] - v;
+    assert!(
+        dv.x.abs() < 1e-12 && dv.y > 0.0 && dv.y <= 0.05 + 1e-12,
+        "{dv}"
+    );
 }
 
 /// Obstacle damping slows a separating particle's push but never pulls it

@@ -20,6 +20,7 @@
 
 use std::collections::BTreeMap;
 
+use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::tools::signed_distance;
 use op_dynamics::{Point3, Real, Vec3, World};
 use parry3d_f64::math::{Pose, Vector};
@@ -87,6 +88,15 @@ impl Reactions {
     pub fn apply(&self, world: &mut World) {
         for r in &self.reactions {
             world.add_external_force(r.particle, r.force, r.torque);
+        }
+    }
+
+    /// Adds every reaction to `held` (by particle id; `held` must hold
+    /// every id): a force contributor that acts over a whole interval
+    /// ([`op_dynamics::contributors`], `World::advance_to_with`).
+    pub fn add_to(&self, held: &mut ExternalAccumulator) {
+        for r in &self.reactions {
+            held.add(r.particle, r.force, r.torque);
         }
     }
 }

@@ -43,6 +43,7 @@
 //! thread count. Contact regions thinner than a cell, whose crossing edges
 //! have no endpoint inside either object, may be missed.
 
+use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Point3, Real, Vec3, World};
 use rayon::prelude::*;
 
@@ -229,6 +230,13 @@ impl PairReactions {
     pub fn apply(&self, world: &mut World) {
         self.a.apply(world);
         self.b.apply(world);
+    }
+
+    /// Adds the reactions on both objects to `held` (see
+    /// [`Reactions::add_to`]).
+    pub fn add_to(&self, held: &mut ExternalAccumulator) {
+        self.a.add_to(held);
+        self.b.add_to(held);
     }
 }
 

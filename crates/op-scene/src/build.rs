@@ -301,7 +301,7 @@ impl Scene {
             driver.push(Box::new(crate::stages::Creation));
         }
         if skins.len() >= 2 || !skin_tools.is_empty() {
-            driver.push(Box::new(crate::stages::Contact));
+            driver.push(Box::new(crate::stages::Contact::default()));
         }
         if !skins.is_empty() {
             driver.push(Box::new(crate::stages::Skins));

@@ -11,9 +11,9 @@
 //! contact) the skins are re-posed on the particles and, for every pair of
 //! skinned objects, [`ContactPair::reactions`] (Gascuel's exact contact
 //! surface, no bulge) and, for every obstacle tool a skin meets,
-//! [`op_implicit::collider_reactions`] are computed and applied to the
-//! world, held over the interval ([`World::hold_external_forces_until`];
-//! with the adaptive scheme an interval may take several steps and the
+//! [`op_implicit::collider_reactions`] are computed; they act over the
+//! interval as a force contributor ([`op_dynamics::contributors`],
+//! [`World::advance_to_with`]; with the adaptive scheme an interval may take several steps and the
 //! reactions act on all of them): contact is explicit, one evaluation per
 //! interval, so contact scenes are first order in `dt` whatever the
 //! scheme. Each
@@ -33,11 +33,13 @@
 //! `e / |grad f_A| + e / |grad f_B|` (how deep each undeformed skin reaches
 //! past the contact surface, summed).
 
+use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::tools::parry_pose;
 use op_dynamics::{Point3, Real, Tool, Vec3, World};
 use op_implicit::{
     collider_reactions, polygonize, polygonize_field, polygonize_region, ClippedField, ContactPair,
-    ContactParams, ImplicitContactParams, Mesh, PolygonizeParams, Primitive, Skin,
+    ContactParams, ImplicitContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive, Skin,
+    SkinError,
 };
 use parry3d_f64::math::Pose;
 use parry3d_f64::shape::Shape;
@@ -430,9 +432,14 @@ pub struct SkinTool {
 }
 
 impl SkinTool {
-    /// Adds the reactions on skin `skin` at world time `t` to `world` and
+    /// Adds the reactions on skin `skin` at world time `t` to `held` and
     /// returns (total reaction force, deepest sample depth).
-    fn react(&self, world: &mut World, skin: &BuiltSkin, t: Real) -> Result<(Vec3, Real), String> {
+    fn react(
+        &self,
+        held: &mut ExternalAccumulator,
+        skin: &BuiltSkin,
+        t: Real,
+    ) -> Result<(Vec3, Real), ContactError> {
         let pose = self.tool.pose(t);
         let frame = parry_pose(&pose.position, &pose.rotation);
         let shape = self.tool.shape();
@@ -441,8 +448,13 @@ impl SkinTool {
         let lo = Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - Vec3::repeat(h);
         let hi = Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + Vec3::repeat(h);
         let params = PolygonizeParams::with_cell_size(h);
-        let samples = polygonize_region(skin.skin.field(), &params, Some((lo, hi)))
-            .map_err(|e| format!("sampling skin {}: {e}", skin.name))?;
+        let samples =
+            polygonize_region(skin.skin.field(), &params, Some((lo, hi))).map_err(|source| {
+                ContactError::Sample {
+                    skin: skin.name.clone(),
+                    source,
+                }
+            })?;
         let r = collider_reactions(
             skin.skin.field(),
             samples.positions(),
@@ -452,37 +464,74 @@ impl SkinTool {
                 stiffness: self.stiffness,
             },
         );
-        r.apply(world);
+        r.add_to(held);
         Ok((r.total_force(), r.max_depth()))
     }
 }
 
+/// Why skin contact could not be computed ([`contact_step`]).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ContactError {
+    /// A skin could not follow its particles.
+    #[error("posing skin {skin}: {source}")]
+    Pose {
+        /// The skin's name.
+        skin: String,
+        /// Why.
+        source: SkinError,
+    },
+    /// A skin could not be sampled near a tool.
+    #[error("sampling skin {skin}: {source}")]
+    Sample {
+        /// The skin's name.
+        skin: String,
+        /// Why.
+        source: PolygonizeError,
+    },
+    /// The contact surface of two skins could not be sampled.
+    #[error("contact {a} / {b}: {source}")]
+    Pair {
+        /// The first skin's name.
+        a: String,
+        /// The second skin's name.
+        b: String,
+        /// Why.
+        source: PolygonizeError,
+    },
+}
+
 /// Re-poses `skins` on `world`, computes the contact reactions of every
 /// pair of skins and of every skin against the obstacle tools in `tools`,
-/// adds them to `world` for its next step (of length `dt`) and updates
-/// `stats`. `objects` gives the rest spacings (r0). Against a tool,
+/// replaces `held` with them (to act over the coming interval of length
+/// `dt`, [`op_dynamics::World::advance_to_with`]) and updates `stats`.
+/// `objects` gives the rest spacings (r0). Against a tool,
 /// `max_penetration` is the depth of the deepest skin sample inside it and
 /// `total_impulse` adds the reaction on the skin.
 pub fn contact_step(
-    world: &mut World,
+    world: &World,
     skins: &mut [BuiltSkin],
     tools: &[SkinTool],
     objects: &[BuiltObject],
     dt: Real,
     stats: &mut ContactStats,
-) -> Result<(), String> {
+    held: &mut ExternalAccumulator,
+) -> Result<(), ContactError> {
+    held.clear();
+    held.grow(world.particles().id_bound());
     for s in skins.iter_mut() {
         // Erasers and shapers removed particles during the last interval.
         s.detach_missing(world.particles());
-        s.skin
-            .repose(world)
-            .map_err(|e| format!("posing skin {}: {e}", s.name))?;
+        s.skin.repose(world).map_err(|source| ContactError::Pose {
+            skin: s.name.clone(),
+            source,
+        })?;
     }
     let t = world.time();
     for tool in tools {
         for &k in &tool.skins {
             let skin = &skins[k];
-            let (force, depth) = tool.react(world, skin, t)?;
+            let (force, depth) = tool.react(held, skin, t)?;
             let r0 = objects[skin.object].rest_spacing.max(Real::MIN_POSITIVE);
             stats.max_penetration = stats.max_penetration.max(depth / r0);
             stats.total_impulse += force.norm() * dt;
@@ -498,7 +547,11 @@ pub fn contact_step(
             );
             let r = ContactPair::new(fa, fb)
                 .reactions(&params)
-                .map_err(|e| format!("contact {} / {}: {e}", a.name, b.name))?;
+                .map_err(|source| ContactError::Pair {
+                    a: a.name.clone(),
+                    b: b.name.clone(),
+                    source,
+                })?;
             if r.samples().is_empty() {
                 continue;
             }
@@ -513,7 +566,7 @@ pub fn contact_step(
                 stats.max_penetration = stats.max_penetration.max(depth / r0);
             }
             stats.total_impulse += r.b().total_force().norm() * dt;
-            r.apply(world);
+            r.add_to(held);
         }
     }
     Ok(())

@@ -16,7 +16,9 @@
 //! Each stage is built only when the scene uses it
 //! ([`crate::BuiltScene::stages`]).
 
+use op_dynamics::contributors::Contributor;
 use op_dynamics::driver::{Effects, Phase, Stage, StageError};
+use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Real, World};
 
 use crate::built::BuiltObject;
@@ -165,8 +167,13 @@ impl Stage<SceneState> for Creation {
 }
 
 /// Skin contact: reactions computed at the start of each interval of at
-/// most `dt` and held over it (see [`crate::skins`]).
-pub struct Contact;
+/// most `dt` and acting over it as a force contributor (see
+/// [`crate::skins`] and [`op_dynamics::contributors`]).
+#[derive(Default)]
+pub struct Contact {
+    /// The reactions of the current interval, by particle id.
+    held: ExternalAccumulator,
+}
 
 impl Stage<SceneState> for Contact {
     fn name(&self) -> &str {
@@ -205,10 +212,14 @@ impl Stage<SceneState> for Contact {
             &ctx.objects,
             h,
             &mut ctx.contact,
+            &mut self.held,
         )
         .map_err(|e| StageError::new("contact", e))?;
-        world.hold_external_forces_until(until);
         Ok(Effects::default())
+    }
+
+    fn contributor(&self) -> Option<&dyn Contributor> {
+        Some(&self.held)
     }
 }
 

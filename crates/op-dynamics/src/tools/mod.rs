@@ -26,6 +26,7 @@ use parry3d_f64::shape::{Shape, SharedShape};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::contributors::{Contribution, Contributor, ContributorInput};
 use crate::error::ParamError;
 use crate::integrators::StateRef;
 use crate::math::{Point3, Real, Vec3};
@@ -506,7 +507,7 @@ impl Tools {
     /// Adds every tool's forces and energies (by slot) at state `s`, time
     /// `t`, tool after tool (the same bits at any thread count: each
     /// particle's sum is formed in tool order).
-    pub(crate) fn add(
+    fn add_forces(
         &self,
         t: Real,
         s: StateRef<'_>,
@@ -517,6 +518,27 @@ impl Tools {
         for tool in &self.tools {
             tool.add(t, s, a, forces, energies);
         }
+    }
+}
+
+impl Contributor for Tools {
+    fn name(&self) -> &str {
+        "tools"
+    }
+
+    fn is_active(&self) -> bool {
+        !self.tools.is_empty()
+    }
+
+    /// Every tool's forces and energies, tool after tool.
+    fn contribute(&self, input: &ContributorInput<'_>, out: &mut Contribution<'_>) {
+        self.add_forces(
+            input.t,
+            input.state,
+            input.attributes,
+            out.forces,
+            out.energies,
+        );
     }
 }
 

@@ -456,7 +456,10 @@ mod tests {
     #[test]
     fn the_reference_has_no_internal_citations_or_rustdoc_links() {
         let md = field_reference();
-        assert!(!md.contains("DESIGN"), "a citation of notes outside the repository");
+        assert!(
+            !md.contains("DESIGN"),
+            "a citation of notes outside the repository"
+        );
         assert!(!md.contains("[`"), "a rustdoc link leaked");
         assert!(!md.contains("crate::"), "a crate path leaked");
         assert!(md.contains("## Material"));
