@@ -53,6 +53,13 @@ impl Effects {
     pub fn is_empty(&self) -> bool {
         !self.forces_invalid && self.inserted.is_empty() && self.removed.is_empty()
     }
+
+    /// Adds `other`'s effects to these (ids in the order they happened).
+    pub fn merge(&mut self, other: Effects) {
+        self.forces_invalid |= other.forces_invalid;
+        self.inserted.extend(other.inserted);
+        self.removed.extend(other.removed);
+    }
 }
 
 /// When in the interval a stage runs.
@@ -237,9 +244,7 @@ impl<C> Driver<C> {
                 let clock = Instant::now();
                 let e = self.stages[k].run(world, ctx, t_end)?;
                 self.seconds[k] += clock.elapsed().as_secs_f64();
-                effects.forces_invalid |= e.forces_invalid;
-                effects.inserted.extend(e.inserted);
-                effects.removed.extend(e.removed);
+                effects.merge(e);
             }
             if !effects.is_empty() {
                 if effects.forces_invalid {
@@ -293,6 +298,16 @@ impl<C> Driver<C> {
             let stepped = world.advance_to_with(target, &contributors);
             self.world_seconds += clock.elapsed().as_secs_f64();
             stepped?;
+            // 5. What the world's own stages did (particles erased): told to
+            // every stage. The world already dropped its cached forces.
+            let effects = world.take_effects();
+            if !effects.is_empty() {
+                for k in 0..self.stages.len() {
+                    let clock = Instant::now();
+                    self.stages[k].notify(world, ctx, &effects)?;
+                    self.seconds[k] += clock.elapsed().as_secs_f64();
+                }
+            }
         }
         for k in 0..self.stages.len() {
             let clock = Instant::now();

@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::bonds::Bonds;
 use crate::contributors::Contributor;
 use crate::diagnostics::{self, Diagnostics};
+use crate::driver::Effects;
 use crate::error::{self, ParamError};
 use crate::external::{ExternalAccumulator, ExternalParams};
 use crate::flags::Flags;
@@ -16,9 +17,10 @@ use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
 use crate::neighbours::{spatial_order, NeighbourBackend, NeighbourList};
 use crate::particles::{ParticleType, Particles};
-use crate::plasticity::{self, PlasticScratch};
+use crate::plasticity::PlasticScratch;
 use crate::tools::{Role, Tool, ToolParams, Tools};
 
+mod after_step;
 mod editing;
 
 /// Neighbour-list settings (seed 000 §4.2, docs/model.md §5).
@@ -386,6 +388,8 @@ pub struct World {
     torques: Vec<Vec3>,
     prev_positions: Vec<Point3>,
     time: Real,
+    /// Effects of the world's own stages since [`World::take_effects`].
+    effects: Effects,
     steps: u64,
     dt_next: Real,
     report: StepReport,
@@ -461,6 +465,7 @@ impl World {
             torques: vec![Vec3::zeros(); n],
             prev_positions: particles.positions().to_vec(),
             time: 0.0,
+            effects: Effects::default(),
             steps: 0,
             dt_next: params.dt,
             report: StepReport::default(),
@@ -610,6 +615,12 @@ impl World {
             .collect()
     }
 
+    /// What the world's own stages did since the last call (particles that
+    /// erasers removed; [`crate::driver`] tells its stages), and forgets it.
+    pub fn take_effects(&mut self) -> Effects {
+        std::mem::take(&mut self.effects)
+    }
+
     /// Drops the integrator's cached forces: the next step evaluates them
     /// anew (a stage changed what they depend on; see [`crate::driver`]).
     pub fn invalidate_forces(&mut self) {
@@ -744,46 +755,19 @@ impl World {
             self.accumulator.clear();
             self.integrator.invalidate_forces();
         }
-        if self.params.heat.is_some() {
+        // The world's own stages after the step, in order (only those it
+        // uses); their effects are merged, cached forces dropped once.
+        let mut effects = Effects::default();
+        for stage in self.after_step_stages() {
             let clock = std::time::Instant::now();
-            self.advance_heat(info.dt_taken);
-            report.seconds[Stage::Heat as usize] = clock.elapsed().as_secs_f64();
+            let e = self.run_after_step(stage, info.dt_taken, &mut report);
+            report.seconds[stage as usize] = clock.elapsed().as_secs_f64();
+            effects.merge(e);
         }
-        if let Some(bonds) = self.pipeline.bonds.as_mut() {
-            let clock = std::time::Instant::now();
-            report.bonds_broken = bonds.break_stretched(&self.particles);
-            report.seconds[Stage::Bonds as usize] = clock.elapsed().as_secs_f64();
+        if effects.forces_invalid {
+            self.integrator.invalidate_forces();
         }
-        if self.plastic {
-            let clock = std::time::Instant::now();
-            if let Some(list) = self.pipeline.neighbours.as_mut() {
-                let changed = plasticity::apply(
-                    &mut self.particles,
-                    &self.pipeline.materials,
-                    list,
-                    self.pipeline.bonds.as_ref(),
-                    info.dt_taken,
-                    &mut self.plastic_scratch,
-                );
-                // Cached forces were computed with the old curvatures.
-                if changed {
-                    self.integrator.invalidate_forces();
-                }
-            }
-            report.seconds[Stage::Plasticity as usize] = clock.elapsed().as_secs_f64();
-        }
-        // Erasers and trapping shapers act on the state at the end of the
-        // step (before the divergence check, which then sees only the
-        // survivors).
-        if self.pipeline.tools.removes_particles() {
-            let clock = std::time::Instant::now();
-            let erased = self.pipeline.tools.erase(self.time, &self.particles);
-            if !erased.is_empty() {
-                self.remove_live(&erased);
-            }
-            report.erased = erased;
-            report.seconds[Stage::Erase as usize] = clock.elapsed().as_secs_f64();
-        }
+        self.effects.merge(effects);
 
         let clock = std::time::Instant::now();
         let check = self.check_divergence();
@@ -794,38 +778,6 @@ impl World {
         self.report = report;
         check?;
         Ok(&self.report)
-    }
-
-    /// Advances the temperatures over the step just taken (sources at its
-    /// end time, conduction over the pairs within the interaction cut-off,
-    /// cooling; [`crate::heat`]). When some material weakens with heat the
-    /// integrator's cached forces are dropped: they were computed at the
-    /// old temperatures.
-    fn advance_heat(&mut self, dt: Real) {
-        let Some(params) = &self.params.heat else {
-            return;
-        };
-        let pairs = self.pipeline.neighbours.as_mut().map(|list| {
-            list.update(self.particles.positions());
-            let cutoff = list.cutoff();
-            (&*list, cutoff)
-        });
-        let pairs = pairs.map(|(l, c)| (l.pairs(), c));
-        let (positions, objects, temperatures) = self.particles.heat_view();
-        heat::advance(
-            params,
-            self.pipeline.tools.tools(),
-            self.time,
-            dt,
-            positions,
-            objects,
-            pairs,
-            temperatures,
-            &mut self.heat_scratch,
-        );
-        if self.pipeline.heated {
-            self.integrator.invalidate_forces();
-        }
     }
 
     fn check_divergence(&self) -> Result<(), Divergence> {

@@ -331,12 +331,6 @@ impl BuiltSkin {
         }
     }
 
-    /// Drops the primitives of particles that no longer exist (erased by
-    /// tools): an eraser cutting a skinned sheet leaves a skin with a slot.
-    pub fn detach_missing(&mut self, particles: &op_dynamics::Particles) -> usize {
-        self.skin.retain(|id| particles.slot_of(id).is_some())
-    }
-
     /// The skin's mesh at its current pose.
     pub fn mesh(&self) -> Result<Mesh, op_implicit::PolygonizeError> {
         polygonize(
@@ -520,8 +514,6 @@ pub fn contact_step(
     held.clear();
     held.grow(world.particles().id_bound());
     for s in skins.iter_mut() {
-        // Erasers and shapers removed particles during the last interval.
-        s.detach_missing(world.particles());
         s.skin.repose(world).map_err(|source| ContactError::Pose {
             skin: s.name.clone(),
             source,

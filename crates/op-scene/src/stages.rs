@@ -257,10 +257,7 @@ impl Stage<SceneState> for Skins {
     }
 
     fn at_target(&mut self, world: &World, ctx: &mut SceneState) -> Result<(), StageError> {
-        let p = world.particles();
         for s in &mut ctx.skins {
-            // Particles the world removed itself (erasers, shapers).
-            s.detach_missing(p);
             s.skin
                 .repose(world)
                 .map_err(|e| StageError::new("skin", format!("posing {}: {e}", s.name)))?;
