@@ -10,9 +10,9 @@ use std::process::ExitCode;
 
 use anyhow::{anyhow, Context, Result};
 use clap::{Parser, Subcommand};
+use op_render::{self as render, RenderOptions, Style};
 use op_scene::export::obj::scene_to_obj;
 use op_scene::export::FrameFormat;
-use op_scene::render::{self, RenderOptions, Style};
 use op_scene::{BuiltScene, RunError, RunOptions};
 
 /// `println!` that ends the program quietly when stdout is closed early (a

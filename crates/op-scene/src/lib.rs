@@ -3,7 +3,7 @@
 //! README "Running scenes". A scene file (RON or JSON) is read into one serde schema,
 //! validated, and built into an op-dynamics [`op_dynamics::World`] that
 //! contains only what the scene enables. The runner steps it and writes
-//! OBJ frames, `metrics.csv` and `summary.json`; [`render`] draws pictures.
+//! OBJ frames, `metrics.csv` and `summary.json`; the `op-render` crate draws pictures of them.
 #![warn(missing_docs)]
 
 pub mod built;
@@ -11,11 +11,11 @@ pub mod creation;
 pub mod export;
 pub mod fit;
 pub mod health;
+pub mod input;
 pub mod outputs;
 pub mod pointsets;
 pub mod presets;
 pub mod reference;
-pub mod render;
 pub mod run;
 pub mod skins;
 pub mod stability;

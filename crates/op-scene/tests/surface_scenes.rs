@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use op_dynamics::triangulation::Triangulation;
-use op_scene::render::{render, ObjData, ObjObject, RenderOptions, Style};
+use op_render::{render, ObjData, ObjObject, RenderOptions, Style};
 use op_scene::{load_scene, parse_scene, run, Format, RunOptions, Scene, Summary};
 
 fn temp_dir(tag: &str) -> PathBuf {
@@ -31,7 +31,7 @@ fn run_scene(scene: &Scene, out: &Path, frames: usize) -> Summary {
 }
 
 fn frame(out: &Path, k: usize) -> ObjData {
-    op_scene::render::read_run_frame(out, k as u64).unwrap()
+    op_render::read_run_frame(out, k as u64).unwrap()
 }
 
 fn object<'a>(data: &'a ObjData, name: &str) -> &'a ObjObject {

@@ -20,7 +20,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use super::error::RenderError;
-use crate::pointsets::{excerpt, read_regular_file, InputFileError};
+use op_scene::input::{excerpt, read_regular_file, InputFileError};
 
 /// Largest OBJ file read (1 GiB); a larger one, or one that is not a
 /// regular file, is a [`RenderError::Input`] naming it.

@@ -1,4 +1,5 @@
-//! Pictures of OBJ frames: the drawing half of `opsim render` (README "Running scenes").
+//! op-render: pictures of oriented-particle runs, the drawing half of `opsim render`
+//! (README "Running scenes"). It reads what op-scene writes (OBJ frames, `summary.json`).
 //!
 //! Entry points:
 //! - [`render_obj_file`] / [`render_data`]: one frame in one [`Style`] (seed 000
@@ -13,6 +14,8 @@
 //! the same pixels. Frames are read by the small OBJ reader in [`ObjData`]; the
 //! camera frames the data's bounding box automatically unless
 //! [`RenderOptions::camera`] gives one. World `+y` is up.
+
+#![warn(missing_docs)]
 
 mod camera;
 mod contact_sheet;

@@ -1,4 +1,4 @@
-//! End-to-end tests of `op_scene::render`: OBJ files written to a temp dir,
+//! End-to-end tests of `op_render`: OBJ files written to a temp dir,
 //! rendered in every style, saved and decoded again.
 //!
 //! Set `OPSIM_RENDER_EXAMPLES=/some/dir` to also keep one example PNG per style there.
@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use op_scene::render::{
+use op_render::{
     render, render_contact_sheet, render_data, render_obj_file, render_path, save_png, sheet_grid,
     CameraSpec, ObjData, RenderError, RenderOptions, RgbImage, Style,
 };
