@@ -339,7 +339,8 @@ pub fn run(
         &scene.skins,
         &scene.tools,
         &scene.outputs,
-    );
+    )
+    .with_sheet_gap(scene.sheet_gap());
     let write_frames = writer.writes_anything();
     prepare_output(&opts.out_dir, &writer.folders())?;
     let total = opts
