@@ -107,6 +107,7 @@ fn fig_07_hot_knife_cuts_the_sheet_in_two() {
 /// handle that follows is `fig_13_stem_looped_onto_the_body_makes_a_handle`.
 #[test]
 fn fig_13_hot_tool_extrudes_a_stem() {
+    println!("claim: {}", claim("fig_13_stem"));
     use oriented_particles::op_dynamics::triangulation::{triangulate, TriangulationParams};
     let scene = load("fig_13_stem");
     let (built, summary) = run(&scene, "stem");
@@ -225,6 +226,7 @@ fn frames_surface(
 /// apart (see the closing note of issue 7).
 #[test]
 fn fig_13_stem_looped_onto_the_body_makes_a_handle() {
+    println!("claim: {}", claim("fig_13_handle"));
     use oriented_particles::op_dynamics::Point3;
     let scene = load("fig_13_handle");
     let start = frames_surface(&build(&scene));

@@ -308,6 +308,7 @@ fn fig_12c_bonded_sheet_tears_cleanly_beyond_the_break_length() {
 /// seam too, within 10% of r0.
 #[test]
 fn fig_06_two_sheets_weld_into_one() {
+    println!("claim: {}", claim("fig_06_weld"));
     let scene = load("fig_06_weld");
     let start = build(&scene);
     let x0 = start.world.particles().positions().to_vec();
@@ -361,6 +362,7 @@ fn fig_06_two_sheets_weld_into_one() {
 /// completely; folded layers only repel.
 #[test]
 fn fig_12a_cloth_drapes_over_the_sphere() {
+    println!("claim: {}", claim("fig_12_drape"));
     let scene = load("fig_12_drape");
     let (radius, margin) = match (&scene.tools[0].shape, &scene.tools[0].role) {
         (ToolShape::Ball { radius }, Role::Obstacle { margin, .. }) => (*radius, *margin),
@@ -528,6 +530,8 @@ fn dent_run(name: &str) -> DentRun {
 /// no files written.
 #[test]
 fn fig_12b_plastic_shell_keeps_its_dent_elastic_shell_springs_back() {
+    println!("claim: {}", claim("fig_12_plastic"));
+    println!("claim: {}", claim("fig_12_plastic_memory"));
     let plastic = dent_run("fig_12_plastic");
     let memory = dent_run("fig_12_plastic_memory");
     // The same push: both sides were pushed about as deep when the finger
