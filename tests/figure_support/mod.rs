@@ -225,7 +225,7 @@ fn triangle_components(triangles: &[[u32; 3]]) -> usize {
 
 /// Builds `scene` and advances it frame by frame as `opsim run` does (the
 /// settle phase, then frame `k` at `k / frame_rate` after it, to the
-/// scene's duration), calling `f(frame, &built)` at every frame, frame 0
+/// scene's duration, measuring each frame), calling `f(frame, &built)` at every frame, frame 0
 /// included; returns the final state.
 pub fn each_frame(scene: &Scene, mut f: impl FnMut(usize, &BuiltScene)) -> BuiltScene {
     let mut built = build(scene);
@@ -239,6 +239,9 @@ pub fn each_frame(scene: &Scene, mut f: impl FnMut(usize, &BuiltScene)) -> Built
             t0 + k as Real / built.frame_rate
         };
         built.advance_to(t).unwrap_or_else(|e| panic!("{e}"));
+        // The runner measures every frame: a force evaluation, which may
+        // refresh the neighbour list and so the bits of what follows.
+        let _ = built.world.diagnostics();
         f(k, &built);
     }
     built
