@@ -140,13 +140,14 @@ enum Command {
         #[arg(long, default_value_t = 9)]
         frames: usize,
         /// Direction the camera looks along, `X,Y,Z` in scene coordinates
-        /// (z-up), e.g. `0,0,-1` from above. Default: from the front
+        /// (z-up), e.g. `0,0,-1` from above. Default: the run's view (the
+        /// scene's `outputs.view`, from summary.json), else from the front
         /// (-y side), 35 degrees to the right and 25 degrees above.
         #[arg(long, value_parser = parse_direction, allow_hyphen_values = true)]
         view: Option<[f64; 3]>,
         /// Up direction of the picture, `X,Y,Z` in scene coordinates.
-        /// Default: the run's up (against its gravity, from summary.json),
-        /// else +z.
+        /// Default: the run's up (the scene's `outputs.up`, else against its
+        /// gravity, from summary.json), else +z.
         #[arg(long, value_parser = parse_direction, allow_hyphen_values = true)]
         up: Option<[f64; 3]>,
     },
@@ -255,6 +256,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             // The frames are y-up OBJ files of a z-up scene: directions
             // given in scene coordinates are converted like the frames.
             let up = up.or_else(|| render::run_up_axis(&input));
+            let view = view.or_else(|| render::run_view_axis(&input));
             let opts = RenderOptions {
                 width,
                 height,

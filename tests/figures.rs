@@ -16,6 +16,7 @@ use figure_support::*;
 /// sheet smoothly, so its halves are curved.
 #[test]
 fn fig_08_unoriented_row_makes_a_sharp_crease() {
+    println!("claim: {}", claim("fig_08_crease"));
     let scene = load("fig_08_crease");
     let mut plain = scene.clone();
     plain.objects[0]
@@ -50,13 +51,53 @@ fn fig_08_unoriented_row_makes_a_sharp_crease() {
     );
 }
 
+/// Every figure scene (`scenes/fig_*.ron`) states its claim in its header
+/// (`// claim: ...`, one sentence a viewer can check on the picture); the
+/// figure tests print it next to what they measured.
+#[test]
+fn every_figure_scene_states_a_claim() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("fig_") && n.ends_with(".ron"))
+        .map(|n| n.trim_end_matches(".ron").to_string())
+        .collect();
+    names.sort();
+    assert!(!names.is_empty());
+    for n in &names {
+        assert!(!claim(n).trim().is_empty(), "{n}");
+    }
+}
+
 /// Fig. 9: a ball pushing up through a sheet with the stretching rule
 /// stretches it until particles are created in the gaps; at the end every
 /// particle's nearest neighbour is within `[0.8 r0, d_max]`: no particle
-/// pushed into another's Lennard-Jones core, no gap left unfilled.
+/// pushed into another's Lennard-Jones core, no gap left unfilled. The
+/// claim on the exported surface: a disc (one component, one boundary
+/// loop, chi 1, manifold) in every frame.
 #[test]
 fn fig_09_ball_stretches_the_sheet_and_particles_are_created() {
     let scene = load("fig_09_stretching");
+    println!("claim: {}", claim("fig_09_stretching"));
+    let mut worst = 0.0 as Real;
+    let end = each_frame(&scene, |k, built| {
+        let t = surface_topology(built, "sheet");
+        assert!(t.is_disc(), "frame {k}: {t:?}");
+        let mesh = surface_mesh(built, "sheet");
+        for f in &mesh.triangles {
+            for e in 0..3 {
+                let (a, b) = (f[e] as usize, f[(e + 1) % 3] as usize);
+                worst = worst.max((mesh.vertices[a] - mesh.vertices[b]).norm());
+            }
+        }
+    });
+    let t = surface_topology(&end, "sheet");
+    println!(
+        "every frame a disc; last frame {t:?} over {} particles; longest surface edge \
+         {worst:.3} r0",
+        end.world.particles().len()
+    );
     let stretching = scene
         .creation
         .as_ref()
@@ -132,6 +173,7 @@ fn spin_alignment(name: &str, axis: Vec3, keep_within: Real) -> (Real, Real) {
 
 #[test]
 fn fig_15_spin_aligns_x_with_the_cylinder_axis() {
+    println!("claim: {}", claim("fig_15_spin_cylinder"));
     let (before, after) = spin_alignment("fig_15_spin_cylinder", Vec3::new(0.3, 0.5, 1.0), 4.0);
     assert!(before > 10.0, "the frames start misaligned ({before} deg)");
     assert!(after <= 10.0, "median {after} deg");
@@ -139,6 +181,7 @@ fn fig_15_spin_aligns_x_with_the_cylinder_axis() {
 
 #[test]
 fn fig_15_spin_aligns_x_with_the_spheroid_meridians() {
+    println!("claim: {}", claim("fig_15_spin_spheroid"));
     let (before, after) = spin_alignment("fig_15_spin_spheroid", Vec3::new(-0.4, 0.2, 1.0), 4.5);
     assert!(before > 10.0, "the frames start misaligned ({before} deg)");
     assert!(after <= 10.0, "median {after} deg");
@@ -148,6 +191,7 @@ fn fig_15_spin_aligns_x_with_the_spheroid_meridians() {
 /// each side of the cut, and removes only the particles on its path.
 #[test]
 fn fig_07_eraser_cuts_the_sheet_in_two() {
+    println!("claim: {}", claim("fig_07_cut"));
     let scene = load("fig_07_cut");
     // The slab's half width across the cut.
     let half_width = 0.9;
@@ -193,6 +237,7 @@ fn fig_07_eraser_cuts_the_sheet_in_two() {
 /// connected to every other through neighbours (1.5 r0, the cut-off).
 #[test]
 fn fig_05_two_swinging_chains_link_into_one() {
+    println!("claim: {}", claim("fig_05_chain_linking"));
     let scene = load("fig_05_chain_linking");
     let start = build(&scene);
     let x0 = positions(&start, &start.objects[0].ids);

@@ -11,7 +11,7 @@ mod figure_support;
 
 use std::path::Path;
 
-use figure_support::{build, load, run};
+use figure_support::{build, claim, load, run};
 use oriented_particles::op_dynamics::{Flags, Point3, Real, Vec3};
 use oriented_particles::op_scene::fit::SurfaceMesh;
 use oriented_particles::op_scene::pointsets::read_point_set;
@@ -55,6 +55,7 @@ fn print_figures(fig: &str, particles: usize, m: &SurfaceMesh, r0: Real) {
 /// samples within 0.1 r0 (RMS) of the mesh, its normals outward.
 #[test]
 fn fig_10_closed_interpolation_grows_a_closed_surface_through_the_samples() {
+    println!("claim: {}", claim("fig_10_interpolation"));
     let scene = load("fig_10_interpolation");
     let data = samples("fig_10_sphere.xyz");
 
@@ -120,6 +121,7 @@ fn fig_10_closed_interpolation_grows_a_closed_surface_through_the_samples() {
 /// r0 (RMS) of the mesh, none farther than r0 / 4.
 #[test]
 fn fig_11_open_interpolation_keeps_the_hole_and_covers_the_rest() {
+    println!("claim: {}", claim("fig_11_open_interpolation"));
     let scene = load("fig_11_open_interpolation");
     let data = samples("fig_11_saddle.xyz");
     let (built, summary) = run(&scene, "open");

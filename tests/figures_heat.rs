@@ -60,12 +60,31 @@ fn fig_07_hot_knife_cuts_the_sheet_in_two() {
     assert_eq!(sizes.len(), 2, "{sizes:?}");
     assert_eq!(sizes, vec![below, p.len() - below]);
     assert!(hottest > 1.0, "the knife heated nothing: {hottest}");
+    // The claim on the exported surface: two discs, no triangle across the
+    // slit (every edge's two ends on one side of the blade, y = 0).
+    println!("claim: {}", claim("fig_07_knife"));
+    let t = surface_topology(&built, "sheet");
+    let mesh = surface_mesh(&built, "sheet");
+    let across = mesh
+        .triangles
+        .iter()
+        .filter(|f| {
+            let ys = f.map(|v| mesh.vertices[v as usize].y);
+            ys.iter().any(|&y| y < 0.0) && ys.iter().any(|&y| y > 0.0)
+        })
+        .count();
+    println!("hot knife: last frame surface {t:?}, {across} triangles across y = 0");
+    assert!(t.is_discs(2), "{t:?}");
+    assert_eq!(across, 0);
 
     let (built, _) = run(&cold_knife(&scene), "cold");
     let points = built.world.particles().positions().to_vec();
     let sizes = components(&points, 1.5);
     let lowest = points.iter().map(|x| x.z).fold(Real::INFINITY, Real::min);
-    println!("cold blade: components {sizes:?}, lowest z {lowest:.2}");
+    let t = surface_topology(&built, "sheet");
+    // Printed only: the cold blade stretches the sheet over its edge beyond
+    // the cut-off, so the surface is one piece with holes along the blade.
+    println!("cold blade: components {sizes:?}, lowest z {lowest:.2}, surface {t:?}");
     assert_eq!(sizes.len(), 1, "the cold blade cut the sheet: {sizes:?}");
     assert!(
         lowest < -1.0,
@@ -88,6 +107,7 @@ fn fig_07_hot_knife_cuts_the_sheet_in_two() {
 /// handle that follows is `fig_13_stem_looped_onto_the_body_makes_a_handle`.
 #[test]
 fn fig_13_hot_tool_extrudes_a_stem() {
+    println!("claim: {}", claim("fig_13_stem"));
     use oriented_particles::op_dynamics::triangulation::{triangulate, TriangulationParams};
     let scene = load("fig_13_stem");
     let (built, summary) = run(&scene, "stem");
@@ -206,6 +226,7 @@ fn frames_surface(
 /// apart (see the closing note of issue 7).
 #[test]
 fn fig_13_stem_looped_onto_the_body_makes_a_handle() {
+    println!("claim: {}", claim("fig_13_handle"));
     use oriented_particles::op_dynamics::Point3;
     let scene = load("fig_13_handle");
     let start = frames_surface(&build(&scene));

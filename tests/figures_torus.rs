@@ -157,6 +157,7 @@ fn pieces(t: &Triangulation) -> usize {
 /// r0 apart), 30 edges in three triangles and chi -3.
 #[test]
 fn fig_14_final_surface_has_genus_one() {
+    println!("claim: {}", claim("fig_14_sphere_to_torus"));
     let o = run_scene("genus");
     let (chi, loops) = (o.end.euler_characteristic(), o.end.boundary_loops() as i64);
     let edges = o.end.edges();

@@ -121,3 +121,138 @@ pub fn nearest_distances(points: &[Point3]) -> Vec<Real> {
         })
         .collect()
 }
+
+/// Topology of an object's exported surface (`<object>_surface`, the mesh
+/// `opsim run` writes, [`op_scene::export::geometry::surface_geometry`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SurfaceTopology {
+    /// Euler characteristic `V - E + F` (a disc 1, a sphere 2, two discs 2).
+    pub chi: i64,
+    /// Connected components of the triangles (edge-connected).
+    pub components: usize,
+    /// Boundary loops (components of the edges in one triangle).
+    pub loops: usize,
+    /// Edges held by exactly one triangle.
+    pub boundary_edges: usize,
+    /// Every edge in at most two triangles, every vertex a single fan.
+    pub manifold: bool,
+    /// Number of triangles.
+    pub triangles: usize,
+}
+
+impl SurfaceTopology {
+    /// A topological disc: one component, one boundary loop, chi 1.
+    pub fn is_disc(&self) -> bool {
+        self.manifold && self.components == 1 && self.loops == 1 && self.chi == 1
+    }
+
+    /// `n` topological discs.
+    pub fn is_discs(&self, n: usize) -> bool {
+        self.manifold && self.components == n && self.loops == n && self.chi == n as i64
+    }
+
+    /// A closed surface of genus 0 (a sphere): one component, no boundary.
+    pub fn is_sphere(&self) -> bool {
+        self.manifold && self.components == 1 && self.loops == 0 && self.chi == 2
+    }
+}
+
+/// The exported surface of `built`'s object `name` in its current state,
+/// and its triangles as indices into the mesh vertices.
+pub fn surface_mesh(built: &BuiltScene, name: &str) -> op_scene::export::FrameMesh {
+    let object = built
+        .objects
+        .iter()
+        .find(|o| o.name == name)
+        .unwrap_or_else(|| panic!("no object {name}"));
+    op_scene::export::geometry::surface_geometry(
+        &built.world,
+        object,
+        &built.outputs,
+        built.sheet_gap(),
+    )
+}
+
+/// The topology of `built`'s object `name`'s exported surface now.
+pub fn surface_topology(built: &BuiltScene, name: &str) -> SurfaceTopology {
+    use oriented_particles::op_dynamics::triangulation::Triangulation;
+    let mesh = surface_mesh(built, name);
+    let t = Triangulation {
+        triangles: mesh.triangles.clone(),
+    };
+    let labels = triangle_components(&mesh.triangles);
+    SurfaceTopology {
+        chi: t.euler_characteristic(),
+        components: labels,
+        loops: t.boundary_loops(),
+        boundary_edges: t.edges().values().filter(|&&c| c == 1).count(),
+        manifold: t.is_manifold(),
+        triangles: t.len(),
+    }
+}
+
+/// Number of edge-connected components of `triangles`.
+fn triangle_components(triangles: &[[u32; 3]]) -> usize {
+    let n = triangles
+        .iter()
+        .flatten()
+        .map(|&v| v as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let mut used = vec![false; n];
+    for t in triangles {
+        for k in 0..3 {
+            used[t[k] as usize] = true;
+            let (a, b) = (
+                root(&mut parent, t[k] as usize),
+                root(&mut parent, t[(k + 1) % 3] as usize),
+            );
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    (0..n)
+        .filter(|&i| used[i] && root(&mut parent, i) == i)
+        .count()
+}
+
+/// Builds `scene` and advances it frame by frame as `opsim run` does (the
+/// settle phase, then frame `k` at `k / frame_rate` after it, to the
+/// scene's duration, measuring each frame), calling `f(frame, &built)` at every frame, frame 0
+/// included; returns the final state.
+pub fn each_frame(scene: &Scene, mut f: impl FnMut(usize, &BuiltScene)) -> BuiltScene {
+    let mut built = build(scene);
+    built.settle().expect("settles");
+    let t0 = built.world.time();
+    let frames = (built.duration * built.frame_rate).round() as usize;
+    for k in 0..=frames {
+        let t = if k == 0 {
+            t0
+        } else {
+            t0 + k as Real / built.frame_rate
+        };
+        built.advance_to(t).unwrap_or_else(|e| panic!("{e}"));
+        // The runner measures every frame: a force evaluation, which may
+        // refresh the neighbour list and so the bits of what follows.
+        let _ = built.world.diagnostics();
+        f(k, &built);
+    }
+    built
+}
+
+/// The `// claim: ` line of `scenes/<name>.ron`.
+pub fn claim(name: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.ron"));
+    std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .find_map(|l| l.strip_prefix("// claim: ").map(str::to_string))
+        .unwrap_or_else(|| panic!("{name} states no claim"))
+}

@@ -64,6 +64,18 @@
 //! seed of the test to a closed sphere (5 of 8 before), and it removed the
 //! last edges in three triangles from the torus of seed 000 fig. 14.
 //!
+//! **Links** (our addition): [`triangulate_linked`] keeps only triangles
+//! with at least two of their three edges joining particles that still
+//! interact (the caller's predicate: e.g. closer than the spacing cut-off
+//! and, in a bonded material, bonded). The surface of seed 000 §5 shows
+//! what holds together, so a cut (seed 000 §6, fig. 7) or a tear (§8, fig.
+//! 12c) opens in the triangulation as soon as the pairs across it stop
+//! interacting, even while they are still mutual neighbours within the
+//! radius: a triangle across a cut has one corner on one side and two on
+//! the other, so two of its edges cross the cut. One unlinked edge is
+//! kept: the long diagonal of a cell whose four sides hold together (the
+//! two corners are held through the other two) is not a cut.
+//!
 //! **Orientation**: each triangle is wound so that its geometric normal
 //! `(p_b - p_a) x (p_c - p_a)` points along the sum of its three particle
 //! normals `n = R(q) a` (on a closed surface with outward normals the faces
@@ -146,7 +158,13 @@ pub fn triangulate(
     params: &TriangulationParams,
 ) -> Result<Triangulation, ParamError> {
     let normals: Vec<Vec3> = (0..particles.len()).map(|s| particles.normal(s)).collect();
-    let slots = triangulate_ranked(particles.positions(), &normals, particles.ids(), params)?;
+    let slots = triangulate_ranked(
+        particles.positions(),
+        &normals,
+        particles.ids(),
+        params,
+        &|_, _| true,
+    )?;
     let ids = particles.ids();
     let mut triangles: Vec<[u32; 3]> = slots
         .into_iter()
@@ -168,19 +186,40 @@ pub fn triangulate_points(
     normals: &[Vec3],
     params: &TriangulationParams,
 ) -> Result<Vec<[u32; 3]>, ParamError> {
-    let ranks: Vec<u32> = (0..positions.len() as u32).collect();
-    triangulate_ranked(positions, normals, &ranks, params)
+    triangulate_linked(positions, normals, params, &|_, _| true)
 }
 
-/// [`triangulate_points`] with ties broken by `ranks` (one per position,
+/// [`triangulate_points`] keeping only triangles with at least two of
+/// their three edges *linked*: `linked(a, b)` (indices into `positions`,
+/// `a < b`) says whether the two points still interact (see "Links" in the
+/// module docs). Every point, linked or not, still counts in the
+/// empty-sphere test.
+///
+/// # Errors
+/// As [`triangulate_points`].
+pub fn triangulate_linked(
+    positions: &[Point3],
+    normals: &[Vec3],
+    params: &TriangulationParams,
+    linked: &Linked<'_>,
+) -> Result<Vec<[u32; 3]>, ParamError> {
+    let ranks: Vec<u32> = (0..positions.len() as u32).collect();
+    triangulate_ranked(positions, normals, &ranks, params, linked)
+}
+
+/// Whether two points (indices, smaller first) still interact.
+pub type Linked<'a> = dyn Fn(u32, u32) -> bool + Sync + 'a;
+
+/// [`triangulate_linked`] with ties broken by `ranks` (one per position,
 /// distinct).
 fn triangulate_ranked(
     positions: &[Point3],
     normals: &[Vec3],
     ranks: &[u32],
     params: &TriangulationParams,
+    linked: &Linked<'_>,
 ) -> Result<Vec<[u32; 3]>, ParamError> {
-    let mut out = sphere_rule(positions, normals, ranks, params)?;
+    let mut out = sphere_rule(positions, normals, ranks, params, linked)?;
     resolve_crossed_diagonals(&mut out, positions, normals, ranks);
     resolve_overfull_edges(&mut out, positions, normals, ranks);
     Ok(out)
@@ -193,6 +232,7 @@ fn sphere_rule(
     normals: &[Vec3],
     ranks: &[u32],
     params: &TriangulationParams,
+    linked: &Linked<'_>,
 ) -> Result<Vec<[u32; 3]>, ParamError> {
     params.validate()?;
     if normals.len() != positions.len() {
@@ -235,6 +275,7 @@ fn sphere_rule(
         tree: tree.as_ref(),
         index: &index,
         ranks,
+        linked,
     };
     let per: Vec<Vec<[u32; 3]>> = (0..n)
         .into_par_iter()
@@ -443,6 +484,7 @@ struct Ctx<'a> {
     tree: Option<&'a ImmutableKdTree<Real, 3>>,
     index: &'a [u32],
     ranks: &'a [u32],
+    linked: &'a Linked<'a>,
 }
 
 impl Ctx<'_> {
@@ -450,10 +492,17 @@ impl Ctx<'_> {
     fn triangles_of(&self, i: usize) -> Vec<[u32; 3]> {
         let mut out = Vec::new();
         let row = self.half.row(i);
+        let i32 = i as u32;
+        let link = |a: u32, b: u32| (self.linked)(a.min(b), a.max(b)) as u8;
         for (a, &j) in row.iter().enumerate() {
+            let ij = link(i32, j);
             for &k in &row[a + 1..] {
                 // Mutual: j and k neighbours too (rows ascending, k > j).
                 if self.half.row(j as usize).binary_search(&k).is_err() {
+                    continue;
+                }
+                // Two of the three edges linked: see "Links".
+                if ij + link(i32, k) + link(j, k) < 2 {
                     continue;
                 }
                 let t = [i as u32, j, k];

@@ -33,7 +33,7 @@ pub use contact_sheet::{render_contact_sheet, sheet_grid};
 pub use error::RenderError;
 pub use image::RgbImage;
 pub use obj::{ObjData, ObjObject, MAX_OBJ_FILE_BYTES};
-pub use run_dir::{read_run_frame, run_up_axis};
+pub use run_dir::{read_run_frame, run_up_axis, run_view_axis};
 pub use styles::Style;
 
 use camera::Camera;

@@ -59,11 +59,24 @@ pub fn read_run_frame(dir: &Path, k: u64) -> Result<ObjData, RenderError> {
 /// up to three folders above it. `None` when there is none, or it has no
 /// valid `up`.
 pub fn run_up_axis(path: &Path) -> Option<[f64; 3]> {
+    run_direction(path, "up")
+}
+
+/// The view direction, in scene coordinates, of the run that holds `path`
+/// (as [`run_up_axis`]): the `view` of its `summary.json` (the scene's
+/// `outputs.view`). `None` when there is none or it is not valid.
+pub fn run_view_axis(path: &Path) -> Option<[f64; 3]> {
+    run_direction(path, "view")
+}
+
+/// The direction `key` of the first `summary.json` in `path` or up to three
+/// folders above it.
+fn run_direction(path: &Path, key: &str) -> Option<[f64; 3]> {
     let start = if path.is_dir() { path } else { path.parent()? };
     start.ancestors().take(4).find_map(|dir| {
         let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
         let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-        let up = v.get("up")?.as_array()?;
+        let up = v.get(key)?.as_array()?;
         let c: Vec<f64> = up.iter().filter_map(serde_json::Value::as_f64).collect();
         let up = <[f64; 3]>::try_from(c).ok()?;
         let n = (up[0] * up[0] + up[1] * up[1] + up[2] * up[2]).sqrt();

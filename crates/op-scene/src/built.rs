@@ -30,6 +30,20 @@ pub struct BuiltObject {
     pub created: Vec<u32>,
 }
 
+impl BuiltScene {
+    /// The largest gap the exported surfaces span between particles that
+    /// no longer attract: the stretching rule's `d_min` (times its `r0`)
+    /// when the scene creates particles by stretching, a gap the rule
+    /// leaves as sheet (seed 000 §7); 0 otherwise
+    /// ([`crate::export::geometry::surface_geometry`]).
+    pub fn sheet_gap(&self) -> Real {
+        self.creation
+            .as_ref()
+            .and_then(|c| c.params.stretching.as_ref().map(|s| s.d_min * c.params.r0))
+            .unwrap_or(0.0)
+    }
+}
+
 impl BuiltObject {
     /// Every particle id of the object: the original ones, then the
     /// created ones.

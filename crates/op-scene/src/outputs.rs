@@ -40,6 +40,17 @@ pub struct Outputs {
     /// Mutual-neighbour distance of the triangulation as a fraction of the
     /// object's rest spacing, > 0. Default: 1.7.
     pub triangulation_radius: f64,
+    /// The direction the camera of the scene's pictures looks along, in
+    /// scene coordinates (z-up), chosen so the picture shows the scene's
+    /// claim: written to `summary.json` (`view`) and the default of `opsim
+    /// render` on the run. Default: none (the renderer's own view).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub view: Option<[f64; 3]>,
+    /// The up direction of the scene's pictures, in scene coordinates, not
+    /// along `view`: written to `summary.json` (`up`) in place of the
+    /// direction against gravity. Default: none (against gravity, else +z).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub up: Option<[f64; 3]>,
 }
 
 impl Default for Outputs {
@@ -50,6 +61,8 @@ impl Default for Outputs {
             metrics: true,
             triangulation: false,
             triangulation_radius: 1.7,
+            view: None,
+            up: None,
         }
     }
 }

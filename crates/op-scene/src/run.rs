@@ -106,9 +106,14 @@ pub struct Summary {
     /// Frames per unit of scene time (the scene's `world.frame_rate`):
     /// frame `k` is at scene time `k / frame_rate`.
     pub frame_rate: Real,
-    /// The scene's up direction in scene coordinates: against gravity, or
-    /// `+z` in a scene without gravity. Scenes are z-up by convention.
+    /// The scene's up direction in scene coordinates: `outputs.up` when
+    /// given, else against gravity, or `+z` in a scene without gravity.
+    /// Scenes are z-up by convention.
     pub up: [Real; 3],
+    /// The direction the scene's pictures look along (`outputs.view`), in
+    /// scene coordinates, when the scene gives one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub view: Option<[Real; 3]>,
     /// The frame files: formats, axis conventions and sequences.
     pub files: FrameFiles,
     /// Rayon threads used.
@@ -339,7 +344,8 @@ pub fn run(
         &scene.skins,
         &scene.tools,
         &scene.outputs,
-    );
+    )
+    .with_sheet_gap(scene.sheet_gap());
     let write_frames = writer.writes_anything();
     prepare_output(&opts.out_dir, &writer.folders())?;
     let total = opts
@@ -530,7 +536,8 @@ pub fn run(
             .collect(),
         frames: written,
         frame_rate: scene.frame_rate,
-        up: up_direction(scene),
+        up: scene.outputs.up.unwrap_or_else(|| up_direction(scene)),
+        view: scene.outputs.view,
         files: FrameFiles {
             formats: writer.formats().to_vec(),
             axes: writer

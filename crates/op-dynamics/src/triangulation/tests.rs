@@ -194,7 +194,7 @@ fn crossed_diagonals_are_resolved_on_coarse_curved_surfaces() {
         let params = TriangulationParams::with_radius(1.7);
         let ranks: Vec<u32> = (0..p.len() as u32).collect();
         let raw = Triangulation {
-            triangles: sphere_rule(&p, &normals, &ranks, &params).unwrap(),
+            triangles: sphere_rule(&p, &normals, &ranks, &params, &|_, _| true).unwrap(),
         };
         let t = tri(&p, &normals, 1.7);
         let (b, a) = (over_full(&raw), over_full(&t));
@@ -393,4 +393,29 @@ fn cocircular_square_grid_keeps_one_diagonal_per_cell() {
     let permuted = triangulate(&store, &TriangulationParams::with_radius(1.5)).unwrap();
     assert_eq!(direct, permuted);
     assert_eq!(direct, t);
+}
+
+/// A flat hexagonal sheet whose pairs across x = 5.2 no longer interact (a
+/// cut): [`triangulate_linked`] keeps no triangle across it and returns
+/// two discs, whose triangles are exactly the unlinked triangulation's
+/// triangles on each side.
+#[test]
+fn unlinked_pairs_open_a_cut() {
+    let p = hex_sheet(12, 10);
+    let normals = vec![Vec3::z(); p.len()];
+    let params = TriangulationParams::with_radius(1.5);
+    let side = |k: u32| p[k as usize].x < 5.2;
+    let whole = triangulate_points(&p, &normals, &params).unwrap();
+    let cut = triangulate_linked(&p, &normals, &params, &|a, b| side(a) == side(b)).unwrap();
+    let one_side: Vec<[u32; 3]> = whole
+        .iter()
+        .copied()
+        .filter(|f| f.iter().all(|&k| side(k) == side(f[0])))
+        .collect();
+    assert_eq!(cut, one_side);
+    assert!(cut.len() < whole.len());
+    let t = Triangulation { triangles: cut };
+    assert_eq!(t.euler_characteristic(), 2, "two discs");
+    assert_eq!(t.boundary_loops(), 2);
+    assert!(t.is_manifold());
 }

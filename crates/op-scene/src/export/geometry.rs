@@ -2,7 +2,7 @@
 //! object's particles, a skin, a triangulation, a tool) at the world's
 //! current state, in scene coordinates, independent of the file format.
 
-use op_dynamics::triangulation::{triangulate_points, TriangulationParams};
+use op_dynamics::triangulation::{triangulate_linked, TriangulationParams};
 use op_dynamics::{Real, Tool, Vec3, World};
 use op_implicit::Mesh;
 
@@ -173,16 +173,33 @@ pub fn tool_geometry(k: usize, tool: &Tool, t: Real) -> FrameMesh {
 /// particle normals), with the particles they use as vertices (original
 /// then created, in that order) and their normals. Particles in no
 /// triangle are left out (they are in the particles' own mesh).
-pub fn surface_geometry(world: &World, object: &BuiltObject, outputs: &Outputs) -> FrameMesh {
+///
+/// Only what holds together is triangulated ([`interacting`]): an edge
+/// joins two particles that still attract, so a cut or a tear opens in the
+/// surface (seed 000 §6 fig. 7, §8 fig. 12c). `sheet_gap` (absolute
+/// length, 0 for none) is the exception: a pair closer than it is sheet
+/// even when it no longer attracts, the stretching rule's `d_min` in a
+/// scene that creates particles (a gap the rule has not yet had to fill,
+/// seed 000 §7).
+pub fn surface_geometry(
+    world: &World,
+    object: &BuiltObject,
+    outputs: &Outputs,
+    sheet_gap: Real,
+) -> FrameMesh {
     let p = world.particles();
     let slots: Vec<usize> = object.all_ids().filter_map(|id| p.slot_of(id)).collect();
     let positions: Vec<_> = slots.iter().map(|&s| p.positions()[s]).collect();
     let normals: Vec<Vec3> = slots.iter().map(|&s| p.normal(s)).collect();
     let params =
         TriangulationParams::with_radius(outputs.triangulation_radius * object.rest_spacing);
+    let linked = |a: u32, b: u32| {
+        let (a, b) = (slots[a as usize], slots[b as usize]);
+        (p.positions()[a] - p.positions()[b]).norm() < sheet_gap || interacting(world, a, b)
+    };
     // The radius is validated with the scene; a non-finite spacing leaves
     // the surface without triangles rather than failing the frame.
-    let triangles = triangulate_points(&positions, &normals, &params).unwrap_or_default();
+    let triangles = triangulate_linked(&positions, &normals, &params, &linked).unwrap_or_default();
     let mut mesh = FrameMesh {
         name: surface_name(object),
         vertices: positions.iter().map(|q| q.coords).collect(),
@@ -192,6 +209,29 @@ pub fn surface_geometry(world: &World, object: &BuiltObject, outputs: &Outputs) 
     };
     mesh.compact_triangles();
     mesh
+}
+
+/// Whether the particles in slots `a` and `b` still attract each other:
+/// closer than the spacing cut-off of their materials (the larger of the
+/// two; a material without a spacing term sets no limit) and, when bonds
+/// govern the pair (op_dynamics::bonds), bonded. Pairs that fail either
+/// only repel or do not interact at all (seed 002 §5).
+pub fn interacting(world: &World, a: usize, b: usize) -> bool {
+    let p = world.particles();
+    let materials = world.materials();
+    let (ma, mb) = (p.materials()[a], p.materials()[b]);
+    let cutoff = [ma, mb]
+        .iter()
+        .filter_map(|&m| materials.get(m as usize))
+        .map(|m| m.spacing_cutoff())
+        .fold(0.0, Real::max);
+    if cutoff > 0.0 && (p.positions()[a] - p.positions()[b]).norm() >= cutoff {
+        return false;
+    }
+    match world.bonds() {
+        Some(bonds) if bonds.governs(ma, mb) => bonds.contains(p.ids()[a], p.ids()[b]),
+        _ => true,
+    }
 }
 
 /// The name of an object's triangulation in the frames: `<object>_surface`.

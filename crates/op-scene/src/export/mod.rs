@@ -135,6 +135,7 @@ pub struct FrameWriter {
     sequences: Vec<Sequence>,
     sources: Vec<Source>,
     vtu_files: Vec<(String, Real)>,
+    sheet_gap: Real,
 }
 
 impl FrameWriter {
@@ -196,7 +197,16 @@ impl FrameWriter {
             sequences,
             sources,
             vtu_files: Vec::new(),
+            sheet_gap: 0.0,
         }
+    }
+
+    /// Sets the largest gap the surfaces span between particles that no
+    /// longer attract ([`geometry::surface_geometry`]; the scene's
+    /// [`crate::BuiltScene::sheet_gap`]). Default 0.
+    pub fn with_sheet_gap(mut self, gap: Real) -> Self {
+        self.sheet_gap = gap;
+        self
     }
 
     /// The sequences, in the order they are written.
@@ -260,7 +270,9 @@ impl FrameWriter {
                 let at = |f| seq.path(&self.out, k, f);
                 let mesh = match *source {
                     Source::Particles(o) => geometry::object_geometry(world, &objects[o], outputs),
-                    Source::Surface(o) => geometry::surface_geometry(world, &objects[o], outputs),
+                    Source::Surface(o) => {
+                        geometry::surface_geometry(world, &objects[o], outputs, self.sheet_gap)
+                    }
                     Source::Tool(t) => geometry::tool_geometry(t, &tools[t], world.time()),
                     Source::Skin(s) => {
                         let skin = &skins[s];

@@ -223,7 +223,26 @@ impl Scene {
             file,
             "outputs.triangulation_radius",
             self.outputs.triangulation_radius,
-        )
+        )?;
+        if let Some(v) = &self.outputs.view {
+            direction(file, "outputs.view", v)?;
+        }
+        if let Some(u) = &self.outputs.up {
+            direction(file, "outputs.up", u)?;
+        }
+        if let (Some(v), Some(u)) = (&self.outputs.view, &self.outputs.up) {
+            let dot: Real = v.iter().zip(u).map(|(a, b)| a * b).sum();
+            let norms = |x: &[Real; 3]| x.iter().map(|c| c * c).sum::<Real>().sqrt();
+            if dot.abs() >= (1.0 - 1e-6) * norms(v) * norms(u) {
+                return Err(SceneError::value(
+                    file,
+                    "outputs.up",
+                    checks::fmt3(u),
+                    "must not be parallel to outputs.view",
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Checks one object; returns its particle count.
