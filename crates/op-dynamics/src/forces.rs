@@ -79,8 +79,10 @@ struct OrientedPair {
 #[derive(Default)]
 struct BlockScratch {
     /// Incoming force and torque of each particle of the block from the
-    /// block's own rows.
-    local: Vec<(Vec3, Vec3)>,
+    /// block's own rows (torques only for kernels with torques: the
+    /// spacing kernel's accumulator stays half as large in cache).
+    local_f: Vec<Vec3>,
+    local_t: Vec<Vec3>,
     /// Contributions to particles of later blocks, in visiting order, then
     /// stably sorted by target block: target slots and forces (and torques,
     /// oriented kernel only).
@@ -548,8 +550,12 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
         |b: usize, block: &mut BlockScratch, f: &mut [Vec3], t: &mut [Vec3], e: &mut [Real]| {
             let b0 = b * BLOCK;
             let b1 = b0 + f.len();
-            block.local.clear();
-            block.local.resize(f.len(), (Vec3::zeros(), Vec3::zeros()));
+            block.local_f.clear();
+            block.local_f.resize(f.len(), Vec3::zeros());
+            block.local_t.clear();
+            if TORQUES {
+                block.local_t.resize(f.len(), Vec3::zeros());
+            }
             block.spill_targets.clear();
             block.spill_forces.clear();
             block.spill_torques.clear();
@@ -573,11 +579,10 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
                     let fj = o.force_j();
                     fo -= fj;
                     eo += o.energy();
-                    let l = &mut block.local[j - b0];
-                    l.0 += fj;
+                    block.local_f[j - b0] += fj;
                     if TORQUES {
                         to += o.torque_i();
-                        l.1 += o.torque_j();
+                        block.local_t[j - b0] += o.torque_j();
                     }
                 }
                 for (k, &j) in row.iter().enumerate().skip(split) {
@@ -594,9 +599,12 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
                         block.spill_torques.push(o.torque_j());
                     }
                 }
-                let (fin, tin) = block.local[i - b0];
-                f[i - b0] = fin + fo;
-                t[i - b0] = if TORQUES { tin + to } else { Vec3::zeros() };
+                f[i - b0] = block.local_f[i - b0] + fo;
+                t[i - b0] = if TORQUES {
+                    block.local_t[i - b0] + to
+                } else {
+                    Vec3::zeros()
+                };
                 e[i - b0] = eo;
             }
             // Group the spill by target block, keeping the visiting order
