@@ -26,7 +26,10 @@
 //! compiled for two bond lookups ([`crate::bonds`]): worlds without bonded
 //! materials run the instance whose lookup is the constant `true` (the
 //! code they ran before bonds existed, no per-pair bond work); worlds with
-//! them look each complete pair up in the bond store.
+//! them look each complete pair up in the bond store. Worlds of one
+//! spacing material run a loop per potential (`uniform_spacing`); with
+//! 12-6 Lennard-Jones its pairs are evaluated in SIMD lanes dispatched at
+//! run time ([`crate::lanes`]), which add up to the scalar loop's bits.
 
 use rayon::prelude::*;
 
@@ -38,9 +41,9 @@ use crate::heat::pair_strength;
 use crate::integrators::StateRef;
 use crate::interactions::{
     evaluate_pair, evaluate_pair_weakened, evaluate_spacing_sq, evaluate_spacing_weakened,
-    Coupling, ParticleView, PreparedMaterial, SpacingKernel,
+    Coupling, ParticleView, PreparedMaterial,
 };
-use crate::math::{Point3, Real, Vec3};
+use crate::math::{Real, Vec3};
 use crate::neighbours::NeighbourList;
 use crate::particles::Attributes;
 use crate::tools::Tools;
@@ -61,6 +64,9 @@ pub enum Kernel {
 /// the order of every sum depends on it, never on the thread count.
 pub(crate) const BLOCK: usize = 2048;
 
+mod uniform_spacing;
+use uniform_spacing::uniform_spacing_pass;
+
 /// Result of one pair in the oriented kernel.
 #[derive(Copy, Clone, Debug, Default)]
 struct OrientedPair {
@@ -74,8 +80,10 @@ struct OrientedPair {
 #[derive(Default)]
 struct BlockScratch {
     /// Incoming force and torque of each particle of the block from the
-    /// block's own rows.
-    local: Vec<(Vec3, Vec3)>,
+    /// block's own rows (torques only for kernels with torques: the
+    /// spacing kernel's accumulator stays half as large in cache).
+    local_f: Vec<Vec3>,
+    local_t: Vec<Vec3>,
     /// Contributions to particles of later blocks, in visiting order, then
     /// stably sorted by target block: target slots and forces (and torques,
     /// oriented kernel only).
@@ -237,18 +245,18 @@ impl ForceContext<'_> {
                 let list = &*list;
                 if let (Kernel::Spacing, Some(b)) = (kernel, bonds) {
                     let pair = |i: usize, j: usize| spacing_pair(a, m, b, heated, cutoff2, s, i, j);
-                    accumulate::<false, _, _>(list, blocks, pair, out);
+                    accumulate::<false, _>(list, blocks, Scalar(pair), out);
                 } else if kernel == Kernel::Spacing {
                     if uniform_spacing(a) && !heated {
                         // One material, every pair complete: a dedicated
                         // loop per spacing potential (monomorphized, no
                         // per-pair dispatch).
-                        uniform_spacing_pass(&m[0], cutoff2, s.positions, list, blocks, out);
+                        uniform_spacing_pass(&m[0], cutoff2, s.positions, list, blocks, out, true);
                     } else {
                         let pair = |i: usize, j: usize| {
                             spacing_pair(a, m, &Unbonded, heated, cutoff2, s, i, j)
                         };
-                        accumulate::<false, _, _>(list, blocks, pair, out);
+                        accumulate::<false, _>(list, blocks, Scalar(pair), out);
                     }
                 } else {
                     frames(normals, tangents, a, s);
@@ -260,21 +268,21 @@ impl ForceContext<'_> {
                                 a, m, b, friction, heated, cutoff2, nv, tv, s, i, j,
                             )
                         };
-                        accumulate::<true, _, _>(list, blocks, pair, out);
+                        accumulate::<true, _>(list, blocks, Scalar(pair), out);
                     } else if !heated && uniform_oriented(a) {
                         let pair = |i: usize, j: usize| {
                             oriented_pair::<true>(
                                 a, m, &Unbonded, friction, false, cutoff2, nv, tv, s, i, j,
                             )
                         };
-                        accumulate::<true, _, _>(list, blocks, pair, out);
+                        accumulate::<true, _>(list, blocks, Scalar(pair), out);
                     } else {
                         let pair = |i: usize, j: usize| {
                             oriented_pair::<false>(
                                 a, m, &Unbonded, friction, heated, cutoff2, nv, tv, s, i, j,
                             )
                         };
-                        accumulate::<true, _, _>(list, blocks, pair, out);
+                        accumulate::<true, _>(list, blocks, Scalar(pair), out);
                     }
                 }
             }
@@ -453,13 +461,49 @@ impl PairOut for OrientedPair {
     }
 }
 
+/// A pair kernel as the accumulation sees it: `prepare` may evaluate a
+/// whole row at once (the SIMD lanes, [`crate::lanes`]) into the block's
+/// row scratch, then `pair` gives the result of the `k`-th pair `(i, j)` of
+/// the row, `None` when it contributes nothing.
+///
+/// `DENSE` sources also give every in-block pair a result through
+/// `pair_or_zero`: an exact zero (`+0.0` everywhere) for pairs that
+/// contribute nothing. Adding it leaves every sum's bits as skipping the
+/// pair would (the sums start at `+0.0` and, being sums, never become
+/// `-0.0`), without the unpredictable branch on the cut-off.
+trait PairSource: Sync {
+    type Out: PairOut;
+    type Row: Default + Send;
+    const DENSE: bool = false;
+    fn prepare(&self, i: usize, row: &[u32], scratch: &mut Self::Row);
+    fn pair(&self, i: usize, j: usize, k: usize, scratch: &Self::Row) -> Option<Self::Out>;
+    #[inline(always)]
+    fn pair_or_zero(&self, i: usize, j: usize, k: usize, scratch: &Self::Row) -> Self::Out {
+        self.pair(i, j, k, scratch).unwrap_or_default()
+    }
+}
+
+/// A pair kernel evaluated one pair at a time.
+struct Scalar<F>(F);
+
+impl<O: PairOut, F: Fn(usize, usize) -> Option<O> + Sync> PairSource for Scalar<F> {
+    type Out = O;
+    type Row = ();
+    #[inline(always)]
+    fn prepare(&self, _: usize, _: &[u32], _: &mut ()) {}
+    #[inline(always)]
+    fn pair(&self, i: usize, j: usize, _: usize, _: &()) -> Option<O> {
+        (self.0)(i, j)
+    }
+}
+
 /// Evaluates every listed pair once and sums the contributions per
 /// particle, block by block (see the module docs). `TORQUES` is false for
 /// kernels without torques.
-fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> Option<O> + Sync>(
+fn accumulate<const TORQUES: bool, P: PairSource>(
     list: &NeighbourList,
     blocks: &mut Vec<BlockScratch>,
-    pair: P,
+    src: P,
     out: Sums<'_>,
 ) {
     let pairs = list.pairs();
@@ -480,31 +524,43 @@ fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> Option<O> 
         |b: usize, block: &mut BlockScratch, f: &mut [Vec3], t: &mut [Vec3], e: &mut [Real]| {
             let b0 = b * BLOCK;
             let b1 = b0 + f.len();
-            block.local.clear();
-            block.local.resize(f.len(), (Vec3::zeros(), Vec3::zeros()));
+            block.local_f.clear();
+            block.local_f.resize(f.len(), Vec3::zeros());
+            block.local_t.clear();
+            if TORQUES {
+                block.local_t.resize(f.len(), Vec3::zeros());
+            }
             block.spill_targets.clear();
             block.spill_forces.clear();
             block.spill_torques.clear();
+            let mut scratch = P::Row::default();
             for i in b0..b1 {
                 let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
                 // The row is sorted: targets in this block, then later ones.
                 let row = &nbrs[pairs.row_range(i)];
+                src.prepare(i, row, &mut scratch);
                 let split = row.partition_point(|&j| (j as usize) < b1);
-                for &j in &row[..split] {
+                for (k, &j) in row[..split].iter().enumerate() {
                     let j = j as usize;
-                    let Some(o) = pair(i, j) else { continue };
+                    let o = if P::DENSE {
+                        src.pair_or_zero(i, j, k, &scratch)
+                    } else {
+                        let Some(o) = src.pair(i, j, k, &scratch) else {
+                            continue;
+                        };
+                        o
+                    };
                     let fj = o.force_j();
                     fo -= fj;
                     eo += o.energy();
-                    let l = &mut block.local[j - b0];
-                    l.0 += fj;
+                    block.local_f[j - b0] += fj;
                     if TORQUES {
                         to += o.torque_i();
-                        l.1 += o.torque_j();
+                        block.local_t[j - b0] += o.torque_j();
                     }
                 }
-                for &j in &row[split..] {
-                    let Some(o) = pair(i, j as usize) else {
+                for (k, &j) in row.iter().enumerate().skip(split) {
+                    let Some(o) = src.pair(i, j as usize, k, &scratch) else {
                         continue;
                     };
                     let fj = o.force_j();
@@ -517,9 +573,12 @@ fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> Option<O> 
                         block.spill_torques.push(o.torque_j());
                     }
                 }
-                let (fin, tin) = block.local[i - b0];
-                f[i - b0] = fin + fo;
-                t[i - b0] = if TORQUES { tin + to } else { Vec3::zeros() };
+                f[i - b0] = block.local_f[i - b0] + fo;
+                t[i - b0] = if TORQUES {
+                    block.local_t[i - b0] + to
+                } else {
+                    Vec3::zeros()
+                };
                 e[i - b0] = eo;
             }
             // Group the spill by target block, keeping the visiting order
@@ -571,61 +630,6 @@ fn accumulate<const TORQUES: bool, O: PairOut, P: Fn(usize, usize) -> Option<O> 
                 }
             }
         });
-}
-
-/// The uniform spacing kernel ([`uniform_spacing`]) for one material: the
-/// pass monomorphized per spacing potential.
-fn uniform_spacing_pass(
-    m: &PreparedMaterial,
-    cutoff2: Real,
-    p: &[Point3],
-    list: &NeighbourList,
-    blocks: &mut Vec<BlockScratch>,
-    out: Sums<'_>,
-) {
-    #[inline(always)]
-    fn pair(
-        eval: impl Fn(Real, Real) -> (Real, Real),
-        cutoff2: Real,
-        p: &[Point3],
-        i: usize,
-        j: usize,
-    ) -> Option<SpacingPair> {
-        let r = p[j] - p[i];
-        let d2 = r.norm_squared();
-        // Coincident (d2 = 0) and NaN pairs contribute nothing.
-        if d2 > cutoff2 || d2.is_nan() || d2 <= 0.0 {
-            return None;
-        }
-        let (energy, g) = eval(d2, 1.0 / d2);
-        Some(SpacingPair {
-            force_j: r * (-g),
-            energy,
-        })
-    }
-    match m.spacing() {
-        Some(SpacingKernel::LennardJones(l)) if l.is_12_6() => {
-            let f = |i, j| pair(|d2, inv| l.eval_sq_12_6(d2, inv), cutoff2, p, i, j);
-            accumulate::<false, _, _>(list, blocks, f, out);
-        }
-        Some(SpacingKernel::LennardJones(l)) => {
-            let f = |i, j| pair(|d2, inv| l.eval_sq(d2, inv), cutoff2, p, i, j);
-            accumulate::<false, _, _>(list, blocks, f, out);
-        }
-        Some(SpacingKernel::Cohesion(c)) => {
-            let eval = |d2: Real, inv: Real| {
-                let r = d2.sqrt();
-                let (u, du) = c.eval(r);
-                (u, du * (r * inv))
-            };
-            let f = |i, j| pair(eval, cutoff2, p, i, j);
-            accumulate::<false, _, _>(list, blocks, f, out);
-        }
-        None => {
-            let f = |i, j| pair(|_, _| (0.0, 0.0), cutoff2, p, i, j);
-            accumulate::<false, _, _>(list, blocks, f, out);
-        }
-    }
 }
 
 /// World normals and tangents of every particle at state `s`.

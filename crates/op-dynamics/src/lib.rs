@@ -32,6 +32,7 @@ pub mod forces;
 pub mod heat;
 pub mod integrators;
 pub mod interactions;
+pub mod lanes;
 pub mod math;
 pub mod neighbours;
 pub mod particles;

@@ -31,8 +31,9 @@ pub struct NeighbourParams {
     /// faster one ([`NeighbourBackend::default`]).
     pub backend: NeighbourBackend,
     /// Skin as a fraction of the interaction cut-off: lists hold pairs
-    /// within `cutoff * (1 + skin)` and are rebuilt when a particle moved
-    /// more than half the skin. `0 < skin <= 10` ([`MAX_SKIN`]); the list
+    /// within `cutoff * (1 + skin)` and are rebuilt when the two largest
+    /// particle displacements since the last build add up to more than the
+    /// skin. `0 < skin <= 10` ([`MAX_SKIN`]); the list
     /// radius `cutoff * (1 + skin)` of every material must also be finite
     /// ([`World::new`] checks it). Default: 0.2.
     pub skin: Real,
@@ -643,7 +644,7 @@ impl World {
     /// Stages, in order: (1) re-sort particles in spatial order when the
     /// neighbour list is about to be rebuilt; (2) integrate, each force
     /// evaluation updating the neighbour list (list-only rebuild when a
-    /// stage moved particles past half the skin), running the pair kernel
+    /// stage moved particles past the skin bound), running the pair kernel
     /// and gathering per particle, adding external actions; (3) clear the
     /// pending external forces; (4) advance the temperatures
     /// ([`crate::heat`], when the world has heat); (5) break the bonds

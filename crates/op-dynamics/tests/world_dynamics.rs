@@ -81,10 +81,18 @@ fn same_bits_at_any_thread_count_and_backend() {
 /// Worlds of several accumulation blocks (2048 particles each: pairs that
 /// cross a block boundary are summed in a second pass, see
 /// `op_dynamics::forces`): the same bits at 1, 2 and 3 threads, for both
-/// kernels, and the internal forces still sum to zero.
+/// kernels (the spacing one both scalar, with cohesion, and in SIMD lanes,
+/// with 12-6 Lennard-Jones), and the internal forces still sum to zero.
 #[test]
 fn same_bits_across_blocks_at_any_thread_count() {
-    for material in [full_material(true, 1.0), spacing_material()] {
+    let lj = Material {
+        spacing: Some(Spacing::LennardJones(LennardJonesParams {
+            cutoff: 1.5,
+            ..Default::default()
+        })),
+        ..Material::empty()
+    };
+    for material in [full_material(true, 1.0), spacing_material(), lj] {
         let make = || {
             let mut rng = Rng::new(22);
             noisy_sheet(&mut rng, 100, 55, 0.1)

@@ -223,6 +223,42 @@ impl LennardJones {
         })
     }
 
+    /// [`Self::eval_sq_12_6`] without branches, for pairs in SIMD lanes
+    /// (`crate::lanes`): the untapered potential, the taper and the
+    /// cut-off are all computed and the result selected. Bit for bit the
+    /// same as [`Self::eval_sq_12_6`] (the same operations in the same
+    /// order, no fused multiply-add), so the vectorized kernel sums the
+    /// same bits as the scalar one on any CPU. `d2 > 0`.
+    #[inline(always)]
+    pub fn eval_sq_12_6_select(&self, d2: Real, inv_d2: Real) -> (Real, Real) {
+        let x2 = self.r0_sq * inv_d2;
+        let x6 = x2 * x2 * x2;
+        let (xn, xm) = (x6 * x6, x6);
+        let u = self.c_n * xn - self.c_m * xm;
+        let g = self.c_g * (xm - xn) * x2;
+        let r = d2.sqrt();
+        let (s, ds) = self.taper.eval_select(r);
+        let (ut, gt) = (u * s, g * s + u * ds * (r * inv_d2));
+        let (outside, inner) = (d2 >= self.rc_sq, d2 <= self.r_on_sq);
+        let (u, g) = (if inner { u } else { ut }, if inner { g } else { gt });
+        (if outside { 0.0 } else { u }, if outside { 0.0 } else { g })
+    }
+
+    /// The folded constants the SIMD lanes evaluate
+    /// [`Self::eval_sq_12_6_select`] with.
+    pub(crate) fn lane_constants(&self) -> crate::lanes::LjLaneConstants {
+        crate::lanes::LjLaneConstants {
+            r0_sq: self.r0_sq,
+            c_n: self.c_n,
+            c_m: self.c_m,
+            c_g: self.c_g,
+            r_on_sq: self.r_on_sq,
+            rc_sq: self.rc_sq,
+            r_on: self.taper.r_on(),
+            inv_width: self.taper.inv_width(),
+        }
+    }
+
     /// The even-exponent body: `powers(x²) = (x^n, x^m)`.
     #[inline(always)]
     fn eval_sq_even(
@@ -305,6 +341,35 @@ mod tests {
                 assert!((u - us).abs() <= 1e-12 * (1.0 + u.abs()), "{n} {m} {r}");
                 assert!((du / r - g).abs() <= 1e-12 * (1.0 + g.abs()), "{n} {m} {r}");
             }
+        }
+    }
+
+    /// The branch-free 12-6 form of the SIMD lanes gives the same bits as
+    /// the scalar one, inside, across the taper and beyond the cut-off.
+    #[test]
+    fn eval_sq_12_6_select_is_bit_identical() {
+        let l = LennardJonesParams {
+            taper: 0.1,
+            ..Default::default()
+        }
+        .prepare()
+        .unwrap();
+        let bits = |(a, b): (Real, Real)| (a.to_bits(), b.to_bits());
+        let r_on = l.taper.r_on();
+        let mut d2s: Vec<Real> = (0..=5000)
+            .map(|k| {
+                let r = 0.5 + 2.5 * k as Real / 5000.0;
+                r * r
+            })
+            .collect();
+        d2s.extend([r_on * r_on, l.r_on_sq, l.rc_sq, 6.25, 1e-300, 1e300]);
+        for d2 in d2s {
+            let inv = 1.0 / d2;
+            assert_eq!(
+                bits(l.eval_sq_12_6(d2, inv)),
+                bits(l.eval_sq_12_6_select(d2, inv)),
+                "d2 = {d2}"
+            );
         }
     }
 

@@ -244,14 +244,21 @@ pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) 
                 // Cells x0..=x1 of this (y, z) line are contiguous.
                 let a = scratch.cell_start[grid.cell_id([x0, y, z])] as usize;
                 let b = scratch.cell_start[grid.cell_id([x1, y, z]) + 1] as usize;
+                // Branch-free filter: every candidate is written, the
+                // length advances only for kept ones (whether `j > i` is
+                // a coin toss in spatial order: a branch on it mispredicts
+                // half the time).
+                let start = row.len();
+                row.resize(start + (b - a), 0);
+                let mut len = start;
                 for (q, &j) in scratch.sorted_pos[a..b]
                     .iter()
                     .zip(&scratch.sorted_idx[a..b])
                 {
-                    if j as usize > i && dist2(&p, q) <= r2 {
-                        row.push(j);
-                    }
+                    row[len] = j;
+                    len += usize::from((j as usize > i) & (dist2(&p, q) <= r2));
                 }
+                row.truncate(len);
             }
         }
     });

@@ -7,7 +7,7 @@
 //!   (sorted cell list, kiddo k-d tree, or the all-pairs oracle). All
 //!   backends give identical lists.
 //! - [`NeighbourList`]: the cached list of a simulation, rebuilt only when
-//!   some particle moved more than half the skin.
+//!   the two largest displacements add up to more than the skin.
 //! - [`spatial_order`]: a Morton permutation that puts particles in spatial
 //!   memory order (the world re-sorts at rebuilds).
 //!
@@ -117,10 +117,11 @@ pub fn search(backend: NeighbourBackend, positions: &[Point3], radius: Real, out
 ///
 /// The list holds every pair within `cutoff + skin` of the positions at the
 /// last build (the reference positions). [`update`](Self::update) rebuilds
-/// it when some particle has moved more than `skin / 2` from its reference
-/// position. **Guarantee**: after `update(positions)`, every pair within
-/// `cutoff` at `positions` is in [`pairs`](Self::pairs) (each particle moved
-/// at most `skin / 2`, so the pair was within `cutoff + skin` at the build).
+/// it when the two largest displacements from the reference positions add
+/// up to more than the skin. **Guarantee**: after `update(positions)`, every
+/// pair within `cutoff` at `positions` is in [`pairs`](Self::pairs) (its two
+/// particles moved at most `skin` together, so the pair was within
+/// `cutoff + skin` at the build).
 /// The list may also hold pairs farther than `cutoff`: consumers test the
 /// distance themselves.
 ///
@@ -136,12 +137,13 @@ pub struct NeighbourList {
     pairs: PairList,
     built: bool,
     rebuilds: u64,
-    /// Largest displacement from the reference positions at the last
-    /// [`NeighbourList::rebuild_due`] call.
+    /// The bound `d1 + d2` (the two largest displacements from the
+    /// reference positions) at the last [`NeighbourList::rebuild_due`]
+    /// call.
     last_shift: Real,
 }
 
-/// Relative slack on the `skin / 2` rebuild threshold: rebuilding slightly
+/// Relative slack on the `d1 + d2 <= skin` rebuild threshold: rebuilding slightly
 /// early absorbs the round-off of the displacement and pair tests, so the
 /// guarantee holds at the boundary too.
 const THRESHOLD_SLACK: Real = 1e-9;
@@ -181,11 +183,9 @@ impl NeighbourList {
     }
 
     /// Rebuilds the list when it has never been built, the particle count
-    /// changed, or some particle moved more than `skin / 2` since the last
-    /// build. Returns true when it rebuilt.
-    ///
-    /// The displacement check is a parallel scan of the positions
-    /// (short-circuits at the first particle that moved too far).
+    /// changed, or the two largest displacements since the last build add
+    /// up to more than the skin (see [`NeighbourList::needs_rebuild`]).
+    /// Returns true when it rebuilt.
     pub fn update(&mut self, positions: &[Point3]) -> bool {
         if !self.needs_rebuild(positions) {
             return false;
@@ -196,45 +196,82 @@ impl NeighbourList {
 
     /// True when [`NeighbourList::update`] would rebuild (the world uses it
     /// to re-sort particles in spatial order just before a rebuild).
+    ///
+    /// The criterion is the pair bound of the Verlet list: a pair's
+    /// distance changes by at most the sum of its two particles'
+    /// displacements, so while the two largest displacements `d1 >= d2`
+    /// satisfy `d1 + d2 <= skin`, no pair that was beyond `cutoff + skin`
+    /// at the build can be within `cutoff`. (The per-particle rule
+    /// `2 d1 <= skin` is the special case `d2 = d1`; with the pair bound a
+    /// few fast particles among slow ones no longer force a rebuild.) A
+    /// particle that turned non-finite, or finite again, also rebuilds.
     pub fn needs_rebuild(&self, positions: &[Point3]) -> bool {
-        !self.built || positions.len() != self.reference.len() || self.moved_too_far(positions)
+        !self.built
+            || positions.len() != self.reference.len()
+            || self.moved_too_far(self.displacements(positions))
     }
 
     /// True when [`NeighbourList::needs_rebuild`] is, or when the measured
-    /// motion predicts that it will be before the next call: the largest
-    /// displacement `d` from the reference positions, grown by twice its
-    /// growth since the previous call (one step of motion, with margin for
-    /// acceleration), exceeds half the skin. The world calls it once per
-    /// step, before integrating, so that rebuilds happen there, where
-    /// particles can be re-sorted in spatial order, rather than inside a
-    /// force evaluation (which still rebuilds, exactly when needed, if the
-    /// prediction was short).
+    /// motion predicts that it will be at the next call: the bound
+    /// `d1 + d2` ([`NeighbourList::needs_rebuild`]) grown by its growth
+    /// since the previous call (one more step at the same speed) exceeds
+    /// the skin. The world calls it once per step, before integrating, so
+    /// that rebuilds happen there, where particles can be re-sorted in
+    /// spatial order, rather than inside a force evaluation (which still
+    /// rebuilds, exactly when needed, if the prediction was short). Only
+    /// positions enter: the decision is the same on any machine and at
+    /// any thread count.
     pub fn rebuild_due(&mut self, positions: &[Point3]) -> bool {
-        if self.needs_rebuild(positions) {
+        if !self.built || positions.len() != self.reference.len() {
             return true;
         }
-        let d = self.max_displacement(positions);
-        let growth = (d - self.last_shift).max(0.0);
-        self.last_shift = d;
-        d + 2.0 * growth > 0.5 * self.skin * (1.0 - THRESHOLD_SLACK)
+        let moved = self.displacements(positions);
+        if self.moved_too_far(moved) {
+            return true;
+        }
+        let bound = moved.0 + moved.1;
+        let growth = (bound - self.last_shift).max(0.0);
+        self.last_shift = bound;
+        bound + growth > self.skin * (1.0 - THRESHOLD_SLACK)
     }
 
-    /// The largest distance of a finite position from its reference.
-    fn max_displacement(&self, positions: &[Point3]) -> Real {
-        positions
+    /// The two largest distances `(d1, d2)`, `d1 >= d2`, of finite
+    /// positions from their references, and whether some particle changed
+    /// between finite and non-finite.
+    fn displacements(&self, positions: &[Point3]) -> (Real, Real, bool) {
+        let (a, b, flipped) = positions
             .par_iter()
             .zip(self.reference.par_iter())
             .with_min_len(4096)
-            .map(|(p, q)| {
-                let d2 = (p - q).norm_squared();
-                if d2.is_nan() {
-                    0.0
-                } else {
-                    d2
-                }
-            })
-            .reduce(|| 0.0, Real::max)
-            .sqrt()
+            .fold(
+                || (0.0, 0.0, false),
+                |(a, b, f): (Real, Real, bool), (p, q)| {
+                    let d2 = (p - q).norm_squared();
+                    if d2.is_nan() {
+                        // Fine only if both are non-finite (no neighbours
+                        // either way).
+                        return (a, b, f || csr::is_finite(p) || csr::is_finite(q));
+                    }
+                    let (a, b) = top_two(a, b, d2);
+                    (a, b, f || d2.is_infinite())
+                },
+            )
+            .reduce(
+                || (0.0, 0.0, false),
+                |(a, b, f), (c, d, g)| {
+                    let (a, b) = top_two(a, b, c);
+                    let (a, b) = top_two(a, b, d);
+                    (a, b, f || g)
+                },
+            );
+        (a.sqrt(), b.sqrt(), flipped)
+    }
+
+    /// Whether the displacements `(d1, d2, flipped)` call for a rebuild:
+    /// `d1 + d2` above the skin (less a round-off slack), or a particle
+    /// flipped between finite and non-finite.
+    fn moved_too_far(&self, (d1, d2, flipped): (Real, Real, bool)) -> bool {
+        flipped || d1 + d2 > self.skin * (1.0 - THRESHOLD_SLACK)
     }
 
     /// Marks the list stale: the next [`update`](Self::update) rebuilds it
@@ -253,24 +290,6 @@ impl NeighbourList {
         self.built = true;
         self.rebuilds += 1;
         self.last_shift = 0.0;
-    }
-
-    /// True when some particle moved more than `skin / 2` (less a
-    /// round-off slack) from its reference position, or changed between
-    /// finite and non-finite.
-    fn moved_too_far(&self, positions: &[Point3]) -> bool {
-        let half = 0.5 * self.skin * (1.0 - THRESHOLD_SLACK);
-        let limit2 = half * half;
-        positions
-            .par_iter()
-            .zip(self.reference.par_iter())
-            .with_min_len(4096)
-            .any(|(p, q)| {
-                let d2 = (p - q).norm_squared();
-                // NaN d2: fine only if both are non-finite (no neighbours
-                // either way).
-                (d2 > limit2 || d2.is_nan()) && (csr::is_finite(p) || csr::is_finite(q))
-            })
     }
 
     /// The half list of the last build (empty before the first).
@@ -306,5 +325,17 @@ impl NeighbourList {
     /// The positions at the last build (empty before the first).
     pub fn reference_positions(&self) -> &[Point3] {
         &self.reference
+    }
+}
+
+/// The two largest of `a >= b` and `x`, in order.
+#[inline(always)]
+fn top_two(a: Real, b: Real, x: Real) -> (Real, Real) {
+    if x > a {
+        (x, a)
+    } else if x > b {
+        (a, x)
+    } else {
+        (a, b)
     }
 }

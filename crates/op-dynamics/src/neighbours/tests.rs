@@ -343,7 +343,7 @@ fn backends_agree_after_spatial_sort() {
 }
 
 #[test]
-fn update_rebuilds_only_when_a_particle_moves_more_than_half_the_skin() {
+fn update_rebuilds_only_when_the_two_largest_moves_exceed_the_skin() {
     let pts = hex_sheet(10, 10, 0.0, 14);
     let mut list = NeighbourList::new(NeighbourBackend::CellList, 1.2, 0.4);
     assert_eq!(list.radius(), 1.2 + 0.4);
@@ -352,12 +352,19 @@ fn update_rebuilds_only_when_a_particle_moves_more_than_half_the_skin() {
     assert_eq!(list.rebuilds(), 1);
     assert!(!list.update(&pts), "no motion, no rebuild");
     let mut moved = pts.clone();
-    moved[42].x += 0.19;
-    moved[7].y -= 0.15;
-    assert!(!list.update(&moved), "moves below skin/2 keep the list");
-    moved[42].x += 0.02; // now 0.21 > 0.2 from the reference
+    moved[42].x += 0.39;
+    assert!(
+        !list.update(&moved),
+        "one particle moving 0.39 < skin while the others rest keeps the list"
+    );
+    moved[7].y -= 0.005;
+    assert!(!list.update(&moved), "0.39 + 0.005 < skin keeps the list");
+    moved[7].y -= 0.01; // now 0.39 + 0.015 > 0.4
     assert!(list.needs_rebuild(&moved));
-    assert!(list.update(&moved), "a move above skin/2 rebuilds");
+    assert!(
+        list.update(&moved),
+        "two moves adding up above the skin rebuild"
+    );
     assert!(!list.needs_rebuild(&moved));
     assert_eq!(list.rebuilds(), 2);
     assert_eq!(list.reference_positions(), moved.as_slice());
@@ -385,7 +392,7 @@ fn skin_keeps_every_pair_within_cutoff() {
         let mut rebuilt = 0;
         for step in 0..60 {
             // Random moves of up to 0.45 skin/2 per step: several steps
-            // accumulate past skin/2 and force rebuilds.
+            // accumulate past the bound and force rebuilds.
             for p in pts.iter_mut() {
                 *p += rng.vec_in_ball(0.45 * 0.5 * skin);
             }
@@ -418,6 +425,13 @@ fn skin_guarantee_holds_at_the_boundary() {
     list.update(&pts);
     assert_eq!(list.pairs().num_pairs(), 1);
     let moved = [Point3::new(0.25, 0.0, 0.0), Point3::new(1.25, 0.0, 0.0)];
+    list.update(&moved);
+    assert_eq!(list.pairs().num_pairs(), 1);
+    // One particle moving the whole skin, the other resting: also at the
+    // cut-off, also in the list.
+    let mut list = NeighbourList::new(NeighbourBackend::CellList, cutoff, skin);
+    list.update(&pts);
+    let moved = [Point3::new(0.5, 0.0, 0.0), Point3::new(1.5, 0.0, 0.0)];
     list.update(&moved);
     assert_eq!(list.pairs().num_pairs(), 1);
 }
