@@ -294,12 +294,15 @@ fn main() {
         .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
         .unwrap_or_else(|_| vec![1.0, 0.5, 0.25]);
 
+    let thread_counts: Vec<usize> = std::env::var("SKINS_THREADS")
+        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
+        .unwrap_or_else(|_| vec![1, 2]);
     let mut table = String::new();
     let mut checks = String::new();
     let mut band = String::new();
     for &cube in &cubes {
         let reps = if cube < 0.3 { reps.min(3) } else { reps };
-        for threads in [1, 2] {
+        for &threads in &thread_counts {
             let (mut a, mut b, mut walls) = (Vec::new(), Vec::new(), Vec::new());
             let (mut mesh_a, mut mesh_b) = (None, None);
             for rep in 0..reps {
