@@ -17,6 +17,7 @@ pub mod presets;
 pub mod reference;
 pub mod render;
 pub mod run;
+mod skin_shape;
 pub mod skins;
 pub mod stability;
 pub mod stages;

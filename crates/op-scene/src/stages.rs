@@ -250,8 +250,7 @@ impl Stage<SceneState> for Skins {
         for s in &mut ctx.skins {
             // Particles the world removed itself (erasers, shapers).
             s.detach_missing(p);
-            s.skin
-                .repose(world)
+            s.repose(world)
                 .map_err(|e| StageError::new("skin", format!("posing {}: {e}", s.name)))?;
         }
         Ok(())
