@@ -105,7 +105,8 @@ impl CellGrid {
         }
         let mut idx = [0usize; 3];
         for k in 0..3 {
-            let c = ((p[k] - self.origin[k]) * self.inv_cell).floor();
+            // Truncation is the floor on the grid (c >= 0).
+            let c = (p[k] - self.origin[k]) * self.inv_cell;
             if !(c >= 0.0 && c < self.dims[k] as Real) {
                 return &[];
             }

@@ -122,17 +122,18 @@ pub struct SkinSpec {
 /// Default [`SkinSpec::smoothness`]: 2, so a clump of particles looks
 /// round and a sheet's rows do not show.
 ///
-/// Measured (tests below, cell size 0.05): the skin of four point
+/// Measured (`skin_shape` tests, cell size 0.05): the skin of four point
 /// primitives of radius 1.2 in a tetrahedron of edge 1 (the ball of
-/// `ball_vs_spiral`) is off its best-fit sphere by 9.2% RMS of its radius
-/// at smoothness 1, 2.2% at 1.5, 0.5% at 2; a hexagonal sheet of square
-/// primitives (half side 0.5, radius 1.2) with a `thickness` of 0.1 to 0.2
-/// has holes between its primitives at 1.5 and none at 2, where its top
-/// is flat within 1.2% r0 (thickness 0.15) to 0.7% r0 (0.4). Contact does
-/// not depend on it ([`SkinSpec::contact_primitive`]): with the blended
-/// skin in contact, `ball_vs_spiral`'s spiral, which the ball's wider skin
-/// kept touching, ended at a rest shape error of 0.12 instead of below
-/// 0.02.
+/// `ball_vs_spiral`), its amplitude matched to the contact skin, is off
+/// its best-fit sphere by 9.2% RMS of its radius at smoothness 1, 0.49% at
+/// 1.5, 0.10% at 2; a hexagonal sheet of square primitives (half side 0.5,
+/// radius 1.2) with a `thickness` of 0.25 (0.4) is flat within 0.84% r0
+/// (0.66%) at smoothness 2; a ring ribbon of squares (half side 0.5,
+/// radius 0.8, spacing 1) keeps bumps of 0.13 r0 peak-to-peak (0.14 with
+/// the plain kernel). Contact does not depend on it
+/// ([`SkinSpec::contact_primitive`]): with the blended skin in contact,
+/// `ball_vs_spiral`'s spiral, which the ball's wider skin kept touching,
+/// ended at a rest shape error of 0.12 instead of below 0.02.
 pub const DEFAULT_SMOOTHNESS: Real = 2.0;
 
 fn default_smoothness() -> Real {

@@ -156,8 +156,8 @@ fn block_range(grid: &Grid, (c, r): (Point3, Real)) -> Option<[(usize, usize); 3
 /// (rounding), or `None` when there are none.
 fn node_range(grid: &Grid, k: usize, a: Real, b: Real) -> Option<(usize, usize)> {
     let n = grid.dims[k] as Real;
-    let lo = ((a - grid.lo[k]) / grid.h).floor() - 1.0;
-    let hi = ((b - grid.lo[k]) / grid.h).ceil() + 1.0;
+    let lo = floor((a - grid.lo[k]) / grid.h) - 1.0;
+    let hi = ceil((b - grid.lo[k]) / grid.h) + 1.0;
     if hi < 0.0
         || lo > n - 1.0
         || lo.partial_cmp(&hi) == Some(std::cmp::Ordering::Greater)
@@ -167,6 +167,28 @@ fn node_range(grid: &Grid, k: usize, a: Real, b: Real) -> Option<(usize, usize)>
         return None;
     }
     Some((lo.max(0.0) as usize, hi.min(n - 1.0) as usize))
+}
+
+/// `x.floor()` without the libm call (SSE2 has no rounding instruction):
+/// truncation, one down for negative non-integers. Exact for |x| < 2^53;
+/// beyond, and for NaN, `x` itself (an integer, or NaN).
+#[inline]
+fn floor(x: Real) -> Real {
+    if !(x.abs() < 9.0e15) {
+        return x;
+    }
+    let t = x as i64 as Real;
+    if t > x {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
+/// `x.ceil()` as [`floor`]: `-floor(-x)`.
+#[inline]
+fn ceil(x: Real) -> Real {
+    -floor(-x)
 }
 
 /// What sampling a block found.
@@ -240,8 +262,8 @@ pub(super) fn sample_band(
         let (c, r) = prim.bounding_sphere();
         let local = |k: usize, n: usize| {
             let s = block.start[k] as Real;
-            let a = (((c[k] - r - grid.lo[k]) / h).floor() - s).max(0.0);
-            let b = (((c[k] + r - grid.lo[k]) / h).ceil() - s).min(n as Real - 1.0);
+            let a = (floor((c[k] - r - grid.lo[k]) / h) - s).max(0.0);
+            let b = (ceil((c[k] + r - grid.lo[k]) / h) - s).min(n as Real - 1.0);
             (a as usize, b as isize)
         };
         let ((i0, i1), (j0, j1), (k0, k1)) = (local(0, nx), local(1, ny), local(2, nz));
