@@ -443,6 +443,13 @@ fn main() {
     let _ = writeln!(md, "| rustc | {} |", sh("rustc", &["-V"]));
     let _ = writeln!(
         md,
+        "| load average at the end (1, 5, 15 min) | {} |",
+        std::fs::read_to_string("/proc/loadavg")
+            .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(", "))
+            .unwrap_or_else(|_| "?".into())
+    );
+    let _ = writeln!(
+        md,
         "| date | {} |",
         sh("date", &["-u", "+%Y-%m-%d %H:%M UTC"])
     );
