@@ -174,7 +174,7 @@ fn node_range(grid: &Grid, k: usize, a: Real, b: Real) -> Option<(usize, usize)>
 /// beyond, and for NaN, `x` itself (an integer, or NaN).
 #[inline]
 fn floor(x: Real) -> Real {
-    if !(x.abs() < 9.0e15) {
+    if x.is_nan() || x.abs() >= 9.0e15 {
         return x;
     }
     let t = x as i64 as Real;
@@ -296,14 +296,14 @@ pub(super) fn sample_band(
             *d = dx * dx;
         }
         let dx2 = &dx2[i0..=i1];
-        for k in k0..=k1 {
-            let dz = zs[k] - c.z;
+        for (k, z) in zs.iter().enumerate().take(k1 + 1).skip(k0) {
+            let dz = z - c.z;
             let dz2 = dz * dz;
             if dz2 >= r2 {
                 continue;
             }
-            for j in j0..=j1 {
-                let dy = ys[j] - c.y;
+            for (j, y) in ys.iter().enumerate().take(j1 + 1).skip(j0) {
+                let dy = y - c.y;
                 let dyz = dy * dy + dz2;
                 if dyz >= r2 {
                     continue;
