@@ -4,6 +4,7 @@
 //! frames hash to the golden value in `tests/data/golden_frames.txt` (a
 //! refactoring of the step must not change a bit; a change of the physics
 //! named in its commit re-blesses them with `OPSIM_BLESS=1`).
+//! Every exported skin frame must be a closed manifold.
 //! `OPSIM_BIN` runs another build of `opsim` (to bless the goldens of an
 //! earlier commit).
 
@@ -53,6 +54,60 @@ fn frames_hash(out: &std::path::Path) -> String {
         }
     }
     format!("{h:016x} {}", files.len())
+}
+
+/// The skin frames (OBJ files under `frames/*_skin/`) whose triangles do
+/// not form a closed, edge-manifold, consistently oriented surface: every
+/// directed edge `a -> b` once and its reverse once, no triangle repeating
+/// a vertex (the check of `op_implicit::is_closed_oriented_manifold`, on
+/// the exported indices), with the reason.
+fn open_skin_frames(out: &std::path::Path) -> Vec<String> {
+    let mut bad = Vec::new();
+    for f in files_under(&out.join("frames")) {
+        let skin = f
+            .parent()
+            .and_then(|d| d.file_name())
+            .is_some_and(|d| d.to_string_lossy().ends_with("_skin"));
+        if !skin || f.extension().and_then(|e| e.to_str()) != Some("obj") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&f).unwrap();
+        let mut directed: std::collections::HashMap<(u64, u64), u32> = Default::default();
+        let mut why = None;
+        let mut faces = 0;
+        for line in text.lines() {
+            let Some(rest) = line.strip_prefix("f ") else {
+                continue;
+            };
+            faces += 1;
+            let t: Vec<u64> = rest
+                .split_whitespace()
+                .map(|v| v.split('/').next().unwrap().parse().unwrap())
+                .collect();
+            if t.len() != 3 || t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+                why.get_or_insert(format!("degenerate face {t:?}"));
+                continue;
+            }
+            for k in 0..3 {
+                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        for (&(a, b), &n) in &directed {
+            if n != 1 || directed.get(&(b, a)) != Some(&1) {
+                why.get_or_insert(format!(
+                    "edge {a}-{b} used {n} times, its reverse {:?}",
+                    directed.get(&(b, a))
+                ));
+            }
+        }
+        if faces == 0 {
+            why.get_or_insert("no triangles".to_string());
+        }
+        if let Some(why) = why {
+            bad.push(format!("{}: {why}", f.display()));
+        }
+    }
+    bad
 }
 
 fn golden_path() -> PathBuf {
@@ -120,6 +175,10 @@ fn shipped_scenes_run_without_unexpected_warnings() {
                             "expected a warning containing {e:?}, got {warnings:?}"
                         ));
                     }
+                }
+                // Every frame of every skin is a closed manifold (issue 19).
+                for bad in open_skin_frames(&out) {
+                    fail(format!("skin not closed and manifold: {bad}"));
                 }
                 hashes
                     .lock()

@@ -90,6 +90,29 @@ impl Tris {
     }
 }
 
+/// CPU seconds (user + system, 10 ms ticks) of this process, or of its
+/// waited-for children, from `/proc/self/stat` (fields utime, stime,
+/// cutime, cstime); 0 where it cannot be read.
+fn cpu_seconds(children: bool) -> Real {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    let fields: Vec<&str> = stat
+        .rsplit(')')
+        .next()
+        .unwrap_or("")
+        .split_whitespace()
+        .collect();
+    let at = if children { 13 } else { 11 };
+    let tick = |k: usize| {
+        fields
+            .get(k)
+            .and_then(|x| x.parse::<Real>().ok())
+            .unwrap_or(0.0)
+    };
+    (tick(at) + tick(at + 1)) / 100.0
+}
+
 fn read_obj(path: &Path) -> Tris {
     let text = std::fs::read_to_string(path).expect("splashsurf's OBJ");
     let mut positions = Vec::new();
@@ -120,6 +143,9 @@ fn read_obj(path: &Path) -> Tris {
 
 struct Run {
     seconds: Real,
+    /// CPU seconds (user + system) of the run: ours, the process's; the
+    /// peer's, its child process's.
+    cpu: Real,
     mesh: Option<Tris>,
     stats: Option<op_implicit::PolygonizeStats>,
 }
@@ -130,6 +156,7 @@ fn ours(particles: &[Point3], iso: Real, cube: Real, threads: usize, keep: bool)
         .build()
         .unwrap();
     pool.install(|| {
+        let cpu0 = cpu_seconds(false);
         let start = Instant::now();
         let prims = particles
             .iter()
@@ -148,6 +175,7 @@ fn ours(particles: &[Point3], iso: Real, cube: Real, threads: usize, keep: bool)
         let seconds = start.elapsed().as_secs_f64();
         Run {
             seconds,
+            cpu: cpu_seconds(false) - cpu0,
             mesh: keep.then(|| Tris {
                 positions: mesh.positions().iter().map(|p| [p.x, p.y, p.z]).collect(),
                 triangles: mesh.triangles().to_vec(),
@@ -168,6 +196,7 @@ fn splashsurf(
     threads: usize,
     keep: bool,
 ) -> (Run, Real) {
+    let cpu0 = cpu_seconds(true);
     let start = Instant::now();
     let output = Command::new(bin)
         .args([
@@ -189,6 +218,7 @@ fn splashsurf(
         .output()
         .expect("splashsurf runs");
     let wall = start.elapsed().as_secs_f64();
+    let cpu = cpu_seconds(true) - cpu0;
     assert!(
         output.status.success(),
         "{}",
@@ -212,6 +242,7 @@ fn splashsurf(
     (
         Run {
             seconds: ms / 1e3,
+            cpu,
             mesh: keep.then(|| read_obj(out)),
             stats: None,
         },
@@ -294,18 +325,24 @@ fn main() {
         .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
         .unwrap_or_else(|_| vec![1.0, 0.5, 0.25]);
 
+    let thread_counts: Vec<usize> = std::env::var("SKINS_THREADS")
+        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
+        .unwrap_or_else(|_| vec![1, 2]);
     let mut table = String::new();
+    let mut cpu_table = String::new();
     let mut checks = String::new();
     let mut band = String::new();
     for &cube in &cubes {
         let reps = if cube < 0.3 { reps.min(3) } else { reps };
-        for threads in [1, 2] {
+        for &threads in &thread_counts {
             let (mut a, mut b, mut walls) = (Vec::new(), Vec::new(), Vec::new());
+            let (mut cpu_a, mut cpu_b) = (Vec::new(), Vec::new());
             let (mut mesh_a, mut mesh_b) = (None, None);
             for rep in 0..reps {
                 let keep = rep == 0 && threads == 1;
                 let run = ours(&particles, iso, cube, threads, keep);
                 a.push(run.seconds);
+                cpu_a.push(run.cpu);
                 if let (true, Some(st)) = (keep, run.stats) {
                     let _ = writeln!(
                         band,
@@ -322,6 +359,7 @@ fn main() {
                     let (run, wall) =
                         splashsurf(bin, &input, &tmp.join("surface.obj"), cube, threads, keep);
                     b.push(run.seconds);
+                    cpu_b.push(run.cpu);
                     walls.push(wall);
                     mesh_b = mesh_b.or(run.mesh);
                 }
@@ -351,6 +389,17 @@ fn main() {
                 table,
                 "| {cube} r | {threads} | {ma:.3} ({lo_a:.3}-{hi_a:.3}) | {} | {} | {reps} |",
                 row_b.0, row_b.1
+            );
+            let (ca, _, _) = median_spread(&cpu_a);
+            let (cb, ratio) = if cpu_b.is_empty() {
+                ("-".to_string(), "-".to_string())
+            } else {
+                let (cb, _, _) = median_spread(&cpu_b);
+                (format!("{cb:.2}"), format!("{:.2}x", ca / cb))
+            };
+            let _ = writeln!(
+                cpu_table,
+                "| {cube} r | {threads} | {ca:.2} | {cb} | {ratio} |"
             );
             for (name, m) in [("ours", mesh_a), ("splashsurf", mesh_b)] {
                 if let Some(m) = m {
@@ -394,6 +443,13 @@ fn main() {
     let _ = writeln!(md, "| rustc | {} |", sh("rustc", &["-V"]));
     let _ = writeln!(
         md,
+        "| load average at the end (1, 5, 15 min) | {} |",
+        std::fs::read_to_string("/proc/loadavg")
+            .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(", "))
+            .unwrap_or_else(|_| "?".into())
+    );
+    let _ = writeln!(
+        md,
         "| date | {} |",
         sh("date", &["-u", "+%Y-%m-%d %H:%M UTC"])
     );
@@ -424,6 +480,15 @@ fn main() {
     );
     let _ = writeln!(md, "## Time\n\n| cube | threads | ours, s | splashsurf, s | ratio | runs |\n|---|---|---|---|---|---|");
     md += &table;
+    let _ = writeln!(
+        md,
+        "\n## CPU time\n\nUser + system CPU seconds (10 ms ticks), median over the same runs: ours of the \
+         timed part, splashsurf of its whole process (reading the particles, reconstructing, writing \
+         the OBJ: an upper bound of its reconstruction's CPU). On this shared machine the wall time \
+         includes waiting for a core; the CPU time does not.\n\n\
+         | cube | threads | ours, CPU s | splashsurf process, CPU s | ratio |\n|---|---|---|---|---|"
+    );
+    md += &cpu_table;
     let _ = writeln!(
         md,
         "\n## Meshes (1-thread run)\n\nClosed/manifold: every directed edge once and its reverse once. Euler \

@@ -5,9 +5,11 @@
 
 use op_dynamics::{Point3, Real};
 
-/// Cells per sphere are bounded by making cells at least as large as the
-/// mean sphere diameter; the total cell count is capped at this many per
-/// sphere (plus a constant) by coarsening the grid.
+/// Cells are as large as the mean sphere radius: a lookup then scans the
+/// spheres whose box overlaps a cell of side R, about (3 R)^3 / (4 R)^3 = 0.42
+/// of those a cell of the mean diameter lists, each sphere sits in at most
+/// 27 cells (for a sphere of mean size). The total cell count is capped at
+/// this many per sphere (plus a constant) by coarsening the grid.
 const MAX_CELLS_PER_SPHERE: usize = 64;
 
 /// The grid: origin, cell size, dimensions, and the CSR lists.
@@ -28,19 +30,17 @@ impl CellGrid {
         }
         let mut lo = Point3::from([Real::INFINITY; 3]);
         let mut hi = Point3::from([Real::NEG_INFINITY; 3]);
-        let mut mean_diameter = 0.0;
+        let mut mean_radius = 0.0;
         for (c, r) in spheres {
             for k in 0..3 {
                 lo[k] = lo[k].min(c[k] - r);
                 hi[k] = hi[k].max(c[k] + r);
             }
-            mean_diameter += 2.0 * r;
+            mean_radius += r;
         }
-        mean_diameter /= spheres.len() as Real;
+        mean_radius /= spheres.len() as Real;
         let extent = hi - lo;
-        let mut cell = mean_diameter
-            .max(1e-9 * extent.max())
-            .max(Real::MIN_POSITIVE);
+        let mut cell = mean_radius.max(1e-9 * extent.max()).max(Real::MIN_POSITIVE);
         let budget = MAX_CELLS_PER_SPHERE * spheres.len() + 1024;
         let dims_for = |cell: Real| -> [usize; 3] {
             [0, 1, 2].map(|k| ((extent[k] / cell).floor() as usize + 1).max(1))
@@ -105,7 +105,8 @@ impl CellGrid {
         }
         let mut idx = [0usize; 3];
         for k in 0..3 {
-            let c = ((p[k] - self.origin[k]) * self.inv_cell).floor();
+            // Truncation is the floor on the grid (c >= 0).
+            let c = (p[k] - self.origin[k]) * self.inv_cell;
             if !(c >= 0.0 && c < self.dims[k] as Real) {
                 return &[];
             }

@@ -288,6 +288,12 @@ impl PosedPrimitive {
     /// gradient.
     #[inline]
     pub fn distance2_and_gradient(&self, p: &Point3) -> (Real, Vec3) {
+        if let Shape::Point = self.shape {
+            // Rotations keep lengths: the local offset's length and
+            // direction, rotated back, are the world offset's.
+            let d = p.coords - self.pose.translation.vector;
+            return (d.norm_squared(), d * 2.0);
+        }
         let local = self.pose.inverse_transform_point(p).coords;
         let (d2, g) = self.shape.distance2_and_gradient(&local);
         (d2, self.pose.rotation * g)
@@ -311,8 +317,7 @@ impl PosedPrimitive {
     /// The primitive's field at `p` (no gradient).
     #[inline]
     pub fn field(&self, p: &Point3) -> Real {
-        let local = self.pose.inverse_transform_point(p).coords;
-        let (d2, _) = self.shape.distance2_and_gradient(&local);
+        let (d2, _) = self.distance2_and_gradient(p);
         self.weight * kernel::value_sq(d2 * self.inv_radius2)
     }
 }

@@ -17,6 +17,7 @@ pub mod pointsets;
 pub mod presets;
 pub mod reference;
 pub mod run;
+mod skin_shape;
 pub mod skins;
 pub mod stability;
 pub mod stages;

@@ -258,8 +258,7 @@ impl Stage<SceneState> for Skins {
 
     fn at_target(&mut self, world: &World, ctx: &mut SceneState) -> Result<(), StageError> {
         for s in &mut ctx.skins {
-            s.skin
-                .repose(world)
+            s.repose(world)
                 .map_err(|e| StageError::new("skin", format!("posing {}: {e}", s.name)))?;
         }
         Ok(())

@@ -156,8 +156,8 @@ fn block_range(grid: &Grid, (c, r): (Point3, Real)) -> Option<[(usize, usize); 3
 /// (rounding), or `None` when there are none.
 fn node_range(grid: &Grid, k: usize, a: Real, b: Real) -> Option<(usize, usize)> {
     let n = grid.dims[k] as Real;
-    let lo = ((a - grid.lo[k]) / grid.h).floor() - 1.0;
-    let hi = ((b - grid.lo[k]) / grid.h).ceil() + 1.0;
+    let lo = floor((a - grid.lo[k]) / grid.h) - 1.0;
+    let hi = ceil((b - grid.lo[k]) / grid.h) + 1.0;
     if hi < 0.0
         || lo > n - 1.0
         || lo.partial_cmp(&hi) == Some(std::cmp::Ordering::Greater)
@@ -167,6 +167,28 @@ fn node_range(grid: &Grid, k: usize, a: Real, b: Real) -> Option<(usize, usize)>
         return None;
     }
     Some((lo.max(0.0) as usize, hi.min(n - 1.0) as usize))
+}
+
+/// `x.floor()` without the libm call (SSE2 has no rounding instruction):
+/// truncation, one down for negative non-integers. Exact for |x| < 2^53;
+/// beyond, and for NaN, `x` itself (an integer, or NaN).
+#[inline]
+fn floor(x: Real) -> Real {
+    if x.is_nan() || x.abs() >= 9.0e15 {
+        return x;
+    }
+    let t = x as i64 as Real;
+    if t > x {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
+/// `x.ceil()` as [`floor`]: `-floor(-x)`.
+#[inline]
+fn ceil(x: Real) -> Real {
+    -floor(-x)
 }
 
 /// What sampling a block found.
@@ -229,68 +251,70 @@ pub(super) fn sample_band(
     let mut values = vec![0.0; nx * ny * nz];
     let mut evaluations = 0;
     let h = grid.h;
-    let xs: Vec<Real> = (0..nx)
-        .map(|i| grid.node(block.start[0] + i, 0, 0).x)
-        .collect();
+    let [s0, s1, s2] = block.start;
+    // Node coordinates exactly as Grid::node computes them.
+    let xs: Vec<Real> = (0..nx).map(|i| grid.node(s0 + i, 0, 0).x).collect();
+    let ys: Vec<Real> = (0..ny).map(|j| grid.node(0, s1 + j, 0).y).collect();
+    let zs: Vec<Real> = (0..nz).map(|k| grid.node(0, 0, s2 + k).z).collect();
+    let mut dx2 = vec![0.0; nx];
     for &i in list {
         let prim = &field.primitives()[i as usize];
         let (c, r) = prim.bounding_sphere();
         let local = |k: usize, n: usize| {
             let s = block.start[k] as Real;
-            let a = (((c[k] - r - grid.lo[k]) / h).floor() - s).max(0.0);
-            let b = (((c[k] + r - grid.lo[k]) / h).ceil() - s).min(n as Real - 1.0);
+            let a = (floor((c[k] - r - grid.lo[k]) / h) - s).max(0.0);
+            let b = (ceil((c[k] + r - grid.lo[k]) / h) - s).min(n as Real - 1.0);
             (a as usize, b as isize)
         };
         let ((i0, i1), (j0, j1), (k0, k1)) = (local(0, nx), local(1, ny), local(2, nz));
         if i1 < i0 as isize || j1 < j0 as isize || k1 < k0 as isize {
             continue;
         }
+        let (i1, j1, k1) = (i1 as usize, j1 as usize, k1 as usize);
         let r2 = r * r;
+        if !matches!(prim.shape(), Shape::Point) {
+            for k in k0..=k1 {
+                for j in j0..=j1 {
+                    let row = (k * ny + j) * nx;
+                    for i in i0..=i1 {
+                        let p = grid.node(s0 + i, s1 + j, s2 + k);
+                        values[row + i] += prim.field(&p);
+                    }
+                }
+            }
+            evaluations += (k1 + 1 - k0) * (j1 + 1 - j0) * (i1 + 1 - i0);
+            continue;
+        }
+        // A point primitive: w f(s), s = |p - c|^2 / r^2, over the nodes of
+        // its bounding box in the block; the squared x offsets are shared
+        // by every row, nodes outside the support add exactly 0, and the
+        // kernel is written branch-free so the row loop vectorizes.
         let inv = 1.0 / r2;
-        let inv_h = 1.0 / h;
-        let point = matches!(prim.shape(), Shape::Point);
-        let [s0, s1, s2] = block.start;
-        for k in k0..=k1 as usize {
-            let dz = grid.lo.z + (s2 + k) as Real * h - c.z;
-            if dz * dz >= r2 {
+        let w = prim.weight();
+        for (d, x) in dx2[i0..=i1].iter_mut().zip(&xs[i0..=i1]) {
+            let dx = x - c.x;
+            *d = dx * dx;
+        }
+        let dx2 = &dx2[i0..=i1];
+        for (k, z) in zs.iter().enumerate().take(k1 + 1).skip(k0) {
+            let dz = z - c.z;
+            let dz2 = dz * dz;
+            if dz2 >= r2 {
                 continue;
             }
-            for j in j0..=j1 as usize {
-                let dy = grid.lo.y + (s1 + j) as Real * h - c.y;
-                let dyz = dy * dy + dz * dz;
+            for (j, y) in ys.iter().enumerate().take(j1 + 1).skip(j0) {
+                let dy = y - c.y;
+                let dyz = dy * dy + dz2;
                 if dyz >= r2 {
                     continue;
                 }
                 let row = (k * ny + j) * nx;
-                if point {
-                    // Only the chord of the row inside the sphere: nodes
-                    // floor(xa) + 1 ..= floor(xb) (floors by truncating
-                    // values >= 0); a node exactly on the sphere adds 0.
-                    let half = (r2 - dyz).sqrt();
-                    let xa = ((c.x - half - grid.lo.x) * inv_h - s0 as Real).max(-1.0);
-                    let xb = ((c.x + half - grid.lo.x) * inv_h - s0 as Real).max(-1.0);
-                    let a = ((xa + 1.0) as isize).max(i0 as isize) as usize;
-                    let b = ((xb + 1.0) as isize - 1).min(i1);
-                    if b < a as isize {
-                        continue;
-                    }
-                    let b = b as usize;
-                    // The node's x exactly as Grid::node computes it; the
-                    // kernel written branch-free so the loop vectorizes.
-                    for (v, x) in values[row + a..=row + b].iter_mut().zip(&xs[a..=b]) {
-                        let dx = x - c.x;
-                        let s = (dx * dx + dyz) * inv;
-                        let f = 1.0 + s * (-22.0 / 9.0 + s * (17.0 / 9.0 - s * (4.0 / 9.0)));
-                        *v += if s < 1.0 { f } else { 0.0 };
-                    }
-                    evaluations += b + 1 - a;
-                } else {
-                    for i in i0..=i1 as usize {
-                        let p = grid.node(s0 + i, s1 + j, s2 + k);
-                        values[row + i] += prim.field(&p);
-                        evaluations += 1;
-                    }
+                for (v, &d) in values[row + i0..=row + i1].iter_mut().zip(dx2) {
+                    let s = (d + dyz) * inv;
+                    let f = 1.0 + s * (-22.0 / 9.0 + s * (17.0 / 9.0 - s * (4.0 / 9.0)));
+                    *v += w * if s < 1.0 { f } else { 0.0 };
                 }
+                evaluations += dx2.len();
             }
         }
     }
