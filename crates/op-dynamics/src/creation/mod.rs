@@ -171,7 +171,7 @@ pub struct Applied {
 /// When the parameters are invalid (nothing changes).
 pub fn apply(world: &mut World, params: &CreationParams) -> Result<Applied, WorldError> {
     params.validate()?;
-    if world.steps() % params.interval != 0 {
+    if !world.steps().is_multiple_of(params.interval) {
         return Ok(Applied::default());
     }
     let merges = params.merges(world.particles())?;

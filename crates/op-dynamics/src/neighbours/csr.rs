@@ -540,8 +540,9 @@ mod tests {
         // A symmetric relation on 1000 particles spanning several blocks:
         // i ~ j when |i - j| <= 3 or both are multiples of 97.
         let n = 1000usize;
-        let rel =
-            |i: usize, j: usize| i != j && (i.abs_diff(j) <= 3 || (i % 97 == 0 && j % 97 == 0));
+        let rel = |i: usize, j: usize| {
+            i != j && (i.abs_diff(j) <= 3 || (i.is_multiple_of(97) && j.is_multiple_of(97)))
+        };
         let mut serial = PairList::new();
         serial.build_serial(n, |i, out| {
             out.extend((i + 1..n).filter(|&j| rel(i, j)).map(|j| j as u32))
