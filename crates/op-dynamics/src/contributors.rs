@@ -27,7 +27,7 @@
 use crate::integrators::StateRef;
 use crate::interactions::PreparedMaterial;
 use crate::math::{Real, Vec3};
-use crate::particles::{Attributes, Particles};
+use crate::particles::{live_slot, Attributes};
 
 /// What a contributor reads: the time, the state being evaluated and the
 /// particles' attributes (by slot).
@@ -50,11 +50,7 @@ impl ContributorInput<'_> {
     /// Slot of particle `id`, `None` when it was removed or never existed.
     #[inline]
     pub fn slot(&self, id: u32) -> Option<usize> {
-        self.attributes
-            .slot_of
-            .get(id as usize)
-            .filter(|&&s| s != Particles::REMOVED)
-            .map(|&s| s as usize)
+        live_slot(self.attributes.slot_of, id)
     }
 }
 

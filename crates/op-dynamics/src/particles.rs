@@ -190,6 +190,16 @@ pub struct Attributes<'a> {
     pub masses: &'a [Real],
 }
 
+/// The slot of particle `id` in a slot table indexed by id
+/// ([`Attributes::slot_of`]), `None` for ids never given or removed.
+#[inline]
+pub(crate) fn live_slot(slot_of: &[u32], id: u32) -> Option<usize> {
+    slot_of
+        .get(id as usize)
+        .filter(|&&s| s != Particles::REMOVED)
+        .map(|&s| s as usize)
+}
+
 /// Structure-of-arrays particle store. All arrays have the same length,
 /// which only the store's methods can change.
 #[derive(Clone, Debug, Default)]
@@ -360,11 +370,7 @@ impl Particles {
     /// never given or removed).
     #[inline]
     pub fn slot_of(&self, id: u32) -> Option<usize> {
-        self.statics
-            .slot_of
-            .get(id as usize)
-            .filter(|&&s| s != Self::REMOVED)
-            .map(|&s| s as usize)
+        live_slot(&self.statics.slot_of, id)
     }
 
     /// World normal `n = R(q) a` of the particle in `slot`.

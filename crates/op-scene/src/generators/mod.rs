@@ -395,11 +395,8 @@ impl Generator {
                 spacing,
                 center,
             } => {
-                checks::positive(file, &at("radius"), *radius)?;
-                checks::positive(file, &at("spacing"), *spacing)?;
-                checks::finite3(file, &at("center"), center)?;
                 let n = shapes::sphere_count(*radius, *spacing);
-                checks::count_at_most(file, &at("spacing"), n, max, "this radius and spacing")?;
+                check_ball(file, &at, *radius, *spacing, center, n)?;
                 if n < 1.0 {
                     return Err(SceneError::value(
                         file,
@@ -417,14 +414,14 @@ impl Generator {
                 radius,
                 spacing,
                 center,
-            } => {
-                checks::positive(file, &at("radius"), *radius)?;
-                checks::positive(file, &at("spacing"), *spacing)?;
-                checks::finite3(file, &at("center"), center)?;
-                let n = solid::solid_ball_estimate(*radius, *spacing);
-                checks::count_at_most(file, &at("spacing"), n, max, "this radius and spacing")?;
-                Ok(())
-            }
+            } => check_ball(
+                file,
+                &at,
+                *radius,
+                *spacing,
+                center,
+                solid::solid_ball_estimate(*radius, *spacing),
+            ),
             Generator::TorusShell {
                 major,
                 minor,
@@ -613,6 +610,31 @@ impl Generator {
             Generator::List { particles } => points::list(particles),
         })
     }
+}
+
+/// Checks a sphere or ball generator: positive `radius` and `spacing`, a
+/// finite `center`, and at most [`MAX_PARTICLES`] particles (`count`, the
+/// generator's estimate); `at` names a field.
+fn check_ball(
+    file: &str,
+    at: &dyn Fn(&str) -> String,
+    radius: Real,
+    spacing: Real,
+    center: &[Real; 3],
+    count: Real,
+) -> Result<(), SceneError> {
+    checks::positive(file, &at("radius"), radius)?;
+    checks::positive(file, &at("spacing"), spacing)?;
+    checks::finite3(file, &at("center"), center)?;
+    let limit = MAX_PARTICLES;
+    checks::count_at_most(
+        file,
+        &at("spacing"),
+        count,
+        limit,
+        "this radius and spacing",
+    )?;
+    Ok(())
 }
 
 /// The velocities file `p` of [`crate::schema::Velocities::File`] at field
