@@ -23,8 +23,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-use oriented_particles::op_dynamics::triangulation::Triangulation;
 use oriented_particles::op_dynamics::{Point3, Real};
+use oriented_particles::op_modeling::triangulation::Triangulation;
 use oriented_particles::op_scene::fit::shapes::Shape;
 use oriented_particles::op_scene::fit::{fit, sample_distances, FitParams};
 use oriented_particles::op_scene::pointsets::PointSet;

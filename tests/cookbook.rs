@@ -97,8 +97,8 @@ fn cloth_rests_on_the_box_and_hangs_over_its_sides() {
     let scene = load("cloth_on_box");
     let (half, margin) = match (&scene.tools[0].shape, &scene.tools[0].role) {
         (
-            oriented_particles::op_dynamics::tools::ToolShape::Cuboid { half_extents },
-            oriented_particles::op_dynamics::tools::Role::Obstacle { margin, .. },
+            oriented_particles::op_modeling::tools::ToolShape::Cuboid { half_extents },
+            oriented_particles::op_modeling::tools::Role::Obstacle { margin, .. },
         ) => (*half_extents, *margin),
         other => panic!("the box is a cuboid obstacle: {other:?}"),
     };
@@ -157,7 +157,7 @@ fn solid_ball_bounces_and_comes_to_rest_round() {
     println!("claim: {}", claim("ball_bounce"));
     let scene = load("ball_bounce");
     let margin = match &scene.tools[0].role {
-        oriented_particles::op_dynamics::tools::Role::Obstacle { margin, .. } => *margin,
+        oriented_particles::op_modeling::tools::Role::Obstacle { margin, .. } => *margin,
         other => panic!("the ground is an obstacle: {other:?}"),
     };
     let (_, frames) = frames(&scene);

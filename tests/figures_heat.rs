@@ -6,7 +6,8 @@
 
 mod figure_support;
 
-use oriented_particles::op_dynamics::{Real, Role};
+use oriented_particles::op_dynamics::Real;
+use oriented_particles::op_modeling::Role;
 use oriented_particles::op_scene::Scene;
 
 use figure_support::*;
@@ -108,7 +109,7 @@ fn fig_07_hot_knife_cuts_the_sheet_in_two() {
 #[test]
 fn fig_13_hot_tool_extrudes_a_stem() {
     println!("claim: {}", claim("fig_13_stem"));
-    use oriented_particles::op_dynamics::triangulation::{triangulate, TriangulationParams};
+    use oriented_particles::op_modeling::triangulation::{triangulate, TriangulationParams};
     let scene = load("fig_13_stem");
     let (built, summary) = run(&scene, "stem");
     let p = built.world.particles();
@@ -154,7 +155,7 @@ fn fig_13_hot_tool_extrudes_a_stem() {
 /// from `a` to `b` crosses (Möller–Trumbore).
 fn crossings(
     built: &oriented_particles::op_scene::BuiltScene,
-    t: &oriented_particles::op_dynamics::triangulation::Triangulation,
+    t: &oriented_particles::op_modeling::triangulation::Triangulation,
     a: oriented_particles::op_dynamics::Point3,
     b: oriented_particles::op_dynamics::Point3,
 ) -> usize {
@@ -184,8 +185,8 @@ fn crossings(
 /// The triangulation the frames of `built` hold (radius 1.7 rest spacings).
 fn frames_surface(
     built: &oriented_particles::op_scene::BuiltScene,
-) -> oriented_particles::op_dynamics::triangulation::Triangulation {
-    use oriented_particles::op_dynamics::triangulation::{triangulate, TriangulationParams};
+) -> oriented_particles::op_modeling::triangulation::Triangulation {
+    use oriented_particles::op_modeling::triangulation::{triangulate, TriangulationParams};
     let radius = built.outputs.triangulation_radius * built.objects[0].rest_spacing;
     triangulate(
         built.world.particles(),
@@ -234,8 +235,8 @@ fn fig_13_stem_looped_onto_the_body_makes_a_handle() {
     assert_eq!(start.boundary_loops(), 0);
 
     let inside_tip = |built: &oriented_particles::op_scene::BuiltScene| {
-        let tool = built
-            .world
+        let tool = oriented_particles::op_modeling::Tools::of(&built.world)
+            .expect("the world's tools")
             .tools()
             .iter()
             .find(|t| t.params().name == "tip")

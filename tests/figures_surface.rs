@@ -8,7 +8,8 @@
 mod figure_support;
 
 use oriented_particles::op_dynamics::diagnostics::kinematic;
-use oriented_particles::op_dynamics::{Point3, Real, Role, ToolShape, Vec3};
+use oriented_particles::op_dynamics::{Point3, Real, Vec3};
+use oriented_particles::op_modeling::{Role, ToolShape};
 use oriented_particles::op_scene::run::rest_shape_error;
 use oriented_particles::op_scene::{BuiltScene, Scene};
 
@@ -128,7 +129,7 @@ fn assert_one_tear(name: &str) -> usize {
         count - left
     );
     // One piece in each hand: no piece has vertices on both sides.
-    let tri = oriented_particles::op_dynamics::triangulation::Triangulation {
+    let tri = oriented_particles::op_modeling::triangulation::Triangulation {
         triangles: mesh.triangles.clone(),
     };
     for &(a, b) in tri.edges().keys() {

@@ -4,15 +4,15 @@
 //! some old sphere particles are deleted when trapped between the two
 //! shaping tools". The scene `scenes/fig_14_sphere_to_torus.ron` is run the
 //! way `opsim run` runs it; the triangulation is the one its frames hold
-//! (seed 000 §5, `op_dynamics::triangulation`, radius 1.7 times the
+//! (seed 000 §5, `op_modeling::triangulation`, radius 1.7 times the
 //! object's measured rest spacing, 0.88 for this Fibonacci sphere).
 
 mod figure_support;
 
-use oriented_particles::op_dynamics::triangulation::{
+use oriented_particles::op_dynamics::Real;
+use oriented_particles::op_modeling::triangulation::{
     triangulate, Triangulation, TriangulationParams,
 };
-use oriented_particles::op_dynamics::Real;
 use oriented_particles::op_scene::BuiltScene;
 
 use figure_support::*;

@@ -175,7 +175,7 @@ pub fn surface_mesh(built: &BuiltScene, name: &str) -> op_scene::export::FrameMe
 
 /// The topology of `built`'s object `name`'s exported surface now.
 pub fn surface_topology(built: &BuiltScene, name: &str) -> SurfaceTopology {
-    use oriented_particles::op_dynamics::triangulation::Triangulation;
+    use oriented_particles::op_modeling::triangulation::Triangulation;
     let mesh = surface_mesh(built, name);
     let t = Triangulation {
         triangles: mesh.triangles.clone(),

@@ -7,7 +7,7 @@
 //! Runge–Kutta scheme, each half kick of velocity Verlet) asks the
 //! contributors in one fixed order, after the pair kernel:
 //!
-//! 1. the tools ([`crate::tools::Tools`]: obstacles, attractors, movers,
+//! 1. the tools ([`crate::tooling::ToolSet`], op-modeling `tools`: obstacles, attractors, movers,
 //!    with their energies);
 //! 2. the uniform field ([`crate::external::UniformField`]: gravity, linear
 //!    and angular damping, the cold drag of heated materials);

@@ -46,7 +46,7 @@ use crate::interactions::{
 use crate::math::{Real, Vec3};
 use crate::neighbours::NeighbourList;
 use crate::particles::Attributes;
-use crate::tools::Tools;
+use crate::tooling::ToolSet;
 
 /// Which pair kernel a world runs, fixed when the world is built.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -138,13 +138,14 @@ pub(crate) struct ForceContext<'a> {
     /// The caller's contributors for this interval
     /// ([`crate::World::advance_to_with`]).
     pub extra: &'a [&'a dyn Contributor],
-    pub tools: &'a Tools,
+    /// The world's tools, asked first ([`crate::tooling`]).
+    pub tools: Option<&'a dyn ToolSet>,
     pub scratch: &'a mut ForceScratch,
 }
 
 /// The force evaluation's configuration and scratch, owned by the world:
 /// the chosen kernel, the prepared materials, the neighbour list.
-pub(crate) struct Pipeline {
+pub(crate) struct ForceModel {
     pub kernel: Kernel,
     pub materials: Vec<PreparedMaterial>,
     pub friction: bool,
@@ -155,12 +156,13 @@ pub(crate) struct Pipeline {
     pub neighbours: Option<NeighbourList>,
     /// The bond store (`None`: no particle has a bonded material).
     pub bonds: Option<Bonds>,
-    /// Tools acting on the particles (empty: no tool stage).
-    pub tools: Tools,
+    /// Tools acting on the particles ([`crate::World::set_tools`]; none:
+    /// no tool stage).
+    pub tools: Option<Box<dyn ToolSet>>,
     pub scratch: ForceScratch,
 }
 
-impl Pipeline {
+impl ForceModel {
     /// The force field of the world's particles with these attributes and
     /// external actions.
     pub fn context<'a>(
@@ -183,7 +185,7 @@ impl Pipeline {
             step_start: None,
             accumulator,
             extra,
-            tools: &self.tools,
+            tools: self.tools.as_deref(),
             scratch: &mut self.scratch,
         }
     }
@@ -302,9 +304,11 @@ impl ForceContext<'_> {
         // The order of the module docs of `crate::contributors`.
         let uniform = UniformField::new(self.external, self.materials, self.heated);
         let windows = ForceWindows(&self.external.forces);
-        let built_in: [&dyn Contributor; 3] = [self.tools, &uniform, self.accumulator];
-        for c in built_in
+        let built_in: [&dyn Contributor; 2] = [&uniform, self.accumulator];
+        let tools = self.tools.map(|t| t as &dyn Contributor);
+        for c in tools
             .into_iter()
+            .chain(built_in)
             .chain(self.extra.iter().copied())
             .chain(std::iter::once(&windows as &dyn Contributor))
         {

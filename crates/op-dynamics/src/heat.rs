@@ -10,8 +10,8 @@
 //! gives no equations; this module is the simplest model with those
 //! properties, every choice documented:
 //!
-//! - **Sources**: a [`Heater`](crate::tools::Role::Heater) or
-//!   [`Knife`](crate::tools::Role::Knife) tool raises the temperature of
+//! - **Sources**: a heater or knife tool
+//!   (op-modeling `tools::Role`, through [`crate::tooling::ToolSet::add_heat`]) raises the temperature of
 //!   the particles within `reach` of its surface at
 //!   `power * (1 - max(s, 0) / reach)` per unit time (`s` the signed
 //!   distance, so the full power inside and a linear fall-off outside).
@@ -28,7 +28,7 @@
 //!   at fixed temperatures forces and torques are still its exact
 //!   gradients, so they conserve linear and angular momentum.
 //! - **Gating**: the stretching rule can require hot particles
-//!   ([`crate::creation::StretchingParams::min_temperature`]).
+//!   (op-modeling `creation::StretchingParams::min_temperature`).
 //!
 //! The temperatures advance once per step, after the mechanical step
 //! (operator splitting, first order in `dt`): sources, then conduction
@@ -53,7 +53,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{self, ParamError};
 use crate::math::{Point3, Real};
 use crate::neighbours::PairList;
-use crate::tools::Tool;
+use crate::tooling::ToolSet;
 
 /// How heat moves in a world (seed 000 §6, §8).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -208,7 +208,7 @@ pub(crate) struct HeatScratch {
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn advance(
     params: &HeatParams,
-    tools: &[Tool],
+    sources: Option<&dyn ToolSet>,
     t: Real,
     dt: Real,
     positions: &[Point3],
@@ -217,9 +217,8 @@ pub(crate) fn advance(
     temperatures: &mut [Real],
     scratch: &mut HeatScratch,
 ) {
-    // Tools that do not heat add nothing.
-    for tool in tools {
-        tool.add_heat(t, dt, positions, objects, temperatures);
+    if let Some(sources) = sources.filter(|s| s.heats()) {
+        sources.add_heat(t, dt, positions, objects, temperatures);
     }
     if let Some((list, cutoff)) = pairs.filter(|_| params.conduction > 0.0) {
         conduct(
@@ -366,7 +365,7 @@ mod tests {
         for _ in 0..50 {
             advance(
                 &params,
-                &[],
+                None,
                 0.0,
                 0.1,
                 &p,
@@ -397,7 +396,7 @@ mod tests {
         for _ in 0..10 {
             advance(
                 &params,
-                &[],
+                None,
                 0.0,
                 0.2,
                 &p,

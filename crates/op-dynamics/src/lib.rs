@@ -14,15 +14,13 @@
 //!
 //! Surface modeling (seed 000 §5, §7): [`World::insert_particles`] and
 //! [`World::remove_particles`] edit the particle set between steps (ids stay
-//! stable); [`creation`] holds the stretching and growing rules that decide
-//! which particles to add; [`triangulation`] turns particles into triangles
-//! for rendering, with topology checks (Euler characteristic, boundary
-//! loops, manifold).
+//! stable). The modeling side — tools, heat sources, creation rules, the
+//! triangulation and point-set fitting — is the op-modeling crate; tools act
+//! on a world through [`ToolSet`] ([`World::set_tools`]).
 #![warn(missing_docs)]
 
 pub mod bonds;
 pub mod contributors;
-pub mod creation;
 pub mod diagnostics;
 pub mod driver;
 pub mod error;
@@ -37,8 +35,7 @@ pub mod math;
 pub mod neighbours;
 pub mod particles;
 pub mod plasticity;
-pub mod tools;
-pub mod triangulation;
+pub mod tooling;
 pub mod world;
 
 pub use diagnostics::Diagnostics;
@@ -51,5 +48,5 @@ pub use interactions::Material;
 pub use math::{Mat3, Point3, Quat, Real, Vec3};
 pub use neighbours::NeighbourBackend;
 pub use particles::{ParticleDesc, ParticleType, Particles};
-pub use tools::{Keyframe, Path, Role, Tool, ToolParams, ToolShape};
-pub use world::{Divergence, NeighbourParams, World, WorldError, WorldParams};
+pub use tooling::ToolSet;
+pub use world::{Divergence, Merge, NeighbourParams, World, WorldError, WorldParams};

@@ -208,12 +208,12 @@ pub struct Particles {
     velocities: Vec<Vec3>,
     orientations: Vec<Quat>,
     angular_velocities: Vec<Vec3>,
-    statics: Statics,
+    statics: AttributeArrays,
 }
 
 /// The arrays the integrator does not advance.
 #[derive(Clone, Debug, Default)]
-struct Statics {
+struct AttributeArrays {
     ids: Vec<u32>,
     slot_of: Vec<u32>,
     masses: Vec<Real>,
@@ -229,7 +229,7 @@ struct Statics {
     temperatures: Vec<Real>,
 }
 
-impl Statics {
+impl AttributeArrays {
     fn view(&self) -> Attributes<'_> {
         Attributes {
             ids: &self.ids,

@@ -10,7 +10,7 @@ use crate::driver::Effects;
 use crate::error::{self, ParamError};
 use crate::external::{ExternalAccumulator, ExternalParams};
 use crate::flags::Flags;
-use crate::forces::{ForceScratch, Kernel, Pipeline};
+use crate::forces::{ForceModel, ForceScratch, Kernel};
 use crate::heat::{self, HeatParams};
 use crate::integrators::{Integrator, Scheme};
 use crate::interactions::{Material, PreparedMaterial};
@@ -18,10 +18,11 @@ use crate::math::{Point3, Real, Vec3};
 use crate::neighbours::{spatial_order, NeighbourBackend, NeighbourList};
 use crate::particles::{ParticleType, Particles};
 use crate::plasticity::PlasticScratch;
-use crate::tools::{Role, Tool, ToolParams, Tools};
+use crate::tooling::ToolSet;
 
 mod after_step;
 mod editing;
+pub use editing::Merge;
 
 /// Neighbour-list settings (seed 000 §4.2, docs/model.md §5).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -90,8 +91,6 @@ pub struct WorldParams {
     pub external: ExternalParams,
     /// Divergence detection.
     pub divergence: DivergenceParams,
-    /// Tools acting on the particles (seed 000 §6). Default: none.
-    pub tools: Vec<ToolParams>,
     /// Heat conduction and cooling ([`crate::heat`]), or `None` for
     /// constant temperatures. Required by heater and knife tools.
     /// Default: `None`.
@@ -107,7 +106,6 @@ impl Default for WorldParams {
             neighbours: NeighbourParams::default(),
             external: ExternalParams::default(),
             divergence: DivergenceParams::default(),
-            tools: Vec::new(),
             heat: None,
         }
     }
@@ -139,18 +137,7 @@ impl WorldParams {
         if let Some(h) = &self.heat {
             h.validate().map_err(|e| e.within("heat"))?;
         }
-        self.tools.iter().enumerate().try_for_each(|(k, t)| {
-            t.validate().map_err(|e| e.within(&format!("tools[{k}]")))?;
-            if t.role.heating().is_some() && self.heat.is_none() {
-                return Err(ParamError::Invalid {
-                    field: format!("tools[{k}].role"),
-                    message: "a heater or knife needs the world's heat settings \
-                              (heat: conduction, cooling, ambient)"
-                        .into(),
-                });
-            }
-            Ok(())
-        })
+        Ok(())
     }
 }
 
@@ -375,7 +362,7 @@ pub struct World {
     particles: Particles,
     params: WorldParams,
     /// The force evaluation's configuration and scratch.
-    pipeline: Pipeline,
+    model: ForceModel,
     repulsion: bool,
     /// Some material in use has plasticity: the plastic stage runs.
     plastic: bool,
@@ -442,7 +429,7 @@ impl World {
         });
         let n = particles.len();
         Ok(World {
-            pipeline: Pipeline {
+            model: ForceModel {
                 kernel: config.kernel,
                 materials: prepared,
                 friction: config.friction,
@@ -450,7 +437,7 @@ impl World {
                 has_fixed: config.has_fixed,
                 neighbours,
                 bonds,
-                tools: Tools::new(&params.tools, &particles)?,
+                tools: None,
                 scratch: ForceScratch::default(),
             },
             repulsion: config.repulsion,
@@ -498,36 +485,36 @@ impl World {
 
     /// The prepared materials.
     pub fn materials(&self) -> &[PreparedMaterial] {
-        &self.pipeline.materials
+        &self.model.materials
     }
 
     /// The pair kernel chosen from the enabled terms.
     pub fn kernel(&self) -> Kernel {
-        self.pipeline.kernel
+        self.model.kernel
     }
 
     /// The bonds ([`crate::bonds`]), if some particle has a bonded
     /// material.
     pub fn bonds(&self) -> Option<&Bonds> {
-        self.pipeline.bonds.as_ref()
+        self.model.bonds.as_ref()
     }
 
     /// The neighbour list, if any interaction is enabled.
     pub fn neighbours(&self) -> Option<&NeighbourList> {
-        self.pipeline.neighbours.as_ref()
+        self.model.neighbours.as_ref()
     }
 
     /// Names of what this world evaluates: the kernel, each enabled
     /// interaction term of the materials in use, and the external actions.
     pub fn enabled(&self) -> Vec<String> {
-        let mut out = vec![format!("kernel:{:?}", self.pipeline.kernel).to_lowercase()];
+        let mut out = vec![format!("kernel:{:?}", self.model.kernel).to_lowercase()];
         let mut terms: Vec<&'static str> = Vec::new();
-        let mut seen = vec![false; self.pipeline.materials.len()];
+        let mut seen = vec![false; self.model.materials.len()];
         self.particles
             .materials()
             .iter()
             .for_each(|&m| seen[m as usize] = true);
-        for (m, s) in self.pipeline.materials.iter().zip(seen) {
+        for (m, s) in self.model.materials.iter().zip(seen) {
             if s {
                 for t in m.enabled_terms() {
                     if (t != "repulsion" || self.repulsion) && !terms.contains(&t) {
@@ -537,10 +524,10 @@ impl World {
             }
         }
         out.extend(terms.iter().map(|t| format!("term:{t}")));
-        if self.pipeline.friction {
+        if self.model.friction {
             out.push("friction".into());
         }
-        if self.pipeline.heated {
+        if self.model.heated {
             out.push("heat_weakening".into());
         }
         if self.params.heat.is_some() {
@@ -556,24 +543,33 @@ impl World {
         if !e.forces.is_empty() {
             out.push("force_windows".into());
         }
-        for t in self.pipeline.tools.tools() {
-            let role = match t.params().role {
-                Role::Obstacle { .. } => "obstacle",
-                Role::Attractor { .. } => "attractor",
-                Role::Mover { .. } => "mover",
-                Role::Eraser => "eraser",
-                Role::Heater { .. } => "heater",
-                Role::Knife { .. } => "knife",
-                Role::Shaper { .. } => "shaper",
-            };
-            out.push(format!("tool:{role}"));
+        if let Some(tools) = &self.model.tools {
+            out.extend(tools.roles().into_iter().map(|r| format!("tool:{r}")));
         }
         out
     }
 
-    /// The tools acting on the particles.
-    pub fn tools(&self) -> &[Tool] {
-        self.pipeline.tools.tools()
+    /// Gives the world its tools (seed 000 §6; op-modeling `tools`), in
+    /// place of any it had. Tools that heat need the world's heat settings
+    /// ([`WorldParams::heat`]); cached forces are dropped.
+    pub fn set_tools(&mut self, tools: Box<dyn ToolSet>) -> Result<(), WorldError> {
+        if tools.heats() && self.params.heat.is_none() {
+            return Err(ParamError::Invalid {
+                field: "tools".into(),
+                message: "a heater or knife needs the world's heat settings \
+                          (heat: conduction, cooling, ambient)"
+                    .into(),
+            }
+            .into());
+        }
+        self.model.tools = Some(tools);
+        self.invalidate_forces();
+        Ok(())
+    }
+
+    /// The tools acting on the particles ([`World::set_tools`]), if any.
+    pub fn tools(&self) -> Option<&dyn ToolSet> {
+        self.model.tools.as_deref()
     }
 
     /// Current simulation time.
@@ -713,7 +709,7 @@ impl World {
     ) -> Result<&StepReport, Divergence> {
         let mut report = StepReport::default();
         let clock = std::time::Instant::now();
-        if let Some(list) = self.pipeline.neighbours.as_mut() {
+        if let Some(list) = self.model.neighbours.as_mut() {
             if self.params.neighbours.reorder && list.rebuild_due(self.particles.positions()) {
                 let order = spatial_order(self.particles.positions(), list.cutoff() + list.skin());
                 self.particles.permute(&order);
@@ -728,19 +724,19 @@ impl World {
         report.seconds[Stage::Reorder as usize] = clock.elapsed().as_secs_f64();
 
         let clock = std::time::Instant::now();
-        let neighbour_before = self.pipeline.scratch.neighbour_seconds;
+        let neighbour_before = self.model.scratch.neighbour_seconds;
         // Spacing-only worlds that nothing set spinning never rotate.
-        let rotating = self.pipeline.kernel == Kernel::Oriented || self.may_rotate;
+        let rotating = self.model.kernel == Kernel::Oriented || self.may_rotate;
         self.integrator.set_translation_only(!rotating);
         let (state, bodies, attributes) = self.particles.split();
         let mut ctx =
-            self.pipeline
+            self.model
                 .context(attributes, &self.params.external, &self.accumulator, extra);
         ctx.step_start = Some(self.time);
         let info = self
             .integrator
             .step(&mut ctx, &bodies, self.time, dt, state);
-        let neighbour_seconds = self.pipeline.scratch.neighbour_seconds - neighbour_before;
+        let neighbour_seconds = self.model.scratch.neighbour_seconds - neighbour_before;
         report.seconds[Stage::Neighbours as usize] = neighbour_seconds;
         report.seconds[Stage::Integrate as usize] =
             clock.elapsed().as_secs_f64() - neighbour_seconds;
@@ -786,7 +782,7 @@ impl World {
         let vmax2 = self.params.divergence.max_speed.powi(2);
         // Without torques (spacing kernel, no pending torque) and without
         // initial spin, orientations cannot change: skip reading them.
-        let rotating = self.pipeline.kernel == Kernel::Oriented || self.may_rotate;
+        let rotating = self.model.kernel == Kernel::Oriented || self.may_rotate;
         let bad = (0..p.len()).find_map(|i| {
             let finite = p.positions()[i].iter().all(|c| c.is_finite())
                 && p.velocities()[i].iter().all(|c| c.is_finite())
@@ -827,11 +823,11 @@ impl World {
     pub fn evaluate_forces(&mut self) -> (&[Vec3], &[Vec3], Real) {
         let state = self.particles.state();
         let attributes = self.particles.attributes();
-        let mut ctx =
-            self.pipeline
-                .context(attributes, &self.params.external, &self.accumulator, &[]);
+        let mut ctx = self
+            .model
+            .context(attributes, &self.params.external, &self.accumulator, &[]);
         ctx.evaluate(self.time, state, &mut self.forces, &mut self.torques);
-        (&self.forces, &self.torques, self.pipeline.scratch.potential)
+        (&self.forces, &self.torques, self.model.scratch.potential)
     }
 
     /// Energies, momenta and the oscillation measure at the current state
@@ -847,6 +843,6 @@ impl World {
 
     /// Forces evaluated so far (all stages of all steps).
     pub fn force_evaluations(&self) -> u64 {
-        self.pipeline.scratch.evaluations
+        self.model.scratch.evaluations
     }
 }

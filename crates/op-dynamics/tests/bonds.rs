@@ -4,16 +4,14 @@
 //! conserved, breaking deterministic at 1 and 2 threads and any slot order,
 //! bonds kept by id through insertion and removal.
 
-mod common;
-
-use common::{
-    assert_energy_gradients, assert_momentum_conserved, full_material, hex_sheet, in_pool,
-    random_cluster, spacing_material, Rng,
-};
 use op_dynamics::bonds::BondParams;
 use op_dynamics::{
     ExternalParams, ForceWindow, Material, ParticleDesc, Particles, Point3, Real, World,
     WorldParams,
+};
+use op_test_support::{
+    assert_energy_gradients, assert_momentum_conserved, full_material, hex_sheet, in_pool,
+    random_cluster, spacing_material, Rng,
 };
 
 fn bonded(m: Material, radius: Real, break_length: Real) -> Material {

@@ -2,14 +2,12 @@
 //! radius errors instead of panics, exact angular momentum of velocity
 //! Verlet, force windows at the end of a settle phase).
 
-mod common;
-
-use common::{full_material, random_cluster, spacing_material, Rng};
 use op_dynamics::interactions::{LennardJonesParams, RepulsionParams, Spacing, WeightParams};
 use op_dynamics::{
     AdaptiveParams, ExternalParams, ForceWindow, Material, NeighbourParams, ParticleDesc,
     Particles, Point3, Real, Scheme, Vec3, World, WorldParams,
 };
+use op_test_support::{full_material, random_cluster, spacing_material, Rng};
 
 fn two_particles(objects: [u32; 2]) -> Particles {
     let mut p = Particles::new();

@@ -4,9 +4,6 @@
 //! determinism at 1 and 2 threads, particle insertion and removal, and the
 //! stage running only when a material asks for it.
 
-mod common;
-
-use common::{desc_of, in_pool, Rng};
 use op_dynamics::interactions::{CohesionParams, Spacing, WeightParams};
 use op_dynamics::neighbours::NeighbourList;
 use op_dynamics::plasticity::{current_curvature, Plasticity};
@@ -15,6 +12,7 @@ use op_dynamics::{
     ExternalParams, Flags, ForceWindow, Material, NeighbourBackend, ParticleDesc, Particles,
     Point3, Real, Vec3, World, WorldParams,
 };
+use op_test_support::{desc_of, in_pool, Rng};
 
 const RADIUS: Real = 4.0;
 

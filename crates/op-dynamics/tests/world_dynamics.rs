@@ -2,14 +2,12 @@
 //! count determinism, neighbour backends agreeing, energy behaviour of the
 //! integrators on the full oriented interaction.
 
-mod common;
-
-use common::{full_material, in_pool, noisy_sheet, random_cluster, spacing_material, Rng};
 use op_dynamics::interactions::{LennardJonesParams, Spacing};
 use op_dynamics::{
     ExternalParams, Material, NeighbourBackend, NeighbourParams, Particles, Point3, Real, Scheme,
     Vec3, World, WorldParams,
 };
+use op_test_support::{full_material, in_pool, noisy_sheet, random_cluster, spacing_material, Rng};
 
 /// Positions, orientations and velocities by particle id.
 fn snapshot(w: &World) -> Vec<[u64; 10]> {

@@ -3,13 +3,11 @@
 //! as a world built directly from the edited particle set, at 1 and 2
 //! threads; survivors keep their ids; bad ids are rejected.
 
-mod common;
-
-use common::{desc_of, full_material, in_pool, noisy_sheet, spacing_material, Rng};
 use op_dynamics::{
     ExternalParams, ForceWindow, Material, ParticleDesc, Particles, Point3, Scheme, Vec3, World,
     WorldParams,
 };
+use op_test_support::{desc_of, full_material, in_pool, noisy_sheet, spacing_material, Rng};
 
 /// State bits of particle `id`.
 fn bits(w: &World, id: u32) -> Vec<u64> {

@@ -3,13 +3,11 @@
 //! whole pipeline: neighbour list, pair kernel, gather), they conserve
 //! linear and angular momentum, and they are invariant under rigid motions.
 
-mod common;
-
-use common::{
+use op_dynamics::{Material, Particles, Point3, Quat, Real, Vec3, World, WorldParams};
+use op_test_support::{
     assert_energy_gradients, assert_momentum_conserved, full_material, random_cluster,
     spacing_material, Rng,
 };
-use op_dynamics::{Material, Particles, Point3, Quat, Real, Vec3, World, WorldParams};
 
 fn world(p: Particles, m: Material) -> World {
     World::new(p, &[m], WorldParams::default()).unwrap()

@@ -21,8 +21,8 @@
 use std::collections::BTreeMap;
 
 use op_dynamics::external::ExternalAccumulator;
-use op_dynamics::tools::signed_distance;
 use op_dynamics::{Point3, Real, Vec3, World};
+use op_modeling::tools::signed_distance;
 use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::shape::Shape;
 use rayon::prelude::*;

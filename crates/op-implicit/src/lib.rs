@@ -50,5 +50,5 @@ pub use polygonize::{
     is_closed_oriented_manifold, polygonize, polygonize_field, polygonize_region,
     polygonize_with_stats, Mesh, PolygonizeParams, PolygonizeStats,
 };
-pub use primitives::{PosedPrimitive, Primitive, Shape};
+pub use primitives::{PosedPrimitive, Primitive, Skeleton};
 pub use skin::Skin;

@@ -2,7 +2,7 @@
 //!
 //! "Each skeleton can be a complex object defined as a collection of
 //! primitives placed in the oriented particle referential" (seed 002 §6).
-//! A [`Primitive`] is a [`Shape`] with its own pose (offset and rotation)
+//! A [`Primitive`] is a [`Skeleton`] with its own pose (offset and rotation)
 //! in the body frame of the particle that carries it and a support radius
 //! `R` for the field kernel ([`crate::kernel`]). Each frame the particle's
 //! world pose is composed with the primitive's to give a [`PosedPrimitive`],
@@ -10,11 +10,11 @@
 //! with an analytic gradient.
 //!
 //! Shapes, in the primitive's own frame:
-//! - [`Shape::Point`]: the origin;
-//! - [`Shape::Segment`]: `[-L, L]` along x;
-//! - [`Shape::Rectangle`]: `[-a, a] x [-b, b]` in the x-y plane (the square
+//! - [`Skeleton::Point`]: the origin;
+//! - [`Skeleton::Segment`]: `[-L, L]` along x;
+//! - [`Skeleton::Rectangle`]: `[-a, a] x [-b, b]` in the x-y plane (the square
 //!   skeletons of seed 002 fig. 6);
-//! - [`Shape::Ellipsoid`]: the origin, with distance measured in the frame
+//! - [`Skeleton::Ellipsoid`]: the origin, with distance measured in the frame
 //!   scaled per axis, `d^2 = sum (p_i / k_i)^2`: an anisotropic potential
 //!   (seed 002 §6) whose support is an ellipsoid of semi-axes `k_i R`.
 //!
@@ -28,7 +28,7 @@ use crate::kernel;
 
 /// The geometry of a skeleton primitive in its own frame (module doc).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Shape {
+pub enum Skeleton {
     /// A point at the origin.
     Point,
     /// The segment from `(-half_length, 0, 0)` to `(half_length, 0, 0)`.
@@ -50,20 +50,20 @@ pub enum Shape {
     },
 }
 
-impl Shape {
+impl Skeleton {
     /// Squared (scaled) distance from local point `p` and its gradient with
     /// respect to `p`.
     #[inline]
     pub fn distance2_and_gradient(&self, p: &Vec3) -> (Real, Vec3) {
         let diff = match *self {
-            Shape::Point => *p,
-            Shape::Segment { half_length } => {
+            Skeleton::Point => *p,
+            Skeleton::Segment { half_length } => {
                 Vec3::new(p.x - p.x.clamp(-half_length, half_length), p.y, p.z)
             }
-            Shape::Rectangle {
+            Skeleton::Rectangle {
                 half_extents: [a, b],
             } => Vec3::new(p.x - p.x.clamp(-a, a), p.y - p.y.clamp(-b, b), p.z),
-            Shape::Ellipsoid { scales } => {
+            Skeleton::Ellipsoid { scales } => {
                 let q = p.component_div(&scales);
                 let g = q.component_div(&scales) * 2.0;
                 return (q.norm_squared(), g);
@@ -78,23 +78,23 @@ impl Shape {
     /// `extent + factor * R` of the origin.
     fn extent_and_factor(&self) -> (Real, Real) {
         match *self {
-            Shape::Point => (0.0, 1.0),
-            Shape::Segment { half_length } => (half_length, 1.0),
-            Shape::Rectangle {
+            Skeleton::Point => (0.0, 1.0),
+            Skeleton::Segment { half_length } => (half_length, 1.0),
+            Skeleton::Rectangle {
                 half_extents: [a, b],
             } => (a.hypot(b), 1.0),
-            Shape::Ellipsoid { scales } => (0.0, scales.max()),
+            Skeleton::Ellipsoid { scales } => (0.0, scales.max()),
         }
     }
 
     fn is_valid(&self) -> bool {
         match *self {
-            Shape::Point => true,
-            Shape::Segment { half_length } => half_length.is_finite() && half_length >= 0.0,
-            Shape::Rectangle { half_extents } => {
+            Skeleton::Point => true,
+            Skeleton::Segment { half_length } => half_length.is_finite() && half_length >= 0.0,
+            Skeleton::Rectangle { half_extents } => {
                 half_extents.iter().all(|h| h.is_finite() && *h >= 0.0)
             }
-            Shape::Ellipsoid { scales } => scales.iter().all(|k| k.is_finite() && *k > 0.0),
+            Skeleton::Ellipsoid { scales } => scales.iter().all(|k| k.is_finite() && *k > 0.0),
         }
     }
 }
@@ -110,7 +110,7 @@ pub struct Primitive {
     /// frame.
     pub rotation: Quat,
     /// The skeleton geometry in the primitive's frame.
-    pub shape: Shape,
+    pub shape: Skeleton,
     /// Support radius `R` of the kernel, > 0: the field vanishes at scaled
     /// distance `>= R` and the skin of an isolated primitive of weight 1
     /// lies at `R/2`.
@@ -128,7 +128,7 @@ impl Primitive {
         Primitive {
             offset,
             rotation: Quat::identity(),
-            shape: Shape::Point,
+            shape: Skeleton::Point,
             radius,
             weight: 1.0,
         }
@@ -147,7 +147,7 @@ impl Primitive {
         Primitive {
             offset: (a + b) * 0.5,
             rotation,
-            shape: Shape::Segment {
+            shape: Skeleton::Segment {
                 half_length: 0.5 * d.norm(),
             },
             radius,
@@ -161,7 +161,7 @@ impl Primitive {
         Primitive {
             offset,
             rotation,
-            shape: Shape::Rectangle { half_extents },
+            shape: Skeleton::Rectangle { half_extents },
             radius,
             weight: 1.0,
         }
@@ -182,7 +182,7 @@ impl Primitive {
         Primitive {
             offset,
             rotation,
-            shape: Shape::Ellipsoid { scales },
+            shape: Skeleton::Ellipsoid { scales },
             radius,
             weight: 1.0,
         }
@@ -240,7 +240,7 @@ pub struct PosedPrimitive {
     particle: u32,
     particle_position: Point3,
     pose: Isometry3<Real>,
-    shape: Shape,
+    shape: Skeleton,
     inv_radius2: Real,
     bound: Real,
     weight: Real,
@@ -268,7 +268,7 @@ impl PosedPrimitive {
 
     /// The skeleton geometry.
     #[inline]
-    pub fn shape(&self) -> &Shape {
+    pub fn shape(&self) -> &Skeleton {
         &self.shape
     }
 
@@ -288,7 +288,7 @@ impl PosedPrimitive {
     /// gradient.
     #[inline]
     pub fn distance2_and_gradient(&self, p: &Point3) -> (Real, Vec3) {
-        if let Shape::Point = self.shape {
+        if let Skeleton::Point = self.shape {
             // Rotations keep lengths: the local offset's length and
             // direction, rotated back, are the world offset's.
             let d = p.coords - self.pose.translation.vector;

@@ -1,5 +1,5 @@
 //! Particle creation in scenes (seed 000 §7; op-dynamics
-//! [`op_dynamics::creation`]): the scene's `creation` section and what the
+//! [`op_modeling::creation`]): the scene's `creation` section and what the
 //! runner does with it.
 //!
 //! ```ron
@@ -31,8 +31,8 @@
 //! Created particles of a skinned object get the object's skin primitive,
 //! merged ones lose theirs ([`crate::stages`]).
 
-use op_dynamics::creation::{CreationParams, GrowingParams, MergingParams, StretchingParams};
 use op_dynamics::Real;
+use op_modeling::creation::{CreationParams, GrowingParams, MergingParams, StretchingParams};
 use serde::{Deserialize, Serialize};
 
 use crate::error::SceneError;

@@ -29,7 +29,7 @@
 
 use op_dynamics::{Point3, Real, Vec3};
 
-use crate::built::{BuiltObject, BuiltScene};
+use crate::built_scene::{BuiltObject, BuiltScene};
 
 /// Rest neighbour pairs are the original particles at most this many rest
 /// spacings apart in the rest shape.

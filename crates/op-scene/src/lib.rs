@@ -6,7 +6,7 @@
 //! OBJ frames, `metrics.csv` and `summary.json`; the `op-render` crate draws pictures of them.
 #![warn(missing_docs)]
 
-pub mod built;
+pub mod built_scene;
 pub mod creation;
 pub mod export;
 pub mod fit;
@@ -22,13 +22,13 @@ pub mod skins;
 pub mod stability;
 pub mod stages;
 
-pub use built::{BuiltObject, BuiltScene};
+pub use built_scene::{BuiltObject, BuiltScene};
 pub use creation::CreationSettings;
 pub use outputs::{Outputs, ParticleOutput};
 pub use run::{run, RunError, RunOptions, Summary};
 pub use skins::{BuiltSkin, ContactStats, SkinPrimitive, SkinSpec, SkinTool};
 
-pub mod build;
+pub mod builder;
 pub mod error;
 pub mod generators;
 pub mod load;

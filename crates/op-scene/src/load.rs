@@ -5,7 +5,7 @@ use std::path::Path;
 
 use ron::extensions::Extensions;
 
-use crate::built::BuiltScene;
+use crate::built_scene::BuiltScene;
 use crate::error::SceneError;
 use crate::schema::Scene;
 

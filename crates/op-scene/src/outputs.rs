@@ -33,7 +33,7 @@ pub struct Outputs {
     /// Default: true.
     pub metrics: bool,
     /// Write each object's triangulation (seed 000 §5,
-    /// [`op_dynamics::triangulation`]) in the OBJ frames as an extra object
+    /// [`op_modeling::triangulation`]) in the OBJ frames as an extra object
     /// `<object>_surface`: its particles as vertices with their normals,
     /// `f` elements wound along the normals. Default: false.
     pub triangulation: bool,

@@ -12,7 +12,7 @@ use op_dynamics::diagnostics::rest_shape_rms;
 use op_dynamics::{Point3, Real};
 use serde::Serialize;
 
-use crate::built::{BuiltObject, BuiltScene};
+use crate::built_scene::{BuiltObject, BuiltScene};
 use crate::error::short;
 use crate::export::layout::{is_sequence_file, is_vtu_file};
 use crate::export::{write_atomically, FrameFormat, FrameWriter, Sequence};

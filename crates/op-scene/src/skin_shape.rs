@@ -76,7 +76,7 @@ pub(crate) fn matched_weight(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::built::BuiltObject;
+    use crate::built_scene::BuiltObject;
     use crate::skins::{BuiltSkin, SkinPrimitive, SkinSpec, DEFAULT_SMOOTHNESS};
     use op_dynamics::{Material, ParticleDesc, Particles, Quat, World, WorldParams};
     use op_implicit::Mesh;

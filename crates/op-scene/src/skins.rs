@@ -39,18 +39,19 @@
 //! past the contact surface, summed).
 
 use op_dynamics::external::ExternalAccumulator;
-use op_dynamics::tools::parry_pose;
-use op_dynamics::{Point3, Real, Tool, Vec3, World};
+use op_dynamics::{Point3, Real, Vec3, World};
 use op_implicit::{
     collider_reactions, polygonize, polygonize_field, polygonize_region, ClippedField, ContactPair,
     ContactParams, ImplicitContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive, Skin,
     SkinError,
 };
+use op_modeling::tools::parry_pose;
+use op_modeling::Tool;
 use parry3d_f64::math::Pose;
 use parry3d_f64::shape::Shape;
 use serde::{Deserialize, Serialize};
 
-use crate::built::BuiltObject;
+use crate::built_scene::BuiltObject;
 use crate::error::SceneError;
 use crate::schema::checks::positive;
 

@@ -21,7 +21,7 @@ use op_dynamics::driver::{Effects, Phase, Stage, StageError};
 use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Real, World};
 
-use crate::built::BuiltObject;
+use crate::built_scene::BuiltObject;
 use crate::creation::CreationState;
 use crate::skins::{contact_step, BuiltSkin, ContactStats, SkinTool};
 

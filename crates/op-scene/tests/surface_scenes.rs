@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use op_dynamics::triangulation::Triangulation;
+use op_modeling::triangulation::Triangulation;
 use op_render::{render, ObjData, ObjObject, RenderOptions, Style};
 use op_scene::{load_scene, parse_scene, run, Format, RunOptions, Scene, Summary};
 

@@ -28,9 +28,15 @@ impl World {
     pub(super) fn after_step_stages(&self) -> impl Iterator<Item = Stage> {
         let uses = [
             (Stage::Heat, self.params.heat.is_some()),
-            (Stage::Bonds, self.pipeline.bonds.is_some()),
+            (Stage::Bonds, self.model.bonds.is_some()),
             (Stage::Plasticity, self.plastic),
-            (Stage::Erase, self.pipeline.tools.removes_particles()),
+            (
+                Stage::Erase,
+                self.model
+                    .tools
+                    .as_ref()
+                    .is_some_and(|t| t.removes_particles()),
+            ),
         ];
         uses.into_iter().filter(|u| u.1).map(|u| u.0)
     }
@@ -47,18 +53,18 @@ impl World {
         match stage {
             Stage::Heat => effects.forces_invalid = self.advance_heat(dt),
             Stage::Bonds => {
-                if let Some(bonds) = self.pipeline.bonds.as_mut() {
+                if let Some(bonds) = self.model.bonds.as_mut() {
                     report.bonds_broken = bonds.break_stretched(&self.particles);
                 }
             }
             Stage::Plasticity => {
-                if let Some(list) = self.pipeline.neighbours.as_mut() {
+                if let Some(list) = self.model.neighbours.as_mut() {
                     // Cached forces were computed with the old curvatures.
                     effects.forces_invalid = plasticity::apply(
                         &mut self.particles,
-                        &self.pipeline.materials,
+                        &self.model.materials,
                         list,
-                        self.pipeline.bonds.as_ref(),
+                        self.model.bonds.as_ref(),
                         dt,
                         &mut self.plastic_scratch,
                     );
@@ -67,7 +73,10 @@ impl World {
             Stage::Erase => {
                 // On the state at the end of the step, before the divergence
                 // check, which then sees only the survivors.
-                let erased = self.pipeline.tools.erase(self.time, &self.particles);
+                let erased = match self.model.tools.as_mut() {
+                    Some(tools) => tools.erase(self.time, &self.particles),
+                    None => Vec::new(),
+                };
                 if !erased.is_empty() {
                     self.remove_live(&erased);
                     effects.forces_invalid = true;
@@ -89,7 +98,7 @@ impl World {
         let Some(params) = &self.params.heat else {
             return false;
         };
-        let pairs = self.pipeline.neighbours.as_mut().map(|list| {
+        let pairs = self.model.neighbours.as_mut().map(|list| {
             list.update(self.particles.positions());
             let cutoff = list.cutoff();
             (&*list, cutoff)
@@ -98,7 +107,7 @@ impl World {
         let (positions, objects, temperatures) = self.particles.heat_view();
         heat::advance(
             params,
-            self.pipeline.tools.tools(),
+            self.model.tools.as_deref(),
             self.time,
             dt,
             positions,
@@ -107,6 +116,6 @@ impl World {
             temperatures,
             &mut self.heat_scratch,
         );
-        self.pipeline.heated
+        self.model.heated
     }
 }

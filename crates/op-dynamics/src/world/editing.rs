@@ -15,7 +15,7 @@
 //! gives the same bits as a world built directly from the edited particle
 //! set in the same slot order (tested in `tests/world_editing.rs`).
 //!
-//! Merging ([`World::merge_particles`], [`crate::creation::merging`]) moves
+//! Merging ([`World::merge_particles`], (op-modeling `creation::merging`)) moves
 //! each survivor and removes the other particle of its pair: one removal.
 //!
 //! Bonds ([`crate::bonds`]): inserted particles bond to every live particle
@@ -25,9 +25,8 @@
 
 use super::{Config, World, WorldError};
 use crate::bonds::Bonds;
-use crate::creation::Merge;
 use crate::error::ParamError;
-use crate::math::Vec3;
+use crate::math::{Point3, Real, Vec3};
 use crate::particles::ParticleDesc;
 
 impl World {
@@ -41,7 +40,7 @@ impl World {
     /// [`WorldError::Param`] naming `particles[k].<field>` for an invalid
     /// description.
     pub fn insert_particles(&mut self, descs: &[ParticleDesc]) -> Result<Vec<u32>, WorldError> {
-        let materials = self.pipeline.materials.len();
+        let materials = self.model.materials.len();
         for (k, d) in descs.iter().enumerate() {
             d.validate()
                 .map_err(|e| e.within(&format!("particles[{k}]")))?;
@@ -66,11 +65,11 @@ impl World {
             ids.push(self.particles.push(d.clone())?);
         }
         if let Some(&first) = ids.first() {
-            let (p, m) = (&self.particles, &self.pipeline.materials);
-            if self.pipeline.bonds.is_none() && Bonds::needed(p, m) {
-                self.pipeline.bonds = Some(Bonds::new(m));
+            let (p, m) = (&self.particles, &self.model.materials);
+            if self.model.bonds.is_none() && Bonds::needed(p, m) {
+                self.model.bonds = Some(Bonds::new(m));
             }
-            if let Some(b) = self.pipeline.bonds.as_mut() {
+            if let Some(b) = self.model.bonds.as_mut() {
                 b.form(p, m, first);
             }
         }
@@ -102,7 +101,7 @@ impl World {
         Ok(self.remove_live(ids))
     }
 
-    /// Applies merges of the merging rule ([`crate::creation::merging`]):
+    /// Applies merges of the merging rule ((op-modeling `creation::merging`)):
     /// each survivor takes its merge's position, velocity and temperature,
     /// then the merged-away particles are removed. Returns how many were
     /// removed.
@@ -152,12 +151,12 @@ impl World {
             .map(|&s| self.prev_positions[s as usize])
             .collect();
         self.prev_positions = prev;
-        if Bonds::needed(&self.particles, &self.pipeline.materials) {
-            if let Some(b) = self.pipeline.bonds.as_mut() {
+        if Bonds::needed(&self.particles, &self.model.materials) {
+            if let Some(b) = self.model.bonds.as_mut() {
                 b.retain_live(&self.particles);
             }
         } else {
-            self.pipeline.bonds = None;
+            self.model.bonds = None;
         }
         self.after_edit();
         before - self.particles.len()
@@ -166,22 +165,22 @@ impl World {
     /// Re-derives what depends on the particle set after an edit.
     fn after_edit(&mut self) {
         let n = self.particles.len();
-        let config = Config::of(&self.particles, &self.pipeline.materials);
+        let config = Config::of(&self.particles, &self.model.materials);
         let same_list =
-            self.pipeline.neighbours.as_ref().is_some_and(|l| {
+            self.model.neighbours.as_ref().is_some_and(|l| {
                 config.kernel != super::Kernel::None && l.cutoff() == config.cutoff
             });
         if same_list {
-            if let Some(list) = self.pipeline.neighbours.as_mut() {
+            if let Some(list) = self.model.neighbours.as_mut() {
                 list.invalidate();
             }
         } else {
-            self.pipeline.neighbours = config.neighbour_list(&self.params.neighbours);
+            self.model.neighbours = config.neighbour_list(&self.params.neighbours);
         }
-        self.pipeline.kernel = config.kernel;
-        self.pipeline.friction = config.friction;
-        self.pipeline.heated = config.heated;
-        self.pipeline.has_fixed = config.has_fixed;
+        self.model.kernel = config.kernel;
+        self.model.friction = config.friction;
+        self.model.heated = config.heated;
+        self.model.has_fixed = config.has_fixed;
         self.repulsion = config.repulsion;
         self.plastic = config.plastic;
         self.accumulator.grow(self.particles.id_bound());
@@ -191,4 +190,20 @@ impl World {
         self.torques.resize(n, Vec3::zeros());
         self.integrator.invalidate();
     }
+}
+
+/// One merge of the merging rule (op-modeling `creation::merging`): particle `removed` joins particle `survivor`, which takes
+/// the new `position`, `velocity` and `temperature`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Merge {
+    /// Id of the particle that stays.
+    pub survivor: u32,
+    /// Id of the particle that is removed.
+    pub removed: u32,
+    /// The survivor's new position.
+    pub position: Point3,
+    /// The survivor's new velocity.
+    pub velocity: Vec3,
+    /// The survivor's new temperature.
+    pub temperature: Real,
 }

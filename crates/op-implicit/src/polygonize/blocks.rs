@@ -19,7 +19,7 @@ use op_dynamics::{Point3, Real, Vec3};
 
 use crate::field::{Field, ScalarField};
 use crate::kernel::value_sq;
-use crate::primitives::Shape;
+use crate::primitives::Skeleton;
 
 /// Cells per block along x, y, z: long along x, the rows the primitives
 /// are splatted along, so a row's setup is shared by more nodes.
@@ -213,7 +213,7 @@ fn can_skip(field: &Field, grid: &Grid, block: &Block, list: &[u32], iso: Real) 
         let prim = &field.primitives()[i as usize];
         let (c, r) = prim.bounding_sphere();
         let w = prim.weight();
-        if !matches!(prim.shape(), Shape::Point) {
+        if !matches!(prim.shape(), Skeleton::Point) {
             upper += w;
             continue;
         }
@@ -272,7 +272,7 @@ pub(super) fn sample_band(
         }
         let (i1, j1, k1) = (i1 as usize, j1 as usize, k1 as usize);
         let r2 = r * r;
-        if !matches!(prim.shape(), Shape::Point) {
+        if !matches!(prim.shape(), Skeleton::Point) {
             for k in k0..=k1 {
                 for j in j0..=j1 {
                     let row = (k * ny + j) * nx;

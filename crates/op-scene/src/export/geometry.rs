@@ -2,11 +2,12 @@
 //! object's particles, a skin, a triangulation, a tool) at the world's
 //! current state, in scene coordinates, independent of the file format.
 
-use op_dynamics::triangulation::{triangulate_linked, TriangulationParams};
-use op_dynamics::{Real, Tool, Vec3, World};
+use op_dynamics::{Real, Vec3, World};
 use op_implicit::Mesh;
+use op_modeling::triangulation::{triangulate_linked, TriangulationParams};
+use op_modeling::Tool;
 
-use crate::built::BuiltObject;
+use crate::built_scene::BuiltObject;
 use crate::outputs::{Outputs, ParticleOutput};
 
 /// One mesh of a frame, in scene coordinates (z-up): vertices with one
@@ -168,7 +169,7 @@ pub fn tool_geometry(k: usize, tool: &Tool, t: Real) -> FrameMesh {
 }
 
 /// The mesh `<object>_surface`: the triangles of
-/// [`op_dynamics::triangulation`] over the object's live particles (mutual
+/// [`op_modeling::triangulation`] over the object's live particles (mutual
 /// neighbours within `triangulation_radius` rest spacings, wound along the
 /// particle normals), with the particles they use as vertices (original
 /// then created, in that order) and their normals. Particles in no

@@ -27,9 +27,10 @@ use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use op_dynamics::{Real, Tool, World};
+use op_dynamics::{Real, World};
+use op_modeling::Tool;
 
-use crate::built::BuiltObject;
+use crate::built_scene::BuiltObject;
 use crate::outputs::{Outputs, ParticleOutput};
 use crate::skins::{BuiltSkin, SkinTool};
 

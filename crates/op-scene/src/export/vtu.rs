@@ -26,7 +26,7 @@ use vtkio::model::{
     VertexNumbers, Vtk,
 };
 
-use crate::built::BuiltObject;
+use crate::built_scene::BuiltObject;
 
 /// The VTK model of the particle state of `objects` in `world`.
 fn model(world: &World, objects: &[BuiltObject], title: &str) -> Vtk {

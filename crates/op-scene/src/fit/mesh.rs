@@ -2,8 +2,8 @@
 
 use std::collections::HashMap;
 
-use op_dynamics::triangulation::{triangulate_points, Triangulation, TriangulationParams};
 use op_dynamics::{Point3, Real, Vec3};
+use op_modeling::triangulation::{triangulate_points, Triangulation, TriangulationParams};
 
 use super::FitError;
 

@@ -120,13 +120,13 @@ mod spacing;
 use std::io::Write;
 use std::path::Path;
 
-use op_dynamics::creation::{CreationParams, GrowingParams, StretchingParams};
 use op_dynamics::interactions::spacing::Spacing;
 use op_dynamics::interactions::CohesionParams;
 use op_dynamics::{
     ExternalParams, Flags, Material, ParamError, ParticleDesc, Particles, Point3, Real, Scheme,
     Vec3, World, WorldError, WorldParams,
 };
+use op_modeling::creation::{CreationParams, GrowingParams, StretchingParams};
 
 use crate::pointsets::PointSet;
 

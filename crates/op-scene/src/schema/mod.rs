@@ -63,9 +63,9 @@ pub use validate::{MAX_COHESION_ALPHA_R0_SQUARED, MAX_COHESION_CUTOFF_OVER_R0};
 
 use std::collections::BTreeMap;
 
-use op_dynamics::tools::{Path, Role, ToolShape};
 use op_dynamics::world::NeighbourParams;
 use op_dynamics::{Material, ParticleType, Real, Scheme};
+use op_modeling::tools::{Role, ToolPath, ToolShape};
 use serde::{Deserialize, Serialize};
 
 use crate::creation::CreationSettings;
@@ -526,7 +526,7 @@ pub struct ToolSpec {
     /// Keyframes `(time, position, rotation)`, rotation as a rotation
     /// vector. Default: still at the origin.
     #[serde(default)]
-    pub path: Path,
+    pub path: ToolPath,
     /// `Obstacle(stiffness, margin, damping)`, `Attractor(strength, reach)`
     /// or `Mover(stiffness, damping, release)`.
     pub role: Role,

@@ -27,10 +27,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::{child_of, world_tangent, Accepted};
-use crate::error::{self, ParamError};
-use crate::math::Real;
-use crate::neighbours::{search, NeighbourBackend, PairList};
-use crate::particles::{ParticleDesc, Particles};
+use op_dynamics::error::{self, ParamError};
+use op_dynamics::math::Real;
+use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
+use op_dynamics::particles::{ParticleDesc, Particles};
 
 /// Parameters of the growing rule; lengths are fractions of `r0`, angles
 /// radians.

@@ -34,14 +34,15 @@ use std::collections::HashMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{self, ParamError};
-use crate::flags::Flags;
-use crate::math::{tangent_axis, Point3, Quat, Real, Vec3};
-use crate::particles::{ParticleDesc, Particles};
-use crate::world::{World, WorldError};
+use op_dynamics::error::{self, ParamError};
+use op_dynamics::flags::Flags;
+use op_dynamics::math::{tangent_axis, Point3, Quat, Real, Vec3};
+use op_dynamics::particles::{ParticleDesc, Particles};
+use op_dynamics::world::{World, WorldError};
 
 pub use growing::GrowingParams;
-pub use merging::{Merge, MergingParams};
+pub use merging::MergingParams;
+pub use op_dynamics::Merge;
 pub use stretching::StretchingParams;
 
 /// The creation rules of a simulation.

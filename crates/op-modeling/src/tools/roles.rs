@@ -11,8 +11,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{self, ParamError};
-use crate::math::Real;
+use op_dynamics::error::{self, ParamError};
+use op_dynamics::math::Real;
 
 /// A tool's role.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -70,7 +70,7 @@ pub enum Role {
     /// A heater (seed 000 §8, fig. 13: "heating the surface near the
     /// tool"): no force; raises the temperature of the particles within
     /// `reach` of its surface at `power (1 - max(s, 0) / reach)` per unit
-    /// time ([`crate::heat`]). Needs the world's `heat` settings.
+    /// time ([`op_dynamics::heat`]). Needs the world's `heat` settings.
     Heater {
         /// Heating rate at and inside the surface, > 0 (temperature per
         /// unit time).
@@ -106,7 +106,7 @@ pub enum Role {
     /// contact margin of two (or more) shaping tools at once (signed
     /// distance `s < margin` to each, each tool with its own margin) is
     /// deleted from the world, like an eraser's particles
-    /// ([`crate::world::StepReport::erased`]). The margin is the particle's
+    /// ([`op_dynamics::world::StepReport::erased`]). The margin is the particle's
     /// contact radius: such a particle is pressed by two tool surfaces
     /// whose gap there is narrower than the two margins together, so it
     /// cannot stay in the surface between them; a single tool only pushes
@@ -191,6 +191,19 @@ impl Role {
                 error::positive("Shaper.margin", *margin)?;
                 error::non_negative("Shaper.damping", *damping)
             }
+        }
+    }
+
+    /// The role's name in lower case (`obstacle`, `mover`, ...).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Role::Obstacle { .. } => "obstacle",
+            Role::Attractor { .. } => "attractor",
+            Role::Mover { .. } => "mover",
+            Role::Eraser => "eraser",
+            Role::Heater { .. } => "heater",
+            Role::Knife { .. } => "knife",
+            Role::Shaper { .. } => "shaper",
         }
     }
 

@@ -93,10 +93,10 @@ use std::collections::BTreeMap;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
-use crate::error::{self, ParamError};
-use crate::math::{Point3, Real, Vec3};
-use crate::neighbours::{search, NeighbourBackend, PairList};
-use crate::particles::Particles;
+use op_dynamics::error::{self, ParamError};
+use op_dynamics::math::{Point3, Real, Vec3};
+use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
+use op_dynamics::particles::Particles;
 
 /// Settings of [`triangulate`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -417,7 +417,7 @@ fn tangent_coordinates<'a>(
     } else {
         Vec3::z()
     };
-    let u = crate::math::tangent_axis(&n).normalize();
+    let u = op_dynamics::math::tangent_axis(&n).normalize();
     let w = n.cross(&u);
     let origin = positions[v[0] as usize];
     move |k: u32| {

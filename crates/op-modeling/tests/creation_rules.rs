@@ -3,11 +3,9 @@
 //! the candidates do not depend on thread count or slot order; bad
 //! parameters are errors.
 
-mod common;
-
-use common::{hex_sheet, in_pool, spacing_material, Rng};
-use op_dynamics::creation::{self, CreationParams, GrowingParams, StretchingParams};
 use op_dynamics::{Flags, ParticleDesc, Particles, Point3, Real, Vec3, World, WorldParams};
+use op_modeling::creation::{self, CreationParams, GrowingParams, StretchingParams};
+use op_test_support::{hex_sheet, in_pool, spacing_material, Rng};
 
 fn store(points: &[Point3]) -> Particles {
     let mut p = Particles::new();

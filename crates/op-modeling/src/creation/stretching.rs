@@ -29,7 +29,7 @@
 //! **Heat gating** (seed 000 §8, fig. 13: "only allowing the hot parts of
 //! the surface to deform and stretch"): with [`StretchingParams::min_temperature`]
 //! set, a pair opens a gap only when both its particles are at least that
-//! hot ([`crate::heat`]).
+//! hot ([`op_dynamics::heat`]).
 //!
 //! Static attributes (mass, material, type, curvature, ...) are copied from
 //! the pair's particle with the smaller id; fixed flags are not copied.
@@ -40,10 +40,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::{child_of, world_tangent, Accepted};
-use crate::error::{self, ParamError};
-use crate::math::{Point3, Real, Vec3};
-use crate::neighbours::{search, NeighbourBackend, PairList};
-use crate::particles::{ParticleDesc, Particles};
+use op_dynamics::error::{self, ParamError};
+use op_dynamics::math::{Point3, Real, Vec3};
+use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
+use op_dynamics::particles::{ParticleDesc, Particles};
 
 /// Parameters of the stretching rule, lengths as fractions of `r0`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]

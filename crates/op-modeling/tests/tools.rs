@@ -3,14 +3,12 @@
 //! energies the world reports, movers carry what they grabbed, object
 //! selections are honoured, and results do not depend on the thread count.
 
-mod common;
-
-use common::{in_pool, spacing_material};
-use op_dynamics::tools::{Keyframe, Path, Role, ToolParams, ToolShape};
 use op_dynamics::{
     ExternalParams, Material, ParticleDesc, Particles, Point3, Real, Scheme, Vec3, World,
     WorldParams,
 };
+use op_modeling::tools::{Keyframe, Role, ToolError, ToolParams, ToolPath, ToolShape, Tools};
+use op_test_support::{in_pool, spacing_material};
 
 fn particles(points: &[Point3], object: impl Fn(usize) -> u32) -> Particles {
     let mut p = Particles::new();
@@ -28,7 +26,7 @@ fn floor(stiffness: Real, damping: Real) -> ToolParams {
         shape: ToolShape::Plane {
             normal: [0.0, 0.0, 1.0],
         },
-        path: Path::default(),
+        path: ToolPath::default(),
         role: Role::Obstacle {
             stiffness,
             margin: 0.0,
@@ -42,7 +40,7 @@ fn ball(centre: [Real; 3], radius: Real, role: Role) -> ToolParams {
     ToolParams {
         name: "ball".into(),
         shape: ToolShape::Ball { radius },
-        path: Path::fixed(centre),
+        path: ToolPath::fixed(centre),
         role,
         objects: None,
     }
@@ -60,11 +58,14 @@ fn obstacle_carries_weight_at_the_penalty_depth() {
             gravity: [0.0, 0.0, -g],
             ..ExternalParams::default()
         },
-        tools: vec![floor(k, 20.0)],
         ..WorldParams::default()
     };
     let p = particles(&[Point3::new(0.3, -0.2, 0.5)], |_| 0);
-    let mut w = World::new(p, &[Material::empty()], params).unwrap();
+    let mut w = with_tools(
+        World::new(p, &[Material::empty()], params),
+        vec![floor(k, 20.0)],
+    )
+    .unwrap();
     assert!(w.enabled().contains(&"tool:obstacle".to_string()));
     w.advance_to(4.0).unwrap();
     let z = w.particles().positions()[0].z;
@@ -85,7 +86,7 @@ fn tool_forces_are_the_gradient_of_the_tool_energies() {
         Point3::new(3.05, 0.0, 0.0), // grabbed by the mover
         Point3::new(5.0, 5.0, 5.0),  // far from everything
     ];
-    let mover_path = Path {
+    let mover_path = ToolPath {
         keyframes: vec![
             Keyframe {
                 time: 0.0,
@@ -131,12 +132,18 @@ fn tool_forces_are_the_gradient_of_the_tool_energies() {
             objects: None,
         },
     ];
-    let params = WorldParams {
+    let params = WorldParams::default();
+    let mut w = with_tools(
+        World::new(particles(&points, |_| 0), &[spacing_material()], params),
         tools,
-        ..WorldParams::default()
+    )
+    .unwrap();
+    let grabbed = |w: &World| {
+        Tools::of(w).unwrap().tools()[2]
+            .grabbed()
+            .collect::<Vec<_>>()
     };
-    let mut w = World::new(particles(&points, |_| 0), &[spacing_material()], params).unwrap();
-    assert_eq!(w.tools()[2].grabbed().collect::<Vec<_>>(), vec![3]);
+    assert_eq!(grabbed(&w), vec![3]);
     // Advance the clock (the mover has moved), then put the particles back
     // where the test wants them.
     w.advance_to(0.37).unwrap();
@@ -184,7 +191,7 @@ fn mover_carries_grabbed_particles() {
     let tool = ToolParams {
         name: "hand".into(),
         shape: ToolShape::Ball { radius: 0.5 },
-        path: Path {
+        path: ToolPath {
             keyframes: vec![
                 Keyframe {
                     time: 0.0,
@@ -206,10 +213,13 @@ fn mover_carries_grabbed_particles() {
         objects: None,
     };
     let params = WorldParams {
-        tools: vec![tool],
         ..WorldParams::default()
     };
-    let mut w = World::new(particles(&points, |_| 0), &[Material::empty()], params).unwrap();
+    let mut w = with_tools(
+        World::new(particles(&points, |_| 0), &[Material::empty()], params),
+        vec![tool],
+    )
+    .unwrap();
     w.advance_to(1.5).unwrap();
     let p = w.particles().positions();
     assert!(
@@ -232,13 +242,15 @@ fn tools_act_only_on_their_objects() {
     let mut tool = floor(100.0, 0.0);
     tool.objects = Some(vec![1]);
     let params = WorldParams {
-        tools: vec![tool],
         ..WorldParams::default()
     };
-    let mut w = World::new(
-        particles(&points, |k| k as u32),
-        &[Material::empty()],
-        params,
+    let mut w = with_tools(
+        World::new(
+            particles(&points, |k| k as u32),
+            &[Material::empty()],
+            params,
+        ),
+        vec![tool],
     )
     .unwrap();
     let f = w.evaluate_forces().0.to_vec();
@@ -266,7 +278,7 @@ fn tools_are_deterministic_across_thread_counts() {
             half_height: 8.0,
             radius: 1.0,
         },
-        path: Path {
+        path: ToolPath {
             keyframes: vec![
                 Keyframe {
                     time: 0.0,
@@ -295,11 +307,13 @@ fn tools_are_deterministic_across_thread_counts() {
                     gravity: [0.0, 0.0, -9.81],
                     ..ExternalParams::default()
                 },
-                tools: vec![cylinder.clone(), floor(500.0, 1.0)],
                 ..WorldParams::default()
             };
-            let mut w =
-                World::new(particles(&points, |_| 0), &[spacing_material()], params).unwrap();
+            let mut w = with_tools(
+                World::new(particles(&points, |_| 0), &[spacing_material()], params),
+                vec![cylinder.clone(), floor(500.0, 1.0)],
+            )
+            .unwrap();
             w.advance_to(0.6).unwrap();
             w.particles()
                 .positions()
@@ -348,17 +362,30 @@ fn interval_contributors_act_over_the_whole_interval() {
 #[test]
 fn obstacle_damping_never_pulls() {
     let params = WorldParams {
-        tools: vec![floor(100.0, 100.0)],
         ..WorldParams::default()
     };
     let mut p = Particles::new();
     let mut d = ParticleDesc::at(Point3::new(0.0, 0.0, -0.01));
     d.velocity = Vec3::new(0.0, 0.0, 10.0);
     p.push(d).unwrap();
-    let mut w = World::new(p, &[Material::empty()], params).unwrap();
+    let mut w = with_tools(
+        World::new(p, &[Material::empty()], params),
+        vec![floor(100.0, 100.0)],
+    )
+    .unwrap();
     assert_eq!(w.evaluate_forces().0[0], Vec3::zeros());
     // Approaching, the damping adds to the penalty push.
     w.particles_mut().set_velocity(0, Vec3::new(0.0, 0.0, -0.1));
     let f = w.evaluate_forces().0[0];
     assert!((f.z - (100.0 * 0.01 + 100.0 * 0.1)).abs() < 1e-12, "{f}");
+}
+
+/// `world` with the tools `params` (`Tools::equip`).
+fn with_tools(
+    world: Result<World, op_dynamics::WorldError>,
+    params: Vec<ToolParams>,
+) -> Result<World, ToolError> {
+    let mut world = world?;
+    Tools::equip(&mut world, &params)?;
+    Ok(world)
 }

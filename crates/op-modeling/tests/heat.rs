@@ -5,17 +5,15 @@
 //! and heat, stretching can be gated by temperature, and the result does
 //! not depend on the thread count.
 
-mod common;
-
-use common::{
-    assert_energy_gradients, assert_momentum_conserved, full_material, hex_sheet, in_pool,
-    random_cluster, spacing_material, Rng,
-};
-use op_dynamics::creation::{CreationParams, StretchingParams};
-use op_dynamics::tools::{Path, Role, ToolParams, ToolShape};
 use op_dynamics::{
     ExternalParams, Flags, ForceWindow, HeatParams, HeatResponse, Material, ParticleDesc,
     Particles, Point3, Real, World, WorldParams,
+};
+use op_modeling::creation::{CreationParams, StretchingParams};
+use op_modeling::tools::{Role, ToolError, ToolParams, ToolPath, ToolShape, Tools};
+use op_test_support::{
+    assert_energy_gradients, assert_momentum_conserved, full_material, hex_sheet, in_pool,
+    random_cluster, spacing_material, Rng,
 };
 
 const RESPONSE: HeatResponse = HeatResponse {
@@ -43,7 +41,7 @@ fn ball(centre: [Real; 3], radius: Real, role: Role) -> ToolParams {
     ToolParams {
         name: "ball".into(),
         shape: ToolShape::Ball { radius },
-        path: Path::fixed(centre),
+        path: ToolPath::fixed(centre),
         role,
         objects: None,
     }
@@ -154,10 +152,13 @@ fn heaters_heat_what_they_reach_and_conduction_spreads_it() {
         let params = WorldParams {
             dt,
             heat: heat(conduction, 0.0),
-            tools: vec![heater([0.0, 0.0, 0.0], 0.6, power, reach)],
             ..WorldParams::default()
         };
-        let mut w = World::new(p, &[m], params).unwrap();
+        let mut w = with_tools(
+            World::new(p, &[m], params),
+            vec![heater([0.0, 0.0, 0.0], 0.6, power, reach)],
+        )
+        .unwrap();
         assert!(w.enabled().contains(&"tool:heater".to_string()));
         for _ in 0..steps {
             w.step().unwrap();
@@ -272,10 +273,13 @@ fn knives_push_like_obstacles_and_heat() {
         }
         let params = WorldParams {
             heat: heat(0.0, 0.0),
-            tools: vec![ball([0.0; 3], 1.0, role)],
             ..WorldParams::default()
         };
-        let mut w = World::new(p, &[Material::empty()], params).unwrap();
+        let mut w = with_tools(
+            World::new(p, &[Material::empty()], params),
+            vec![ball([0.0; 3], 1.0, role)],
+        )
+        .unwrap();
         let f = w.evaluate_forces().0.to_vec();
         w.step().unwrap();
         (f, temperatures_by_id(&w))
@@ -335,12 +339,14 @@ fn stretching_can_be_gated_by_temperature() {
 #[test]
 fn heaters_need_heat_settings() {
     let params = WorldParams {
-        tools: vec![heater([0.0; 3], 1.0, 1.0, 0.5)],
         ..WorldParams::default()
     };
-    let err = World::new(Particles::new(), &[Material::empty()], params)
-        .err()
-        .expect("refused");
+    let err = with_tools(
+        World::new(Particles::new(), &[Material::empty()], params),
+        vec![heater([0.0; 3], 1.0, 1.0, 0.5)],
+    )
+    .err()
+    .expect("refused");
     let msg = err.to_string();
     assert!(msg.contains("tools[0]") && msg.contains("heat"), "{msg}");
 }
@@ -360,14 +366,14 @@ fn heat_is_deterministic_across_thread_counts() {
             shape: ToolShape::Cuboid {
                 half_extents: [0.1, 2.0, 2.0],
             },
-            path: Path {
+            path: ToolPath {
                 keyframes: vec![
-                    op_dynamics::Keyframe {
+                    op_modeling::Keyframe {
                         time: 0.0,
                         position: [6.5, -3.0, 0.0],
                         rotation: [0.0; 3],
                     },
-                    op_dynamics::Keyframe {
+                    op_modeling::Keyframe {
                         time: 0.3,
                         position: [6.5, 10.0, 0.0],
                         rotation: [0.0; 3],
@@ -385,10 +391,13 @@ fn heat_is_deterministic_across_thread_counts() {
         };
         let params = WorldParams {
             heat: heat(1.0, 0.5),
-            tools: vec![knife],
             ..WorldParams::default()
         };
-        let mut w = World::new(p, &[heated(full_material(false, 0.5))], params).unwrap();
+        let mut w = with_tools(
+            World::new(p, &[heated(full_material(false, 0.5))], params),
+            vec![knife],
+        )
+        .unwrap();
         for _ in 0..300 {
             w.step().unwrap();
         }
@@ -413,10 +422,13 @@ fn changing_temperatures_refresh_forces_only_when_materials_weaken() {
         }
         let params = WorldParams {
             heat: heat(1.0, 0.5),
-            tools: vec![heater([3.0, 2.0, 0.0], 1.0, 5.0, 1.0)],
             ..WorldParams::default()
         };
-        let mut w = World::new(p, &[material], params).unwrap();
+        let mut w = with_tools(
+            World::new(p, &[material], params),
+            vec![heater([3.0, 2.0, 0.0], 1.0, 5.0, 1.0)],
+        )
+        .unwrap();
         w.step().unwrap();
         let before = w.force_evaluations();
         for _ in 0..10 {
@@ -486,4 +498,14 @@ fn cold_drag_slows_cold_particles_only() {
         .unwrap_err()
         .to_string()
         .contains("cold_drag"));
+}
+
+/// `world` with the tools `params` (`Tools::equip`).
+fn with_tools(
+    world: Result<World, op_dynamics::WorldError>,
+    params: Vec<ToolParams>,
+) -> Result<World, ToolError> {
+    let mut world = world?;
+    Tools::equip(&mut world, &params)?;
+    Ok(world)
 }

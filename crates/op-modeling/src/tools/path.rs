@@ -9,8 +9,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{self, ParamError};
-use crate::math::{Quat, Real, Vec3};
+use op_dynamics::error::{self, ParamError};
+use op_dynamics::math::{Quat, Real, Vec3};
 
 /// A pose of the tool at a time.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -31,7 +31,7 @@ pub struct Keyframe {
 /// the tool at the origin, unrotated; one keyframe keeps it there.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(transparent)]
-pub struct Path {
+pub struct ToolPath {
     /// Keyframes in strictly increasing time.
     pub keyframes: Vec<Keyframe>,
 }
@@ -56,10 +56,10 @@ impl ToolPose {
     }
 }
 
-impl Path {
+impl ToolPath {
     /// A path that keeps the tool still at `position`.
-    pub fn fixed(position: [Real; 3]) -> Path {
-        Path {
+    pub fn fixed(position: [Real; 3]) -> ToolPath {
+        ToolPath {
             keyframes: vec![Keyframe {
                 time: 0.0,
                 position,
@@ -145,8 +145,8 @@ impl Path {
 mod tests {
     use super::*;
 
-    fn path() -> Path {
-        Path {
+    fn path() -> ToolPath {
+        ToolPath {
             keyframes: vec![
                 Keyframe {
                     time: 1.0,
@@ -176,7 +176,7 @@ mod tests {
         assert_eq!(end.position, Vec3::new(2.0, 0.0, 4.0));
         assert!((end.rotation.angle() - 1.0).abs() < 1e-12);
         assert!(!p.is_static());
-        assert!(Path::fixed([1.0, 2.0, 3.0]).is_static());
+        assert!(ToolPath::fixed([1.0, 2.0, 3.0]).is_static());
     }
 
     #[test]

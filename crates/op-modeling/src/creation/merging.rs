@@ -5,7 +5,7 @@
 //!
 //! Why it is needed: the cohesion force of seed 002 §3 has no hard core
 //! (`f(r) = E (r0 - r)³ / r · exp(-α (r0 - r)²)` vanishes as `r → 0` for
-//! the usual `α`, see [`crate::interactions::cohesion`]), so two particles
+//! the usual `α`, see [`op_dynamics::interactions::cohesion`]), so two particles
 //! pushed past its repulsive barrier (by a tool pressing two layers of a
 //! surface together, or by a rim welding onto another) stay together for
 //! good. Such a pair is one surface element counted twice: the
@@ -30,11 +30,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{self, ParamError};
-use crate::flags::Flags;
-use crate::math::{Point3, Real, Vec3};
-use crate::neighbours::{search, NeighbourBackend, PairList};
-use crate::particles::Particles;
+use op_dynamics::error::{self, ParamError};
+use op_dynamics::flags::Flags;
+use op_dynamics::math::{Point3, Real};
+use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
+use op_dynamics::particles::Particles;
+use op_dynamics::Merge;
 
 /// Parameters of the merging rule, lengths as fractions of `r0`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -60,22 +61,6 @@ impl MergingParams {
             "must be in (0, 1) (a fraction of the rest spacing r0)",
         )
     }
-}
-
-/// One merge: particle `removed` joins particle `survivor`, which takes
-/// the new `position`, `velocity` and `temperature`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Merge {
-    /// Id of the particle that stays.
-    pub survivor: u32,
-    /// Id of the particle that is removed.
-    pub removed: u32,
-    /// The survivor's new position.
-    pub position: Point3,
-    /// The survivor's new velocity.
-    pub velocity: Vec3,
-    /// The survivor's new temperature.
-    pub temperature: Real,
 }
 
 /// The merges the rule makes now, in ascending order of their id pairs.

@@ -1,5 +1,11 @@
-//! Shared helpers of the integration tests: a seeded RNG and small scenes.
-#![allow(dead_code)]
+//! Test support of the oriented-particles workspace (unpublished): the one
+//! seeded generator ([`Rng`], SplitMix64), small particle sets (hex sheets,
+//! random clusters, noisy sheets), materials, a fixed-size thread pool
+//! ([`in_pool`], for the same-bits-at-any-thread-count checks), temporary
+//! directories ([`temp_dir`]), and the checks every force term must pass:
+//! energy gradients against finite differences
+//! ([`assert_energy_gradients`]) and momentum conservation
+//! ([`assert_momentum_conserved`]).
 
 use op_dynamics::interactions::{CohesionParams, Spacing, WeightParams, WeightShape};
 use op_dynamics::{Material, ParticleDesc, Particles, Point3, Quat, Real, Vec3, World};
@@ -8,9 +14,11 @@ use op_dynamics::{Material, ParticleDesc, Particles, Point3, Quat, Real, Vec3, W
 pub struct Rng(u64);
 
 impl Rng {
+    /// The generator seeded with `seed`.
     pub fn new(seed: u64) -> Self {
         Rng(seed)
     }
+    /// The next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
@@ -22,6 +30,7 @@ impl Rng {
     pub fn uniform(&mut self, lo: Real, hi: Real) -> Real {
         lo + (hi - lo) * ((self.next_u64() >> 11) as Real / (1u64 << 53) as Real)
     }
+    /// A vector with components uniform in `[-s, s)`.
     pub fn vec3(&mut self, s: Real) -> Vec3 {
         Vec3::new(
             self.uniform(-s, s),
@@ -29,6 +38,7 @@ impl Rng {
             self.uniform(-s, s),
         )
     }
+    /// A rotation whose scaled axis has components uniform in `[-angle, angle)`.
     pub fn quat(&mut self, angle: Real) -> Quat {
         Quat::from_scaled_axis(self.vec3(angle))
     }
@@ -213,4 +223,14 @@ pub fn assert_momentum_conserved(w: &mut World, case: &str) {
         ang.norm() <= 1e-12 * scale,
         "{case}: angular {ang:?} (scale {scale})"
     );
+}
+
+/// A fresh, empty directory `<system temp>/<crate>-<tag>-<pid>` for one
+/// test (removed first when a previous run left it).
+pub fn temp_dir(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("op-test-{tag}-{}", std::process::id()));
+    // A leftover of an earlier run with the same pid: start empty.
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create the test's temporary directory");
+    dir
 }

@@ -9,8 +9,8 @@ use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::shape::{SharedShape, TriMeshFlags};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{self, ParamError};
-use crate::math::{Quat, Real, Vec3};
+use op_dynamics::error::{self, ParamError};
+use op_dynamics::math::{Quat, Real, Vec3};
 
 /// A tool's shape in its own frame (the frame its path moves).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]

@@ -1,5 +1,5 @@
 use super::*;
-use crate::particles::ParticleDesc;
+use op_dynamics::particles::ParticleDesc;
 
 /// SplitMix64 for seeded jitter.
 struct Rng(u64);

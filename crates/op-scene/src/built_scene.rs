@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use op_dynamics::driver::{DriveError, Driver};
-use op_dynamics::{Divergence, Point3, Real, Tool, World};
+use op_dynamics::{Divergence, Point3, Real, World};
+use op_modeling::Tool;
 
 use crate::creation::CreationState;
 use crate::outputs::{Outputs, ParticleOutput};
@@ -141,7 +142,7 @@ impl BuiltScene {
                 .collect();
             // Particles cannot coincide after a finite, non-divergent settle
             // phase unless the material lets them; keep the built spacing then.
-            if let Ok(r0) = crate::build::rest_spacing(&o.rest, Some(o.rest_spacing)) {
+            if let Ok(r0) = crate::builder::rest_spacing(&o.rest, Some(o.rest_spacing)) {
                 o.rest_spacing = r0;
             }
         }

@@ -26,13 +26,14 @@ use parry3d_f64::shape::{Shape, SharedShape};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::contributors::{Contribution, Contributor, ContributorInput};
-use crate::error::ParamError;
-use crate::integrators::StateRef;
-use crate::math::{Point3, Real, Vec3};
-use crate::particles::{Attributes, Particles};
+use op_dynamics::contributors::{Contribution, Contributor, ContributorInput};
+use op_dynamics::error::ParamError;
+use op_dynamics::integrators::StateRef;
+use op_dynamics::math::{Point3, Real, Vec3};
+use op_dynamics::particles::{Attributes, Particles};
+use op_dynamics::tooling::ToolSet;
 
-pub use path::{Keyframe, Path, ToolPose};
+pub use path::{Keyframe, ToolPath, ToolPose};
 pub use roles::Role;
 pub use shape::{parry_pose, ToolShape};
 
@@ -47,7 +48,7 @@ pub struct ToolParams {
     pub shape: ToolShape,
     /// Motion of the tool frame. Default: still at the origin.
     #[serde(default)]
-    pub path: Path,
+    pub path: ToolPath,
     /// What the tool does.
     pub role: Role,
     /// Object ids the tool acts on. Default (`None`): every object.
@@ -164,7 +165,7 @@ impl Tool {
         let (local, triangles, convex): (Vec<Vec3>, Vec<[u32; 3]>, bool) =
             if let ToolShape::Plane { normal } = &self.params.shape {
                 let n = Vec3::from(*normal).normalize();
-                let u = crate::math::tangent_axis(&n) * plane_extent;
+                let u = op_dynamics::math::tangent_axis(&n) * plane_extent;
                 let v = n.cross(&u);
                 let corners = vec![-u - v, u - v, u + v, -u + v];
                 (corners, vec![[0, 1, 2], [0, 2, 3]], false)
@@ -252,7 +253,7 @@ impl Tool {
     }
 
     /// Adds `dt` times the heating rate this tool gives each particle at
-    /// time `t` ([`crate::heat::heating_rate`] of its signed distance) to
+    /// time `t` ([`op_dynamics::heat::heating_rate`] of its signed distance) to
     /// its temperature (by slot). Nothing unless the tool is a heater or a
     /// knife; particles of objects it does not act on are not heated.
     pub fn add_heat(
@@ -283,8 +284,9 @@ impl Tool {
                 // No signed distance exactly on the surface or where the
                 // projection degenerates inside (a ball's centre): both get
                 // the full power.
-                let rate = signed_distance(shape, &frame, &x)
-                    .map_or(power, |(sd, _)| crate::heat::heating_rate(power, reach, sd));
+                let rate = signed_distance(shape, &frame, &x).map_or(power, |(sd, _)| {
+                    op_dynamics::heat::heating_rate(power, reach, sd)
+                });
                 *temp += dt * rate;
             });
     }
@@ -542,254 +544,84 @@ impl Contributor for Tools {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::particles::ParticleDesc;
-
-    /// An eraser ball sweeping along a row of still particles removes each
-    /// one when its centre is inside, exactly those, in any thread count;
-    /// a mover forgets the particles erased from its grip; survivors keep
-    /// their ids.
-    #[test]
-    fn eraser_removes_the_particles_it_passes_over() {
-        use crate::{Material, World, WorldParams};
-        let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let mut p = Particles::new();
-                    for k in 0..10 {
-                        p.push(ParticleDesc::at(Point3::new(k as Real, 0.0, 0.0)))
-                            .unwrap();
-                    }
-                    // Sweeps x from -1 to 4.5 over t in [0, 1]; radius 0.6
-                    // reaches x <= 5.1 at the end: particles 0..=5.
-                    let eraser = ToolParams {
-                        name: "eraser".into(),
-                        shape: ToolShape::Ball { radius: 0.6 },
-                        path: Path {
-                            keyframes: vec![
-                                Keyframe {
-                                    time: 0.0,
-                                    position: [-1.0, 0.0, 0.0],
-                                    rotation: [0.0; 3],
-                                },
-                                Keyframe {
-                                    time: 1.0,
-                                    position: [4.5, 0.0, 0.0],
-                                    rotation: [0.0; 3],
-                                },
-                            ],
-                        },
-                        role: Role::Eraser,
-                        objects: None,
-                    };
-                    // Holds particles 1 and 8 in place.
-                    let holder = |x: Real| ToolParams {
-                        name: "holder".into(),
-                        shape: ToolShape::Ball { radius: 0.1 },
-                        path: Path::fixed([x, 0.0, 0.0]),
-                        role: Role::Mover {
-                            stiffness: 10.0,
-                            damping: 0.0,
-                            release: Real::INFINITY,
-                        },
-                        objects: None,
-                    };
-                    let params = WorldParams {
-                        dt: 0.01,
-                        tools: vec![eraser, holder(1.0), holder(8.0)],
-                        ..WorldParams::default()
-                    };
-                    let mut w = World::new(p, &[Material::empty()], params).unwrap();
-                    assert!(w.enabled().contains(&"tool:eraser".to_string()));
-                    let mut erased = Vec::new();
-                    let mut count_when_first_erased = None;
-                    while w.time() < 1.5 {
-                        let now = w.step().unwrap().erased.clone();
-                        if !now.is_empty() && count_when_first_erased.is_none() {
-                            count_when_first_erased = Some(w.time());
-                        }
-                        erased.extend(now);
-                    }
-                    let grabbed: Vec<Vec<u32>> =
-                        w.tools().iter().map(|t| t.grabbed().collect()).collect();
-                    (
-                        erased,
-                        w.particles().ids().to_vec(),
-                        grabbed,
-                        count_when_first_erased,
-                    )
-                })
-        };
-        let (erased, mut ids, grabbed, first) = run(1);
-        assert_eq!(erased, vec![0, 1, 2, 3, 4, 5]);
-        ids.sort_unstable();
-        assert_eq!(ids, vec![6, 7, 8, 9]);
-        // The ball's surface reaches x = 0 at t = 0.4/5.5.
-        let first = first.expect("something was erased");
-        assert!((first - 0.4 / 5.5).abs() <= 0.011, "{first}");
-        assert_eq!(grabbed, vec![vec![], vec![], vec![8]]);
-        assert_eq!(run(2), run(1));
+impl ToolSet for Tools {
+    fn heats(&self) -> bool {
+        self.tools.iter().any(|t| t.params.role.heating().is_some())
     }
 
-    /// Two shaping balls closing along z on a row of still particles along
-    /// z (fixed: only the trap rule acts) delete exactly the particles
-    /// within both margins: those in the gap between them once it is
-    /// narrower than two margins, none while the gap is wider, none near
-    /// one ball only; the same ids at 1 and 2 threads. A single shaping
-    /// tool deletes nothing (a world with one does not even look).
-    #[test]
-    fn shapers_delete_the_particles_trapped_between_them() {
-        use crate::{Flags, Material, World, WorldParams};
-        let shaper = |from: Real, to: Real| ToolParams {
-            name: "shaper".into(),
-            shape: ToolShape::Ball { radius: 1.0 },
-            path: Path {
-                keyframes: vec![
-                    Keyframe {
-                        time: 0.0,
-                        position: [0.0, 0.0, from],
-                        rotation: [0.0; 3],
-                    },
-                    Keyframe {
-                        time: 1.0,
-                        position: [0.0, 0.0, to],
-                        rotation: [0.0; 3],
-                    },
-                ],
-            },
-            role: Role::Shaper {
-                stiffness: 10.0,
-                margin: 0.3,
-                damping: 0.0,
-            },
-            objects: None,
-        };
-        // Particles at z = -2.0, -1.9, ..., 2.0 (ids 0..=40), held fixed.
-        let row = || {
-            let mut p = Particles::new();
-            for k in 0..=40 {
-                let mut d = ParticleDesc::at(Point3::new(0.0, 0.0, -2.0 + 0.1 * k as Real));
-                d.flags = Flags::FIXED_POSITION | Flags::FIXED_ORIENTATION;
-                p.push(d).unwrap();
-            }
-            p
-        };
-        let run = |threads: usize, tools: Vec<ToolParams>| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let params = WorldParams {
-                        dt: 0.01,
-                        tools,
-                        ..WorldParams::default()
-                    };
-                    let mut w = World::new(row(), &[Material::empty()], params).unwrap();
-                    let mut erased = Vec::new();
-                    let mut first = None;
-                    while w.time() < 1.0 - 1e-9 {
-                        let now = w.step().unwrap().erased.clone();
-                        if !now.is_empty() && first.is_none() {
-                            first = Some(w.time());
-                        }
-                        erased.extend(now);
-                    }
-                    (erased, first, w.tools().len())
-                })
-        };
-        // Ball surfaces at z = ±(2.5 - 1.0 - 1.25 t): the gap 2 (1.5 - 1.25
-        // t) falls below two margins (0.6) at t = 0.96; at t = 1 the gap is
-        // (-0.25, 0.25) and the particles within 0.3 of both surfaces are
-        // those with |z| < 0.05.
-        let closing = vec![shaper(2.5, 1.25), shaper(-2.5, -1.25)];
-        let (erased, first, _) = run(1, closing.clone());
-        assert_eq!(erased, vec![20], "only z = 0 lies within both margins");
-        let first = first.expect("something was trapped");
-        assert!(first >= 0.96 - 1e-9, "trapped too early: t = {first}");
-        assert_eq!(
-            run(2, closing),
-            run(1, vec![shaper(2.5, 1.25), shaper(-2.5, -1.25)])
-        );
-        // Overlapping: the surfaces reach z = ∓0.25 at t = 1 (inside a
-        // ball counts as within its margin), so every particle with
-        // |z| < 0.55 is within 0.3 of both, and is deleted on the way.
-        let (mut wide, _, _) = run(1, vec![shaper(2.5, 0.75), shaper(-2.5, -0.75)]);
-        wide.sort_unstable();
-        assert_eq!(wide, (15..=25).collect::<Vec<u32>>());
-        // One shaper alone, pushed through the whole row, deletes nothing.
-        let (alone, _, _) = run(1, vec![shaper(2.5, -2.5)]);
-        assert!(alone.is_empty(), "{alone:?}");
-        let one = Tools::new(&[shaper(2.5, -2.5)], &row()).unwrap();
-        assert!(!one.removes_particles());
-        assert!(Tools::new(&[shaper(2.5, 1.0), shaper(-2.5, -1.0)], &row())
-            .unwrap()
-            .removes_particles());
-    }
-
-    /// Every shape's output mesh is closed where the shape is, outward
-    /// oriented (positive signed volume close to the shape's), and posed.
-    #[test]
-    fn surface_meshes_are_outward_and_posed() {
-        let particles = {
-            let mut p = Particles::new();
-            p.push(ParticleDesc::at(Point3::new(9.0, 9.0, 9.0)))
-                .unwrap();
-            p
-        };
-        let shapes = [
-            (
-                ToolShape::Ball { radius: 1.0 },
-                4.0 / 3.0 * std::f64::consts::PI,
-            ),
-            (
-                ToolShape::Cuboid {
-                    half_extents: [1.0, 2.0, 0.5],
-                },
-                8.0,
-            ),
-            (
-                ToolShape::Cylinder {
-                    half_height: 1.0,
-                    radius: 0.5,
-                },
-                std::f64::consts::PI * 0.25 * 2.0,
-            ),
-        ];
-        for (shape, volume) in shapes {
-            let tool = Tool::new(
-                &ToolParams {
-                    name: String::new(),
-                    shape: shape.clone(),
-                    path: Path::fixed([1.0, 2.0, 3.0]),
-                    role: Role::Obstacle {
-                        stiffness: 1.0,
-                        margin: 0.0,
-                        damping: 0.0,
-                    },
-                    objects: None,
-                },
-                &particles,
-            )
-            .unwrap();
-            let (v, t) = tool.surface_mesh(0.0, 1.0);
-            let centre = Vec3::new(1.0, 2.0, 3.0);
-            let signed: Real = t
-                .iter()
-                .map(|tri| {
-                    let [a, b, c] = tri.map(|k| v[k as usize].coords - centre);
-                    a.dot(&b.cross(&c)) / 6.0
-                })
-                .sum();
-            assert!(
-                signed > 0.0 && (signed - volume).abs() < 0.1 * volume,
-                "{shape:?}: {signed} vs {volume}"
-            );
+    /// Every heating tool's heat, tool after tool ([`Tool::add_heat`]).
+    fn add_heat(
+        &self,
+        t: Real,
+        dt: Real,
+        positions: &[Point3],
+        objects: &[u32],
+        temperatures: &mut [Real],
+    ) {
+        for tool in &self.tools {
+            tool.add_heat(t, dt, positions, objects, temperatures);
         }
     }
+
+    fn removes_particles(&self) -> bool {
+        Tools::removes_particles(self)
+    }
+
+    fn erase(&mut self, t: Real, particles: &Particles) -> Vec<u32> {
+        Tools::erase(self, t, particles)
+    }
+
+    fn roles(&self) -> Vec<&'static str> {
+        self.tools.iter().map(|t| t.params.role.name()).collect()
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
 }
+
+impl Tools {
+    /// The tools of `world`, when they are a [`Tools`]
+    /// ([`op_dynamics::World::set_tools`]).
+    pub fn of(world: &op_dynamics::World) -> Option<&Tools> {
+        world.tools()?.as_any().downcast_ref::<Tools>()
+    }
+
+    /// Builds the tools of `params` for `world`'s particles (movers grab
+    /// the particles they start on) and gives them to it. Without tools the
+    /// world is left as it is (it pays for no tool stage).
+    pub fn equip(world: &mut op_dynamics::World, params: &[ToolParams]) -> Result<(), ToolError> {
+        if params.is_empty() {
+            return Ok(());
+        }
+        if world.params().heat.is_none() {
+            if let Some(k) = params.iter().position(|t| t.role.heating().is_some()) {
+                return Err(ParamError::Invalid {
+                    field: format!("tools[{k}].role"),
+                    message: "a heater or knife needs the world's heat settings \
+                              (heat: conduction, cooling, ambient)"
+                        .into(),
+                }
+                .into());
+            }
+        }
+        let tools = Tools::new(params, world.particles())?;
+        world.set_tools(Box::new(tools))?;
+        Ok(())
+    }
+}
+
+/// Why tools could not be given to a world.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ToolError {
+    /// A tool's description is invalid.
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    /// The world refused them (a heating tool in a world without heat).
+    #[error(transparent)]
+    World(#[from] op_dynamics::WorldError),
+}
+
+#[cfg(test)]
+mod tests;

@@ -9,10 +9,11 @@ use op_dynamics::neighbours::{search, PairList};
 use op_dynamics::world::DivergenceParams;
 use op_dynamics::{
     ExternalParams, Flags, ForceWindow, Material, NeighbourBackend, ParticleDesc, Particles,
-    Point3, Real, Role, Tool, ToolParams, Vec3, World, WorldParams,
+    Point3, Real, Vec3, World, WorldParams,
 };
+use op_modeling::{Role, Tool, ToolParams};
 
-use crate::built::{BuiltObject, BuiltScene};
+use crate::built_scene::{BuiltObject, BuiltScene};
 use crate::creation::CreationState;
 use crate::error::SceneError;
 use crate::fit::{DataNeighbourhood, SceneFit};
@@ -219,10 +220,15 @@ impl Scene {
             divergence: DivergenceParams {
                 max_speed: w.divergence.max_speed,
             },
-            tools,
             heat: w.heat.clone(),
         };
-        let world = World::new(particles, &materials, params).map_err(|e| {
+        let world = World::new(particles, &materials, params)
+            .map_err(op_modeling::tools::ToolError::from)
+            .and_then(|mut world| {
+                op_modeling::Tools::equip(&mut world, &tools)?;
+                Ok(world)
+            });
+        let world = world.map_err(|e| {
             let mut message = format!("building the world: {e}");
             for (k, name) in used.iter().enumerate() {
                 message =
