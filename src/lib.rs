@@ -1,8 +1,8 @@
-//! Facade: the engine ([`op_dynamics`]), the scene layer ([`op_scene`]),
-//! and the shape-memory [`experiments`] of seed 002.
+//! Facade of oriented-particles: the engine ([`op_dynamics`]), modeling
+//! (tools, creation rules, triangulation: [`op_modeling`]), the scene layer
+//! ([`op_scene`]: schema, builder, runner, export) and the renderer
+//! ([`op_render`]). The `opsim` command line is this package's binary.
 pub use op_dynamics;
 pub use op_modeling;
 pub use op_render;
 pub use op_scene;
-
-pub mod experiments;

@@ -7,9 +7,7 @@
 //! log(error) against log(dt), for positions and orientations.
 //! `reports/accuracy.md` has the full sweep.
 
-use oriented_particles::experiments::accuracy::{
-    errors, log_slope, simulate, CaseEntry, Method, SceneSource,
-};
+use op_experiments::accuracy::{errors, log_slope, simulate, CaseEntry, Method, SceneSource};
 use oriented_particles::op_dynamics::{Real, Scheme};
 
 fn entry() -> CaseEntry {

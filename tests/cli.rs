@@ -1,6 +1,7 @@
 //! End-to-end tests of the `opsim` binary (README "Running scenes"): run the real
 //! binary in temporary directories and check exit codes, files and values.
 
+use op_test_support::temp_dir;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -14,13 +15,6 @@ fn opsim(args: &[&str], cwd: &Path) -> Output {
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("opsim-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn text(o: &Output) -> String {

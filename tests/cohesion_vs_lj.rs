@@ -3,10 +3,10 @@
 //! length for every integrator, and the oscillations of systems released
 //! near equilibrium.
 
-use oriented_particles::experiments::matching::{matched_lennard_jones, reference_cohesion};
-use oriented_particles::experiments::oscillation::{release_near_equilibrium, Dynamics};
-use oriented_particles::experiments::single_threaded;
-use oriented_particles::experiments::triangle::{
+use op_experiments::matching::{matched_lennard_jones, reference_cohesion};
+use op_experiments::oscillation::{release_near_equilibrium, Dynamics};
+use op_experiments::single_threaded;
+use op_experiments::triangle::{
     largest_diverging, lowest_converging, percentages, schemes, RobustnessTable, TriangleSettings,
 };
 use oriented_particles::op_dynamics::interactions::Spacing;

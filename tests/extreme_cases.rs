@@ -9,20 +9,15 @@
 
 use std::path::{Path, PathBuf};
 
-use oriented_particles::experiments::stability::extreme::{
+use op_experiments::stability::extreme::{
     cases, coincident_in_one_object, files_with_non_finite, run_scene, ExtremeOutcome, ExtremeRun,
     Overrides, RunLength,
 };
+use op_test_support::fresh_path;
 use oriented_particles::op_dynamics::Scheme;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("opsim-extreme-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
 }
 
 /// Whether frame 0 of every sequence of the run in `out` is on disk.
@@ -44,7 +39,7 @@ fn run_case(name: &str, overrides: Overrides) -> ExtremeRun {
         .into_iter()
         .find(|c| c.name == name)
         .expect("a known case");
-    let out = temp_dir(name);
+    let out = fresh_path(name);
     let run = run_scene(&case.scene(&repo()), &out, overrides).expect("the scene runs");
     let bad = files_with_non_finite(&out);
     assert!(bad.is_empty(), "{name}: non-finite output: {bad:?}");

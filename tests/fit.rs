@@ -10,20 +10,14 @@
 //! spacing with the right Euler characteristic and boundary loops.
 
 use std::f64::consts::{PI, TAU};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 use op_dynamics::{Point3, Vec3};
 use op_scene::fit::shapes::Shape;
 use op_scene::fit::{fit, Fit, FitParams};
 use op_scene::pointsets::{read_point_set, PointSet};
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("opsim-fit-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use op_test_support::temp_dir;
 
 fn opsim(args: &[&str], cwd: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_opsim"))

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use op_test_support::fresh_path;
 use ply_rs_bw::ply::{DefaultElement, Property};
 use vtkio::model::{Attribute, DataSet, IOBuffer, Piece};
 
@@ -18,12 +19,6 @@ fn opsim(args: &[&str]) -> Output {
         .current_dir(repo())
         .output()
         .expect("run opsim")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("opsim-formats-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
 }
 
 /// `(vertices, faces, lines)` of an OBJ frame file.
@@ -75,7 +70,7 @@ fn ints(b: &IOBuffer) -> Vec<i32> {
 
 #[test]
 fn ply_and_vtu_frames_parse_back_with_counts_and_attributes() {
-    let out = temp_dir("all");
+    let out = fresh_path("all");
     let o = opsim(&[
         "run",
         "scenes/hinge_spiral.ron",
@@ -191,7 +186,7 @@ fn ply_and_vtu_frames_parse_back_with_counts_and_attributes() {
 
 #[test]
 fn vtu_alone_writes_no_mesh_frames_and_an_unknown_format_is_refused() {
-    let out = temp_dir("vtu");
+    let out = fresh_path("vtu");
     let o = opsim(&[
         "run",
         "scenes/two_sheets.ron",

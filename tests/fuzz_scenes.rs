@@ -8,6 +8,7 @@
 //! `OPSIM_FUZZ_MUTANTS` (default 240) and `OPSIM_FUZZ_SEED` (default 13)
 //! set the run; the counts by class are printed (`--nocapture`).
 
+use op_test_support::Rng;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -22,22 +23,6 @@ const TIME_BOUND: Duration = Duration::from_secs(90);
 /// [`TIME_BOUND`] (3e7 did not: a torus shell of spacing 0.1, 23,700
 /// particles, ran past 90 s; seed 7).
 const BUDGET: &str = "1e7";
-
-/// SplitMix64: a small seeded generator.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -283,7 +268,7 @@ fn mutated_scenes_exit_cleanly_in_bounded_time_with_finite_outputs() {
                 if k >= count {
                     break;
                 }
-                let mut rng = Rng(seed ^ (k as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
+                let mut rng = Rng::new(seed ^ (k as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
                 let scene = &scenes[rng.below(scenes.len())];
                 let json = scene.extension().is_some_and(|e| e == "json");
                 let original = std::fs::read_to_string(scene).unwrap();

@@ -5,17 +5,15 @@
 //! in one piece, and two objects that collide without merging.
 //!
 //! The scenes are the files of `scenes/`; their parameters come from the
-//! one recipe of `oriented_particles::experiments::spiral`. Runs take well
+//! one recipe of `op_experiments::spiral`. Runs take well
 //! under a second each (tiny worlds, run on one thread).
 
 use std::path::{Path, PathBuf};
 
-use oriented_particles::experiments::membership::{run_collision, run_hinge};
-use oriented_particles::experiments::scaling::Scaling;
-use oriented_particles::experiments::single_threaded;
-use oriented_particles::experiments::spiral::{
-    experiment_shapes, run_spiral, SpiralRecipe, SpiralShape, Units,
-};
+use op_experiments::membership::{run_collision, run_hinge};
+use op_experiments::scaling::Scaling;
+use op_experiments::single_threaded;
+use op_experiments::spiral::{experiment_shapes, run_spiral, SpiralRecipe, SpiralShape, Units};
 use oriented_particles::op_scene::outputs::ParticleOutput;
 use oriented_particles::op_scene::{self, load_scene, CurvatureLaw, RunOptions, Scene, Summary};
 use serde_json::Value;

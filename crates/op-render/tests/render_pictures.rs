@@ -6,23 +6,12 @@
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use op_render::{
     render, render_contact_sheet, render_data, render_obj_file, render_path, save_png, sheet_grid,
     CameraSpec, ObjData, RenderError, RenderOptions, RgbImage, Style,
 };
-
-/// A fresh, unique directory under the system temp dir.
-fn temp_dir(tag: &str) -> PathBuf {
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let dir =
-        std::env::temp_dir().join(format!("op-scene-render-{tag}-{}-{n}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use op_test_support::temp_dir;
 
 /// A gently curved hexagonal patch of particles (positions and normals, no faces),
 /// lifted by `lift` along `+y`.

@@ -3,22 +3,12 @@
 //! creation rules run by the runner (created particles counted, frames
 //! identical at 1 and 2 threads).
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::path::Path;
 
 use op_modeling::triangulation::Triangulation;
 use op_render::{render, ObjData, ObjObject, RenderOptions, Style};
 use op_scene::{load_scene, parse_scene, run, Format, RunOptions, Scene, Summary};
-
-fn temp_dir(tag: &str) -> PathBuf {
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::SeqCst);
-    let dir =
-        std::env::temp_dir().join(format!("op-scene-surface-{tag}-{}-{n}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use op_test_support::temp_dir;
 
 fn run_scene(scene: &Scene, out: &Path, frames: usize) -> Summary {
     let mut built = scene.build(None, None).unwrap_or_else(|e| panic!("{e}"));

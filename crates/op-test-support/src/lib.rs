@@ -26,6 +26,10 @@ impl Rng {
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^ (z >> 31)
     }
+    /// Uniform in `0..n` (`n > 0`; the modulo bias is below `n / 2^64`).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
     /// Uniform in [lo, hi).
     pub fn uniform(&mut self, lo: Real, hi: Real) -> Real {
         lo + (hi - lo) * ((self.next_u64() >> 11) as Real / (1u64 << 53) as Real)
@@ -225,12 +229,27 @@ pub fn assert_momentum_conserved(w: &mut World, case: &str) {
     );
 }
 
-/// A fresh, empty directory `<system temp>/<crate>-<tag>-<pid>` for one
-/// test (removed first when a previous run left it).
+/// A new, empty directory under the system's temporary directory, unique
+/// to this call (`op-test-<tag>-<pid>-<n>`).
+///
+/// # Panics
+///
+/// If the directory cannot be created.
 pub fn temp_dir(tag: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("op-test-{tag}-{}", std::process::id()));
-    // A leftover of an earlier run with the same pid: start empty.
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = fresh_path(tag);
     std::fs::create_dir_all(&dir).expect("create the test's temporary directory");
     dir
+}
+
+/// A path under the system's temporary directory, unique to this call
+/// (`op-test-<tag>-<pid>-<n>`), where nothing exists: for programs under
+/// test that create their output directory themselves.
+pub fn fresh_path(tag: &str) -> std::path::PathBuf {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static COUNTER: AtomicUsize = AtomicUsize::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::SeqCst);
+    let path = std::env::temp_dir().join(format!("op-test-{tag}-{}-{n}", std::process::id()));
+    // A leftover of an earlier run with the same pid: start from nothing.
+    let _ = std::fs::remove_dir_all(&path);
+    path
 }

@@ -43,7 +43,7 @@ use op_dynamics::{
     WorldParams,
 };
 
-use crate::experiments::matching::reference_cohesion;
+use crate::matching::reference_cohesion;
 
 /// The potential whose stiffness a probe varies.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]

@@ -9,8 +9,8 @@ use op_dynamics::interactions::Spacing;
 use op_dynamics::{AdaptiveParams, Real, Scheme};
 use op_scene::{load_scene, Generator, ObjectSpec, Scene, WorldSettings};
 
-use crate::experiments::matching::reference_cohesion;
-use crate::experiments::spiral::{SpiralRecipe, SpiralShape};
+use crate::matching::reference_cohesion;
+use crate::spiral::{SpiralRecipe, SpiralShape};
 
 /// An integrator with its time step: the step of a fixed-step scheme, or
 /// the largest step of [`Scheme::Adaptive`] (whose tolerance is in the
@@ -202,7 +202,7 @@ pub fn fixed_schemes() -> [Scheme; 4] {
     ]
 }
 
-/// The cohesion triangle of seed 002 §3 (`src/experiments/triangle.rs`):
+/// The cohesion triangle of seed 002 §3 (`crates/op-experiments/src/triangle.rs`):
 /// three unit-mass particles held by the reference cohesion (`E = 200`,
 /// `r0 = 1`, `α = 16`, cut-off 1.5), started at rest on an equilateral
 /// triangle of side `p · r0`, here WITHOUT damping, so it breathes for ever

@@ -28,7 +28,7 @@ use op_dynamics::{
 };
 use op_scene::{load_scene, run, RunError, RunOptions, Summary};
 
-use crate::experiments::matching::reference_cohesion;
+use crate::matching::reference_cohesion;
 
 /// One extreme case given as a scene.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]

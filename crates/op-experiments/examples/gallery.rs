@@ -6,16 +6,16 @@
 //! scene's claim), else the renderer's default view with the run's up.
 //!
 //! ```text
-//! cargo run --release --example gallery              # every picture
-//! cargo run --release --example gallery -- fig_07_knife fig_12_drape
+//! cargo run --release -p op-experiments --example gallery              # every picture
+//! cargo run --release -p op-experiments --example gallery -- fig_07_knife fig_12_drape
 //! ```
 
 use std::path::{Path, PathBuf};
 
-use oriented_particles::op_render::{self as render, RenderOptions, Style};
-use oriented_particles::op_scene::export::obj::scene_to_obj;
-use oriented_particles::op_scene::export::FrameFormat;
-use oriented_particles::op_scene::{self, build_scene_file, RunOptions};
+use op_render::{self as render, RenderOptions, Style};
+use op_scene::export::obj::scene_to_obj;
+use op_scene::export::FrameFormat;
+use op_scene::{self, build_scene_file, RunOptions};
 
 /// A picture of the gallery: the scene (`scenes/NAME.ron`), the frames of
 /// its contact sheet and the drawing style.
@@ -65,7 +65,8 @@ const GALLERY: &[Picture] = &[
 const FRAME_SIZE: (u32, u32) = (400, 300);
 
 fn main() -> anyhow::Result<()> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = op_experiments::workspace_root();
+    let root = root.as_path();
     let only: Vec<String> = std::env::args().skip(1).collect();
     if let Some(unknown) = only
         .iter()
