@@ -37,16 +37,16 @@ use crate::bonds::Bonds;
 use crate::contributors::{Contribution, Contributor, ContributorInput};
 use crate::external::{ExternalAccumulator, ExternalParams, ForceWindows, UniformField};
 use crate::flags::Flags;
-use crate::heat::pair_strength;
 use crate::integrators::StateRef;
-use crate::interactions::{
-    evaluate_pair, evaluate_pair_weakened, evaluate_spacing_sq, evaluate_spacing_weakened,
-    Coupling, ParticleView, PreparedMaterial,
-};
+use crate::interactions::{Coupling, PreparedMaterial};
 use crate::math::{Real, Vec3};
 use crate::neighbours::NeighbourList;
 use crate::particles::Attributes;
 use crate::tooling::ToolSet;
+
+mod pair_kernels;
+use pair_kernels::{frames, oriented_pair, spacing_pair};
+pub use pair_kernels::friction_force;
 
 /// Which pair kernel a world runs, fixed when the world is built.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -634,189 +634,4 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
                 }
             }
         });
-}
-
-/// World normals and tangents of every particle at state `s`.
-fn frames(normals: &mut Vec<Vec3>, tangents: &mut Vec<Vec3>, a: &Attributes<'_>, s: StateRef<'_>) {
-    let n = s.positions.len();
-    normals.resize(n, Vec3::zeros());
-    tangents.resize(n, Vec3::zeros());
-    normals
-        .par_iter_mut()
-        .zip(tangents.par_iter_mut())
-        .enumerate()
-        .with_min_len(1024)
-        .for_each(|(i, (nv, tv))| {
-            let q = &s.orientations[i];
-            *nv = q * a.normal_axes[i];
-            *tv = q * a.tangent_axes[i];
-        });
-}
-
-/// The heat strength of the pair `(i, j)` when the world is `heated`
-/// ([`crate::heat::pair_strength`]), else 1.
-#[inline]
-fn strength(
-    a: &Attributes<'_>,
-    mi: &PreparedMaterial,
-    mj: &PreparedMaterial,
-    heated: bool,
-    i: usize,
-    j: usize,
-) -> Real {
-    if heated {
-        pair_strength(
-            mi.heat_response(),
-            mj.heat_response(),
-            a.temperatures[i],
-            a.temperatures[j],
-        )
-    } else {
-        1.0
-    }
-}
-
-/// The spacing kernel's pair: spacing potential for complete pairs
-/// (weakened by heat when `heated`), the typing repulsion otherwise; zero
-/// beyond the cut-off.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn spacing_pair(
-    a: &Attributes<'_>,
-    materials: &[PreparedMaterial],
-    bonds: &impl BondLookup,
-    heated: bool,
-    cutoff2: Real,
-    s: StateRef<'_>,
-    i: usize,
-    j: usize,
-) -> Option<SpacingPair> {
-    let p = s.positions;
-    let r = p[j] - p[i];
-    let d2 = r.norm_squared();
-    if d2 > cutoff2 {
-        return None;
-    }
-    let (mi, mj) = (
-        &materials[a.materials[i] as usize],
-        &materials[a.materials[j] as usize],
-    );
-    let (energy, force_j) = match coupling(a, bonds, i, j) {
-        Coupling::Complete { .. } => {
-            let st = strength(a, mi, mj, heated, i, j);
-            if st < 1.0 {
-                evaluate_spacing_weakened(mi, mj, &r, d2.sqrt(), st)
-            } else {
-                evaluate_spacing_sq(mi, mj, &r, d2)
-            }
-        }
-        Coupling::RepulsionOnly => {
-            let res = evaluate_pair(
-                &view(p[i], Vec3::zeros(), Vec3::zeros(), 0.0, mi),
-                &view(p[j], Vec3::zeros(), Vec3::zeros(), 0.0, mj),
-                Coupling::RepulsionOnly,
-            );
-            (res.energy, res.force_j)
-        }
-    };
-    Some(SpacingPair { force_j, energy })
-}
-
-#[inline]
-fn view(
-    position: crate::math::Point3,
-    normal: Vec3,
-    tangent: Vec3,
-    kappa: Real,
-    material: &PreparedMaterial,
-) -> ParticleView<'_> {
-    ParticleView {
-        position,
-        normal,
-        tangent,
-        kappa,
-        material,
-    }
-}
-
-/// The oriented kernel's pair: the full interaction of the pair's coupling
-/// (weakened by heat when `heated`) plus inter-particle friction; zero
-/// beyond the cut-off.
-///
-/// `UNIFORM`: every particle has material 0, one object, one type and is
-/// oriented, the world is not heated ([`uniform_oriented`]): every pair is
-/// complete and oriented, without per-pair lookups.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn oriented_pair<const UNIFORM: bool>(
-    a: &Attributes<'_>,
-    materials: &[PreparedMaterial],
-    bonds: &impl BondLookup,
-    friction: bool,
-    heated: bool,
-    cutoff2: Real,
-    normals: &[Vec3],
-    tangents: &[Vec3],
-    s: StateRef<'_>,
-    i: usize,
-    j: usize,
-) -> Option<OrientedPair> {
-    let p = s.positions;
-    let r = p[j] - p[i];
-    let d2 = r.norm_squared();
-    if d2 > cutoff2 {
-        return None;
-    }
-    let (mi, mj, c) = if UNIFORM {
-        let m = &materials[0];
-        (m, m, Coupling::Complete { oriented: true })
-    } else {
-        (
-            &materials[a.materials[i] as usize],
-            &materials[a.materials[j] as usize],
-            coupling(a, bonds, i, j),
-        )
-    };
-    let (vi, vj) = (
-        view(p[i], normals[i], tangents[i], a.curvatures[i], mi),
-        view(p[j], normals[j], tangents[j], a.curvatures[j], mj),
-    );
-    let res = if !UNIFORM && heated && matches!(c, Coupling::Complete { .. }) {
-        evaluate_pair_weakened(&vi, &vj, c, strength(a, mi, mj, heated, i, j))
-    } else {
-        evaluate_pair(&vi, &vj, c)
-    };
-    let mut force_j = res.force_j;
-    if friction && matches!(c, Coupling::Complete { .. }) {
-        let v_rel = s.velocities[j] - s.velocities[i];
-        force_j += friction_force(mi, mj, &r, d2.sqrt(), &v_rel);
-    }
-    Some(OrientedPair {
-        force_j,
-        torque_i: res.torque_i,
-        torque_j: res.torque_j,
-        energy: res.energy,
-    })
-}
-
-/// Inter-particle friction (seed 002 §3, §5): damping of the relative
-/// velocity of two particles. Applied along the line of centres (the
-/// dissipative force of DPD), so it conserves linear *and* angular momentum;
-/// weight `1 - r/r_c` over the spacing cut-off, coefficient the mean of the
-/// two materials'. Returns the force on j (the force on i is its negative).
-#[inline]
-pub fn friction_force(
-    mi: &PreparedMaterial,
-    mj: &PreparedMaterial,
-    r: &Vec3,
-    dist: Real,
-    v_rel: &Vec3,
-) -> Vec3 {
-    let gamma = 0.5 * (mi.friction() + mj.friction());
-    let rc = mi.spacing_cutoff().max(mj.spacing_cutoff());
-    if gamma == 0.0 || dist >= rc || dist == 0.0 {
-        return Vec3::zeros();
-    }
-    let e = r / dist;
-    -gamma * (1.0 - dist / rc) * v_rel.dot(&e) * e
 }
