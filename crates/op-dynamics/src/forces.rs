@@ -45,8 +45,8 @@ use crate::particles::Attributes;
 use crate::tooling::ToolSet;
 
 mod pair_kernels;
-use pair_kernels::{frames, oriented_pair, spacing_pair};
 pub use pair_kernels::friction_force;
+use pair_kernels::{frames, oriented_pair, spacing_pair};
 
 /// Which pair kernel a world runs, fixed when the world is built.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
@@ -585,26 +585,7 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
                 };
                 e[i - b0] = eo;
             }
-            // Group the spill by target block, keeping the visiting order
-            // within each group (a counting sort of the visiting indices).
-            let first = b + 1;
-            block.starts.clear();
-            block.starts.resize(nblocks - first + 1, 0);
-            for &j in &block.spill_targets {
-                block.starts[j as usize / BLOCK - first + 1] += 1;
-            }
-            for g in 1..block.starts.len() {
-                block.starts[g] += block.starts[g - 1];
-            }
-            block.order.clear();
-            block.order.resize(block.spill_targets.len(), 0);
-            block.cursor.clear();
-            block.cursor.extend_from_slice(&block.starts);
-            for (k, &j) in block.spill_targets.iter().enumerate() {
-                let c = &mut block.cursor[j as usize / BLOCK - first];
-                block.order[*c as usize] = k as u32;
-                *c += 1;
-            }
+            block.group_spills(b, nblocks);
         };
     blocks
         .par_iter_mut()
@@ -614,7 +595,16 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
         .enumerate()
         .for_each(|(b, (((block, f), t), e))| work(b, block, f, t, e));
     // Pass 2: each block adds the spills aimed at it, earlier blocks first.
-    let blocks = &*blocks;
+    add_spills::<TORQUES>(blocks, forces, torques);
+}
+
+/// Pass 2 of [`accumulate`]: each block of `forces` and `torques` adds the
+/// spills aimed at it, from the earlier blocks in ascending order.
+fn add_spills<const TORQUES: bool>(
+    blocks: &[BlockScratch],
+    forces: &mut [Vec3],
+    torques: &mut [Vec3],
+) {
     forces
         .par_chunks_mut(BLOCK)
         .zip(torques.par_chunks_mut(BLOCK))
@@ -634,4 +624,30 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
                 }
             }
         });
+}
+
+impl BlockScratch {
+    /// Groups block `b`'s spill by target block (of `nblocks`), keeping the
+    /// visiting order within each group: a counting sort of the visiting
+    /// indices into `order`, with each group's range in `starts`.
+    fn group_spills(&mut self, b: usize, nblocks: usize) {
+        let first = b + 1;
+        self.starts.clear();
+        self.starts.resize(nblocks - first + 1, 0);
+        for &j in &self.spill_targets {
+            self.starts[j as usize / BLOCK - first + 1] += 1;
+        }
+        for g in 1..self.starts.len() {
+            self.starts[g] += self.starts[g - 1];
+        }
+        self.order.clear();
+        self.order.resize(self.spill_targets.len(), 0);
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.starts);
+        for (k, &j) in self.spill_targets.iter().enumerate() {
+            let c = &mut self.cursor[j as usize / BLOCK - first];
+            self.order[*c as usize] = k as u32;
+            *c += 1;
+        }
+    }
 }

@@ -1,7 +1,6 @@
 //! The world: particles, materials, the enabled interaction kernel, the
 //! neighbour list, external actions and the integrator, stepped in time.
 
-
 use crate::bonds::Bonds;
 use crate::contributors::Contributor;
 use crate::diagnostics::{self, Diagnostics};
@@ -23,7 +22,7 @@ mod after_step;
 mod editing;
 mod params;
 pub use editing::Merge;
-pub use params::{DivergenceParams, NeighbourParams, WorldParams};
+pub use params::{DivergenceParams, NeighbourParams, WorldParams, MAX_SKIN};
 
 /// Why building a world failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -113,7 +112,7 @@ pub struct StepReport {
     pub seconds: [f64; 8],
     /// Stable ids of the particles eraser tools removed at the end of the
     /// step (seed 000 fig. 7), or shaping tools trapped between them (fig.
-    /// 14, [`Role::Shaper`]), in increasing order.
+    /// 14, op-modeling `Role::Shaper`), in increasing order.
     pub erased: Vec<u32>,
     /// Bonds that broke at the end of the step, stretched beyond their
     /// break length ([`crate::bonds`]; seed 000 fig. 12c tearing).

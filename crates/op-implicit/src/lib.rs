@@ -33,9 +33,11 @@ pub mod field;
 mod grid;
 pub mod implicit_contact;
 pub mod kernel;
+pub mod object_skin;
 pub mod polygonize;
 pub mod primitives;
 pub mod skin;
+pub mod skin_stages;
 #[cfg(test)]
 mod test_util;
 

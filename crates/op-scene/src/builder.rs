@@ -20,7 +20,7 @@ use crate::fit::{DataNeighbourhood, SceneFit};
 use crate::generators::Generated;
 use crate::schema::validate::object_path;
 use crate::schema::{ObjectSpec, Override, Scene};
-use crate::skins::{BuiltSkin, ContactStats, SkinTool};
+use crate::skins::{ContactStats, ObjectSkin, SkinTool};
 
 impl Scene {
     /// Validates the scene ([`Scene::validate`]; points files relative to
@@ -79,175 +79,20 @@ impl Scene {
         base_dir: Option<&Path>,
         source: Option<PathBuf>,
     ) -> Result<BuiltScene, SceneError> {
-        let file = self.origin();
         let counts = self.validate(base_dir)?;
-
-        let used: Vec<&String> = self
-            .materials
-            .keys()
-            .filter(|name| self.objects.iter().any(|o| &o.material == *name))
-            .collect();
-        if used.len() > usize::from(u16::MAX) + 1 {
-            return Err(SceneError::Build {
-                file: file.to_string(),
-                message: format!(
-                    "{} materials are used; at most 65536 are supported",
-                    used.len()
-                ),
-            });
-        }
-        let index: HashMap<&str, u16> = used
-            .iter()
-            .enumerate()
-            .map(|(k, name)| (name.as_str(), k as u16))
-            .collect();
-        let materials: Vec<Material> = used.iter().map(|name| self.materials[*name]).collect();
-
-        let mut particles = Particles::new();
-        let mut objects = Vec::with_capacity(self.objects.len());
-        let mut offsets = Vec::with_capacity(self.objects.len());
-        let fit = self.creation.as_ref().and_then(|c| c.fit.as_ref());
-        let fitted = fit.map(|f| f.object_index(self));
-        let mut seeds = None;
-        for (k, o) in self.objects.iter().enumerate() {
-            let path = object_path(k, &o.name);
-            let generator_path = format!("{path}.generator");
-            let mut g = o.generator.generate(base_dir, file, &generator_path)?;
-            if fitted == Some(k) {
-                let s = self.fit_seeds(&mut g, base_dir, &generator_path)?;
-                seeds = Some(s);
-            }
-            if g.len() != counts[k] {
-                return Err(SceneError::Build {
-                    file: file.to_string(),
-                    message: format!(
-                        "{generator_path}: made {} particles, {} when validated (did the points file change?)",
-                        g.len(),
-                        counts[k]
-                    ),
-                });
-            }
-            let mut descs: Vec<ParticleDesc> = (0..g.len())
-                .map(|i| {
-                    particle(
-                        o,
-                        k as u32,
-                        index.get(o.material.as_str()).copied().unwrap_or(0),
-                        g.positions[i],
-                        g.curvatures[i],
-                    )
-                    .with_normal(g.normals[i])
-                })
-                .collect();
-            for ov in &o.overrides {
-                apply(ov, &mut descs);
-            }
-            add_velocities(o, &mut descs, base_dir, file, &path)?;
-            if fitted == Some(k) {
-                // The samples are fixed seeds until the release.
-                for d in &mut descs {
-                    d.flags.insert(Flags::FIXED_POSITION);
-                    d.flags.insert(Flags::FIXED_ORIENTATION);
-                }
-            }
-            let offset = particles.len();
-            offsets.push(offset);
-            let mut ids = Vec::with_capacity(descs.len());
-            for (i, d) in descs.into_iter().enumerate() {
-                let id = particles
-                    .push(d)
-                    .map_err(|e| SceneError::param(file, &format!("{path}.particles[{i}]"), e))?;
-                ids.push(id);
-            }
-            let rest: Vec<Point3> = particles.positions()[offset..].to_vec();
-            let fit_spacing = seeds.as_ref().filter(|_| fitted == Some(k)).map(|s| s.2);
-            let rest_spacing = rest_spacing(&rest, o.generator.nominal_spacing())
-                .map_err(|(i, j)| SceneError::Build {
-                    file: file.to_string(),
-                    message: format!(
-                        "{path}: particles {i} and {j} coincide at {:?}; particles of an object must be apart",
-                        rest[i].coords.as_slice()
-                    ),
-                })?;
-            // A fitted object's spacing is the fit's, not the samples'.
-            let rest_spacing = fit_spacing.unwrap_or(rest_spacing);
-            objects.push(BuiltObject {
-                name: o.name.clone(),
-                ids,
-                rest,
-                rest_spacing,
-                created: Vec::new(),
-            });
-        }
-
-        let windows = self
-            .forces
-            .iter()
-            .map(|f| {
-                let k = self
-                    .objects
-                    .iter()
-                    .position(|o| o.name == f.object)
-                    .unwrap_or(0);
-                let (start, end) = (f.start + self.world.settle, f.end + self.world.settle);
-                ForceWindow {
-                    particles: f
-                        .particles
-                        .indices(counts[k])
-                        .into_iter()
-                        .map(|i| (offsets[k] + i) as u32)
-                        .collect(),
-                    force: f.force,
-                    start,
-                    end,
-                    // Shifting may round `end - start` down by an ulp.
-                    ramp: f.ramp.min(0.5 * (end - start)),
-                }
-            })
-            .collect();
-        let w = &self.world;
+        let used = self.used_materials()?;
+        let placed = self.place_objects(base_dir, &counts, &used)?;
         let (tools, skin_tool_params, all_tools) = self.tool_params();
-        let params = WorldParams {
-            scheme: w.integrator,
-            dt: w.dt,
-            neighbours: w.neighbours.clone(),
-            external: ExternalParams {
-                gravity: w.gravity,
-                linear_damping: w.linear_damping,
-                angular_damping: w.angular_damping,
-                forces: windows,
-            },
-            divergence: DivergenceParams {
-                max_speed: w.divergence.max_speed,
-            },
-            heat: w.heat.clone(),
-        };
-        let world = World::new(particles, &materials, params)
-            .map_err(op_modeling::tools::ToolError::from)
-            .and_then(|mut world| {
-                op_modeling::Tools::equip(&mut world, &tools)?;
-                Ok(world)
-            });
-        let world = world.map_err(|e| {
-            let mut message = format!("building the world: {e}");
-            for (k, name) in used.iter().enumerate() {
-                message =
-                    message.replace(&format!("materials[{k}]"), &format!("materials.{name:?}"));
-            }
-            SceneError::Build {
-                file: file.to_string(),
-                message,
-            }
-        })?;
+        let world = self.make_world(placed.particles, &used, &counts, &placed.offsets, &tools)?;
+        let objects = placed.objects;
+        let file = self.origin();
         let mut skins = Vec::new();
         for (k, o) in self.objects.iter().enumerate() {
             let Some(spec) = &o.skin else { continue };
-            let skin =
-                BuiltSkin::new(&world, k, &objects[k], spec, o.normal_axis).map_err(|e| {
-                    SceneError::Build {
-                        file: file.to_string(),
-                        message: format!("{}.skin: {e}", object_path(k, &o.name)),
-                    }
+            let skin = crate::skins::build_skin(&world, k, &objects[k], spec, o.normal_axis)
+                .map_err(|e| SceneError::Build {
+                    file: file.to_string(),
+                    message: format!("{}.skin: {e}", object_path(k, &o.name)),
                 })?;
             skins.push(skin);
         }
@@ -277,41 +122,9 @@ impl Scene {
                     .map_err(|e| SceneError::param(file, &format!("tools[{k}]"), e))
             })
             .collect::<Result<Vec<_>, SceneError>>()?;
-        let creation = self.creation.as_ref().map(|c| {
-            let default_r0 = match fitted {
-                Some(k) => objects[k].rest_spacing,
-                None => objects.first().map_or(1.0, |o| o.rest_spacing),
-            };
-            let params = c.params(default_r0);
-            let fit = c.fit.as_ref().zip(seeds.as_ref()).map(|(f, (p, n, _))| {
-                let d_max = params.stretching.as_ref().map_or(2.5, |s| s.d_max);
-                SceneFit {
-                    object: fitted.unwrap_or(0),
-                    near: DataNeighbourhood::new(p, n, params.r0, d_max, f.open),
-                    release_time: w.settle + f.release,
-                    released: false,
-                }
-            });
-            CreationState {
-                params,
-                next_step: 0,
-                fit,
-            }
-        });
-        // Only the stages the scene uses (crate::stages, in their order).
-        let mut driver = op_dynamics::driver::Driver::new();
-        if let Some(c) = &creation {
-            if c.fit.is_some() {
-                driver.push(Box::new(crate::stages::FitRelease));
-            }
-            driver.push(Box::new(crate::stages::Creation));
-        }
-        if skins.len() >= 2 || !skin_tools.is_empty() {
-            driver.push(Box::new(crate::stages::Contact::default()));
-        }
-        if !skins.is_empty() {
-            driver.push(Box::new(crate::stages::Skins));
-        }
+        let creation = self.creation_state(&objects, placed.fitted, placed.seeds.as_ref());
+        let driver = stage_driver(creation.as_ref(), &skins, &skin_tools);
+        let w = &self.world;
         Ok(BuiltScene {
             driver,
             skins,
@@ -334,6 +147,274 @@ impl Scene {
             creation,
         })
     }
+
+    /// The names of the materials some object uses, in the scene's order
+    /// (the world holds only these; index = material index).
+    fn used_materials(&self) -> Result<Vec<&String>, SceneError> {
+        let used: Vec<&String> = self
+            .materials
+            .keys()
+            .filter(|name| self.objects.iter().any(|o| &o.material == *name))
+            .collect();
+        if used.len() > usize::from(u16::MAX) + 1 {
+            return Err(SceneError::Build {
+                file: self.origin().to_string(),
+                message: format!(
+                    "{} materials are used; at most 65536 are supported",
+                    used.len()
+                ),
+            });
+        }
+        Ok(used)
+    }
+
+    /// Generates every object's particles (`counts` as validated), applies
+    /// overrides and initial velocities, and records each object's rest
+    /// shape and spacing.
+    fn place_objects(
+        &self,
+        base_dir: Option<&Path>,
+        counts: &[usize],
+        used: &[&String],
+    ) -> Result<Placed, SceneError> {
+        let index: HashMap<&str, u16> = used
+            .iter()
+            .enumerate()
+            .map(|(k, name)| (name.as_str(), k as u16))
+            .collect();
+        let fit = self.creation.as_ref().and_then(|c| c.fit.as_ref());
+        let mut placed = Placed {
+            particles: Particles::new(),
+            objects: Vec::with_capacity(self.objects.len()),
+            offsets: Vec::with_capacity(self.objects.len()),
+            fitted: fit.map(|f| f.object_index(self)),
+            seeds: None,
+        };
+        for (k, o) in self.objects.iter().enumerate() {
+            let material = index.get(o.material.as_str()).copied().unwrap_or(0);
+            self.place_object(base_dir, k, o, counts[k], material, &mut placed)?;
+        }
+        Ok(placed)
+    }
+
+    /// Generates and adds object `k` (see [`Scene::place_objects`]).
+    fn place_object(
+        &self,
+        base_dir: Option<&Path>,
+        k: usize,
+        o: &ObjectSpec,
+        count: usize,
+        material: u16,
+        placed: &mut Placed,
+    ) -> Result<(), SceneError> {
+        let file = self.origin();
+        let path = object_path(k, &o.name);
+        let generator_path = format!("{path}.generator");
+        let mut g = o.generator.generate(base_dir, file, &generator_path)?;
+        let fitted = placed.fitted == Some(k);
+        if fitted {
+            placed.seeds = Some(self.fit_seeds(&mut g, base_dir, &generator_path)?);
+        }
+        if g.len() != count {
+            return Err(SceneError::Build {
+                file: file.to_string(),
+                message: format!(
+                    "{generator_path}: made {} particles, {count} when validated (did the points file change?)",
+                    g.len(),
+                ),
+            });
+        }
+        let mut descs: Vec<ParticleDesc> = (0..g.len())
+            .map(|i| {
+                particle(o, k as u32, material, g.positions[i], g.curvatures[i])
+                    .with_normal(g.normals[i])
+            })
+            .collect();
+        for ov in &o.overrides {
+            apply(ov, &mut descs);
+        }
+        add_velocities(o, &mut descs, base_dir, file, &path)?;
+        if fitted {
+            // The samples are fixed seeds until the release.
+            for d in &mut descs {
+                d.flags.insert(Flags::FIXED_POSITION);
+                d.flags.insert(Flags::FIXED_ORIENTATION);
+            }
+        }
+        let offset = placed.particles.len();
+        placed.offsets.push(offset);
+        let mut ids = Vec::with_capacity(descs.len());
+        for (i, d) in descs.into_iter().enumerate() {
+            let id = placed
+                .particles
+                .push(d)
+                .map_err(|e| SceneError::param(file, &format!("{path}.particles[{i}]"), e))?;
+            ids.push(id);
+        }
+        let rest: Vec<Point3> = placed.particles.positions()[offset..].to_vec();
+        let fit_spacing = placed.seeds.as_ref().filter(|_| fitted).map(|s| s.2);
+        let rest_spacing = rest_spacing(&rest, o.generator.nominal_spacing()).map_err(|(i, j)| {
+            SceneError::Build {
+                file: file.to_string(),
+                message: format!(
+                    "{path}: particles {i} and {j} coincide at {:?}; particles of an object must be apart",
+                    rest[i].coords.as_slice()
+                ),
+            }
+        })?;
+        placed.objects.push(BuiltObject {
+            name: o.name.clone(),
+            ids,
+            rest,
+            // A fitted object's spacing is the fit's, not the samples'.
+            rest_spacing: fit_spacing.unwrap_or(rest_spacing),
+            created: Vec::new(),
+        });
+        Ok(())
+    }
+
+    /// The scene's force windows on global particle ids (`offsets`: each
+    /// object's first slot), shifted by the settle phase.
+    fn force_windows(&self, counts: &[usize], offsets: &[usize]) -> Vec<ForceWindow> {
+        self.forces
+            .iter()
+            .map(|f| {
+                let k = self
+                    .objects
+                    .iter()
+                    .position(|o| o.name == f.object)
+                    .unwrap_or(0);
+                let (start, end) = (f.start + self.world.settle, f.end + self.world.settle);
+                ForceWindow {
+                    particles: f
+                        .particles
+                        .indices(counts[k])
+                        .into_iter()
+                        .map(|i| (offsets[k] + i) as u32)
+                        .collect(),
+                    force: f.force,
+                    start,
+                    end,
+                    // Shifting may round `end - start` down by an ulp.
+                    ramp: f.ramp.min(0.5 * (end - start)),
+                }
+            })
+            .collect()
+    }
+
+    /// The world of `particles` with the used materials, the scene's world
+    /// settings and force windows, and the world's tools (errors name the
+    /// materials by their scene names).
+    fn make_world(
+        &self,
+        particles: Particles,
+        used: &[&String],
+        counts: &[usize],
+        offsets: &[usize],
+        tools: &[ToolParams],
+    ) -> Result<World, SceneError> {
+        let w = &self.world;
+        let materials: Vec<Material> = used.iter().map(|name| self.materials[*name]).collect();
+        let params = WorldParams {
+            scheme: w.integrator,
+            dt: w.dt,
+            neighbours: w.neighbours.clone(),
+            external: ExternalParams {
+                gravity: w.gravity,
+                linear_damping: w.linear_damping,
+                angular_damping: w.angular_damping,
+                forces: self.force_windows(counts, offsets),
+            },
+            divergence: DivergenceParams {
+                max_speed: w.divergence.max_speed,
+            },
+            heat: w.heat.clone(),
+        };
+        let world = World::new(particles, &materials, params)
+            .map_err(op_modeling::tools::ToolError::from)
+            .and_then(|mut world| {
+                op_modeling::Tools::equip(&mut world, tools)?;
+                Ok(world)
+            });
+        world.map_err(|e| {
+            let mut message = format!("building the world: {e}");
+            for (k, name) in used.iter().enumerate() {
+                message =
+                    message.replace(&format!("materials[{k}]"), &format!("materials.{name:?}"));
+            }
+            SceneError::Build {
+                file: self.origin().to_string(),
+                message,
+            }
+        })
+    }
+
+    /// The creation rules' state, when the scene has creation rules (with
+    /// the fit of `creation.fit` on object `fitted` from `seeds`).
+    fn creation_state(
+        &self,
+        objects: &[BuiltObject],
+        fitted: Option<usize>,
+        seeds: Option<&FitSeeds>,
+    ) -> Option<CreationState> {
+        let c = self.creation.as_ref()?;
+        let default_r0 = match fitted {
+            Some(k) => objects[k].rest_spacing,
+            None => objects.first().map_or(1.0, |o| o.rest_spacing),
+        };
+        let params = c.params(default_r0);
+        let fit = c.fit.as_ref().zip(seeds).map(|(f, (p, n, _))| {
+            let d_max = params.stretching.as_ref().map_or(2.5, |s| s.d_max);
+            SceneFit {
+                object: fitted.unwrap_or(0),
+                near: DataNeighbourhood::new(p, n, params.r0, d_max, f.open),
+                release_time: self.world.settle + f.release,
+                released: false,
+            }
+        });
+        Some(CreationState {
+            params,
+            next_step: 0,
+            fit,
+        })
+    }
+}
+
+/// The seeds of `creation.fit`: positions, normals, fit spacing.
+type FitSeeds = (Vec<Point3>, Vec<Vec3>, Real);
+
+/// The particles of a scene's objects as generated, before the world.
+struct Placed {
+    particles: Particles,
+    objects: Vec<BuiltObject>,
+    /// Each object's first slot.
+    offsets: Vec<usize>,
+    /// The object `creation.fit` fits, if any.
+    fitted: Option<usize>,
+    seeds: Option<FitSeeds>,
+}
+
+/// The driver with only the stages the scene uses ([`crate::stages`], in
+/// their order).
+fn stage_driver(
+    creation: Option<&CreationState>,
+    skins: &[ObjectSkin],
+    skin_tools: &[SkinTool],
+) -> op_dynamics::driver::Driver<crate::stages::SceneState> {
+    let mut driver = op_dynamics::driver::Driver::new();
+    if let Some(c) = creation {
+        if c.fit.is_some() {
+            driver.push(Box::new(crate::stages::FitRelease));
+        }
+        driver.push(Box::new(crate::stages::Creation));
+    }
+    if skins.len() >= 2 || !skin_tools.is_empty() {
+        driver.push(Box::new(crate::stages::ContactStage::default()));
+    }
+    if !skins.is_empty() {
+        driver.push(Box::new(crate::stages::SkinStage));
+    }
+    driver
 }
 
 impl Scene {
@@ -347,7 +428,7 @@ impl Scene {
         g: &mut Generated,
         base_dir: Option<&Path>,
         generator_path: &str,
-    ) -> Result<(Vec<Point3>, Vec<Vec3>, Real), SceneError> {
+    ) -> Result<FitSeeds, SceneError> {
         let file = self.origin();
         let k = self
             .creation

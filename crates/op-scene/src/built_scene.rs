@@ -8,7 +8,7 @@ use op_modeling::Tool;
 
 use crate::creation::CreationState;
 use crate::outputs::{Outputs, ParticleOutput};
-use crate::skins::{BuiltSkin, ContactStats, SkinTool};
+use crate::skins::{ContactStats, ObjectSkin, SkinTool};
 use crate::stages::SceneState;
 
 /// One object of a built scene.
@@ -95,7 +95,7 @@ pub struct BuiltScene {
     pub energy_gain: Real,
     /// The implicit skins of the skinned objects, in scene order (empty
     /// when no object has a skin: nothing of op-implicit is built).
-    pub skins: Vec<BuiltSkin>,
+    pub skins: Vec<ObjectSkin>,
     /// Every tool of the scene, in scene order (drawn in the frames as
     /// `tool_<name>`; the world and [`BuiltScene::skin_tools`] hold the
     /// ones that act).

@@ -26,7 +26,7 @@ pub use built_scene::{BuiltObject, BuiltScene};
 pub use creation::CreationSettings;
 pub use outputs::{Outputs, ParticleOutput};
 pub use run::{run, RunError, RunOptions, Summary};
-pub use skins::{BuiltSkin, ContactStats, SkinPrimitive, SkinSpec, SkinTool};
+pub use skins::{ContactStats, ObjectSkin, SkinPrimitive, SkinSpec, SkinTool};
 
 pub mod builder;
 pub mod error;

@@ -336,95 +336,11 @@ struct Element {
 /// are skipped.
 pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
     let bytes = strip_bom(bytes);
-    // Header: text lines up to `end_header`.
-    let mut pos = 0;
-    let mut line_no = 0;
-    let mut format = None;
-    let mut elements: Vec<Element> = Vec::new();
-    loop {
-        let Some(end) = bytes[pos..].iter().position(|&b| b == b'\n') else {
-            return Err(format_err(
-                file,
-                None,
-                "the header has no `end_header` line",
-            ));
-        };
-        line_no += 1;
-        let raw = String::from_utf8_lossy(&bytes[pos..pos + end]);
-        pos += end + 1;
-        let fields: Vec<&str> = raw.split_whitespace().collect();
-        let err = |m: String| format_err(file, Some(line_no), m);
-        if line_no == 1 {
-            if fields != ["ply"] {
-                return Err(err("the first line must be `ply`".into()));
-            }
-            continue;
-        }
-        match fields.first().copied() {
-            None | Some("comment") | Some("obj_info") => {}
-            Some("format") => {
-                format = match fields.get(1).copied() {
-                    Some("ascii") => Some(false),
-                    Some("binary_little_endian") => Some(true),
-                    other => {
-                        return Err(err(format!(
-                            "format {} is not supported: use ascii or binary_little_endian",
-                            excerpt(other.unwrap_or("(missing)"))
-                        )))
-                    }
-                }
-            }
-            Some("element") => {
-                let (Some(name), Some(count)) = (fields.get(1), fields.get(2)) else {
-                    return Err(err("`element` needs a name and a count".into()));
-                };
-                let count = count.parse().map_err(|_| {
-                    err(format!("element count `{}` is not a count", excerpt(count)))
-                })?;
-                elements.push(Element {
-                    name: name.to_string(),
-                    count,
-                    properties: Vec::new(),
-                });
-            }
-            Some("property") => {
-                let Some(element) = elements.last_mut() else {
-                    return Err(err("`property` before any `element`".into()));
-                };
-                let ty = |k: usize| {
-                    fields.get(k).and_then(|t| Scalar::parse(t)).ok_or_else(|| {
-                        err(format!(
-                            "unknown property type in `{}`",
-                            excerpt(raw.trim())
-                        ))
-                    })
-                };
-                let property = if fields.get(1) == Some(&"list") {
-                    Property {
-                        list: Some(ty(2)?),
-                        scalar: ty(3)?,
-                        name: fields.get(4).unwrap_or(&"").to_string(),
-                    }
-                } else {
-                    Property {
-                        scalar: ty(1)?,
-                        list: None,
-                        name: fields.get(2).unwrap_or(&"").to_string(),
-                    }
-                };
-                element.properties.push(property);
-            }
-            Some("end_header") => break,
-            Some(other) => return Err(err(format!("unknown header keyword `{}`", excerpt(other)))),
-        }
-    }
-    let Some(binary) = format else {
-        return Err(format_err(file, None, "the header has no `format` line"));
-    };
-    let Some(vertex_index) = elements.iter().position(|e| e.name == "vertex") else {
+    let header = PlyHeader::parse(bytes, file)?;
+    let Some(vertex_index) = header.elements.iter().position(|e| e.name == "vertex") else {
         return Err(format_err(file, None, "no `vertex` element"));
     };
-    let vertex = &elements[vertex_index];
+    let vertex = &header.elements[vertex_index];
     let find = |n: &str| {
         vertex
             .properties
@@ -442,96 +358,12 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
         (Some(a), Some(b), Some(c)) => Some([a, b, c]),
         _ => None,
     };
-    let mut rows: Vec<Vec<Real>> = Vec::with_capacity(vertex.count.min(1 << 24));
-    if binary {
-        let mut data = &bytes[pos..];
-        let truncated = || format_err(file, None, "binary data ends early");
-        for (k, element) in elements.iter().enumerate().take(vertex_index + 1) {
-            if element.properties.is_empty() {
-                // Rows of no bytes (the vertex element has x, y and z):
-                // nothing to skip, however large the count.
-                continue;
-            }
-            for _ in 0..element.count {
-                let mut row = Vec::with_capacity(element.properties.len());
-                for p in &element.properties {
-                    let items = match p.list {
-                        Some(count_type) => {
-                            if data.len() < count_type.size() {
-                                return Err(truncated());
-                            }
-                            let n = count_type.read_le(data);
-                            data = &data[count_type.size()..];
-                            if n < 0.0 {
-                                return Err(format_err(file, None, "negative list length"));
-                            }
-                            n as usize
-                        }
-                        None => 1,
-                    };
-                    let need = items.checked_mul(p.scalar.size()).ok_or_else(truncated)?;
-                    if data.len() < need {
-                        return Err(truncated());
-                    }
-                    if p.list.is_none() {
-                        row.push(p.scalar.read_le(data));
-                    }
-                    data = &data[need..];
-                }
-                if k == vertex_index {
-                    rows.push(row);
-                }
-            }
-        }
+    let data = &bytes[header.data_start..];
+    let rows = if header.binary {
+        binary_rows(data, &header.elements, vertex_index, file)?
     } else {
-        let text = String::from_utf8_lossy(&bytes[pos..]);
-        let mut lines = text.lines().map(|l| {
-            line_no += 1;
-            (line_no, l)
-        });
-        for (k, element) in elements.iter().enumerate().take(vertex_index + 1) {
-            for _ in 0..element.count {
-                let Some((line, l)) = lines.next() else {
-                    return Err(format_err(
-                        file,
-                        None,
-                        format!(
-                            "the file ends before its {} `{}` rows",
-                            element.count, element.name
-                        ),
-                    ));
-                };
-                if k != vertex_index {
-                    continue;
-                }
-                let fields: Vec<&str> = l.split_whitespace().collect();
-                if vertex.properties.iter().any(|p| p.list.is_some()) {
-                    return Err(format_err(
-                        file,
-                        Some(line),
-                        "list properties in `vertex` are not supported in ascii PLY",
-                    ));
-                }
-                if fields.len() != vertex.properties.len() {
-                    return Err(format_err(
-                        file,
-                        Some(line),
-                        format!(
-                            "expected {} values, found {}",
-                            vertex.properties.len(),
-                            fields.len()
-                        ),
-                    ));
-                }
-                rows.push(
-                    fields
-                        .iter()
-                        .map(|f| number(f, file, line))
-                        .collect::<Result<Vec<_>, _>>()?,
-                );
-            }
-        }
-    }
+        ascii_rows(data, &header, vertex_index, file)?
+    };
     // Map property positions to row positions (lists are not in rows).
     let scalar_pos = |i: usize| {
         vertex.properties[..i]
@@ -539,35 +371,278 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
             .filter(|p| p.list.is_none())
             .count()
     };
-    let (ix, iy, iz) = (scalar_pos(ix), scalar_pos(iy), scalar_pos(iz));
-    let mut positions = Vec::with_capacity(rows.len());
-    let mut normals = Vec::new();
-    for (k, row) in rows.iter().enumerate() {
-        let p = Point3::new(row[ix], row[iy], row[iz]);
-        if !p.iter().all(|c| c.is_finite()) {
-            return Err(format_err(
-                file,
-                None,
-                format!("vertex {k} has a non-finite coordinate"),
-            ));
-        }
-        positions.push(p);
-        if let Some(n) = normal_ix {
-            let n = n.map(scalar_pos);
-            let v = Vec3::new(row[n[0]], row[n[1]], row[n[2]]);
-            normals.push(unit(v, file, None).map_err(|_| {
-                format_err(
+    let columns = VertexColumns {
+        position: [scalar_pos(ix), scalar_pos(iy), scalar_pos(iz)],
+        normal: normal_ix.map(|n| n.map(scalar_pos)),
+    };
+    columns.points(&rows, file)
+}
+
+/// A PLY header: the data format, the elements and where the data start.
+struct PlyHeader {
+    binary: bool,
+    elements: Vec<Element>,
+    /// Byte offset of the first data byte.
+    data_start: usize,
+    /// Lines read (the header's), for the line numbers of ascii data.
+    lines: usize,
+}
+
+impl PlyHeader {
+    /// Reads the header: text lines up to `end_header`.
+    fn parse(bytes: &[u8], file: &str) -> Result<PlyHeader, PointSetError> {
+        let mut pos = 0;
+        let mut line_no = 0;
+        let mut format = None;
+        let mut elements: Vec<Element> = Vec::new();
+        loop {
+            let Some(end) = bytes[pos..].iter().position(|&b| b == b'\n') else {
+                return Err(format_err(
                     file,
                     None,
-                    format!("vertex {k} has a zero or non-finite normal"),
-                )
-            })?);
+                    "the header has no `end_header` line",
+                ));
+            };
+            line_no += 1;
+            let raw = String::from_utf8_lossy(&bytes[pos..pos + end]);
+            pos += end + 1;
+            let fields: Vec<&str> = raw.split_whitespace().collect();
+            let err = |m: String| format_err(file, Some(line_no), m);
+            if line_no == 1 {
+                if fields != ["ply"] {
+                    return Err(err("the first line must be `ply`".into()));
+                }
+                continue;
+            }
+            match fields.first().copied() {
+                None | Some("comment") | Some("obj_info") => {}
+                Some("format") => {
+                    format = match fields.get(1).copied() {
+                        Some("ascii") => Some(false),
+                        Some("binary_little_endian") => Some(true),
+                        other => {
+                            return Err(err(format!(
+                                "format {} is not supported: use ascii or binary_little_endian",
+                                excerpt(other.unwrap_or("(missing)"))
+                            )))
+                        }
+                    }
+                }
+                Some("element") => {
+                    let (Some(name), Some(count)) = (fields.get(1), fields.get(2)) else {
+                        return Err(err("`element` needs a name and a count".into()));
+                    };
+                    let count = count.parse().map_err(|_| {
+                        err(format!("element count `{}` is not a count", excerpt(count)))
+                    })?;
+                    elements.push(Element {
+                        name: name.to_string(),
+                        count,
+                        properties: Vec::new(),
+                    });
+                }
+                Some("property") => {
+                    let Some(element) = elements.last_mut() else {
+                        return Err(err("`property` before any `element`".into()));
+                    };
+                    element.properties.push(property(&fields, &raw, err)?);
+                }
+                Some("end_header") => break,
+                Some(other) => {
+                    return Err(err(format!("unknown header keyword `{}`", excerpt(other))))
+                }
+            }
+        }
+        let Some(binary) = format else {
+            return Err(format_err(file, None, "the header has no `format` line"));
+        };
+        Ok(PlyHeader {
+            binary,
+            elements,
+            data_start: pos,
+            lines: line_no,
+        })
+    }
+}
+
+/// The property of a `property` header line (`fields`, the line `raw`).
+fn property(
+    fields: &[&str],
+    raw: &str,
+    err: impl Fn(String) -> PointSetError,
+) -> Result<Property, PointSetError> {
+    let ty = |k: usize| {
+        fields.get(k).and_then(|t| Scalar::parse(t)).ok_or_else(|| {
+            err(format!(
+                "unknown property type in `{}`",
+                excerpt(raw.trim())
+            ))
+        })
+    };
+    Ok(if fields.get(1) == Some(&"list") {
+        Property {
+            list: Some(ty(2)?),
+            scalar: ty(3)?,
+            name: fields.get(4).unwrap_or(&"").to_string(),
+        }
+    } else {
+        Property {
+            scalar: ty(1)?,
+            list: None,
+            name: fields.get(2).unwrap_or(&"").to_string(),
+        }
+    })
+}
+
+/// The scalar values of every row of element `vertex_index` in binary
+/// little-endian `data` (the elements before it skipped; lists skipped).
+fn binary_rows(
+    mut data: &[u8],
+    elements: &[Element],
+    vertex_index: usize,
+    file: &str,
+) -> Result<Vec<Vec<Real>>, PointSetError> {
+    let mut rows = Vec::with_capacity(elements[vertex_index].count.min(1 << 24));
+    let truncated = || format_err(file, None, "binary data ends early");
+    for (k, element) in elements.iter().enumerate().take(vertex_index + 1) {
+        if element.properties.is_empty() {
+            // Rows of no bytes (the vertex element has x, y and z):
+            // nothing to skip, however large the count.
+            continue;
+        }
+        for _ in 0..element.count {
+            let mut row = Vec::with_capacity(element.properties.len());
+            for p in &element.properties {
+                let items = match p.list {
+                    Some(count_type) => {
+                        if data.len() < count_type.size() {
+                            return Err(truncated());
+                        }
+                        let n = count_type.read_le(data);
+                        data = &data[count_type.size()..];
+                        if n < 0.0 {
+                            return Err(format_err(file, None, "negative list length"));
+                        }
+                        n as usize
+                    }
+                    None => 1,
+                };
+                let need = items.checked_mul(p.scalar.size()).ok_or_else(truncated)?;
+                if data.len() < need {
+                    return Err(truncated());
+                }
+                if p.list.is_none() {
+                    row.push(p.scalar.read_le(data));
+                }
+                data = &data[need..];
+            }
+            if k == vertex_index {
+                rows.push(row);
+            }
         }
     }
-    Ok(PointSet {
-        positions,
-        normals: normal_ix.map(|_| normals),
-    })
+    Ok(rows)
+}
+
+/// The values of every row of element `vertex_index` in ascii `data` (the
+/// rows of the elements before it skipped).
+fn ascii_rows(
+    data: &[u8],
+    header: &PlyHeader,
+    vertex_index: usize,
+    file: &str,
+) -> Result<Vec<Vec<Real>>, PointSetError> {
+    let vertex = &header.elements[vertex_index];
+    let mut rows = Vec::with_capacity(vertex.count.min(1 << 24));
+    let text = String::from_utf8_lossy(data);
+    let mut line_no = header.lines;
+    let mut lines = text.lines().map(|l| {
+        line_no += 1;
+        (line_no, l)
+    });
+    for (k, element) in header.elements.iter().enumerate().take(vertex_index + 1) {
+        for _ in 0..element.count {
+            let Some((line, l)) = lines.next() else {
+                return Err(format_err(
+                    file,
+                    None,
+                    format!(
+                        "the file ends before its {} `{}` rows",
+                        element.count, element.name
+                    ),
+                ));
+            };
+            if k != vertex_index {
+                continue;
+            }
+            let fields: Vec<&str> = l.split_whitespace().collect();
+            if vertex.properties.iter().any(|p| p.list.is_some()) {
+                return Err(format_err(
+                    file,
+                    Some(line),
+                    "list properties in `vertex` are not supported in ascii PLY",
+                ));
+            }
+            if fields.len() != vertex.properties.len() {
+                return Err(format_err(
+                    file,
+                    Some(line),
+                    format!(
+                        "expected {} values, found {}",
+                        vertex.properties.len(),
+                        fields.len()
+                    ),
+                ));
+            }
+            rows.push(
+                fields
+                    .iter()
+                    .map(|f| number(f, file, line))
+                    .collect::<Result<Vec<_>, _>>()?,
+            );
+        }
+    }
+    Ok(rows)
+}
+
+/// Where the position and normal coordinates are in a vertex row.
+struct VertexColumns {
+    position: [usize; 3],
+    normal: Option<[usize; 3]>,
+}
+
+impl VertexColumns {
+    /// The points (and normals) of `rows`.
+    fn points(&self, rows: &[Vec<Real>], file: &str) -> Result<PointSet, PointSetError> {
+        let [ix, iy, iz] = self.position;
+        let mut positions = Vec::with_capacity(rows.len());
+        let mut normals = Vec::new();
+        for (k, row) in rows.iter().enumerate() {
+            let p = Point3::new(row[ix], row[iy], row[iz]);
+            if !p.iter().all(|c| c.is_finite()) {
+                return Err(format_err(
+                    file,
+                    None,
+                    format!("vertex {k} has a non-finite coordinate"),
+                ));
+            }
+            positions.push(p);
+            if let Some(n) = self.normal {
+                let v = Vec3::new(row[n[0]], row[n[1]], row[n[2]]);
+                normals.push(unit(v, file, None).map_err(|_| {
+                    format_err(
+                        file,
+                        None,
+                        format!("vertex {k} has a zero or non-finite normal"),
+                    )
+                })?);
+            }
+        }
+        Ok(PointSet {
+            positions,
+            normals: self.normal.map(|_| normals),
+        })
+    }
 }
 
 #[cfg(test)]

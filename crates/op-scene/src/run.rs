@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use op_dynamics::diagnostics::rest_shape_rms;
-use op_dynamics::{Point3, Real};
+use op_dynamics::{Diagnostics, Point3, Real};
 use serde::Serialize;
 
 use crate::built_scene::{BuiltObject, BuiltScene};
@@ -346,7 +346,6 @@ pub fn run(
         &scene.outputs,
     )
     .with_sheet_gap(scene.sheet_gap());
-    let write_frames = writer.writes_anything();
     prepare_output(&opts.out_dir, &writer.folders())?;
     let total = opts
         .frames
@@ -357,84 +356,137 @@ pub fn run(
         .outputs
         .metrics
         .then(|| Metrics::new(opts.out_dir.join("metrics.csv")));
-    let mut max_err = vec![0.0; scene.objects.len()];
-    let mut last_err = vec![0.0; scene.objects.len()];
-    let heat = scene.world.params().heat.is_some();
-    let mut hottest = vec![Real::NEG_INFINITY; scene.objects.len()];
-    let mut energy_scale = None;
-    let passive = scene.is_passive();
-    let mut lowest_total = Real::INFINITY;
-    let mut gain_seen: Real = 0.0;
-    let mut gain_scale = None;
-    let mut written = 0;
-    let mut divergence: Option<String> = None;
-    let mut failure: Option<RunError> = None;
+    let mut tally = Tally::new(scene);
     let mut warnings = scene.step_warnings.clone();
     if let Err(d) = scene.settle() {
-        divergence = Some(format!("while settling: {d}"));
+        tally.divergence = Some(format!("while settling: {d}"));
     }
     let mut health = Health::new(scene, duration, scene.extent_growth);
-    let (mut measure_seconds, mut export_seconds) = (0.0, 0.0);
-    let floor = energy_floor(scene, health.size(), duration);
+    let mut watch = EnergyWatch::new(scene, energy_floor(scene, health.size(), duration));
     let t0 = scene.world.time();
     for k in 0..total {
-        if divergence.is_some() {
+        if tally.divergence.is_some() {
             break;
         }
-        // Frame 0 poses the skins on the settled particles.
         let t = t0 + k as Real / scene.frame_rate;
-        if let Err(d) = scene.advance_to(if k == 0 { scene.world.time() } else { t }) {
-            // A stage's failure ends the run as a divergence does (exit 3):
-            // the state it left cannot be continued.
-            divergence = Some(d.to_string());
+        let frame = Frame {
+            k,
+            t,
+            wall: &clock,
+            writer: &mut writer,
+            metrics: metrics.as_mut(),
+        };
+        if !tally.frame(scene, &mut health, &mut watch, frame) {
             break;
         }
-        let measuring = Instant::now();
-        let d = scene.world.diagnostics();
+        on_frame(k + 1, total);
+    }
+    if let Some(m) = metrics.as_mut() {
+        if let Err(e) = m.save() {
+            tally.failure.get_or_insert(e);
+        }
+    }
+    if watch.gain_seen > ENERGY_GAIN_WARNING {
+        warnings.push(format!(
+            "the scene gained energy without input: the total energy rose {} times its energy \
+             scale above the lowest earlier frame (a step too large for the stiffness, or \
+             particles started on top of each other)",
+            short(watch.gain_seen)
+        ));
+    }
+    let (findings, health_warnings) = health.finish(scene);
+    // After a divergence the state is the blown-up one: its pieces and
+    // escape say nothing the divergence does not.
+    if tally.divergence.is_none() {
+        warnings.extend(health_warnings);
+    }
+    let summary = tally.summary(scene, &writer, findings, warnings, clock.elapsed());
+    let path = opts.out_dir.join("summary.json");
+    let saved = write_atomically(&path, |w| {
+        serde_json::to_writer_pretty(&mut *w, &summary).map_err(std::io::Error::other)?;
+        writeln!(w)
+    })
+    .map_err(io(&path));
+    if let Some(e) = tally.failure {
+        return Err(e);
+    }
+    saved?;
+    match tally.divergence {
+        Some(message) => Err(RunError::Diverged {
+            message,
+            summary: Box::new(summary),
+        }),
+        None => Ok(summary),
+    }
+}
+
+/// One frame to take: its index and time, the run's clock, where it goes.
+struct Frame<'a> {
+    k: usize,
+    t: Real,
+    wall: &'a Instant,
+    writer: &'a mut FrameWriter,
+    metrics: Option<&'a mut Metrics>,
+}
+
+/// The energy checks of every frame (README "Running scenes"): runaway
+/// kinetic energy against the energy scale, and the gain of a passive
+/// scene over its lowest earlier total.
+struct EnergyWatch {
+    /// The energy the scene's own inputs can give it ([`energy_floor`]).
+    floor: Real,
+    /// The energy scale and the particle count it was taken at.
+    scale: Option<(Real, usize)>,
+    /// A damped, unforced scene (its energy may not rise).
+    passive: bool,
+    lowest_total: Real,
+    /// The largest gain seen (in units of `gain_scale`).
+    gain_seen: Real,
+    gain_scale: Option<Real>,
+}
+
+impl EnergyWatch {
+    fn new(scene: &BuiltScene, floor: Real) -> Self {
+        EnergyWatch {
+            floor,
+            scale: None,
+            passive: scene.is_passive(),
+            lowest_total: Real::INFINITY,
+            gain_seen: 0.0,
+            gain_scale: None,
+        }
+    }
+
+    /// Checks the frame with diagnostics `d`; the divergence message when
+    /// it fails.
+    fn check(&mut self, scene: &BuiltScene, d: &Diagnostics) -> Result<(), String> {
         let count = scene.world.particles().len();
         let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
         // The scale is taken at frame 0, never below the energy the scene's
         // own inputs can give it (`energy_floor`), and again (keeping the
         // larger) whenever the creation rules changed the particle count:
         // new particles bring energy the first frame did not hold.
-        let scale = match energy_scale {
+        let scale = match self.scale {
             Some((s, c)) if c == count => s,
             Some((s, _)) => Real::max(s, here),
-            None => here.max(floor),
+            None => here.max(self.floor),
         };
-        energy_scale = Some((scale, count));
+        self.scale = Some((scale, count));
         // The gain of a passive scene is measured against its own energy at
         // frame 0 (a damped scene at rest holds only potential energy).
-        let own_scale = *gain_scale.get_or_insert(here.max(1e-12 * count as Real));
+        let own_scale = *self
+            .gain_scale
+            .get_or_insert(here.max(1e-12 * count as Real));
         let kinetic = d.kinetic_translational + d.kinetic_rotational;
         if !d.total.is_finite() || kinetic > scene.energy_growth * scale {
-            let p = scene.world.particles();
-            let fastest = (0..p.len())
-                .max_by(|&a, &b| {
-                    p.velocities()[a]
-                        .norm()
-                        .total_cmp(&p.velocities()[b].norm())
-                })
-                .map_or(0, |s| p.ids()[s]);
-            divergence = Some(format!(
-                "simulation diverged at step {} (t = {}): particle {fastest}: runaway energy \
-                 (kinetic {kinetic:.3e} > {} x energy scale {scale:.3e})",
-                scene.world.steps(),
-                short(scene.world.time()),
-                short(scene.energy_growth)
-            ));
-            break;
+            return Err(runaway(scene, kinetic, scale));
         }
-        if let Some(message) = health.observe(scene) {
-            divergence = Some(message);
-            break;
-        }
-        if passive && lowest_total.is_finite() {
-            let gain = (d.total - lowest_total) / own_scale.max(Real::MIN_POSITIVE);
+        if self.passive && self.lowest_total.is_finite() {
+            let gain = (d.total - self.lowest_total) / own_scale.max(Real::MIN_POSITIVE);
             if gain > scene.energy_gain {
-                divergence = Some(format!(
+                return Err(format!(
                     "simulation diverged at step {} (t = {}): energy gain: total energy {:.6e} \
-                     exceeds the lowest of the earlier frames, {lowest_total:.6e}, by more than \
+                     exceeds the lowest of the earlier frames, {:.6e}, by more than \
                      divergence.energy_gain = {} x energy scale {own_scale:.3e}; a damped, \
                      unforced scene cannot gain energy: a step too large for the stiffness put \
                      it in (reduce dt or use the adaptive scheme), or a pair started at r = 0, \
@@ -442,31 +494,105 @@ pub fn run(
                     scene.world.steps(),
                     short(scene.world.time()),
                     d.total,
+                    self.lowest_total,
                     short(scene.energy_gain)
                 ));
-                break;
             }
-            gain_seen = gain_seen.max(gain);
+            self.gain_seen = self.gain_seen.max(gain);
         }
-        lowest_total = lowest_total.min(d.total);
-        for (o, obj) in scene.objects.iter().enumerate() {
-            let e = rest_shape_error(scene, obj);
-            last_err[o] = e;
-            max_err[o] = Real::max(max_err[o], e);
-            if heat {
-                let p = scene.world.particles();
-                hottest[o] = obj
-                    .all_ids()
-                    .filter_map(|id| p.slot_of(id))
-                    .map(|s| p.temperatures()[s])
-                    .fold(hottest[o], Real::max);
-            }
+        self.lowest_total = self.lowest_total.min(d.total);
+        Ok(())
+    }
+}
+
+/// The runaway-energy divergence message, naming the fastest particle.
+fn runaway(scene: &BuiltScene, kinetic: Real, scale: Real) -> String {
+    let p = scene.world.particles();
+    let fastest = (0..p.len())
+        .max_by(|&a, &b| {
+            p.velocities()[a]
+                .norm()
+                .total_cmp(&p.velocities()[b].norm())
+        })
+        .map_or(0, |s| p.ids()[s]);
+    format!(
+        "simulation diverged at step {} (t = {}): particle {fastest}: runaway energy \
+         (kinetic {kinetic:.3e} > {} x energy scale {scale:.3e})",
+        scene.world.steps(),
+        short(scene.world.time()),
+        short(scene.energy_growth)
+    )
+}
+
+/// What a run accumulates over its frames: per-object rest-shape errors and
+/// temperatures, frames written, the stage timings of the runner, and how
+/// it ended.
+struct Tally {
+    max_err: Vec<Real>,
+    last_err: Vec<Real>,
+    /// The world has heat: track each object's hottest particle.
+    heat: bool,
+    hottest: Vec<Real>,
+    written: usize,
+    measure_seconds: f64,
+    export_seconds: f64,
+    divergence: Option<String>,
+    failure: Option<RunError>,
+}
+
+impl Tally {
+    fn new(scene: &BuiltScene) -> Self {
+        let n = scene.objects.len();
+        Tally {
+            max_err: vec![0.0; n],
+            last_err: vec![0.0; n],
+            heat: scene.world.params().heat.is_some(),
+            hottest: vec![Real::NEG_INFINITY; n],
+            written: 0,
+            measure_seconds: 0.0,
+            export_seconds: 0.0,
+            divergence: None,
+            failure: None,
         }
-        measure_seconds += measuring.elapsed().as_secs_f64();
+    }
+
+    /// Advances to the frame, checks it, measures and writes it. Returns
+    /// whether the run goes on.
+    fn frame(
+        &mut self,
+        scene: &mut BuiltScene,
+        health: &mut Health,
+        watch: &mut EnergyWatch,
+        frame: Frame<'_>,
+    ) -> bool {
+        // Frame 0 poses the skins on the settled particles.
+        let t = if frame.k == 0 {
+            scene.world.time()
+        } else {
+            frame.t
+        };
+        if let Err(d) = scene.advance_to(t) {
+            // A stage's failure ends the run as a divergence does (exit 3):
+            // the state it left cannot be continued.
+            self.divergence = Some(d.to_string());
+            return false;
+        }
+        let measuring = Instant::now();
+        let d = scene.world.diagnostics();
+        if let Err(message) = watch.check(scene, &d) {
+            self.divergence = Some(message);
+            return false;
+        }
+        if let Some(message) = health.observe(scene) {
+            self.divergence = Some(message);
+            return false;
+        }
+        self.measure(scene);
+        self.measure_seconds += measuring.elapsed().as_secs_f64();
         let exporting = Instant::now();
-        if write_frames {
-            if let Err((path, e)) = writer.write_frame(
-                k,
+        if frame.writer.writes_anything() {
+            if let Err((path, e)) = frame.writer.write_frame(
+                frame.k,
                 scene.scene_time(),
                 &scene.world,
                 &scene.objects,
@@ -475,91 +601,95 @@ pub fn run(
                 &scene.tools,
                 &scene.outputs,
             ) {
-                failure = Some(io(&path)(e));
-                break;
+                self.failure = Some(io(&path)(e));
+                return false;
             }
         }
-        written += 1;
-        export_seconds += exporting.elapsed().as_secs_f64();
-        if let Some(m) = metrics.as_mut() {
+        self.written += 1;
+        self.export_seconds += exporting.elapsed().as_secs_f64();
+        if let Some(m) = frame.metrics {
+            let kinetic = d.kinetic_translational + d.kinetic_rotational;
             if let Err(e) = m.push(format_args!(
-                "{k},{},{kinetic},{},{},{},{},{}",
+                "{},{},{kinetic},{},{},{},{},{}",
+                frame.k,
                 scene.scene_time(),
                 d.potential,
                 d.total,
                 d.oscillation,
                 d.max_speed,
-                clock.elapsed().as_secs_f64()
+                frame.wall.elapsed().as_secs_f64()
             )) {
-                failure = Some(e);
-                break;
+                self.failure = Some(e);
+                return false;
             }
         }
-        on_frame(k + 1, total);
+        true
     }
-    if let Some(m) = metrics.as_mut() {
-        if let Err(e) = m.save() {
-            failure.get_or_insert(e);
+
+    /// Each object's rest-shape error and hottest particle at this frame.
+    fn measure(&mut self, scene: &BuiltScene) {
+        for (o, obj) in scene.objects.iter().enumerate() {
+            let e = rest_shape_error(scene, obj);
+            self.last_err[o] = e;
+            self.max_err[o] = Real::max(self.max_err[o], e);
+            if self.heat {
+                let p = scene.world.particles();
+                self.hottest[o] = obj
+                    .all_ids()
+                    .filter_map(|id| p.slot_of(id))
+                    .map(|s| p.temperatures()[s])
+                    .fold(self.hottest[o], Real::max);
+            }
         }
     }
-    if gain_seen > ENERGY_GAIN_WARNING {
-        warnings.push(format!(
-            "the scene gained energy without input: the total energy rose {} times its energy \
-             scale above the lowest earlier frame (a step too large for the stiffness, or \
-             particles started on top of each other)",
-            short(gain_seen)
-        ));
-    }
-    let (findings, health_warnings) = health.finish(scene);
-    // After a divergence the state is the blown-up one: its pieces and
-    // escape say nothing the divergence does not.
-    if divergence.is_none() {
-        warnings.extend(health_warnings);
-    }
-    let summary = Summary {
-        scene: scene.name.clone(),
-        steps: scene.world.steps(),
-        sim_time: scene.scene_time(),
-        settle: if scene.settled { scene.settle } else { 0.0 },
-        wall_seconds: clock.elapsed().as_secs_f64(),
-        diverged: divergence.is_some(),
-        divergence: divergence.clone(),
-        warnings,
-        failure: failure.as_ref().map(error_chain),
-        stages: scene
-            .timings()
-            .into_iter()
-            .chain([
-                ("measure".to_string(), measure_seconds),
-                ("export".to_string(), export_seconds),
-            ])
-            .collect(),
-        frames: written,
-        frame_rate: scene.frame_rate,
-        up: scene.outputs.up.unwrap_or_else(|| up_direction(scene)),
-        view: scene.outputs.view,
-        files: FrameFiles {
-            formats: writer.formats().to_vec(),
-            axes: writer
-                .formats()
-                .iter()
-                .map(|f| (f.extension().to_string(), f.axes().to_string()))
+
+    /// The run's summary (`summary.json`).
+    fn summary(
+        &self,
+        scene: &BuiltScene,
+        writer: &FrameWriter,
+        findings: Vec<crate::health::ObjectFindings>,
+        warnings: Vec<String>,
+        wall: std::time::Duration,
+    ) -> Summary {
+        Summary {
+            scene: scene.name.clone(),
+            steps: scene.world.steps(),
+            sim_time: scene.scene_time(),
+            settle: if scene.settled { scene.settle } else { 0.0 },
+            wall_seconds: wall.as_secs_f64(),
+            diverged: self.divergence.is_some(),
+            divergence: self.divergence.clone(),
+            warnings,
+            failure: self.failure.as_ref().map(error_chain),
+            stages: scene
+                .timings()
+                .into_iter()
+                .chain([
+                    ("measure".to_string(), self.measure_seconds),
+                    ("export".to_string(), self.export_seconds),
+                ])
                 .collect(),
-            sequences: if writer.formats().iter().any(|f| *f != FrameFormat::Vtu) {
-                writer.sequences().to_vec()
-            } else {
-                Vec::new()
-            },
-            vtu_series: writer
-                .formats()
-                .contains(&FrameFormat::Vtu)
-                .then(|| "vtu/state.vtu.series".to_string()),
-        },
-        threads: rayon::current_num_threads(),
-        enabled: scene.stages(),
-        contact: scene.has_contact().then_some(scene.contact),
-        bonds_broken: scene.world.bonds().map(|b| b.broken()),
-        objects: scene
+            frames: self.written,
+            frame_rate: scene.frame_rate,
+            up: scene.outputs.up.unwrap_or_else(|| up_direction(scene)),
+            view: scene.outputs.view,
+            files: frame_files(writer),
+            threads: rayon::current_num_threads(),
+            enabled: scene.stages(),
+            contact: scene.has_contact().then_some(scene.contact),
+            bonds_broken: scene.world.bonds().map(|b| b.broken()),
+            objects: self.objects(scene, findings),
+        }
+    }
+
+    /// The per-object figures of the summary.
+    fn objects(
+        &self,
+        scene: &BuiltScene,
+        findings: Vec<crate::health::ObjectFindings>,
+    ) -> Vec<ObjectSummary> {
+        scene
             .objects
             .iter()
             .zip(findings)
@@ -570,31 +700,36 @@ pub fn run(
                     .all_ids()
                     .filter(|&id| scene.world.particles().slot_of(id).is_some())
                     .count(),
-                rest_shape_error_final: last_err[o],
-                rest_shape_error_max: max_err[o],
+                rest_shape_error_final: self.last_err[o],
+                rest_shape_error_max: self.max_err[o],
                 created: obj.created.len(),
                 pieces: found.pieces,
                 bond_stretch_max: found.bond_stretch_max,
-                temperature_max: (heat && hottest[o].is_finite()).then_some(hottest[o]),
+                temperature_max: (self.heat && self.hottest[o].is_finite())
+                    .then_some(self.hottest[o]),
             })
-            .collect(),
-    };
-    let path = opts.out_dir.join("summary.json");
-    let saved = write_atomically(&path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &summary).map_err(std::io::Error::other)?;
-        writeln!(w)
-    })
-    .map_err(io(&path));
-    if let Some(e) = failure {
-        return Err(e);
+            .collect()
     }
-    saved?;
-    match divergence {
-        Some(message) => Err(RunError::Diverged {
-            message,
-            summary: Box::new(summary),
-        }),
-        None => Ok(summary),
+}
+
+/// The frame files a writer wrote (the summary's `files`).
+fn frame_files(writer: &FrameWriter) -> FrameFiles {
+    FrameFiles {
+        formats: writer.formats().to_vec(),
+        axes: writer
+            .formats()
+            .iter()
+            .map(|f| (f.extension().to_string(), f.axes().to_string()))
+            .collect(),
+        sequences: if writer.formats().iter().any(|f| *f != FrameFormat::Vtu) {
+            writer.sequences().to_vec()
+        } else {
+            Vec::new()
+        },
+        vtu_series: writer
+            .formats()
+            .contains(&FrameFormat::Vtu)
+            .then(|| "vtu/state.vtu.series".to_string()),
     }
 }
 

@@ -77,7 +77,7 @@ pub(crate) fn matched_weight(
 mod tests {
     use super::*;
     use crate::built_scene::BuiltObject;
-    use crate::skins::{BuiltSkin, SkinPrimitive, SkinSpec, DEFAULT_SMOOTHNESS};
+    use crate::skins::{SkinPrimitive, SkinSpec, DEFAULT_SMOOTHNESS};
     use op_dynamics::{Material, ParticleDesc, Particles, Quat, World, WorldParams};
     use op_implicit::Mesh;
 
@@ -106,7 +106,7 @@ mod tests {
             rest_spacing: spacing,
             created: Vec::new(),
         };
-        BuiltSkin::new(&world, 0, &object, spec, [0.0, 0.0, 1.0])
+        crate::skins::build_skin(&world, 0, &object, spec, [0.0, 0.0, 1.0])
             .unwrap()
             .mesh()
             .unwrap()

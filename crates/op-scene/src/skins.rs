@@ -3,7 +3,7 @@
 //!
 //! An object with a [`SkinSpec`] gets one op-implicit skeleton primitive
 //! per particle ([`SkinPrimitive`]); the builder turns them into a
-//! [`BuiltSkin`] (an op-implicit [`Skin`]). Nothing of op-implicit is built
+//! [`ObjectSkin`] (an op-implicit [`Skin`]). Nothing of op-implicit is built
 //! for a scene without skins (see [`crate::BuiltScene::stages`]).
 //!
 //! **Two skins.** Contact acts on the skeleton's own skin, the plain
@@ -11,44 +11,20 @@
 //! frames show the blended skin of [`SkinSpec::smoothness`] (the same when
 //! it is 1), deformed and clipped with the same contact surfaces.
 //!
-//! **Runner.** Before every interval of `dt` of the simulated duration
-//! (not the settle phase, during which skins are neither posed nor in
-//! contact) the skins are re-posed on the particles and, for every pair of
-//! skinned objects, [`ContactPair::reactions`] (Gascuel's exact contact
-//! surface, no bulge) and, for every obstacle tool a skin meets,
-//! [`op_implicit::collider_reactions`] are computed; they act over the
-//! interval as a force contributor ([`op_dynamics::contributors`],
-//! [`World::advance_to_with`]; with the adaptive scheme an interval may take several steps and the
-//! reactions act on all of them): contact is explicit, one evaluation per
-//! interval, so contact scenes are first order in `dt` whatever the
-//! scheme. Each
-//! written frame holds each skin polygonized as an extra OBJ object
-//! `<object>_skin` with vertex normals from the analytic field gradient;
-//! where two skins' supports overlap, the exported field is the deformed
-//! one ([`BuiltSkin::mesh_in`]), so skins in contact meet on the exact
-//! contact surface.
-//!
-//! **Figures** ([`ContactStats`], `summary.json` `contact`):
-//! `total_impulse` is the sum over steps of `|F| dt`, `F` the total contact
-//! force on the second object of each pair (summed over pairs);
-//! `max_penetration` is the largest overlap of the two undeformed skins
-//! over all contact samples and steps, in units of `r0` (the smaller rest
-//! spacing of the pair): at a sample of the contact surface with common
-//! excess `e`, the overlap thickness along the normal is, to first order,
-//! `e / |grad f_A| + e / |grad f_B|` (how deep each undeformed skin reaches
-//! past the contact surface, summed).
+//! **Runner.** The skins, the obstacle tools they meet and the contact
+//! between them are op-implicit's ([`op_implicit::object_skin`]); their
+//! stages ([`op_implicit::skin_stages`]) run on the scene's state
+//! ([`crate::stages::SceneState`]). Each written frame holds each skin
+//! polygonized as an extra OBJ object `<object>_skin` with vertex normals
+//! from the analytic field gradient; where two skins' supports overlap,
+//! the exported field is the deformed one ([`ObjectSkin::mesh_in`]), so
+//! skins in contact meet on the exact contact surface.
 
-use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Point3, Real, Vec3, World};
-use op_implicit::{
-    collider_reactions, polygonize, polygonize_field, polygonize_region, ClippedField, ContactPair,
-    ContactParams, ImplicitContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive, Skin,
-    SkinError,
+pub use op_implicit::object_skin::{
+    contact_step, ContactError, ContactStats, ObjectSkin, SkinTool,
 };
-use op_modeling::tools::parry_pose;
-use op_modeling::Tool;
-use parry3d_f64::math::Pose;
-use parry3d_f64::shape::Shape;
+use op_implicit::{Primitive, Skin, SkinError};
 use serde::{Deserialize, Serialize};
 
 use crate::built_scene::BuiltObject;
@@ -292,382 +268,83 @@ fn layer_field(primitive: &Primitive, normal_axis: Vec3, spacing: Real, height: 
     sum
 }
 
-/// A built skin: the op-implicit [`Skin`]s of one object, the one contact
-/// acts on and the one shown.
-#[derive(Clone, Debug)]
-pub struct BuiltSkin {
-    /// Index of its object in [`crate::BuiltScene::objects`].
-    pub object: usize,
-    /// OBJ object name: `<object>_skin`.
-    pub name: String,
-    /// The contact skin ([`SkinSpec::contact_primitive`]), posed at the
-    /// last [`BuiltSkin::repose`].
-    pub skin: Skin,
-    /// The displayed skin ([`SkinSpec::primitive`]), when it differs from
-    /// the contact skin (a smoothness above 1).
-    pub display: Option<Skin>,
-    /// Polygonization and contact cell size.
-    pub cell_size: Real,
-    /// Contact stiffness.
-    pub stiffness: Real,
-    /// The primitive each particle of the object carries in the contact
-    /// skin (in its body frame).
-    pub primitive: Primitive,
-    /// The primitive each particle carries in the displayed skin.
-    pub display_primitive: Primitive,
-    /// Taubin iterations of the exported mesh ([`SkinSpec::smoothing`]).
-    pub smoothing: usize,
-}
-
-impl BuiltSkin {
-    /// Builds the skin of `object` (index `index`) on `world`.
-    pub(crate) fn new(
-        world: &World,
-        index: usize,
-        object: &BuiltObject,
-        spec: &SkinSpec,
-        normal_axis: [Real; 3],
-    ) -> Result<BuiltSkin, op_implicit::SkinError> {
-        let prim = spec.contact_primitive(normal_axis, object.rest_spacing);
-        let mut shown = spec.primitive(normal_axis, object.rest_spacing);
-        let skin_of =
-            |p: Primitive| Skin::new(world, object.ids.iter().map(|&id| (id, p)).collect());
-        let skin = skin_of(prim)?;
-        if spec.thickness.is_none() && shown != prim {
-            // The blended skin as large as the contact skin
-            // (crate::skin_shape).
-            let unit = skin_of(shown.with_weight(1.0))?;
-            let p = world.particles();
-            let axes: Vec<Vec3> = match spec.primitive {
-                SkinPrimitive::Square { .. } => vec![Vec3::from(normal_axis)],
-                SkinPrimitive::Point => vec![Vec3::x(), Vec3::y(), Vec3::z()],
-            };
-            let mut rays = Vec::new();
-            for &id in &object.ids {
-                if let Some(k) = p.slot_of(id) {
-                    let q = p.orientations()[k];
-                    for a in &axes {
-                        let u = match spec.primitive {
-                            SkinPrimitive::Square { .. } => q * a,
-                            SkinPrimitive::Point => *a,
-                        };
-                        rays.push((p.positions()[k], u));
-                        rays.push((p.positions()[k], -u));
-                    }
-                }
-            }
-            let reach = spec.radius * (1.0 + object.ids.len() as Real);
-            if let Some(w) = crate::skin_shape::matched_weight(
-                skin.field(),
-                unit.field(),
-                &rays,
-                0.25 * spec.cell_size,
-                reach,
-            ) {
-                shown = shown.with_weight(w);
-            }
-        }
-        let display = if shown == prim {
-            None
-        } else {
-            Some(skin_of(shown)?)
-        };
-        Ok(BuiltSkin {
-            object: index,
-            name: format!("{}_skin", object.name),
-            skin,
-            display,
-            cell_size: spec.cell_size,
-            stiffness: spec.stiffness,
-            primitive: prim,
-            display_primitive: shown,
-            smoothing: spec.smoothing as usize,
-        })
-    }
-
-    /// The skins of this object: the contact one, then the displayed one
-    /// when it differs.
-    fn skins_mut(&mut self) -> impl Iterator<Item = (&mut Skin, Primitive)> {
-        std::iter::once((&mut self.skin, self.primitive))
-            .chain(self.display.as_mut().map(|d| (d, self.display_primitive)))
-    }
-
-    /// The field shown ([`BuiltSkin::display`], else the contact field).
-    pub fn display_field(&self) -> &op_implicit::Field {
-        self.display.as_ref().unwrap_or(&self.skin).field()
-    }
-
-    /// Re-poses the skins on the particles of `world`.
-    pub fn repose(&mut self, world: &World) -> Result<(), op_implicit::SkinError> {
-        for (skin, _) in self.skins_mut() {
-            skin.repose(world)?;
-        }
-        Ok(())
-    }
-
-    /// Attaches the object's primitive to the particles `ids` (created by
-    /// the creation rules); posed at the next re-pose.
-    pub fn attach(&mut self, ids: &[u32]) {
-        for (skin, prim) in self.skins_mut() {
-            let new: Vec<(u32, Primitive)> = ids.iter().map(|&id| (id, prim)).collect();
-            // The primitive was valid when the skin was built.
-            let _ = skin.attach(&new);
-        }
-    }
-
-    /// Drops the primitives of the particles `ids` (merged, released or
-    /// erased).
-    pub fn detach(&mut self, ids: &[u32]) {
-        if !ids.is_empty() {
-            let gone: std::collections::HashSet<u32> = ids.iter().copied().collect();
-            for (skin, _) in self.skins_mut() {
-                skin.retain(|id| !gone.contains(&id));
-            }
-        }
-    }
-
-    /// The skin's mesh at its current pose.
-    pub fn mesh(&self) -> Result<Mesh, op_implicit::PolygonizeError> {
-        polygonize(
-            self.display_field(),
-            &PolygonizeParams::with_cell_size(self.cell_size),
-        )
-    }
-
-    /// The skin's mesh at its current pose, deformed by contact (Gascuel,
-    /// seed 002 §6): when another skin of `skins` overlaps its support, the
-    /// exported surface is the deformed field's, so two skins in contact
-    /// meet on one contact surface (no gap, no overlap); with several
-    /// overlapping skins, the first one in scene order deforms it. Then
-    /// the obstacle tools of `tools` that touch this skin at world time `t`
-    /// clip it ([`op_implicit::ClippedField`]): a skin pressed on a rigid
-    /// collider is exported lying on its surface.
-    pub fn mesh_in(
-        &self,
-        skins: &[BuiltSkin],
-        tools: &[SkinTool],
-        t: Real,
-    ) -> Result<Mesh, op_implicit::PolygonizeError> {
-        let own = self.display_field();
-        let params = PolygonizeParams::with_cell_size(self.cell_size);
-        let index = skins.iter().position(|s| s.object == self.object);
-        let poses: Vec<(&Tool, Pose)> = tools
-            .iter()
-            .filter(|tool| index.is_some_and(|i| tool.skins.contains(&i)))
-            .map(|tool| {
-                let pose = tool.tool.pose(t);
-                (&tool.tool, parry_pose(&pose.position, &pose.rotation))
-            })
-            .collect();
-        let colliders: Vec<(&dyn Shape, Pose)> = poses
-            .iter()
-            .map(|(tool, pose)| (tool.shape(), *pose))
-            .collect();
-        let slope = op_implicit::ISO / self.cell_size;
-        let other = skins.iter().find(|o| {
-            o.object != self.object
-                && boxes_overlap(own.support_box(), o.display_field().support_box())
-        });
-        let mut mesh = match (other, colliders.is_empty()) {
-            (Some(o), true) => polygonize_field(
-                &ContactPair::new(own, o.display_field()).deformed_a(),
-                &params,
-            ),
-            (Some(o), false) => {
-                let deformed = ContactPair::new(own, o.display_field()).deformed_a();
-                polygonize_field(&ClippedField::new(&deformed, colliders, slope), &params)
-            }
-            (None, true) => polygonize(own, &params),
-            (None, false) => polygonize_field(&ClippedField::new(own, colliders, slope), &params),
-        }?;
-        mesh.taubin_smooth(self.smoothing);
-        Ok(mesh)
-    }
-}
-
-/// True when two axis-aligned boxes (lower, upper corners) intersect.
-fn boxes_overlap(a: Option<(Point3, Point3)>, b: Option<(Point3, Point3)>) -> bool {
-    match (a, b) {
-        (Some((alo, ahi)), Some((blo, bhi))) => {
-            (0..3).all(|k| alo[k] <= bhi[k] && blo[k] <= ahi[k])
-        }
-        _ => false,
-    }
-}
-
-/// Contact figures of a run (module doc): `summary.json` `contact`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct ContactStats {
-    /// Largest overlap of two undeformed skins, or depth of a skin inside
-    /// an obstacle tool, in units of r0.
-    pub max_penetration: Real,
-    /// Sum over steps of `|F| dt` on the second object of each pair.
-    pub total_impulse: Real,
-}
-
-/// An obstacle tool that skinned objects meet through their skins: the
-/// skin is sampled where it may touch the tool (its polygonization
-/// clipped to the tool's bounding box, a cell wider), and every sample
-/// inside the tool gets the reaction `stiffness x depth` along the tool's
-/// outward normal ([`op_implicit::collider_reactions`]; seed 002 §6 with
-/// only the skin compressed).
-#[derive(Clone, Debug)]
-pub struct SkinTool {
-    /// The tool (shape and path; its role is an obstacle).
-    pub tool: Tool,
-    /// Indices in [`crate::BuiltScene::skins`] of the skins it touches.
-    pub skins: Vec<usize>,
-    /// Reaction per unit depth, per sample.
-    pub stiffness: Real,
-}
-
-impl SkinTool {
-    /// Adds the reactions on skin `skin` at world time `t` to `held` and
-    /// returns (total reaction force, deepest sample depth).
-    fn react(
-        &self,
-        held: &mut ExternalAccumulator,
-        skin: &BuiltSkin,
-        t: Real,
-    ) -> Result<(Vec3, Real), ContactError> {
-        let pose = self.tool.pose(t);
-        let frame = parry_pose(&pose.position, &pose.rotation);
-        let shape = self.tool.shape();
-        let aabb = shape.compute_aabb(&frame);
-        let h = skin.cell_size;
-        let lo = Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - Vec3::repeat(h);
-        let hi = Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + Vec3::repeat(h);
-        let params = PolygonizeParams::with_cell_size(h);
-        let samples =
-            polygonize_region(skin.skin.field(), &params, Some((lo, hi))).map_err(|source| {
-                ContactError::Sample {
-                    skin: skin.name.clone(),
-                    source,
-                }
-            })?;
-        let r = collider_reactions(
-            skin.skin.field(),
-            samples.positions(),
-            shape,
-            &frame,
-            &ContactParams {
-                stiffness: self.stiffness,
-            },
-        );
-        r.add_to(held);
-        Ok((r.total_force(), r.max_depth()))
-    }
-}
-
-/// Why skin contact could not be computed ([`contact_step`]).
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum ContactError {
-    /// A skin could not follow its particles.
-    #[error("posing skin {skin}: {source}")]
-    Pose {
-        /// The skin's name.
-        skin: String,
-        /// Why.
-        source: SkinError,
-    },
-    /// A skin could not be sampled near a tool.
-    #[error("sampling skin {skin}: {source}")]
-    Sample {
-        /// The skin's name.
-        skin: String,
-        /// Why.
-        source: PolygonizeError,
-    },
-    /// The contact surface of two skins could not be sampled.
-    #[error("contact {a} / {b}: {source}")]
-    Pair {
-        /// The first skin's name.
-        a: String,
-        /// The second skin's name.
-        b: String,
-        /// Why.
-        source: PolygonizeError,
-    },
-}
-
-/// Re-poses `skins` on `world`, computes the contact reactions of every
-/// pair of skins and of every skin against the obstacle tools in `tools`,
-/// replaces `held` with them (to act over the coming interval of length
-/// `dt`, [`op_dynamics::World::advance_to_with`]) and updates `stats`.
-/// `objects` gives the rest spacings (r0). Against a tool,
-/// `max_penetration` is the depth of the deepest skin sample inside it and
-/// `total_impulse` adds the reaction on the skin.
-pub fn contact_step(
+/// Builds the skin of `object` (index `index`) on `world` from its spec:
+/// the contact skin of [`SkinSpec::contact_primitive`] and, when it differs,
+/// the displayed skin of [`SkinSpec::primitive`], as large as the contact
+/// skin ([`crate::skin_shape`]).
+pub(crate) fn build_skin(
     world: &World,
-    skins: &mut [BuiltSkin],
-    tools: &[SkinTool],
-    objects: &[BuiltObject],
-    dt: Real,
-    stats: &mut ContactStats,
-    held: &mut ExternalAccumulator,
-) -> Result<(), ContactError> {
-    held.clear();
-    held.grow(world.particles().id_bound());
-    for s in skins.iter_mut() {
-        s.repose(world).map_err(|source| ContactError::Pose {
-            skin: s.name.clone(),
-            source,
-        })?;
-    }
-    let t = world.time();
-    for tool in tools {
-        for &k in &tool.skins {
-            let skin = &skins[k];
-            let (force, depth) = tool.react(held, skin, t)?;
-            let r0 = objects[skin.object].rest_spacing.max(Real::MIN_POSITIVE);
-            stats.max_penetration = stats.max_penetration.max(depth / r0);
-            stats.total_impulse += force.norm() * dt;
+    index: usize,
+    object: &BuiltObject,
+    spec: &SkinSpec,
+    normal_axis: [Real; 3],
+) -> Result<ObjectSkin, SkinError> {
+    let prim = spec.contact_primitive(normal_axis, object.rest_spacing);
+    let mut shown = spec.primitive(normal_axis, object.rest_spacing);
+    let skin_of = |p: Primitive| Skin::new(world, object.ids.iter().map(|&id| (id, p)).collect());
+    let skin = skin_of(prim)?;
+    if spec.thickness.is_none() && shown != prim {
+        // The blended skin as large as the contact skin
+        // (crate::skin_shape).
+        let unit = skin_of(shown.with_weight(1.0))?;
+        let p = world.particles();
+        let axes: Vec<Vec3> = match spec.primitive {
+            SkinPrimitive::Square { .. } => vec![Vec3::from(normal_axis)],
+            SkinPrimitive::Point => vec![Vec3::x(), Vec3::y(), Vec3::z()],
+        };
+        let mut rays = Vec::new();
+        for &id in &object.ids {
+            if let Some(k) = p.slot_of(id) {
+                let q = p.orientations()[k];
+                for a in &axes {
+                    let u = match spec.primitive {
+                        SkinPrimitive::Square { .. } => q * a,
+                        SkinPrimitive::Point => *a,
+                    };
+                    rays.push((p.positions()[k], u));
+                    rays.push((p.positions()[k], -u));
+                }
+            }
+        }
+        let reach = spec.radius * (1.0 + object.ids.len() as Real);
+        if let Some(w) = crate::skin_shape::matched_weight(
+            skin.field(),
+            unit.field(),
+            &rays,
+            0.25 * spec.cell_size,
+            reach,
+        ) {
+            shown = shown.with_weight(w);
         }
     }
-    for i in 0..skins.len() {
-        for j in i + 1..skins.len() {
-            let (a, b) = (&skins[i], &skins[j]);
-            let (fa, fb) = (a.skin.field(), b.skin.field());
-            let params = ImplicitContactParams::new(
-                0.5 * (a.stiffness + b.stiffness),
-                a.cell_size.min(b.cell_size),
-            );
-            let r = ContactPair::new(fa, fb)
-                .reactions(&params)
-                .map_err(|source| ContactError::Pair {
-                    a: a.name.clone(),
-                    b: b.name.clone(),
-                    source,
-                })?;
-            if r.samples().is_empty() {
-                continue;
-            }
-            let r0 = objects[a.object]
-                .rest_spacing
-                .min(objects[b.object].rest_spacing)
-                .max(Real::MIN_POSITIVE);
-            for s in r.samples() {
-                let ga = fa.value_and_gradient(&s.position).1.norm();
-                let gb = fb.value_and_gradient(&s.position).1.norm();
-                let depth = s.excess / ga.max(1e-12) + s.excess / gb.max(1e-12);
-                stats.max_penetration = stats.max_penetration.max(depth / r0);
-            }
-            stats.total_impulse += r.b().total_force().norm() * dt;
-            r.add_to(held);
-        }
-    }
-    Ok(())
+    let display = if shown == prim {
+        None
+    } else {
+        Some(skin_of(shown)?)
+    };
+    Ok(ObjectSkin {
+        object: index,
+        rest_spacing: object.rest_spacing,
+        name: format!("{}_skin", object.name),
+        skin,
+        display,
+        cell_size: spec.cell_size,
+        stiffness: spec.stiffness,
+        primitive: prim,
+        display_primitive: shown,
+        smoothing: spec.smoothing as usize,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use op_dynamics::{Material, ParticleDesc, Particles, WorldParams};
+    use op_implicit::Mesh;
 
     /// Two point skins of radius 2 (skins of radius 1) whose centres are
     /// `gap` apart, as two objects.
-    fn pair(gap: Real) -> (World, Vec<BuiltSkin>) {
+    fn pair(gap: Real) -> (World, Vec<ObjectSkin>) {
         let mut p = Particles::new();
         for (k, x) in [0.0, gap].into_iter().enumerate() {
             let mut d = ParticleDesc::at(Point3::new(x, 0.0, 0.0));
@@ -693,7 +370,7 @@ mod tests {
                     rest_spacing: 1.0,
                     created: Vec::new(),
                 };
-                BuiltSkin::new(&world, k as usize, &object, &spec, [0.0, 0.0, 1.0]).unwrap()
+                build_skin(&world, k as usize, &object, &spec, [0.0, 0.0, 1.0]).unwrap()
             })
             .collect();
         (world, skins)

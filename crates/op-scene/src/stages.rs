@@ -6,24 +6,25 @@
 //! 2. [`Creation`] (edit): the creation rules every `interval` steps
 //!    (merging, stretching, growing; seed 000 §7), the created particles
 //!    joining their object;
-//! 3. [`Contact`] (forces): skin contact reactions, computed at the start
-//!    of every interval of at most `dt` and held over it (seed 002 §6);
-//! 4. [`Skins`] (follower): every skin gains primitives for created
-//!    particles of its object, drops those of removed ones (merged,
-//!    released, erased by tools), and is re-posed on the particles at the
-//!    target time.
+//! 3. op-implicit's [`ContactStage`] (forces): skin contact reactions,
+//!    computed at the start of every interval of at most `dt` and held
+//!    over it (seed 002 §6);
+//! 4. op-implicit's [`SkinStage`] (follower): every skin gains primitives
+//!    for created particles of its object, drops those of removed ones
+//!    (merged, released, erased by tools), and is re-posed on the
+//!    particles at the target time.
 //!
 //! Each stage is built only when the scene uses it
 //! ([`crate::BuiltScene::stages`]).
 
-use op_dynamics::contributors::Contributor;
 use op_dynamics::driver::{Effects, Phase, Stage, StageError};
-use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Real, World};
+pub use op_implicit::skin_stages::{ContactStage, SkinStage};
+use op_implicit::skin_stages::{SkinParts, SkinnedState};
 
 use crate::built_scene::BuiltObject;
 use crate::creation::CreationState;
-use crate::skins::{contact_step, BuiltSkin, ContactStats, SkinTool};
+use crate::skins::{ContactStats, ObjectSkin, SkinTool};
 
 /// What the scene's stages share: lent by [`crate::BuiltScene`] to its
 /// driver during [`crate::BuiltScene::advance_to`].
@@ -32,13 +33,23 @@ pub struct SceneState {
     /// The objects (created particles are added to them).
     pub objects: Vec<BuiltObject>,
     /// The skins.
-    pub skins: Vec<BuiltSkin>,
+    pub skins: Vec<ObjectSkin>,
     /// Obstacle tools met by skins.
     pub skin_tools: Vec<SkinTool>,
     /// Contact figures.
     pub contact: ContactStats,
     /// The creation rules, when the scene has some.
     pub creation: Option<CreationState>,
+}
+
+impl SkinnedState for SceneState {
+    fn skin_parts(&mut self) -> SkinParts<'_> {
+        SkinParts {
+            skins: &mut self.skins,
+            tools: &self.skin_tools,
+            contact: &mut self.contact,
+        }
+    }
 }
 
 fn pending_release(ctx: &SceneState) -> Option<&crate::fit::SceneFit> {
@@ -163,104 +174,5 @@ impl Stage<SceneState> for Creation {
             inserted: ids,
             removed: merges.iter().map(|m| m.removed).collect(),
         })
-    }
-}
-
-/// Skin contact: reactions computed at the start of each interval of at
-/// most `dt` and acting over it as a force contributor (see
-/// [`crate::skins`] and [`op_dynamics::contributors`]).
-#[derive(Default)]
-pub struct Contact {
-    /// The reactions of the current interval, by particle id.
-    held: ExternalAccumulator,
-}
-
-impl Stage<SceneState> for Contact {
-    fn name(&self) -> &str {
-        "contact"
-    }
-
-    fn phase(&self) -> Phase {
-        Phase::Forces
-    }
-
-    fn due(&self, _world: &World, _ctx: &SceneState) -> bool {
-        true
-    }
-
-    fn horizon(&self, world: &World, _ctx: &SceneState) -> Real {
-        world.time() + world.params().dt
-    }
-
-    /// An interval within 1e-6 steps of the target takes all of it, as
-    /// [`World::advance_to`] does for its last step.
-    fn slack(&self, world: &World) -> Real {
-        1e-6 * world.params().dt
-    }
-
-    fn run(
-        &mut self,
-        world: &mut World,
-        ctx: &mut SceneState,
-        until: Real,
-    ) -> Result<Effects, StageError> {
-        let h = until - world.time();
-        contact_step(
-            world,
-            &mut ctx.skins,
-            &ctx.skin_tools,
-            &ctx.objects,
-            h,
-            &mut ctx.contact,
-            &mut self.held,
-        )
-        .map_err(|e| StageError::new("contact", e))?;
-        Ok(Effects::default())
-    }
-
-    fn contributor(&self) -> Option<&dyn Contributor> {
-        Some(&self.held)
-    }
-}
-
-/// Skins follow their objects' particles (see the module docs).
-pub struct Skins;
-
-impl Stage<SceneState> for Skins {
-    fn name(&self) -> &str {
-        "skin"
-    }
-
-    fn phase(&self) -> Phase {
-        Phase::Edit
-    }
-
-    fn notify(
-        &mut self,
-        world: &World,
-        ctx: &mut SceneState,
-        effects: &Effects,
-    ) -> Result<(), StageError> {
-        let p = world.particles();
-        for s in &mut ctx.skins {
-            s.detach(&effects.removed);
-            let object = s.object as u32;
-            let new: Vec<u32> = effects
-                .inserted
-                .iter()
-                .copied()
-                .filter(|&id| p.slot_of(id).is_some_and(|k| p.objects()[k] == object))
-                .collect();
-            s.attach(&new);
-        }
-        Ok(())
-    }
-
-    fn at_target(&mut self, world: &World, ctx: &mut SceneState) -> Result<(), StageError> {
-        for s in &mut ctx.skins {
-            s.repose(world)
-                .map_err(|e| StageError::new("skin", format!("posing {}: {e}", s.name)))?;
-        }
-        Ok(())
     }
 }

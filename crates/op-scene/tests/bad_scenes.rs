@@ -4,7 +4,6 @@
 
 use std::path::{Path, PathBuf};
 
-
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
 }

@@ -16,7 +16,12 @@ use crate::math::{Real, Vec3};
 use crate::particles::Attributes;
 
 /// World normals and tangents of every particle at state `s`.
-pub(super) fn frames(normals: &mut Vec<Vec3>, tangents: &mut Vec<Vec3>, a: &Attributes<'_>, s: StateRef<'_>) {
+pub(super) fn frames(
+    normals: &mut Vec<Vec3>,
+    tangents: &mut Vec<Vec3>,
+    a: &Attributes<'_>,
+    s: StateRef<'_>,
+) {
     let n = s.positions.len();
     normals.resize(n, Vec3::zeros());
     tangents.resize(n, Vec3::zeros());

@@ -23,7 +23,7 @@ pub struct NeighbourParams {
     /// particle displacements since the last build add up to more than the
     /// skin. `0 < skin <= 10` ([`MAX_SKIN`]); the list
     /// radius `cutoff * (1 + skin)` of every material must also be finite
-    /// ([`World::new`] checks it). Default: 0.2.
+    /// ([`crate::World::new`] checks it). Default: 0.2.
     pub skin: Real,
     /// Re-sort particles in spatial (Morton) order at each rebuild.
     /// Default: true.

@@ -63,7 +63,7 @@ pub enum Role {
     /// An eraser (seed 000 §6, fig. 7: tools that cut a surface; here the
     /// cut removes material): every particle inside the tool's shape at the
     /// end of a step is deleted from the world
-    /// ([`crate::World::remove_particles`]). No force and no energy: the
+    /// ([`op_dynamics::World::remove_particles`]). No force and no energy: the
     /// removal is an edit of the particle set between steps, not a
     /// potential, so energy is not conserved across it.
     Eraser,

@@ -32,7 +32,7 @@ use op_modeling::Tool;
 
 use crate::built_scene::BuiltObject;
 use crate::outputs::{Outputs, ParticleOutput};
-use crate::skins::{BuiltSkin, SkinTool};
+use crate::skins::{ObjectSkin, SkinTool};
 
 pub mod geometry;
 pub mod layout;
@@ -149,7 +149,7 @@ impl FrameWriter {
         out: &Path,
         formats: &[FrameFormat],
         objects: &[BuiltObject],
-        skins: &[BuiltSkin],
+        skins: &[ObjectSkin],
         tools: &[Tool],
         outputs: &Outputs,
     ) -> Self {
@@ -255,7 +255,7 @@ impl FrameWriter {
         time: Real,
         world: &World,
         objects: &[BuiltObject],
-        skins: &[BuiltSkin],
+        skins: &[ObjectSkin],
         skin_tools: &[SkinTool],
         tools: &[Tool],
         outputs: &Outputs,

@@ -291,46 +291,16 @@ impl Generator {
                 law,
                 center,
                 normal,
-            } => {
-                if *count < 2 || *count > max {
-                    return Err(SceneError::value(
-                        file,
-                        at("count"),
-                        count,
-                        &format!("must be in 2..={max}"),
-                    ));
-                }
-                checks::positive(file, &at("spacing"), *spacing)?;
-                for (name, k) in [
-                    ("curvature_start", curvature_start),
-                    ("curvature_end", curvature_end),
-                ] {
-                    checks::finite(file, &at(name), *k)?;
-                    if k.abs() * spacing > 1.0 {
-                        return Err(SceneError::value(
-                            file,
-                            at(name),
-                            k,
-                            &format!(
-                                "turns the curve by more than one radian between neighbours: |curvature| * spacing must be <= 1, so |curvature| <= {}",
-                                1.0 / spacing
-                            ),
-                        ));
-                    }
-                }
-                if *law == CurvatureLaw::Geometric && curvature_start * curvature_end <= 0.0 {
-                    return Err(SceneError::value(
-                        file,
-                        at("law"),
-                        "Geometric",
-                        &format!(
-                            "needs curvature_start and curvature_end nonzero and of the same sign (they are {curvature_start} and {curvature_end})"
-                        ),
-                    ));
-                }
-                checks::finite3(file, &at("center"), center)?;
-                checks::direction(file, &at("normal"), normal)
-            }
+            } => check_spiral(
+                file,
+                &at,
+                *count,
+                *spacing,
+                (*curvature_start, *curvature_end),
+                *law,
+                center,
+                normal,
+            ),
             Generator::HexSheet {
                 nx,
                 ny,
@@ -339,37 +309,7 @@ impl Generator {
                 normal,
                 noise,
                 seed: _,
-            } => {
-                for (name, n) in [("nx", nx), ("ny", ny)] {
-                    if *n < 1 {
-                        return Err(SceneError::value(
-                            file,
-                            at(name),
-                            n,
-                            "must be >= 1 (an empty sheet has no particle)",
-                        ));
-                    }
-                }
-                if nx.checked_mul(*ny).is_none_or(|n| n > max) {
-                    return Err(SceneError::invalid(
-                        file,
-                        at("nx"),
-                        format!("nx * ny = {nx} * {ny} particles; at most {max} are allowed"),
-                    ));
-                }
-                checks::positive(file, &at("spacing"), *spacing)?;
-                checks::finite3(file, &at("center"), center)?;
-                checks::direction(file, &at("normal"), normal)?;
-                if !(noise.is_finite() && *noise >= 0.0 && *noise <= 0.25 * spacing) {
-                    return Err(SceneError::value(
-                        file,
-                        at("noise"),
-                        noise,
-                        &format!("must be in [0, spacing/4] = [0, {}]", 0.25 * spacing),
-                    ));
-                }
-                Ok(())
-            }
+            } => check_hex_sheet(file, &at, (*nx, *ny), *spacing, center, normal, *noise),
             Generator::Chain {
                 count,
                 spacing,
@@ -428,24 +368,7 @@ impl Generator {
                 spacing,
                 center,
                 axis,
-            } => {
-                checks::positive(file, &at("minor"), *minor)?;
-                checks::positive(file, &at("major"), *major)?;
-                if major <= minor {
-                    return Err(SceneError::value(
-                        file,
-                        at("major"),
-                        major,
-                        &format!("must be greater than minor = {minor} (a ring torus)"),
-                    ));
-                }
-                checks::positive(file, &at("spacing"), *spacing)?;
-                checks::finite3(file, &at("center"), center)?;
-                checks::direction(file, &at("axis"), axis)?;
-                let n = shapes::torus_estimate(*major, *minor, *spacing);
-                checks::count_at_most(file, &at("spacing"), n, max, "these radii and spacing")?;
-                Ok(())
-            }
+            } => check_torus(file, &at, (*major, *minor), *spacing, center, axis),
             Generator::Points { path: p } => {
                 let resolved = resolve(base_dir, p);
                 if resolved.is_file() {
@@ -454,23 +377,7 @@ impl Generator {
                     Err(points::missing(file, &at("path"), p, &resolved))
                 }
             }
-            Generator::List { particles } => {
-                if particles.is_empty() {
-                    return Err(SceneError::invalid(
-                        file,
-                        at("particles"),
-                        "is empty: give at least one particle",
-                    ));
-                }
-                if particles.len() > max {
-                    return Err(SceneError::invalid(
-                        file,
-                        at("particles"),
-                        format!("at most {max} particles"),
-                    ));
-                }
-                points::validate_list(particles, file, &at("particles"))
-            }
+            Generator::List { particles } => check_list(file, &at, particles),
         }
     }
 
@@ -610,6 +517,153 @@ impl Generator {
             Generator::List { particles } => points::list(particles),
         })
     }
+}
+
+/// Checks a [`Generator::List`] (`at` gives a field's path).
+fn check_list(
+    file: &str,
+    at: &dyn Fn(&str) -> String,
+    particles: &[ListParticle],
+) -> Result<(), SceneError> {
+    let max = MAX_PARTICLES;
+    if particles.is_empty() {
+        return Err(SceneError::invalid(
+            file,
+            at("particles"),
+            "is empty: give at least one particle",
+        ));
+    }
+    if particles.len() > max {
+        return Err(SceneError::invalid(
+            file,
+            at("particles"),
+            format!("at most {max} particles"),
+        ));
+    }
+    points::validate_list(particles, file, &at("particles"))
+}
+
+/// Checks a [`Generator::Spiral`] (`at` gives a field's path).
+#[allow(clippy::too_many_arguments)]
+fn check_spiral(
+    file: &str,
+    at: &dyn Fn(&str) -> String,
+    count: usize,
+    spacing: Real,
+    (curvature_start, curvature_end): (Real, Real),
+    law: CurvatureLaw,
+    center: &[Real; 3],
+    normal: &[Real; 3],
+) -> Result<(), SceneError> {
+    let max = MAX_PARTICLES;
+    if count < 2 || count > max {
+        return Err(SceneError::value(
+            file,
+            at("count"),
+            count,
+            &format!("must be in 2..={max}"),
+        ));
+    }
+    checks::positive(file, &at("spacing"), spacing)?;
+    for (name, k) in [
+        ("curvature_start", &curvature_start),
+        ("curvature_end", &curvature_end),
+    ] {
+        checks::finite(file, &at(name), *k)?;
+        if k.abs() * spacing > 1.0 {
+            return Err(SceneError::value(
+                file,
+                at(name),
+                k,
+                &format!(
+                    "turns the curve by more than one radian between neighbours: |curvature| * spacing must be <= 1, so |curvature| <= {}",
+                    1.0 / spacing
+                ),
+            ));
+        }
+    }
+    if law == CurvatureLaw::Geometric && curvature_start * curvature_end <= 0.0 {
+        return Err(SceneError::value(
+            file,
+            at("law"),
+            "Geometric",
+            &format!(
+                "needs curvature_start and curvature_end nonzero and of the same sign (they are {curvature_start} and {curvature_end})"
+            ),
+        ));
+    }
+    checks::finite3(file, &at("center"), center)?;
+    checks::direction(file, &at("normal"), normal)
+}
+
+/// Checks a [`Generator::HexSheet`] (`at` gives a field's path).
+fn check_hex_sheet(
+    file: &str,
+    at: &dyn Fn(&str) -> String,
+    (nx, ny): (usize, usize),
+    spacing: Real,
+    center: &[Real; 3],
+    normal: &[Real; 3],
+    noise: Real,
+) -> Result<(), SceneError> {
+    let max = MAX_PARTICLES;
+    for (name, n) in [("nx", nx), ("ny", ny)] {
+        if n < 1 {
+            return Err(SceneError::value(
+                file,
+                at(name),
+                n,
+                "must be >= 1 (an empty sheet has no particle)",
+            ));
+        }
+    }
+    if nx.checked_mul(ny).is_none_or(|n| n > max) {
+        return Err(SceneError::invalid(
+            file,
+            at("nx"),
+            format!("nx * ny = {nx} * {ny} particles; at most {max} are allowed"),
+        ));
+    }
+    checks::positive(file, &at("spacing"), spacing)?;
+    checks::finite3(file, &at("center"), center)?;
+    checks::direction(file, &at("normal"), normal)?;
+    if !(noise.is_finite() && noise >= 0.0 && noise <= 0.25 * spacing) {
+        return Err(SceneError::value(
+            file,
+            at("noise"),
+            noise,
+            &format!("must be in [0, spacing/4] = [0, {}]", 0.25 * spacing),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a [`Generator::TorusShell`] (`at` gives a field's path).
+fn check_torus(
+    file: &str,
+    at: &dyn Fn(&str) -> String,
+    (major, minor): (Real, Real),
+    spacing: Real,
+    center: &[Real; 3],
+    axis: &[Real; 3],
+) -> Result<(), SceneError> {
+    let max = MAX_PARTICLES;
+    checks::positive(file, &at("minor"), minor)?;
+    checks::positive(file, &at("major"), major)?;
+    if major <= minor {
+        return Err(SceneError::value(
+            file,
+            at("major"),
+            major,
+            &format!("must be greater than minor = {minor} (a ring torus)"),
+        ));
+    }
+    checks::positive(file, &at("spacing"), spacing)?;
+    checks::finite3(file, &at("center"), center)?;
+    checks::direction(file, &at("axis"), axis)?;
+    let n = shapes::torus_estimate(major, minor, spacing);
+    checks::count_at_most(file, &at("spacing"), n, max, "these radii and spacing")?;
+    Ok(())
 }
 
 /// Checks a sphere or ball generator: positive `radius` and `spacing`, a

@@ -154,6 +154,18 @@ impl Scene {
                 ),
             ));
         }
+        self.validate_run_size(total)?;
+        self.validate_heat_and_creation()?;
+        self.validate_lengths(base_dir)
+    }
+
+    /// The run's steps, particle-steps and pair-steps within
+    /// [`Scene::limits`]; `total` is the particle count.
+    fn validate_run_size(&self, total: usize) -> Result<(), SceneError> {
+        let file = self.origin();
+        let w = &self.world;
+        let lim = &self.limits;
+        let flag = "(opsim --no-work-limits lifts this limit)";
         let steps = (w.settle + w.duration) / w.dt;
         if steps > lim.max_steps {
             return Err(SceneError::value(
@@ -200,6 +212,15 @@ impl Scene {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// Heat conduction per step and the creation rules' limits.
+    fn validate_heat_and_creation(&self) -> Result<(), SceneError> {
+        let file = self.origin();
+        let w = &self.world;
+        let lim = &self.limits;
+        let flag = "(opsim --no-work-limits lifts this limit)";
         if let Some(h) = &w.heat {
             if h.conduction * w.dt > MAX_CONDUCTION_STEP {
                 return Err(SceneError::value(
@@ -245,7 +266,7 @@ impl Scene {
                 }
             }
         }
-        self.validate_lengths(base_dir)
+        Ok(())
     }
 
     /// Every coordinate, tool size and object size within

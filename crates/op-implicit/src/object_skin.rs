@@ -1,0 +1,332 @@
+//! The skins of a scene's objects and their contact (seed 002 §6, fig. 6):
+//! each skinned object carries an [`ObjectSkin`] (the skin contact acts on
+//! and, when smoother, the one shown), obstacle tools meet skins as
+//! [`SkinTool`]s, and [`contact_step`] computes the reactions of every
+//! pair of skins (Gascuel's exact contact surface, no bulge) and of every
+//! skin against the tools it meets, once per interval, as a force
+//! contributor ([`op_dynamics::contributors`]). The stages that run them
+//! are in [`crate::skin_stages`].
+//!
+//! **Figures** ([`ContactStats`], `summary.json` `contact`):
+//! `total_impulse` is the sum over steps of `|F| dt`, `F` the total contact
+//! force on the second object of each pair (summed over pairs);
+//! `max_penetration` is the largest overlap of the two undeformed skins
+//! over all contact samples and steps, in units of `r0` (the smaller rest
+//! spacing of the pair): at a sample of the contact surface with common
+//! excess `e`, the overlap thickness along the normal is, to first order,
+//! `e / |grad f_A| + e / |grad f_B|` (how deep each undeformed skin reaches
+//! past the contact surface, summed).
+
+use op_dynamics::external::ExternalAccumulator;
+use op_dynamics::{Point3, Real, Vec3, World};
+use op_modeling::tools::parry_pose;
+use op_modeling::Tool;
+use parry3d_f64::math::Pose;
+use parry3d_f64::shape::Shape;
+use serde::Serialize;
+
+use crate::{
+    collider_reactions, polygonize, polygonize_field, polygonize_region, ClippedField, ContactPair,
+    ContactParams, ImplicitContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive, Skin,
+    SkinError,
+};
+
+/// The skin of one object: the [`Skin`] contact acts on and the one shown.
+#[derive(Clone, Debug)]
+pub struct ObjectSkin {
+    /// Index of its object (the particles' object id in the world).
+    pub object: usize,
+    /// The object's rest spacing `r0` (contact depths are in its units).
+    pub rest_spacing: Real,
+    /// OBJ object name: `<object>_skin`.
+    pub name: String,
+    /// The contact skin (the plain kernel of the skeleton), posed at the
+    /// last [`ObjectSkin::repose`].
+    pub skin: Skin,
+    /// The displayed skin, when it differs from the contact skin (a
+    /// blended skin, smoother).
+    pub display: Option<Skin>,
+    /// Polygonization and contact cell size.
+    pub cell_size: Real,
+    /// Contact stiffness.
+    pub stiffness: Real,
+    /// The primitive each particle of the object carries in the contact
+    /// skin (in its body frame).
+    pub primitive: Primitive,
+    /// The primitive each particle carries in the displayed skin.
+    pub display_primitive: Primitive,
+    /// Taubin iterations of the exported mesh ([`Mesh::taubin_smooth`]).
+    pub smoothing: usize,
+}
+
+impl ObjectSkin {
+    /// The skins of this object: the contact one, then the displayed one
+    /// when it differs.
+    pub(crate) fn skins_mut(&mut self) -> impl Iterator<Item = (&mut Skin, Primitive)> {
+        std::iter::once((&mut self.skin, self.primitive))
+            .chain(self.display.as_mut().map(|d| (d, self.display_primitive)))
+    }
+
+    /// The field shown ([`ObjectSkin::display`], else the contact field).
+    pub fn display_field(&self) -> &crate::Field {
+        self.display.as_ref().unwrap_or(&self.skin).field()
+    }
+
+    /// Re-poses the skins on the particles of `world`.
+    pub fn repose(&mut self, world: &World) -> Result<(), crate::SkinError> {
+        for (skin, _) in self.skins_mut() {
+            skin.repose(world)?;
+        }
+        Ok(())
+    }
+
+    /// Attaches the object's primitive to the particles `ids` (created by
+    /// the creation rules); posed at the next re-pose.
+    pub fn attach(&mut self, ids: &[u32]) {
+        for (skin, prim) in self.skins_mut() {
+            let new: Vec<(u32, Primitive)> = ids.iter().map(|&id| (id, prim)).collect();
+            // The primitive was valid when the skin was built.
+            let _ = skin.attach(&new);
+        }
+    }
+
+    /// Drops the primitives of the particles `ids` (merged, released or
+    /// erased).
+    pub fn detach(&mut self, ids: &[u32]) {
+        if !ids.is_empty() {
+            let gone: std::collections::HashSet<u32> = ids.iter().copied().collect();
+            for (skin, _) in self.skins_mut() {
+                skin.retain(|id| !gone.contains(&id));
+            }
+        }
+    }
+
+    /// The skin's mesh at its current pose.
+    pub fn mesh(&self) -> Result<Mesh, crate::PolygonizeError> {
+        polygonize(
+            self.display_field(),
+            &PolygonizeParams::with_cell_size(self.cell_size),
+        )
+    }
+
+    /// The skin's mesh at its current pose, deformed by contact (Gascuel,
+    /// seed 002 §6): when another skin of `skins` overlaps its support, the
+    /// exported surface is the deformed field's, so two skins in contact
+    /// meet on one contact surface (no gap, no overlap); with several
+    /// overlapping skins, the first one in scene order deforms it. Then
+    /// the obstacle tools of `tools` that touch this skin at world time `t`
+    /// clip it ([`crate::ClippedField`]): a skin pressed on a rigid
+    /// collider is exported lying on its surface.
+    pub fn mesh_in(
+        &self,
+        skins: &[ObjectSkin],
+        tools: &[SkinTool],
+        t: Real,
+    ) -> Result<Mesh, crate::PolygonizeError> {
+        let own = self.display_field();
+        let params = PolygonizeParams::with_cell_size(self.cell_size);
+        let index = skins.iter().position(|s| s.object == self.object);
+        let poses: Vec<(&Tool, Pose)> = tools
+            .iter()
+            .filter(|tool| index.is_some_and(|i| tool.skins.contains(&i)))
+            .map(|tool| {
+                let pose = tool.tool.pose(t);
+                (&tool.tool, parry_pose(&pose.position, &pose.rotation))
+            })
+            .collect();
+        let colliders: Vec<(&dyn Shape, Pose)> = poses
+            .iter()
+            .map(|(tool, pose)| (tool.shape(), *pose))
+            .collect();
+        let slope = crate::ISO / self.cell_size;
+        let other = skins.iter().find(|o| {
+            o.object != self.object
+                && boxes_overlap(own.support_box(), o.display_field().support_box())
+        });
+        let mut mesh = match (other, colliders.is_empty()) {
+            (Some(o), true) => polygonize_field(
+                &ContactPair::new(own, o.display_field()).deformed_a(),
+                &params,
+            ),
+            (Some(o), false) => {
+                let deformed = ContactPair::new(own, o.display_field()).deformed_a();
+                polygonize_field(&ClippedField::new(&deformed, colliders, slope), &params)
+            }
+            (None, true) => polygonize(own, &params),
+            (None, false) => polygonize_field(&ClippedField::new(own, colliders, slope), &params),
+        }?;
+        mesh.taubin_smooth(self.smoothing);
+        Ok(mesh)
+    }
+}
+
+/// True when two axis-aligned boxes (lower, upper corners) intersect.
+fn boxes_overlap(a: Option<(Point3, Point3)>, b: Option<(Point3, Point3)>) -> bool {
+    match (a, b) {
+        (Some((alo, ahi)), Some((blo, bhi))) => {
+            (0..3).all(|k| alo[k] <= bhi[k] && blo[k] <= ahi[k])
+        }
+        _ => false,
+    }
+}
+
+/// Contact figures of a run (module doc): `summary.json` `contact`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ContactStats {
+    /// Largest overlap of two undeformed skins, or depth of a skin inside
+    /// an obstacle tool, in units of r0.
+    pub max_penetration: Real,
+    /// Sum over steps of `|F| dt` on the second object of each pair.
+    pub total_impulse: Real,
+}
+
+/// An obstacle tool that skinned objects meet through their skins: the
+/// skin is sampled where it may touch the tool (its polygonization
+/// clipped to the tool's bounding box, a cell wider), and every sample
+/// inside the tool gets the reaction `stiffness x depth` along the tool's
+/// outward normal ([`crate::collider_reactions`]; seed 002 §6 with
+/// only the skin compressed).
+#[derive(Clone, Debug)]
+pub struct SkinTool {
+    /// The tool (shape and path; its role is an obstacle).
+    pub tool: Tool,
+    /// Indices (in the scene's list of skins) of the skins it touches.
+    pub skins: Vec<usize>,
+    /// Reaction per unit depth, per sample.
+    pub stiffness: Real,
+}
+
+impl SkinTool {
+    /// Adds the reactions on skin `skin` at world time `t` to `held` and
+    /// returns (total reaction force, deepest sample depth).
+    fn react(
+        &self,
+        held: &mut ExternalAccumulator,
+        skin: &ObjectSkin,
+        t: Real,
+    ) -> Result<(Vec3, Real), ContactError> {
+        let pose = self.tool.pose(t);
+        let frame = parry_pose(&pose.position, &pose.rotation);
+        let shape = self.tool.shape();
+        let aabb = shape.compute_aabb(&frame);
+        let h = skin.cell_size;
+        let lo = Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - Vec3::repeat(h);
+        let hi = Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + Vec3::repeat(h);
+        let params = PolygonizeParams::with_cell_size(h);
+        let samples =
+            polygonize_region(skin.skin.field(), &params, Some((lo, hi))).map_err(|source| {
+                ContactError::Sample {
+                    skin: skin.name.clone(),
+                    source,
+                }
+            })?;
+        let r = collider_reactions(
+            skin.skin.field(),
+            samples.positions(),
+            shape,
+            &frame,
+            &ContactParams {
+                stiffness: self.stiffness,
+            },
+        );
+        r.add_to(held);
+        Ok((r.total_force(), r.max_depth()))
+    }
+}
+
+/// Why skin contact could not be computed ([`contact_step`]).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ContactError {
+    /// A skin could not follow its particles.
+    #[error("posing skin {skin}: {source}")]
+    Pose {
+        /// The skin's name.
+        skin: String,
+        /// Why.
+        source: SkinError,
+    },
+    /// A skin could not be sampled near a tool.
+    #[error("sampling skin {skin}: {source}")]
+    Sample {
+        /// The skin's name.
+        skin: String,
+        /// Why.
+        source: PolygonizeError,
+    },
+    /// The contact surface of two skins could not be sampled.
+    #[error("contact {a} / {b}: {source}")]
+    Pair {
+        /// The first skin's name.
+        a: String,
+        /// The second skin's name.
+        b: String,
+        /// Why.
+        source: PolygonizeError,
+    },
+}
+
+/// Re-poses `skins` on `world`, computes the contact reactions of every
+/// pair of skins and of every skin against the obstacle tools in `tools`,
+/// replaces `held` with them (to act over the coming interval of length
+/// `dt`, [`op_dynamics::World::advance_to_with`]) and updates `stats`.
+/// Depths are in units of each skin's rest spacing (r0). Against a tool,
+/// `max_penetration` is the depth of the deepest skin sample inside it and
+/// `total_impulse` adds the reaction on the skin.
+pub fn contact_step(
+    world: &World,
+    skins: &mut [ObjectSkin],
+    tools: &[SkinTool],
+    dt: Real,
+    stats: &mut ContactStats,
+    held: &mut ExternalAccumulator,
+) -> Result<(), ContactError> {
+    held.clear();
+    held.grow(world.particles().id_bound());
+    for s in skins.iter_mut() {
+        s.repose(world).map_err(|source| ContactError::Pose {
+            skin: s.name.clone(),
+            source,
+        })?;
+    }
+    let t = world.time();
+    for tool in tools {
+        for &k in &tool.skins {
+            let skin = &skins[k];
+            let (force, depth) = tool.react(held, skin, t)?;
+            let r0 = skin.rest_spacing.max(Real::MIN_POSITIVE);
+            stats.max_penetration = stats.max_penetration.max(depth / r0);
+            stats.total_impulse += force.norm() * dt;
+        }
+    }
+    for i in 0..skins.len() {
+        for j in i + 1..skins.len() {
+            let (a, b) = (&skins[i], &skins[j]);
+            let (fa, fb) = (a.skin.field(), b.skin.field());
+            let params = ImplicitContactParams::new(
+                0.5 * (a.stiffness + b.stiffness),
+                a.cell_size.min(b.cell_size),
+            );
+            let r = ContactPair::new(fa, fb)
+                .reactions(&params)
+                .map_err(|source| ContactError::Pair {
+                    a: a.name.clone(),
+                    b: b.name.clone(),
+                    source,
+                })?;
+            if r.samples().is_empty() {
+                continue;
+            }
+            let r0 = a.rest_spacing.min(b.rest_spacing).max(Real::MIN_POSITIVE);
+            for s in r.samples() {
+                let ga = fa.value_and_gradient(&s.position).1.norm();
+                let gb = fb.value_and_gradient(&s.position).1.norm();
+                let depth = s.excess / ga.max(1e-12) + s.excess / gb.max(1e-12);
+                stats.max_penetration = stats.max_penetration.max(depth / r0);
+            }
+            stats.total_impulse += r.b().total_force().norm() * dt;
+            r.add_to(held);
+        }
+    }
+    Ok(())
+}
