@@ -25,7 +25,9 @@
 
 use op_dynamics::interactions::{Spacing, SpinKind, WeightShape};
 use op_dynamics::{Material, Real, Scheme};
-use op_scene::{Generator, Scene};
+use op_modeling::tools::{Role, ToolShape};
+use op_scene::schema::{ToolSpec, Velocities};
+use op_scene::{CreationSettings, Generator, Scene, SkinPrimitive, SkinSpec};
 
 /// Scale factors of a change of units: lengths are multiplied by
 /// `length`, masses by `mass`, times by `time`.
@@ -105,6 +107,18 @@ impl Scaling {
         out.repulsion.lambda *= s;
         out.repulsion.cutoff *= s;
         out.friction *= self.mass / self.time;
+        if let Some(h) = &mut out.heat {
+            // Melting and residual are a temperature and a ratio.
+            h.cold_drag *= self.mass / self.time;
+        }
+        if let Some(b) = &mut out.bonds {
+            b.radius *= s;
+            b.break_length = b.break_length.map(|x| x * s);
+        }
+        if let Some(p) = &mut out.plasticity {
+            p.yield_curvature /= s;
+            p.rate /= self.time;
+        }
         out
     }
 
@@ -248,13 +262,165 @@ impl Scaling {
                 ov.mass = ov.mass.map(|x| x * m);
             }
         }
+        if let Some(h) = &mut w.heat {
+            // The ambient temperature is a temperature: kept.
+            h.conduction /= t;
+            h.cooling /= t;
+        }
+        for o in &mut out.objects {
+            if let Some(v) = &mut o.velocities {
+                *v = self.velocities(v)?;
+            }
+            if let Some(skin) = &mut o.skin {
+                *skin = self.skin(skin);
+            }
+        }
         for f in &mut out.forces {
             f.force = Self::scale3(f.force, self.force());
             f.start *= t;
             f.end *= t;
             f.ramp *= t;
         }
+        for tool in &mut out.tools {
+            *tool = self.tool(tool);
+        }
+        if let Some(c) = &mut out.creation {
+            *c = self.creation(c);
+        }
         Ok(out)
+    }
+
+    /// Initial velocities in the new units (a file's cannot be scaled here).
+    fn velocities(&self, v: &Velocities) -> Result<Velocities, String> {
+        match v {
+            Velocities::File(path) => Err(format!(
+                "velocities from {} cannot be scaled here",
+                path.display()
+            )),
+            // `t` is an energy (k_B = 1).
+            Velocities::Temperature { t, seed } => Ok(Velocities::Temperature {
+                t: t * self.energy(),
+                seed: *seed,
+            }),
+        }
+    }
+
+    /// A skin in the new units: lengths by `s`, the contact stiffness (a
+    /// pressure per unit field excess: a sample's reaction is stiffness x
+    /// excess x its area) by `m/(s t²)`.
+    fn skin(&self, skin: &SkinSpec) -> SkinSpec {
+        let s = self.length;
+        let mut out = skin.clone();
+        out.radius *= s;
+        out.cell_size *= s;
+        out.thickness = skin.thickness.map(|x| x * s);
+        out.stiffness *= self.mass / (s * self.time * self.time);
+        if let SkinPrimitive::Square { half_side } = &mut out.primitive {
+            *half_side *= s;
+        }
+        out
+    }
+
+    /// A tool in the new units: its path (times by `t`, positions by `s`),
+    /// its shape's lengths, and its role's stiffnesses (force per length,
+    /// `m/t²`), dampings (`m/t`), lengths, release time and heating power
+    /// (temperature per time, `1/t`).
+    fn tool(&self, tool: &ToolSpec) -> ToolSpec {
+        let (s, t) = (self.length, self.time);
+        let mut out = tool.clone();
+        for k in &mut out.path.keyframes {
+            k.time *= t;
+            k.position = Self::scale3(k.position, s);
+        }
+        out.shape = match &tool.shape {
+            ToolShape::Plane { normal } => ToolShape::Plane { normal: *normal },
+            ToolShape::Ball { radius } => ToolShape::Ball { radius: radius * s },
+            ToolShape::Cuboid { half_extents } => ToolShape::Cuboid {
+                half_extents: Self::scale3(*half_extents, s),
+            },
+            ToolShape::Cylinder {
+                half_height,
+                radius,
+            } => ToolShape::Cylinder {
+                half_height: half_height * s,
+                radius: radius * s,
+            },
+            ToolShape::ConvexHull { points } => ToolShape::ConvexHull {
+                points: points.iter().map(|p| Self::scale3(*p, s)).collect(),
+            },
+            ToolShape::TriMesh {
+                vertices,
+                triangles,
+            } => ToolShape::TriMesh {
+                vertices: vertices.iter().map(|p| Self::scale3(*p, s)).collect(),
+                triangles: triangles.clone(),
+            },
+        };
+        let (k, c) = (self.mass / (t * t), self.mass / t);
+        out.role = match tool.role {
+            Role::Obstacle {
+                stiffness,
+                margin,
+                damping,
+            } => Role::Obstacle {
+                stiffness: stiffness * k,
+                margin: margin * s,
+                damping: damping * c,
+            },
+            Role::Attractor { strength, reach } => Role::Attractor {
+                strength: strength * k,
+                reach: reach * s,
+            },
+            Role::Mover {
+                stiffness,
+                damping,
+                release,
+            } => Role::Mover {
+                stiffness: stiffness * k,
+                damping: damping * c,
+                release: release * t,
+            },
+            Role::Eraser => Role::Eraser,
+            Role::Heater { power, reach } => Role::Heater {
+                power: power / t,
+                reach: reach * s,
+            },
+            Role::Knife {
+                stiffness,
+                margin,
+                damping,
+                power,
+                reach,
+            } => Role::Knife {
+                stiffness: stiffness * k,
+                margin: margin * s,
+                damping: damping * c,
+                power: power / t,
+                reach: reach * s,
+            },
+            Role::Shaper {
+                stiffness,
+                margin,
+                damping,
+            } => Role::Shaper {
+                stiffness: stiffness * k,
+                margin: margin * s,
+                damping: damping * c,
+            },
+        };
+        out
+    }
+
+    /// Creation rules in the new units: the spacing by `s` and a fit's
+    /// release time by `t`; every other length is a multiple of the rest
+    /// spacing and the interval counts steps (whose length scales).
+    fn creation(&self, c: &CreationSettings) -> CreationSettings {
+        let mut out = c.clone();
+        out.spacing = c.spacing.map(|x| x * self.length);
+        if let Some(f) = &mut out.fit {
+            f.release *= self.time;
+        }
+        out
     }
 
     /// Scales only the geometry by `s`: generator lengths and curvatures,

@@ -136,7 +136,7 @@ pub const UNITS: &[(&str, &str)] = &[
     ("SkinSpec.radius", "L"),
     ("SkinSpec.smoothing", "iterations"),
     ("SkinSpec.smoothness", "1"),
-    ("SkinSpec.stiffness", "M·L/T²"),
+    ("SkinSpec.stiffness", "M/(L·T²)"),
     ("SkinSpec.thickness", "L"),
     ("StretchingParams.d_max", "×r0"),
     ("StretchingParams.d_min", "×r0"),
