@@ -47,6 +47,8 @@ fn a_skinned_sheet_with_creation_heat_eraser_and_obstacle_runs_with_its_skin() {
         "contact",
         "skin",
         "heat",
+        "bonds",
+        "plasticity",
         "erase",
         "integrate",
         "export",
