@@ -134,7 +134,19 @@ fn short(scheme: &str) -> &'static str {
     }
 }
 
+/// Sections 1 and 2 of the report: the outcome table of stiffness x time
+/// step x integrator, then the largest stable step of each fixed-step
+/// integrator against the effective stiffness (plots written into `dir`).
 fn sweep_section(dir: &Path) -> Res<(String, Vec<StableSteps>)> {
+    let (mut s, cells) = outcome_section();
+    let (stable, all) = stable_step_section(dir, &cells)?;
+    s.push_str(&stable);
+    Ok((s, all))
+}
+
+/// Section 1: the probes, the measures, one outcome table per potential
+/// and the count of each outcome; with the cells, which section 2 counts.
+fn outcome_section() -> (String, Vec<Cell>) {
     let mut s = String::new();
     let _ = writeln!(s, "## 1. Stiffness x time step x integrator\n");
     let _ = writeln!(
@@ -166,7 +178,25 @@ fn sweep_section(dir: &Path) -> Res<(String, Vec<StableSteps>)> {
         .collect();
     let schemes = table_schemes();
     let cells = table(&values, &DTS, &schemes);
-    for (p, vs) in &values {
+    s.push_str(&outcome_tables(&values, &cells));
+    let count = |l: &str| cells.iter().filter(|c| c.outcome.letter() == l).count();
+    let _ = writeln!(
+        s,
+        "\n{} runs: {} converged, {} oscillating, {} broke, {} diverged.\n",
+        cells.len(),
+        count("C"),
+        count("O"),
+        count("B"),
+        count("D")
+    );
+    (s, cells)
+}
+
+/// One table per potential: a row per stiffness value (with its λ), a
+/// column per step, each cell every integrator's outcome letter.
+fn outcome_tables(values: &[(Potential, Vec<Real>)], cells: &[Cell]) -> String {
+    let mut s = String::new();
+    for (p, vs) in values {
         let _ = write!(
             s,
             "\n**{}** ({})\n\n| {} | λ |",
@@ -198,17 +228,14 @@ fn sweep_section(dir: &Path) -> Res<(String, Vec<StableSteps>)> {
             s.push('\n');
         }
     }
-    let count = |l: &str| cells.iter().filter(|c| c.outcome.letter() == l).count();
-    let _ = writeln!(
-        s,
-        "\n{} runs: {} converged, {} oscillating, {} broke, {} diverged.\n",
-        cells.len(),
-        count("C"),
-        count("O"),
-        count("B"),
-        count("D")
-    );
+    s
+}
 
+/// Section 2: the largest stable step of each fixed-step integrator
+/// against λ, one log-log plot per potential (written into `dir`), its
+/// points, and the table of fitted slopes; with every measured curve.
+fn stable_step_section(dir: &Path, cells: &[Cell]) -> Res<(String, Vec<StableSteps>)> {
+    let mut s = String::new();
     let _ = writeln!(s, "## 2. Largest stable step against stiffness\n");
     let search = SearchSettings::default();
     let _ = writeln!(
@@ -233,66 +260,12 @@ fn sweep_section(dir: &Path) -> Res<(String, Vec<StableSteps>)> {
     let mut slope_rows = String::new();
     for p in Potential::ALL {
         let steps = stable_steps(p, &search_values(p), &fixed_step_schemes(), &search);
-        let mut plot = LinePlot {
-            log_x: true,
-            log_y: true,
-            ..LinePlot::new(
-                &format!("{}: largest stable dt", p.name()),
-                "effective stiffness λ = k/m (1/time²)",
-                "largest stable dt",
-            )
-        };
-        let ks: Vec<Real> = steps
-            .iter()
-            .flat_map(|st| st.points.iter().map(|q| q.0))
-            .collect();
-        for (k, st) in steps.iter().enumerate() {
-            plot.series.push(Series {
-                label: short(&st.scheme).to_string(),
-                color: PALETTE[k % PALETTE.len()].into(),
-                dashed: false,
-                points: st.points.clone(),
-            });
-        }
-        if let (Some(lo), Some(hi)) = (
-            ks.iter().copied().reduce(Real::min),
-            ks.iter().copied().reduce(Real::max),
-        ) {
-            plot.series.push(Series {
-                label: "2 sqrt(m/k)".into(),
-                color: "#555".into(),
-                dashed: true,
-                points: vec![(lo, 2.0 / lo.sqrt()), (hi, 2.0 / hi.sqrt())],
-            });
-        }
+        let plot = stable_step_plot(p, &steps);
         let name = format!("largest_dt_{}.svg", p.name());
         std::fs::write(dir.join(&name), plot.svg())?;
         let _ = writeln!(s, "![{}](stability/{name})\n", plot.title);
-        let _ = write!(slope_rows, "| {} |", p.name());
-        for st in &steps {
-            let _ = write!(
-                slope_rows,
-                " {} / {} |",
-                st.slope().map_or("n/a".into(), |v| format!("{v:.3}")),
-                st.median_dimensionless()
-                    .map_or("n/a".into(), |v| format!("{v:.3}"))
-            );
-        }
-        slope_rows.push('\n');
-        let _ = writeln!(
-            s,
-            "<details><summary>{} points (λ, largest stable dt)</summary>\n",
-            p.name()
-        );
-        for st in &steps {
-            let pts: Vec<String> = st
-                .points
-                .iter()
-                .map(|(k, dt)| format!("({}, {})", fmt(*k), fmt(*dt)))
-                .collect();
-            let _ = writeln!(s, "- {}: {}", short(&st.scheme), pts.join(", "));
-        }
-        let _ = writeln!(s, "\n</details>\n");
+        slope_rows.push_str(&slope_row(p, &steps));
+        s.push_str(&points_details(p, &steps));
         all.extend(steps);
     }
     let _ = writeln!(
@@ -324,6 +297,87 @@ fn sweep_section(dir: &Path) -> Res<(String, Vec<StableSteps>)> {
     Ok((s, all))
 }
 
+/// The log-log plot of the largest stable step against λ of potential `p`:
+/// one curve per integrator and the dashed `2 sqrt(m/k)` reference over
+/// the measured range of λ.
+fn stable_step_plot(p: Potential, steps: &[StableSteps]) -> LinePlot {
+    let mut plot = LinePlot {
+        log_x: true,
+        log_y: true,
+        ..LinePlot::new(
+            &format!("{}: largest stable dt", p.name()),
+            "effective stiffness λ = k/m (1/time²)",
+            "largest stable dt",
+        )
+    };
+    let ks: Vec<Real> = steps
+        .iter()
+        .flat_map(|st| st.points.iter().map(|q| q.0))
+        .collect();
+    for (k, st) in steps.iter().enumerate() {
+        plot.series.push(Series {
+            label: short(&st.scheme).to_string(),
+            color: PALETTE[k % PALETTE.len()].into(),
+            dashed: false,
+            points: st.points.clone(),
+        });
+    }
+    if let (Some(lo), Some(hi)) = (
+        ks.iter().copied().reduce(Real::min),
+        ks.iter().copied().reduce(Real::max),
+    ) {
+        plot.series.push(Series {
+            label: "2 sqrt(m/k)".into(),
+            color: "#555".into(),
+            dashed: true,
+            points: vec![(lo, 2.0 / lo.sqrt()), (hi, 2.0 / hi.sqrt())],
+        });
+    }
+    plot
+}
+
+/// The row of potential `p` in the slope table: per integrator, the fitted
+/// slope and the median of dt·sqrt(λ).
+fn slope_row(p: Potential, steps: &[StableSteps]) -> String {
+    let mut slope_rows = String::new();
+    let _ = write!(slope_rows, "| {} |", p.name());
+    for st in steps {
+        let _ = write!(
+            slope_rows,
+            " {} / {} |",
+            st.slope().map_or("n/a".into(), |v| format!("{v:.3}")),
+            st.median_dimensionless()
+                .map_or("n/a".into(), |v| format!("{v:.3}"))
+        );
+    }
+    slope_rows.push('\n');
+    slope_rows
+}
+
+/// The measured points (λ, largest stable dt) of potential `p`, folded in
+/// a details element.
+fn points_details(p: Potential, steps: &[StableSteps]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<details><summary>{} points (λ, largest stable dt)</summary>\n",
+        p.name()
+    );
+    for st in steps {
+        let pts: Vec<String> = st
+            .points
+            .iter()
+            .map(|(k, dt)| format!("({}, {})", fmt(*k), fmt(*dt)))
+            .collect();
+        let _ = writeln!(s, "- {}: {}", short(&st.scheme), pts.join(", "));
+    }
+    let _ = writeln!(s, "\n</details>\n");
+    s
+}
+
+/// Section 3: every scene of `scenes/extreme/` through the runner, the
+/// targets, the adaptive runs left out, and two particles of one object on
+/// one point.
 fn extreme_section(root: &Path) -> Res<String> {
     let mut s = String::new();
     let _ = writeln!(s, "## 3. Extreme cases\n");
@@ -348,60 +402,13 @@ fn extreme_section(root: &Path) -> Res<String> {
         s,
         "| case | what | integrator | outcome | steps | sim time | final O | nearest neighbours / r0 | NaN/inf in outputs | wall s |\n|---|---|---|---|---|---|---|---|---|---|"
     );
-    let tmp = std::env::temp_dir().join(format!("stability-report-{}", std::process::id()));
-    let adaptive = Scheme::Adaptive(AdaptiveParams::with_tolerance(1e-6));
-    let mut targets = String::new();
-    let mut non_finite_files = 0;
-    let mut unreported = Vec::new();
-    for case in cases() {
-        let expensive = matches!(
-            case.name,
-            "thousand_on_a_point" | "tight_curvature" | "mass_ratio" | "huge_force"
-        );
-        let mut runs: Vec<Option<Scheme>> = vec![None];
-        if !expensive {
-            runs.push(Some(adaptive));
-        }
-        for scheme in runs {
-            let out = tmp.join(format!(
-                "{}-{}",
-                case.name,
-                scheme.map_or("scene", |s| s.name())
-            ));
-            let clock = Instant::now();
-            let run = run_scene(
-                &case.scene(root),
-                &out,
-                Overrides {
-                    scheme,
-                    ..Overrides::default()
-                },
-            )?;
-            let wall = clock.elapsed().as_secs_f64();
-            let bad = files_with_non_finite(&out);
-            non_finite_files += bad.len();
-            if scheme.is_none() && case.name == "compress_20" {
-                targets = format!(
-                    "- The cohesion triangle from 20% of its rest length with the default scene \
-                     integrator settings (velocity Verlet, dt 1e-3): **{}**.\n",
-                    run.outcome.cell()
-                );
-            }
-            if matches!(
-                run.outcome,
-                ExtremeOutcome::Oscillating | ExtremeOutcome::Settled(_)
-            ) {
-                unreported.push(format!("`{}` ({})", case.name, run.scheme));
-            }
-            let _ = writeln!(
-                s,
-                "{}",
-                extreme_row(case.name, case.what, &run, bad.len(), wall)
-            );
-            let _ = std::fs::remove_dir_all(&out);
-        }
-    }
-    let _ = std::fs::remove_dir_all(&tmp);
+    let ExtremeRuns {
+        rows,
+        targets,
+        non_finite_files,
+        unreported,
+    } = extreme_runs(root)?;
+    s.push_str(&rows);
     let _ = writeln!(
         s,
         "\n**Targets.**\n\n{targets}- Output files of the extreme runs holding a NaN or \
@@ -423,6 +430,87 @@ fn extreme_section(root: &Path) -> Res<String> {
          damping rate β0/m = 1e6 forces steps near 1e-6 on any explicit scheme; `huge_force` and \
          `thousand_on_a_point` were not tried.\n"
     );
+    s.push_str(&coincident_section());
+    Ok(s)
+}
+
+/// What the runs of the extreme scenes measured.
+#[derive(Default)]
+struct ExtremeRuns {
+    /// One table row per run.
+    rows: String,
+    /// The sentence on the compressed triangle's outcome.
+    targets: String,
+    /// Output files holding a NaN or infinity, over all runs.
+    non_finite_files: usize,
+    /// Runs that ended neither converged nor reported.
+    unreported: Vec<String>,
+}
+
+/// Runs every extreme scene as written, and again with the adaptive
+/// integrator unless expensive, each into a temporary directory (removed
+/// after), scanning its outputs for non-finite values.
+fn extreme_runs(root: &Path) -> Res<ExtremeRuns> {
+    let tmp = std::env::temp_dir().join(format!("stability-report-{}", std::process::id()));
+    let adaptive = Scheme::Adaptive(AdaptiveParams::with_tolerance(1e-6));
+    let mut runs = ExtremeRuns::default();
+    for case in cases() {
+        let expensive = matches!(
+            case.name,
+            "thousand_on_a_point" | "tight_curvature" | "mass_ratio" | "huge_force"
+        );
+        let mut schemes: Vec<Option<Scheme>> = vec![None];
+        if !expensive {
+            schemes.push(Some(adaptive));
+        }
+        for scheme in schemes {
+            let out = tmp.join(format!(
+                "{}-{}",
+                case.name,
+                scheme.map_or("scene", |s| s.name())
+            ));
+            let clock = Instant::now();
+            let run = run_scene(
+                &case.scene(root),
+                &out,
+                Overrides {
+                    scheme,
+                    ..Overrides::default()
+                },
+            )?;
+            let wall = clock.elapsed().as_secs_f64();
+            let bad = files_with_non_finite(&out);
+            runs.non_finite_files += bad.len();
+            if scheme.is_none() && case.name == "compress_20" {
+                runs.targets = format!(
+                    "- The cohesion triangle from 20% of its rest length with the default scene \
+                     integrator settings (velocity Verlet, dt 1e-3): **{}**.\n",
+                    run.outcome.cell()
+                );
+            }
+            if matches!(
+                run.outcome,
+                ExtremeOutcome::Oscillating | ExtremeOutcome::Settled(_)
+            ) {
+                runs.unreported
+                    .push(format!("`{}` ({})", case.name, run.scheme));
+            }
+            let _ = writeln!(
+                runs.rows,
+                "{}",
+                extreme_row(case.name, case.what, &run, bad.len(), wall)
+            );
+            let _ = std::fs::remove_dir_all(&out);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&tmp);
+    Ok(runs)
+}
+
+/// Two particles of one object on one point, built in code, under every
+/// integrator of the table.
+fn coincident_section() -> String {
+    let mut s = String::new();
     let _ = writeln!(
         s,
         "**Two particles of one object on one point** (the builder rejects them in a scene, so \
@@ -452,7 +540,7 @@ fn extreme_section(root: &Path) -> Res<String> {
          nothing there), and the two coincident particles feel the same force from the third: \
          they move as one and never separate, by symmetry.\n"
     );
-    Ok(s)
+    s
 }
 
 fn extreme_row(name: &str, what: &str, run: &ExtremeRun, bad: usize, wall: f64) -> String {

@@ -77,24 +77,90 @@ impl LinePlot {
         self
     }
 
-    /// The SVG document.
+    /// The SVG document: title, shaded bands, grid and tick labels, frame
+    /// and axis labels, reference lines, curves, legend.
     pub fn svg(&self) -> String {
         let (w, h) = (self.width, self.height);
-        let (left, right, top, bottom) = (70.0, 20.0, 36.0, 50.0);
-        let ty = |y: Real| if self.log_y { y.log10() } else { y };
-        let tx = |x: Real| if self.log_x { x.log10() } else { x };
+        let axes = self.axes();
+        let mut s = header(w, h);
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="22" text-anchor="middle" font-size="15">{}</text>"#,
+            w / 2.0,
+            esc(&self.title)
+        );
+        let (top, ph) = (axes.top, axes.ph);
+        let bands = self.visible_bands(&axes);
+        for (a, b, _) in &bands {
+            let _ = writeln!(
+                s,
+                r##"<rect x="{:.1}" y="{top}" width="{:.1}" height="{ph}" fill="#f2e6c9"/>"##,
+                axes.sx(*a),
+                axes.sx(*b) - axes.sx(*a)
+            );
+        }
+        self.write_ticks(&mut s, &axes);
+        for (a, b, label) in &bands {
+            let _ = writeln!(
+                s,
+                r##"<text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="11" fill="#8a6d3b">{}</text>"##,
+                0.5 * (axes.sx(*a) + axes.sx(*b)),
+                top + ph - 6.0,
+                esc(label)
+            );
+        }
+        frame(
+            &mut s,
+            [axes.left, top, axes.pw, ph],
+            h,
+            &self.x_label,
+            &self.y_label,
+        );
+        self.write_hlines(&mut s, &axes);
+        self.write_curves(&mut s, &axes);
+        self.write_legend(&mut s, &axes);
+        s.push_str("</svg>\n");
+        s
+    }
+
+    /// `x` on the x axis's scale (log10 on a log axis).
+    fn tx(&self, x: Real) -> Real {
+        if self.log_x {
+            x.log10()
+        } else {
+            x
+        }
+    }
+
+    /// `y` on the y axis's scale (log10 on a log axis).
+    fn ty(&self, y: Real) -> Real {
+        if self.log_y {
+            y.log10()
+        } else {
+            y
+        }
+    }
+
+    /// Whether a point can be drawn: finite, positive on a log axis,
+    /// within the fixed y range if any.
+    fn usable(&self, &(x, y): &(Real, Real)) -> bool {
         let in_range = |y: Real| self.y_range.is_none_or(|(a, b)| y >= a && y <= b);
-        let usable = |&(x, y): &(Real, Real)| {
-            x.is_finite()
-                && y.is_finite()
-                && (!self.log_y || y > 0.0)
-                && (!self.log_x || x > 0.0)
-                && in_range(y)
-        };
+        x.is_finite()
+            && y.is_finite()
+            && (!self.log_y || y > 0.0)
+            && (!self.log_x || x > 0.0)
+            && in_range(y)
+    }
+
+    /// The range `(x0, x1, y0, y1)`, on the axes' scales, of the usable
+    /// points and the reference lines (the fixed y range if any; the unit
+    /// square when there is nothing to draw; at least 1 wide in x).
+    fn data_range(&self) -> (Real, Real, Real, Real) {
+        let (tx, ty) = (|x: Real| self.tx(x), |y: Real| self.ty(y));
         let pts = self
             .series
             .iter()
-            .flat_map(|s| s.points.iter().filter(|p| usable(p)));
+            .flat_map(|s| s.points.iter().filter(|p| self.usable(p)));
         let (mut x0, mut x1, mut y0, mut y1) = (
             Real::INFINITY,
             Real::NEG_INFINITY,
@@ -122,9 +188,18 @@ impl LinePlot {
         if x1 <= x0 {
             x1 = x0 + 1.0;
         }
+        (x0, x1, y0, y1)
+    }
+
+    /// The plot area and the axes: the data range widened to the ticks
+    /// (whole decades on a log axis, "nice" steps otherwise; a fixed
+    /// linear y range is kept and only its ticks inside are drawn).
+    fn axes(&self) -> Axes {
+        let (w, h) = (self.width, self.height);
+        let (left, right, top, bottom) = (70.0, 20.0, 36.0, 50.0);
+        let (x0, x1, y0, mut y1) = self.data_range();
         let (xt, x0, x1) = if self.log_x {
-            let (a, b) = (x0.floor(), x1.ceil().max(x0.floor() + 1.0));
-            (((a as i64)..=(b as i64)).map(|k| k as Real).collect(), a, b)
+            decades(x0, x1)
         } else {
             ticks(x0, x1)
         };
@@ -138,42 +213,42 @@ impl LinePlot {
                 y1,
             )
         } else if self.log_y {
-            let (a, b) = (y0.floor(), y1.ceil().max(y0.floor() + 1.0));
-            (((a as i64)..=(b as i64)).map(|k| k as Real).collect(), a, b)
+            decades(y0, y1)
         } else {
             if y1 <= y0 {
                 y1 = y0 + 1.0;
             }
             ticks(y0, y1)
         };
-        let (pw, ph) = (w - left - right, h - top - bottom);
-        let sx = |x: Real| left + (tx(x) - x0) / (x1 - x0) * pw;
-        let sxt = |t: Real| left + (t - x0) / (x1 - x0) * pw;
-        let sy = |y: Real| top + (1.0 - (ty(y) - y0) / (y1 - y0)) * ph;
-        let syt = |t: Real| top + (1.0 - (t - y0) / (y1 - y0)) * ph;
-        let mut s = header(w, h);
-        let _ = writeln!(
-            s,
-            r#"<text x="{}" y="22" text-anchor="middle" font-size="15">{}</text>"#,
-            w / 2.0,
-            esc(&self.title)
-        );
-        let bands: Vec<(Real, Real, &String)> = self
-            .bands
+        Axes {
+            log_x: self.log_x,
+            log_y: self.log_y,
+            left,
+            top,
+            pw: w - left - right,
+            ph: h - top - bottom,
+            x: (x0, x1),
+            y: (y0, y1),
+            xt,
+            yt,
+        }
+    }
+
+    /// The shaded bands clipped to the x range (none on a log x axis).
+    fn visible_bands(&self, axes: &Axes) -> Vec<(Real, Real, &String)> {
+        let (x0, x1) = axes.x;
+        self.bands
             .iter()
             .filter(|_| !self.log_x)
             .map(|(a, b, l)| (a.max(x0), b.min(x1), l))
             .filter(|(a, b, _)| b > a)
-            .collect();
-        for (a, b, _) in &bands {
-            let _ = writeln!(
-                s,
-                r##"<rect x="{:.1}" y="{top}" width="{:.1}" height="{ph}" fill="#f2e6c9"/>"##,
-                sx(*a),
-                sx(*b) - sx(*a)
-            );
-        }
-        for &t in &xt {
+            .collect()
+    }
+
+    /// The vertical then the horizontal grid lines, each with its label.
+    fn write_ticks(&self, s: &mut String, axes: &Axes) {
+        let (left, top, pw, ph) = (axes.left, axes.top, axes.pw, axes.ph);
+        for &t in &axes.xt {
             let label = if self.log_x {
                 format!("1e{}", t as i64)
             } else {
@@ -182,13 +257,13 @@ impl LinePlot {
             let _ = writeln!(
                 s,
                 r##"<line x1="{0:.1}" y1="{top}" x2="{0:.1}" y2="{1}" stroke="#ddd"/><text x="{0:.1}" y="{2}" text-anchor="middle" font-size="11">{3}</text>"##,
-                sxt(t),
+                axes.sxt(t),
                 top + ph,
                 top + ph + 16.0,
                 label
             );
         }
-        for &t in &yt {
+        for &t in &axes.yt {
             let label = if self.log_y {
                 format!("1e{}", t as i64)
             } else {
@@ -197,40 +272,40 @@ impl LinePlot {
             let _ = writeln!(
                 s,
                 r##"<line x1="{left}" y1="{0:.1}" x2="{1}" y2="{0:.1}" stroke="#ddd"/><text x="{2}" y="{3:.1}" text-anchor="end" font-size="11">{4}</text>"##,
-                syt(t),
+                axes.syt(t),
                 left + pw,
                 left - 6.0,
-                syt(t) + 4.0,
+                axes.syt(t) + 4.0,
                 label
             );
         }
-        for (a, b, label) in &bands {
-            let _ = writeln!(
-                s,
-                r##"<text x="{:.1}" y="{:.1}" text-anchor="middle" font-size="11" fill="#8a6d3b">{}</text>"##,
-                0.5 * (sx(*a) + sx(*b)),
-                top + ph - 6.0,
-                esc(label)
-            );
-        }
-        frame(&mut s, [left, top, pw, ph], h, &self.x_label, &self.y_label);
+    }
+
+    /// The dotted horizontal reference lines with their labels (those
+    /// drawable on the y axis).
+    fn write_hlines(&self, s: &mut String, axes: &Axes) {
+        let (left, pw) = (axes.left, axes.pw);
         for (y, label) in &self.hlines {
             if !self.log_y || *y > 0.0 {
                 let _ = writeln!(
                     s,
                     r##"<line x1="{left}" y1="{0:.1}" x2="{1}" y2="{0:.1}" stroke="#888" stroke-dasharray="2,3"/><text x="{1}" y="{2:.1}" text-anchor="end" font-size="11" fill="#555">{3}</text>"##,
-                    sy(*y),
+                    axes.sy(*y),
                     left + pw - 4.0,
-                    sy(*y) - 4.0,
+                    axes.sy(*y) - 4.0,
                     esc(label)
                 );
             }
         }
+    }
+
+    /// One path per curve; the pen lifts over points that cannot be drawn.
+    fn write_curves(&self, s: &mut String, axes: &Axes) {
         for ser in &self.series {
             let mut d = String::new();
             let mut pen_up = true;
             for p in &ser.points {
-                if !usable(p) {
+                if !self.usable(p) {
                     pen_up = true;
                     continue;
                 }
@@ -238,8 +313,8 @@ impl LinePlot {
                     d,
                     "{}{:.1},{:.1} ",
                     if pen_up { "M" } else { "L" },
-                    sx(p.0),
-                    sy(p.1)
+                    axes.sx(p.0),
+                    axes.sy(p.1)
                 );
                 pen_up = false;
             }
@@ -254,6 +329,11 @@ impl LinePlot {
                 ser.color
             );
         }
+    }
+
+    /// The legend box in the top right corner, one entry per curve.
+    fn write_legend(&self, s: &mut String, axes: &Axes) {
+        let (left, top, pw) = (axes.left, axes.top, axes.pw);
         if !self.series.is_empty() {
             let _ = writeln!(
                 s,
@@ -276,9 +356,54 @@ impl LinePlot {
                 esc(&ser.label)
             );
         }
-        s.push_str("</svg>\n");
-        s
     }
+}
+
+/// The plot area of a [`LinePlot`] (`left`, `top`, width `pw`, height
+/// `ph`, pixels) and its axes: ranges `x`, `y` and tick positions on the
+/// axes' scales (log10 on a log axis).
+struct Axes {
+    log_x: bool,
+    log_y: bool,
+    left: Real,
+    top: Real,
+    pw: Real,
+    ph: Real,
+    x: (Real, Real),
+    y: (Real, Real),
+    xt: Vec<Real>,
+    yt: Vec<Real>,
+}
+
+impl Axes {
+    /// Pixel column of `t`, on the x axis's scale.
+    fn sxt(&self, t: Real) -> Real {
+        let (x0, x1) = self.x;
+        self.left + (t - x0) / (x1 - x0) * self.pw
+    }
+
+    /// Pixel column of the data value `x`.
+    fn sx(&self, x: Real) -> Real {
+        self.sxt(if self.log_x { x.log10() } else { x })
+    }
+
+    /// Pixel row of `t`, on the y axis's scale.
+    fn syt(&self, t: Real) -> Real {
+        let (y0, y1) = self.y;
+        self.top + (1.0 - (t - y0) / (y1 - y0)) * self.ph
+    }
+
+    /// Pixel row of the data value `y`.
+    fn sy(&self, y: Real) -> Real {
+        self.syt(if self.log_y { y.log10() } else { y })
+    }
+}
+
+/// Whole decades covering `[a, b]` (log10 values), at least one: the
+/// ticks and the widened range.
+fn decades(a: Real, b: Real) -> (Vec<Real>, Real, Real) {
+    let (a, b) = (a.floor(), b.ceil().max(a.floor() + 1.0));
+    (((a as i64)..=(b as i64)).map(|k| k as Real).collect(), a, b)
 }
 
 /// The plot area's border (`[left, top, width, height]`) and the axis

@@ -299,8 +299,38 @@ fn main() {
         .flatten()
         .collect();
     std::fs::write(&input, bytes).unwrap();
+    let iso = iso_value(&particles);
+    let peer = peer_binary();
+    let cubes: Vec<Real> = std::env::var("SKINS_CUBES")
+        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
+        .unwrap_or_else(|_| vec![1.0, 0.5, 0.25]);
 
-    // The iso value: 0.6 of the median field value at the particles.
+    let thread_counts: Vec<usize> = std::env::var("SKINS_THREADS")
+        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
+        .unwrap_or_else(|_| vec![1, 2]);
+    let setup = Setup {
+        particles: &particles,
+        iso,
+        input: &input,
+        tmp: &tmp,
+        peer: peer.as_deref(),
+    };
+    let mut tables = Tables::default();
+    for &cube in &cubes {
+        let reps = if cube < 0.3 { reps.min(3) } else { reps };
+        for &threads in &thread_counts {
+            measure(&setup, cube, threads, reps, &mut tables);
+        }
+    }
+    let md = report(&setup, &tables);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../reports/skins.md");
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    std::fs::write(&path, md).unwrap();
+    eprintln!("wrote {}", path.display());
+}
+
+/// The iso value: 0.6 of the median field value at the particles.
+fn iso_value(particles: &[Point3]) -> Real {
     let field = Field::new(
         particles
             .iter()
@@ -310,119 +340,226 @@ fn main() {
             })
             .collect(),
     );
-    let mut at = field.values(&particles);
+    let mut at = field.values(particles);
     at.sort_by(Real::total_cmp);
-    let iso = 0.6 * at[at.len() / 2];
+    0.6 * at[at.len() / 2]
+}
 
+/// The splashsurf binary under `$PEERS_HOME/bin` (default
+/// `~/.cache/op-peers/bin`), unless missing or `SKINS_NO_PEER` is set.
+fn peer_binary() -> Option<PathBuf> {
     let home = std::env::var("PEERS_HOME")
         .map(PathBuf::from)
         .unwrap_or_else(|_| {
             PathBuf::from(std::env::var("HOME").unwrap_or_default()).join(".cache/op-peers")
         });
     let bin = home.join("bin/splashsurf");
-    let peer = (bin.exists() && std::env::var("SKINS_NO_PEER").is_err()).then_some(bin);
-    let cubes: Vec<Real> = std::env::var("SKINS_CUBES")
-        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
-        .unwrap_or_else(|_| vec![1.0, 0.5, 0.25]);
+    (bin.exists() && std::env::var("SKINS_NO_PEER").is_err()).then_some(bin)
+}
 
-    let thread_counts: Vec<usize> = std::env::var("SKINS_THREADS")
-        .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
-        .unwrap_or_else(|_| vec![1, 2]);
-    let mut table = String::new();
-    let mut cpu_table = String::new();
-    let mut checks = String::new();
-    let mut band = String::new();
-    for &cube in &cubes {
-        let reps = if cube < 0.3 { reps.min(3) } else { reps };
-        for &threads in &thread_counts {
-            let (mut a, mut b, mut walls) = (Vec::new(), Vec::new(), Vec::new());
-            let (mut cpu_a, mut cpu_b) = (Vec::new(), Vec::new());
-            let (mut mesh_a, mut mesh_b) = (None, None);
-            for rep in 0..reps {
-                let keep = rep == 0 && threads == 1;
-                let run = ours(&particles, iso, cube, threads, keep);
-                a.push(run.seconds);
-                cpu_a.push(run.cpu);
-                if let (true, Some(st)) = (keep, run.stats) {
-                    let _ = writeln!(
-                        band,
-                        "| {cube} r | {} | {} / {} | {} | {:.1} |",
-                        st.grid_nodes,
-                        st.sampled_blocks,
-                        st.blocks,
-                        st.sampled_nodes,
-                        st.field_evaluations as Real / 1e6
-                    );
-                }
-                mesh_a = mesh_a.or(run.mesh);
-                if let Some(bin) = &peer {
-                    let (run, wall) =
-                        splashsurf(bin, &input, &tmp.join("surface.obj"), cube, threads, keep);
-                    b.push(run.seconds);
-                    cpu_b.push(run.cpu);
-                    walls.push(wall);
-                    mesh_b = mesh_b.or(run.mesh);
-                }
-                eprintln!(
-                    "cube {cube} threads {threads} rep {rep}: ours {:.3}s splashsurf {:?}",
-                    a[rep],
-                    b.get(rep)
-                );
-            }
-            let (ma, lo_a, hi_a) = median_spread(&a);
-            let row_b = if b.is_empty() {
-                (
-                    "not installed".to_string(),
-                    "-".to_string(),
-                    "-".to_string(),
-                )
-            } else {
-                let (mb, lo_b, hi_b) = median_spread(&b);
-                let (mw, _, _) = median_spread(&walls);
-                (
-                    format!("{mb:.3} ({lo_b:.3}-{hi_b:.3}; process {mw:.3})"),
-                    format!("{:.2}x", ma / mb),
-                    String::new(),
-                )
-            };
+/// What every measurement shares: the particles, the iso value, the
+/// particle file splashsurf reads, the directory of its output, the
+/// splashsurf binary (if any).
+struct Setup<'a> {
+    particles: &'a [Point3],
+    iso: Real,
+    input: &'a Path,
+    tmp: &'a Path,
+    peer: Option<&'a Path>,
+}
+
+/// The rows of the report's tables, one per cube size and thread count
+/// (`checks` and `band`: one per cube size, from the 1-thread run).
+#[derive(Default)]
+struct Tables {
+    time: String,
+    cpu: String,
+    checks: String,
+    band: String,
+}
+
+/// The measurements of one cube size and thread count: our times (`a`)
+/// and splashsurf's (`b`, its own reconstruction timing), its process wall
+/// times, the CPU times of both, the meshes of the 1-thread first run.
+#[derive(Default)]
+struct Samples {
+    a: Vec<Real>,
+    b: Vec<Real>,
+    walls: Vec<Real>,
+    cpu_a: Vec<Real>,
+    cpu_b: Vec<Real>,
+    mesh_a: Option<Tris>,
+    mesh_b: Option<Tris>,
+}
+
+/// `reps` interleaved runs of ours and splashsurf at one cube size and
+/// thread count; appends their rows to `tables` (the narrow band's from
+/// the 1-thread first run).
+fn measure(setup: &Setup, cube: Real, threads: usize, reps: usize, tables: &mut Tables) {
+    let Setup {
+        particles,
+        iso,
+        input,
+        tmp,
+        peer,
+    } = *setup;
+    let mut samples = Samples::default();
+    for rep in 0..reps {
+        let keep = rep == 0 && threads == 1;
+        let run = ours(particles, iso, cube, threads, keep);
+        samples.a.push(run.seconds);
+        samples.cpu_a.push(run.cpu);
+        if let (true, Some(st)) = (keep, run.stats) {
             let _ = writeln!(
-                table,
-                "| {cube} r | {threads} | {ma:.3} ({lo_a:.3}-{hi_a:.3}) | {} | {} | {reps} |",
-                row_b.0, row_b.1
+                tables.band,
+                "| {cube} r | {} | {} / {} | {} | {:.1} |",
+                st.grid_nodes,
+                st.sampled_blocks,
+                st.blocks,
+                st.sampled_nodes,
+                st.field_evaluations as Real / 1e6
             );
-            let (ca, _, _) = median_spread(&cpu_a);
-            let (cb, ratio) = if cpu_b.is_empty() {
-                ("-".to_string(), "-".to_string())
-            } else {
-                let (cb, _, _) = median_spread(&cpu_b);
-                (format!("{cb:.2}"), format!("{:.2}x", ca / cb))
-            };
+        }
+        samples.mesh_a = samples.mesh_a.or(run.mesh);
+        if let Some(bin) = &peer {
+            let (run, wall) = splashsurf(bin, input, &tmp.join("surface.obj"), cube, threads, keep);
+            samples.b.push(run.seconds);
+            samples.cpu_b.push(run.cpu);
+            samples.walls.push(wall);
+            samples.mesh_b = samples.mesh_b.or(run.mesh);
+        }
+        eprintln!(
+            "cube {cube} threads {threads} rep {rep}: ours {:.3}s splashsurf {:?}",
+            samples.a[rep],
+            samples.b.get(rep)
+        );
+    }
+    write_rows(tables, cube, threads, reps, samples);
+}
+
+/// The time, CPU time and mesh rows of one cube size and thread count.
+fn write_rows(tables: &mut Tables, cube: Real, threads: usize, reps: usize, samples: Samples) {
+    let Samples {
+        a,
+        b,
+        walls,
+        cpu_a,
+        cpu_b,
+        mesh_a,
+        mesh_b,
+    } = samples;
+    let (table, cpu_table, checks) = (&mut tables.time, &mut tables.cpu, &mut tables.checks);
+    let (ma, lo_a, hi_a) = median_spread(&a);
+    let row_b = if b.is_empty() {
+        (
+            "not installed".to_string(),
+            "-".to_string(),
+            "-".to_string(),
+        )
+    } else {
+        let (mb, lo_b, hi_b) = median_spread(&b);
+        let (mw, _, _) = median_spread(&walls);
+        (
+            format!("{mb:.3} ({lo_b:.3}-{hi_b:.3}; process {mw:.3})"),
+            format!("{:.2}x", ma / mb),
+            String::new(),
+        )
+    };
+    let _ = writeln!(
+        table,
+        "| {cube} r | {threads} | {ma:.3} ({lo_a:.3}-{hi_a:.3}) | {} | {} | {reps} |",
+        row_b.0, row_b.1
+    );
+    let (ca, _, _) = median_spread(&cpu_a);
+    let (cb, ratio) = if cpu_b.is_empty() {
+        ("-".to_string(), "-".to_string())
+    } else {
+        let (cb, _, _) = median_spread(&cpu_b);
+        (format!("{cb:.2}"), format!("{:.2}x", ca / cb))
+    };
+    let _ = writeln!(
+        cpu_table,
+        "| {cube} r | {threads} | {ca:.2} | {cb} | {ratio} |"
+    );
+    for (name, m) in [("ours", mesh_a), ("splashsurf", mesh_b)] {
+        if let Some(m) = m {
             let _ = writeln!(
-                cpu_table,
-                "| {cube} r | {threads} | {ca:.2} | {cb} | {ratio} |"
+                checks,
+                "| {cube} r | {name} | {} | {} | {} | {} | {:.1} |",
+                m.triangles.len(),
+                m.positions.len(),
+                if m.closed_manifold() { "yes" } else { "no" },
+                m.euler(),
+                m.median_min_angle()
             );
-            for (name, m) in [("ours", mesh_a), ("splashsurf", mesh_b)] {
-                if let Some(m) = m {
-                    let _ = writeln!(
-                        checks,
-                        "| {cube} r | {name} | {} | {} | {} | {} | {:.1} |",
-                        m.triangles.len(),
-                        m.positions.len(),
-                        if m.closed_manifold() { "yes" } else { "no" },
-                        m.euler(),
-                        m.median_min_angle()
-                    );
-                }
-            }
         }
     }
+}
 
+/// The whole report: the machine (read at the end), the setup, the time,
+/// CPU time, mesh and narrow-band tables, the notes.
+fn report(setup: &Setup, tables: &Tables) -> String {
+    let (particles, iso, peer) = (setup.particles, setup.iso, setup.peer);
     let mut md = String::new();
     let _ = writeln!(md, "# Skins: polygonization side by side with splashsurf\n");
     let _ = writeln!(
         md,
         "Generated by `cargo run -p op-implicit --profile ci --example skins_report` (issue 19).\n"
     );
+    md += &machine_section(peer);
+    let _ = writeln!(md, "## Setup\n");
+    let _ = writeln!(
+        md,
+        "{} particles on a lattice of spacing 2 r filling a solid torus (major radius 0.625, minor 0.255, \
+         r = {R}). splashsurf 0.14.1: `reconstruct -r {R} -l 2.0 -c <cube> -n <threads>` (kernel support \
+         4 r, threshold 0.6, its defaults otherwise: no smoothing, no decimation). Ours: \
+         `polygonize_with_stats` on a point primitive of support radius 4 r at each particle, iso value \
+         0.6 x the median field value at the particles = {iso:.4} (splashsurf's threshold is the same \
+         fraction of its normalized interior density), normals from the field gradient (splashsurf: none).\n",
+        particles.len()
+    );
+    let _ = writeln!(
+        md,
+        "Times: our wall time of building the field and polygonizing (in process, rayon pool of \
+         the given size); splashsurf's own `surface reconstruction subdomain-grid` timing (no file reading, \
+         writing or checks), its process wall time in brackets. Runs interleaved (ours, splashsurf, ours, ...); \
+         median and (min-max). Ratio = our median / splashsurf's median: the target is at most 1.0x.\n"
+    );
+    let _ = writeln!(md, "## Time\n\n| cube | threads | ours, s | splashsurf, s | ratio | runs |\n|---|---|---|---|---|---|");
+    md += &tables.time;
+    let _ = writeln!(
+        md,
+        "\n## CPU time\n\nUser + system CPU seconds (10 ms ticks), median over the same runs: ours of the \
+         timed part, splashsurf of its whole process (reading the particles, reconstructing, writing \
+         the OBJ: an upper bound of its reconstruction's CPU). On this shared machine the wall time \
+         includes waiting for a core; the CPU time does not.\n\n\
+         | cube | threads | ours, CPU s | splashsurf process, CPU s | ratio |\n|---|---|---|---|---|"
+    );
+    md += &tables.cpu;
+    let _ = writeln!(
+        md,
+        "\n## Meshes (1-thread run)\n\nClosed/manifold: every directed edge once and its reverse once. Euler \
+         characteristic V - E + F (a torus: 0). Quality: median over triangles of the smallest angle.\n\n\
+         | cube | side | triangles | vertices | closed, manifold | Euler | median min angle, deg |\n|---|---|---|---|---|---|---|"
+    );
+    md += &tables.checks;
+    let _ = writeln!(
+        md,
+        "\n## Our narrow band (1-thread run)\n\nBlocks of 16 x 8 x 8 cells; a block is sampled when some \
+         primitive's support reaches it and the kernel bounds of its point primitives (nearest and \
+         farthest distance to the block) straddle the iso value; nodes on block faces count once per \
+         block. Evaluations: primitive kernels splatted onto nodes.\n\n\
+         | cube | grid nodes | sampled blocks | sampled nodes | kernel evaluations, M |\n|---|---|---|---|---|"
+    );
+    md += &tables.band;
+    md += NOTES;
+    md
+}
+
+/// The machine's facts: CPU, cores, compiler, load at the end, date, the
+/// splashsurf version.
+fn machine_section(peer: Option<&Path>) -> String {
+    let mut md = String::new();
     let _ = writeln!(md, "## Machine\n\n| | |\n|---|---|");
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
@@ -460,54 +597,5 @@ fn main() {
             .map(|b| sh(b.to_str().unwrap(), &["--version"]))
             .unwrap_or_else(|| "not installed (`/work/shared/peers/install.sh splashsurf`)".into())
     );
-    let _ = writeln!(md, "## Setup\n");
-    let _ = writeln!(
-        md,
-        "{} particles on a lattice of spacing 2 r filling a solid torus (major radius 0.625, minor 0.255, \
-         r = {R}). splashsurf 0.14.1: `reconstruct -r {R} -l 2.0 -c <cube> -n <threads>` (kernel support \
-         4 r, threshold 0.6, its defaults otherwise: no smoothing, no decimation). Ours: \
-         `polygonize_with_stats` on a point primitive of support radius 4 r at each particle, iso value \
-         0.6 x the median field value at the particles = {iso:.4} (splashsurf's threshold is the same \
-         fraction of its normalized interior density), normals from the field gradient (splashsurf: none).\n",
-        particles.len()
-    );
-    let _ = writeln!(
-        md,
-        "Times: our wall time of building the field and polygonizing (in process, rayon pool of \
-         the given size); splashsurf's own `surface reconstruction subdomain-grid` timing (no file reading, \
-         writing or checks), its process wall time in brackets. Runs interleaved (ours, splashsurf, ours, ...); \
-         median and (min-max). Ratio = our median / splashsurf's median: the target is at most 1.0x.\n"
-    );
-    let _ = writeln!(md, "## Time\n\n| cube | threads | ours, s | splashsurf, s | ratio | runs |\n|---|---|---|---|---|---|");
-    md += &table;
-    let _ = writeln!(
-        md,
-        "\n## CPU time\n\nUser + system CPU seconds (10 ms ticks), median over the same runs: ours of the \
-         timed part, splashsurf of its whole process (reading the particles, reconstructing, writing \
-         the OBJ: an upper bound of its reconstruction's CPU). On this shared machine the wall time \
-         includes waiting for a core; the CPU time does not.\n\n\
-         | cube | threads | ours, CPU s | splashsurf process, CPU s | ratio |\n|---|---|---|---|---|"
-    );
-    md += &cpu_table;
-    let _ = writeln!(
-        md,
-        "\n## Meshes (1-thread run)\n\nClosed/manifold: every directed edge once and its reverse once. Euler \
-         characteristic V - E + F (a torus: 0). Quality: median over triangles of the smallest angle.\n\n\
-         | cube | side | triangles | vertices | closed, manifold | Euler | median min angle, deg |\n|---|---|---|---|---|---|---|"
-    );
-    md += &checks;
-    let _ = writeln!(
-        md,
-        "\n## Our narrow band (1-thread run)\n\nBlocks of 16 x 8 x 8 cells; a block is sampled when some \
-         primitive's support reaches it and the kernel bounds of its point primitives (nearest and \
-         farthest distance to the block) straddle the iso value; nodes on block faces count once per \
-         block. Evaluations: primitive kernels splatted onto nodes.\n\n\
-         | cube | grid nodes | sampled blocks | sampled nodes | kernel evaluations, M |\n|---|---|---|---|---|"
-    );
-    md += &band;
-    md += NOTES;
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../reports/skins.md");
-    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-    std::fs::write(&path, md).unwrap();
-    eprintln!("wrote {}", path.display());
+    md
 }
