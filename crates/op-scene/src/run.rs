@@ -4,20 +4,23 @@
 //! a bad frame: frames already on disk stay valid and the summary says
 //! `diverged: true`.
 
-use std::fs;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use op_dynamics::diagnostics::rest_shape_rms;
-use op_dynamics::{Diagnostics, Point3, Real};
+use op_dynamics::{Point3, Real};
 use serde::Serialize;
 
 use crate::built_scene::{BuiltObject, BuiltScene};
 use crate::error::short;
-use crate::export::layout::{is_sequence_file, is_vtu_file};
 use crate::export::{write_atomically, FrameFormat, FrameWriter, Sequence};
 use crate::health::{energy_floor, Health, ENERGY_GAIN_WARNING};
 use crate::skins::ContactStats;
+
+mod energy_watch;
+mod output;
+use energy_watch::EnergyWatch;
+pub use output::prepare_output;
 
 /// How to run a scene.
 #[derive(Clone, Debug)]
@@ -206,84 +209,6 @@ pub fn rest_shape_error(scene: &BuiltScene, object: &BuiltObject) -> Real {
     rest_shape_rms(&rest, &current) / object.rest_spacing.max(Real::MIN_POSITIVE)
 }
 
-/// Makes `out_dir` ready for a run: creates it and `folders` (the frame
-/// folders, [`FrameWriter::folders`]), refuses symbolic links where opsim
-/// writes, and removes the files a previous run left there (only the names
-/// opsim writes: `summary.json`, `metrics.csv`, the sequence files
-/// `frames/<stem>/<stem>_<digits>.obj|ply` (and the emptied folders), the
-/// older layout's `frames/frame_*.obj`, `vtu/state_*.vtu`,
-/// `vtu/state.vtu.series` and opsim's temporary files), so frames of two
-/// runs never mix.
-pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunError> {
-    fs::create_dir_all(out_dir).map_err(io(out_dir))?;
-    let frames_dir = out_dir.join("frames");
-    let vtu_dir = out_dir.join("vtu");
-    let link = |p: &Path| {
-        fs::symlink_metadata(p)
-            .map(|m| m.file_type().is_symlink())
-            .unwrap_or(false)
-    };
-    for p in [
-        frames_dir.clone(),
-        vtu_dir.clone(),
-        out_dir.join("metrics.csv"),
-        out_dir.join("summary.json"),
-    ]
-    .iter()
-    .chain(folders)
-    {
-        if link(p) {
-            return Err(RunError::Symlink { path: p.clone() });
-        }
-    }
-    let temporary = crate::export::is_temporary;
-    let clean = |dir: &Path, ours: &dyn Fn(&str) -> bool| -> Result<bool, RunError> {
-        let Ok(entries) = fs::read_dir(dir) else {
-            return Ok(false);
-        };
-        let mut left = false;
-        for e in entries {
-            let e = e.map_err(io(dir))?;
-            let name = e.file_name().to_string_lossy().into_owned();
-            if ours(&name) || temporary(&name) {
-                let path = e.path();
-                if link(&path) {
-                    return Err(RunError::Symlink { path });
-                }
-                fs::remove_file(&path).map_err(io(&path))?;
-            } else {
-                left = true;
-            }
-        }
-        Ok(left)
-    };
-    clean(out_dir, &|name| {
-        name == "summary.json" || name == "metrics.csv"
-    })?;
-    clean(&vtu_dir, &is_vtu_file)?;
-    if let Ok(entries) = fs::read_dir(&frames_dir) {
-        for e in entries {
-            let e = e.map_err(io(&frames_dir))?;
-            let path = e.path();
-            if !e.file_type().map_err(io(&path))?.is_dir() {
-                continue;
-            }
-            let stem = e.file_name().to_string_lossy().into_owned();
-            let left = clean(&path, &|name| is_sequence_file(name, &stem))?;
-            if !left {
-                fs::remove_dir(&path).map_err(io(&path))?;
-            }
-        }
-    }
-    clean(&frames_dir, &|name| {
-        name.starts_with("frame_") && name.ends_with(".obj")
-    })?;
-    for dir in folders {
-        fs::create_dir_all(dir).map_err(io(dir))?;
-    }
-    Ok(())
-}
-
 /// `metrics.csv`, kept in memory and written atomically (like the frames)
 /// at most every few seconds of wall time and at the end, so the file on
 /// disk is always whole.
@@ -427,101 +352,6 @@ struct Frame<'a> {
     wall: &'a Instant,
     writer: &'a mut FrameWriter,
     metrics: Option<&'a mut Metrics>,
-}
-
-/// The energy checks of every frame (README "Running scenes"): runaway
-/// kinetic energy against the energy scale, and the gain of a passive
-/// scene over its lowest earlier total.
-struct EnergyWatch {
-    /// The energy the scene's own inputs can give it ([`energy_floor`]).
-    floor: Real,
-    /// The energy scale and the particle count it was taken at.
-    scale: Option<(Real, usize)>,
-    /// A damped, unforced scene (its energy may not rise).
-    passive: bool,
-    lowest_total: Real,
-    /// The largest gain seen (in units of `gain_scale`).
-    gain_seen: Real,
-    gain_scale: Option<Real>,
-}
-
-impl EnergyWatch {
-    fn new(scene: &BuiltScene, floor: Real) -> Self {
-        EnergyWatch {
-            floor,
-            scale: None,
-            passive: scene.is_passive(),
-            lowest_total: Real::INFINITY,
-            gain_seen: 0.0,
-            gain_scale: None,
-        }
-    }
-
-    /// Checks the frame with diagnostics `d`; the divergence message when
-    /// it fails.
-    fn check(&mut self, scene: &BuiltScene, d: &Diagnostics) -> Result<(), String> {
-        let count = scene.world.particles().len();
-        let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
-        // The scale is taken at frame 0, never below the energy the scene's
-        // own inputs can give it (`energy_floor`), and again (keeping the
-        // larger) whenever the creation rules changed the particle count:
-        // new particles bring energy the first frame did not hold.
-        let scale = match self.scale {
-            Some((s, c)) if c == count => s,
-            Some((s, _)) => Real::max(s, here),
-            None => here.max(self.floor),
-        };
-        self.scale = Some((scale, count));
-        // The gain of a passive scene is measured against its own energy at
-        // frame 0 (a damped scene at rest holds only potential energy).
-        let own_scale = *self
-            .gain_scale
-            .get_or_insert(here.max(1e-12 * count as Real));
-        let kinetic = d.kinetic_translational + d.kinetic_rotational;
-        if !d.total.is_finite() || kinetic > scene.energy_growth * scale {
-            return Err(runaway(scene, kinetic, scale));
-        }
-        if self.passive && self.lowest_total.is_finite() {
-            let gain = (d.total - self.lowest_total) / own_scale.max(Real::MIN_POSITIVE);
-            if gain > scene.energy_gain {
-                return Err(format!(
-                    "simulation diverged at step {} (t = {}): energy gain: total energy {:.6e} \
-                     exceeds the lowest of the earlier frames, {:.6e}, by more than \
-                     divergence.energy_gain = {} x energy scale {own_scale:.3e}; a damped, \
-                     unforced scene cannot gain energy: a step too large for the stiffness put \
-                     it in (reduce dt or use the adaptive scheme), or a pair started at r = 0, \
-                     where its energy is taken as 0",
-                    scene.world.steps(),
-                    short(scene.world.time()),
-                    d.total,
-                    self.lowest_total,
-                    short(scene.energy_gain)
-                ));
-            }
-            self.gain_seen = self.gain_seen.max(gain);
-        }
-        self.lowest_total = self.lowest_total.min(d.total);
-        Ok(())
-    }
-}
-
-/// The runaway-energy divergence message, naming the fastest particle.
-fn runaway(scene: &BuiltScene, kinetic: Real, scale: Real) -> String {
-    let p = scene.world.particles();
-    let fastest = (0..p.len())
-        .max_by(|&a, &b| {
-            p.velocities()[a]
-                .norm()
-                .total_cmp(&p.velocities()[b].norm())
-        })
-        .map_or(0, |s| p.ids()[s]);
-    format!(
-        "simulation diverged at step {} (t = {}): particle {fastest}: runaway energy \
-         (kinetic {kinetic:.3e} > {} x energy scale {scale:.3e})",
-        scene.world.steps(),
-        short(scene.world.time()),
-        short(scene.energy_growth)
-    )
 }
 
 /// What a run accumulates over its frames: per-object rest-shape errors and
@@ -779,7 +609,7 @@ mod tests {
             formats: vec![crate::export::FrameFormat::Obj],
         };
         let result = run(&mut built, &opts, &mut |_, _| {});
-        let _ = fs::remove_dir_all(&dir);
+        let _ = std::fs::remove_dir_all(&dir);
         result
     }
 

@@ -1,0 +1,102 @@
+//! The energy checks of a run's frames (divergence: runaway energy, the
+//! energy gain of a passive scene).
+
+use op_dynamics::{Diagnostics, Real};
+
+use crate::built_scene::BuiltScene;
+use crate::error::short;
+
+/// The energy checks of every frame (README "Running scenes"): runaway
+/// kinetic energy against the energy scale, and the gain of a passive
+/// scene over its lowest earlier total.
+pub(super) struct EnergyWatch {
+    /// The energy the scene's own inputs can give it ([`energy_floor`]).
+    floor: Real,
+    /// The energy scale and the particle count it was taken at.
+    scale: Option<(Real, usize)>,
+    /// A damped, unforced scene (its energy may not rise).
+    passive: bool,
+    lowest_total: Real,
+    /// The largest gain seen (in units of `gain_scale`).
+    pub(super) gain_seen: Real,
+    gain_scale: Option<Real>,
+}
+
+impl EnergyWatch {
+    pub(super) fn new(scene: &BuiltScene, floor: Real) -> Self {
+        EnergyWatch {
+            floor,
+            scale: None,
+            passive: scene.is_passive(),
+            lowest_total: Real::INFINITY,
+            gain_seen: 0.0,
+            gain_scale: None,
+        }
+    }
+
+    /// Checks the frame with diagnostics `d`; the divergence message when
+    /// it fails.
+    pub(super) fn check(&mut self, scene: &BuiltScene, d: &Diagnostics) -> Result<(), String> {
+        let count = scene.world.particles().len();
+        let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
+        // The scale is taken at frame 0, never below the energy the scene's
+        // own inputs can give it (`energy_floor`), and again (keeping the
+        // larger) whenever the creation rules changed the particle count:
+        // new particles bring energy the first frame did not hold.
+        let scale = match self.scale {
+            Some((s, c)) if c == count => s,
+            Some((s, _)) => Real::max(s, here),
+            None => here.max(self.floor),
+        };
+        self.scale = Some((scale, count));
+        // The gain of a passive scene is measured against its own energy at
+        // frame 0 (a damped scene at rest holds only potential energy).
+        let own_scale = *self
+            .gain_scale
+            .get_or_insert(here.max(1e-12 * count as Real));
+        let kinetic = d.kinetic_translational + d.kinetic_rotational;
+        if !d.total.is_finite() || kinetic > scene.energy_growth * scale {
+            return Err(runaway(scene, kinetic, scale));
+        }
+        if self.passive && self.lowest_total.is_finite() {
+            let gain = (d.total - self.lowest_total) / own_scale.max(Real::MIN_POSITIVE);
+            if gain > scene.energy_gain {
+                return Err(format!(
+                    "simulation diverged at step {} (t = {}): energy gain: total energy {:.6e} \
+                     exceeds the lowest of the earlier frames, {:.6e}, by more than \
+                     divergence.energy_gain = {} x energy scale {own_scale:.3e}; a damped, \
+                     unforced scene cannot gain energy: a step too large for the stiffness put \
+                     it in (reduce dt or use the adaptive scheme), or a pair started at r = 0, \
+                     where its energy is taken as 0",
+                    scene.world.steps(),
+                    short(scene.world.time()),
+                    d.total,
+                    self.lowest_total,
+                    short(scene.energy_gain)
+                ));
+            }
+            self.gain_seen = self.gain_seen.max(gain);
+        }
+        self.lowest_total = self.lowest_total.min(d.total);
+        Ok(())
+    }
+}
+
+/// The runaway-energy divergence message, naming the fastest particle.
+fn runaway(scene: &BuiltScene, kinetic: Real, scale: Real) -> String {
+    let p = scene.world.particles();
+    let fastest = (0..p.len())
+        .max_by(|&a, &b| {
+            p.velocities()[a]
+                .norm()
+                .total_cmp(&p.velocities()[b].norm())
+        })
+        .map_or(0, |s| p.ids()[s]);
+    format!(
+        "simulation diverged at step {} (t = {}): particle {fastest}: runaway energy \
+         (kinetic {kinetic:.3e} > {} x energy scale {scale:.3e})",
+        scene.world.steps(),
+        short(scene.world.time()),
+        short(scene.energy_growth)
+    )
+}
