@@ -33,18 +33,37 @@ pub enum WorldError {
     Param(#[from] ParamError),
 }
 
-/// A run that blew up: the step, time and particle where it was detected.
+/// A run that blew up: the step, time and (when one is to blame) particle
+/// where it was detected, and what was wrong. The one divergence of the
+/// workspace: the world's checks (non-finite state, speed limit) and the
+/// runner's (runaway energy, energy gain, explosion beyond the scene's
+/// bounds) all report it, in one format:
+/// `simulation diverged at step N (t = T): particle P: reason`.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("simulation diverged at step {step} (t = {time}): particle {particle}: {reason}")]
 pub struct Divergence {
     /// Index of the step that produced the bad state (1-based).
     pub step: u64,
     /// Simulation time after that step.
     pub time: Real,
-    /// Stable id of the first bad particle.
-    pub particle: u32,
+    /// Stable id of the first bad particle, when one is to blame (the
+    /// energy gain of a whole scene has none).
+    pub particle: Option<u32>,
     /// What was wrong.
     pub reason: String,
+}
+
+impl std::fmt::Display for Divergence {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "simulation diverged at step {} (t = {}): ",
+            self.step, self.time
+        )?;
+        if let Some(p) = self.particle {
+            write!(f, "particle {p}: ")?;
+        }
+        f.write_str(&self.reason)
+    }
 }
 
 /// The stages of [`World::step`], timed in [`StepReport`].
@@ -695,7 +714,7 @@ impl World {
             Some((i, reason)) => Err(Divergence {
                 step: self.steps,
                 time: self.time,
-                particle: p.ids()[i],
+                particle: Some(p.ids()[i]),
                 reason,
             }),
         }

@@ -27,7 +27,7 @@
 //! is never zero, so a scene that starts at rest is measured against the
 //! energy its own inputs can give it rather than against nothing.
 
-use op_dynamics::{Point3, Real, Vec3};
+use op_dynamics::{Divergence, Point3, Real, Vec3};
 
 use crate::built_scene::{BuiltObject, BuiltScene};
 
@@ -208,7 +208,7 @@ impl Health {
 
     /// Observes the current frame; returns the explosion message when a
     /// particle is `extent_growth` scene sizes beyond the scene's bounds.
-    pub fn observe(&mut self, scene: &BuiltScene) -> Option<String> {
+    pub fn observe(&mut self, scene: &BuiltScene) -> Option<Divergence> {
         let w = &scene.world;
         let p = w.particles();
         let t = (w.time() - self.t0).max(0.0);
@@ -236,18 +236,18 @@ impl Health {
             self.escape_max = d;
             self.escaped_object = Some(o);
         }
-        (d > self.explode_at).then(|| {
-            format!(
-                "simulation exploded at step {} (t = {}): particle {id} of object {:?} is \
-                 {} scene sizes ({}) beyond the scene's bounds, more than \
-                 world.divergence.extent_growth = {}",
-                w.steps(),
-                crate::error::short(w.time()),
+        (d > self.explode_at).then(|| Divergence {
+            step: w.steps(),
+            time: w.time(),
+            particle: Some(id),
+            reason: format!(
+                "exploded: it is in object {:?}, {} scene sizes ({}) beyond the scene's \
+                 bounds, more than world.divergence.extent_growth = {}",
                 scene.objects[o].name,
                 crate::error::short(d),
                 crate::error::short(self.size),
                 crate::error::short(self.explode_at)
-            )
+            ),
         })
     }
 

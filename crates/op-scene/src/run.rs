@@ -409,12 +409,12 @@ impl Tally {
         }
         let measuring = Instant::now();
         let d = scene.world.diagnostics();
-        if let Err(message) = watch.check(scene, &d) {
-            self.divergence = Some(message);
+        if let Err(d) = watch.check(scene, &d) {
+            self.divergence = Some(d.to_string());
             return false;
         }
-        if let Some(message) = health.observe(scene) {
-            self.divergence = Some(message);
+        if let Some(d) = health.observe(scene) {
+            self.divergence = Some(d.to_string());
             return false;
         }
         self.measure(scene);

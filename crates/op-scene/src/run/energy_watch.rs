@@ -1,7 +1,7 @@
 //! The energy checks of a run's frames (divergence: runaway energy, the
 //! energy gain of a passive scene).
 
-use op_dynamics::{Diagnostics, Real};
+use op_dynamics::{Diagnostics, Divergence, Real};
 
 use crate::built_scene::BuiltScene;
 use crate::error::short;
@@ -36,7 +36,7 @@ impl EnergyWatch {
 
     /// Checks the frame with diagnostics `d`; the divergence message when
     /// it fails.
-    pub(super) fn check(&mut self, scene: &BuiltScene, d: &Diagnostics) -> Result<(), String> {
+    pub(super) fn check(&mut self, scene: &BuiltScene, d: &Diagnostics) -> Result<(), Divergence> {
         let count = scene.world.particles().len();
         let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
         // The scale is taken at frame 0, never below the energy the scene's
@@ -61,19 +61,17 @@ impl EnergyWatch {
         if self.passive && self.lowest_total.is_finite() {
             let gain = (d.total - self.lowest_total) / own_scale.max(Real::MIN_POSITIVE);
             if gain > scene.energy_gain {
-                return Err(format!(
-                    "simulation diverged at step {} (t = {}): energy gain: total energy {:.6e} \
-                     exceeds the lowest of the earlier frames, {:.6e}, by more than \
-                     divergence.energy_gain = {} x energy scale {own_scale:.3e}; a damped, \
-                     unforced scene cannot gain energy: a step too large for the stiffness put \
-                     it in (reduce dt or use the adaptive scheme), or a pair started at r = 0, \
-                     where its energy is taken as 0",
-                    scene.world.steps(),
-                    short(scene.world.time()),
+                let reason = format!(
+                    "energy gain: total energy {:.6e} exceeds the lowest of the earlier \
+                     frames, {:.6e}, by more than divergence.energy_gain = {} x energy scale \
+                     {own_scale:.3e}; a damped, unforced scene cannot gain energy: a step too \
+                     large for the stiffness put it in (reduce dt or use the adaptive scheme), \
+                     or a pair started at r = 0, where its energy is taken as 0",
                     d.total,
                     self.lowest_total,
                     short(scene.energy_gain)
-                ));
+                );
+                return Err(divergence(scene, None, reason));
             }
             self.gain_seen = self.gain_seen.max(gain);
         }
@@ -82,8 +80,18 @@ impl EnergyWatch {
     }
 }
 
-/// The runaway-energy divergence message, naming the fastest particle.
-fn runaway(scene: &BuiltScene, kinetic: Real, scale: Real) -> String {
+/// A divergence detected by the runner at the world's current step.
+pub(super) fn divergence(scene: &BuiltScene, particle: Option<u32>, reason: String) -> Divergence {
+    Divergence {
+        step: scene.world.steps(),
+        time: scene.world.time(),
+        particle,
+        reason,
+    }
+}
+
+/// The runaway-energy divergence, naming the fastest particle.
+fn runaway(scene: &BuiltScene, kinetic: Real, scale: Real) -> Divergence {
     let p = scene.world.particles();
     let fastest = (0..p.len())
         .max_by(|&a, &b| {
@@ -92,11 +100,9 @@ fn runaway(scene: &BuiltScene, kinetic: Real, scale: Real) -> String {
                 .total_cmp(&p.velocities()[b].norm())
         })
         .map_or(0, |s| p.ids()[s]);
-    format!(
-        "simulation diverged at step {} (t = {}): particle {fastest}: runaway energy \
-         (kinetic {kinetic:.3e} > {} x energy scale {scale:.3e})",
-        scene.world.steps(),
-        short(scene.world.time()),
+    let reason = format!(
+        "runaway energy (kinetic {kinetic:.3e} > {} x energy scale {scale:.3e})",
         short(scene.energy_growth)
-    )
+    );
+    divergence(scene, Some(fastest), reason)
 }
