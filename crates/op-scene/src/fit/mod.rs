@@ -66,10 +66,16 @@
 //!    largest distance from the input samples to the mesh triangles.
 //! 6. *Holes* (`holes.rs`): after the triangulation, the holes (boundary
 //!    loops) narrower than [`FitParams::max_hole`] spacings (closed data)
-//!    or `d_max` (open data: the stretching search range) are closed with
-//!    triangles, a new vertex at the centre of a large one; edges held by
-//!    more than two triangles are dropped first, so every edge ends in at
-//!    most two triangles.
+//!    or, for open data, the wider of `d_max` (the stretching search
+//!    range) and the widest gap uniformly random sampling leaves by chance
+//!    at the samples' density (Miles 1970; 4.7 spacings on 5,000 samples)
+//!    are closed with triangles, a new vertex at the centre of a large
+//!    one; edges held by more than two triangles are dropped first, so
+//!    every edge ends in at most two triangles. Pinched vertices (two fans
+//!    meeting at a point) are split, and pieces with fewer vertices than
+//!    [`FitParams::neighbours`] dropped. Before the chance-gap width, 9
+//!    chance holes stayed open on 5,000 random samples of the saddle
+//!    (widths 3.7-5.6 spacings; its real hole: 29).
 //!
 //! **Limits** (measured before the hole pass and the k-nearest spacing
 //! estimate, on 400 Fibonacci samples of the unit sphere, median sample
@@ -532,11 +538,20 @@ pub fn fit_with_stages(
     // The final pass: close the holes narrower than the open-surface
     // threshold.
     let max_width = if params.open {
-        params.d_max * rest
+        // At least 3 seeds: k >= 2.
+        let knn = Knn::new(&seeds, 6);
+        let r6 = median_of(knn.distances_to(knn.k()));
+        (params.d_max * rest).max(holes::sampling_gap_width(seeds.len(), r6))
     } else {
         params.max_hole * rest
     };
-    holes::fill_holes(&mut mesh, max_width, &seeds, &seed_normals);
+    holes::fill_holes(
+        &mut mesh,
+        max_width,
+        &seeds,
+        &seed_normals,
+        params.neighbours,
+    );
     mesh.measure(&unit);
     stages.lap("holes and distances");
     let to_data = |q: &Point3| frame.to_data(&Point3::from(q.coords * h + centroid));
