@@ -152,7 +152,7 @@ fn split_pinched_vertices(mesh: &mut SurfaceMesh) -> usize {
         // Roots are the smallest member of each fan: fan order is
         // first-triangle order (`fan` is sorted).
         let mut new_index: BTreeMap<usize, u32> = BTreeMap::new();
-        for k in 0..fan.len() {
+        for (k, &t) in fan.iter().enumerate() {
             let r = root(&mut parent, k);
             if r == 0 {
                 continue;
@@ -163,7 +163,7 @@ fn split_pinched_vertices(mesh: &mut SurfaceMesh) -> usize {
                 added += 1;
                 (mesh.vertices.len() - 1) as u32
             });
-            for c in mesh.faces[fan[k]].iter_mut() {
+            for c in mesh.faces[t].iter_mut() {
                 if *c as usize == v {
                     *c = w;
                 }
