@@ -24,7 +24,9 @@ use super::mesh::SurfaceMesh;
 
 /// Closes the holes of `mesh` narrower than `max_width` (unit spacing);
 /// `samples` with unit `normals` place the centre vertices of large
-/// holes. Pinched vertices are split before and after, and pieces of
+/// holes. The triangles are first wound consistently
+/// ([`super::winding::orient`]); pinched vertices are split before and
+/// after, and pieces of
 /// fewer than `min_vertices` vertices dropped after. Returns the number
 /// of holes closed. The figures of `mesh` are
 /// not updated (see [`SurfaceMesh::measure`]).
@@ -36,6 +38,7 @@ pub(super) fn fill_holes(
     min_vertices: usize,
 ) -> usize {
     drop_overfull_edges(&mut mesh.faces);
+    super::winding::orient(mesh);
     split_pinched_vertices(mesh);
     let mut edges = edge_counts(&mesh.faces);
     let mut closed = 0;

@@ -130,6 +130,7 @@ mod normals;
 mod rounds;
 pub mod shapes;
 mod spacing;
+mod winding;
 
 use std::io::Write;
 use std::path::Path;
