@@ -49,7 +49,8 @@
 //!    of their own with the particles around them held fixed (`rounds.rs`),
 //!    so its cost follows what it creates, not the surface's size.
 //! 4. *Release* ([`release`]): the seeds are freed and the whole set relaxes for
-//!    [`FitParams::relax_time`] with damping under cohesion (seed 002 §3)
+//!    [`FitParams::relax_time`] (default 0: the samples are interpolated;
+//!    a time smooths noisy samples) with damping under cohesion (seed 002 §3)
 //!    and co-circularity (seed 000 eq. 8). Co-circularity rather than
 //!    co-planarity: both vanish on a plane, but co-circularity also
 //!    vanishes on a sphere, so relaxing does not flatten curved data. The
@@ -175,7 +176,16 @@ pub struct FitParams {
     /// Largest number of creation rounds. Default: 20.
     pub max_rounds: usize,
     /// Relaxation time after release (unit-spacing time units, >= 0).
-    /// Default: 1.
+    /// Default: 0: the fit interpolates the samples (seed 000 §7, "surface
+    /// interpolation"); give a time for noisy samples, which the release
+    /// smooths (the paper's reason for it) at the price of leaving the
+    /// data. Measured on 5,000 random samples of the shapes of [`shapes`]
+    /// (exact, no noise) at 0, 0.3 and 1: the same topology; sample-to-mesh
+    /// RMS 7e-5, 2e-4, 6.8e-4 on the ellipsoid (growing with the time, 2e-3
+    /// at 3); median smallest angle 38°, 40°, 45° but triangles under 20°
+    /// 10%, 10%, 17%; time 0.6, 1.4, 3.2 s. On the 26,002 vertices of a
+    /// scanned armadillo, 0 against 1: RMS 0.0032 against 0.30 (spacing
+    /// 1.31), 1.9% against 15% of triangles under 20°, 3.2 s against 19 s.
     pub relax_time: Real,
     /// Mutual-neighbour radius of the triangulation, > 0; keep it at
     /// least `d_min`. Default: 2.0 (the default `d_min`): a pair closer
@@ -203,7 +213,7 @@ impl Default for FitParams {
             d_min: 2.0,
             d_max: 2.5,
             max_rounds: 20,
-            relax_time: 1.0,
+            relax_time: 0.0,
             triangulation_radius: 2.0,
             neighbours: 12,
             max_hole: 8.0,
