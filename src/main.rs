@@ -107,7 +107,9 @@ enum Command {
         #[arg(long)]
         spacing: Option<f64>,
         /// Open data: stretching only, so holes wider than the search range
-        /// (2.5 spacings) stay open.
+        /// (2.5 spacings) and than the gaps random sampling leaves by chance
+        /// at the samples' density (about 4.7 spacings on 5,000 samples)
+        /// stay open.
         #[arg(long)]
         open: bool,
         /// Relaxation time after the samples are released (in time units
