@@ -2,6 +2,8 @@
 
 use std::collections::HashMap;
 
+use rayon::prelude::*;
+
 use op_dynamics::{Point3, Real, Vec3};
 use op_modeling::triangulation::{triangulate_points, Triangulation, TriangulationParams};
 
@@ -141,8 +143,8 @@ pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 
             &vertices[f[2] as usize],
         )
     };
-    let mut out = Vec::with_capacity(samples.len());
-    for p in samples {
+    // Each sample on its own: in parallel, the same at any thread count.
+    let nearest = |p: &Point3| {
         let k = key(&p.coords);
         let mut best = Real::INFINITY;
         for dx in -1..=1 {
@@ -169,9 +171,9 @@ pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 
                 .map(|t| tri_distance(p, t))
                 .fold(best, Real::min);
         }
-        out.push(best);
-    }
-    out
+        best
+    };
+    samples.par_iter().map(nearest).collect()
 }
 
 /// Distance from `p` to the triangle `abc` (closest point by region,
