@@ -174,6 +174,14 @@ pub fn tool_geometry(k: usize, tool: &Tool, t: Real) -> FrameMesh {
 /// then created, in that order) and their normals. Particles in no
 /// triangle are left out (they are in the particles' own mesh).
 ///
+/// The mutual-neighbour radius is at least the spacing cut-off of the
+/// object's materials ([`surface_radius`]): every pair that still attracts
+/// may be an edge. A cohesion shell (seed 002 §3) settles tighter than its
+/// `r0` (fig_12_plastic: mean nearest distance 0.82 r0, so 1.7 rest
+/// spacings are 1.40 r0, inside the cut-off 1.5 r0); where a finger
+/// stretches it, the diagonals of a cell that still attracts (1.40-1.43
+/// r0) were longer than the radius and the surface showed a hole.
+///
 /// Only what holds together is triangulated ([`interacting`]): an edge
 /// joins two particles that still attract, so a cut or a tear opens in the
 /// surface (seed 000 §6 fig. 7, §8 fig. 12c). `sheet_gap` (absolute
@@ -191,8 +199,7 @@ pub fn surface_geometry(
     let slots: Vec<usize> = object.all_ids().filter_map(|id| p.slot_of(id)).collect();
     let positions: Vec<_> = slots.iter().map(|&s| p.positions()[s]).collect();
     let normals: Vec<Vec3> = slots.iter().map(|&s| p.normal(s)).collect();
-    let params =
-        TriangulationParams::with_radius(outputs.triangulation_radius * object.rest_spacing);
+    let params = TriangulationParams::with_radius(surface_radius(world, &slots, object, outputs));
     let linked = |a: u32, b: u32| {
         let (a, b) = (slots[a as usize], slots[b as usize]);
         (p.positions()[a] - p.positions()[b]).norm() < sheet_gap || interacting(world, a, b)
@@ -209,6 +216,33 @@ pub fn surface_geometry(
     };
     mesh.compact_triangles();
     mesh
+}
+
+/// The mutual-neighbour radius of an object's surface (absolute length):
+/// `triangulation_radius` rest spacings, or the largest spacing cut-off of
+/// the materials of the particles in `slots` when that is longer (a pair
+/// within it still attracts, seed 000 eq. 5, seed 002 §3, so it holds the
+/// surface together and may be an edge of it).
+pub fn surface_radius(
+    world: &World,
+    slots: &[usize],
+    object: &BuiltObject,
+    outputs: &Outputs,
+) -> Real {
+    let p = world.particles();
+    let materials = world.materials();
+    let mut seen = Vec::new();
+    let mut cutoff: Real = 0.0;
+    for &s in slots {
+        let m = p.materials()[s];
+        if !seen.contains(&m) {
+            seen.push(m);
+            if let Some(material) = materials.get(m as usize) {
+                cutoff = cutoff.max(material.spacing_cutoff());
+            }
+        }
+    }
+    (outputs.triangulation_radius * object.rest_spacing).max(cutoff)
 }
 
 /// Whether the particles in slots `a` and `b` still attract each other:
