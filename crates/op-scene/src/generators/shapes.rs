@@ -322,7 +322,10 @@ mod tests {
                     - spiral_angle(law, k0, k1, s - h, length))
                     / (2.0 * h);
                 let kappa = spiral_curvature(law, k0, k1, s, length);
-                assert!((slope - kappa).abs() < 1e-8, "{law:?} at {s}: {slope} vs {kappa}");
+                assert!(
+                    (slope - kappa).abs() < 1e-8,
+                    "{law:?} at {s}: {slope} vs {kappa}"
+                );
             }
         }
     }
