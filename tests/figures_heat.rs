@@ -206,7 +206,12 @@ fn frames_surface(
 ///   are one, through the neck where the two rims joined;
 /// - the final triangulation is one manifold piece whose genus
 ///   `(2 - chi - b) / 2` (`b` boundary loops) is 1, and whose boundary is
-///   only small holes (at most 2% of its edges, as for fig. 14).
+///   only small holes (at most 2% of its edges, as for fig. 14);
+/// - the exported surface of the last frame (`ball_surface`, only what
+///   holds together, `op_scene::export::geometry::surface_geometry`) is
+///   closed: one manifold piece, no boundary, chi 0 (808 particles, 1616
+///   triangles; chi -1 with one 3-edge hole before the stretching rule's
+///   filled gaps counted as sheet, `SheetGap`).
 ///
 /// Measured (`cargo test --profile ci --test figures_heat -- --nocapture`):
 /// 363 -> 809 particles; at t = 28 the triangulation (radius 1.8 rest
@@ -279,4 +284,12 @@ fn fig_13_stem_looped_onto_the_body_makes_a_handle() {
     let p = built.world.particles();
     let pieces = components(p.positions(), 1.5);
     assert_eq!(pieces.len(), 1, "{pieces:?}");
+    // The claim on the exported surface (the frames' `ball_surface`, only
+    // what holds together): one closed piece of genus 1.
+    let exported = surface_topology(&built, "ball");
+    println!("exported surface at the end: {exported:?}");
+    assert!(exported.manifold, "{exported:?}");
+    assert_eq!(exported.components, 1, "{exported:?}");
+    assert_eq!(exported.loops, 0, "closed: {exported:?}");
+    assert_eq!(exported.chi, 0, "genus 1: {exported:?}");
 }

@@ -7,6 +7,7 @@ use op_dynamics::{Divergence, Point3, Real, World};
 use op_modeling::Tool;
 
 use crate::creation::CreationState;
+use crate::export::geometry::SheetGap;
 use crate::outputs::{Outputs, ParticleOutput};
 use crate::skins::{ContactStats, ObjectSkin, SkinTool};
 use crate::stages::SceneState;
@@ -32,16 +33,21 @@ pub struct BuiltObject {
 }
 
 impl BuiltScene {
-    /// The largest gap the exported surfaces span between particles that
-    /// no longer attract: the stretching rule's `d_min` (times its `r0`)
-    /// when the scene creates particles by stretching, a gap the rule
-    /// leaves as sheet (seed 000 §7); 0 otherwise
-    /// ([`crate::export::geometry::surface_geometry`]).
-    pub fn sheet_gap(&self) -> Real {
+    /// The gaps the exported surfaces span between particles that no
+    /// longer attract: those the stretching rule leaves as sheet (seed 000
+    /// §7; its `d_min` and `d_max` times its `r0`) when the scene creates
+    /// particles by stretching, none otherwise
+    /// ([`crate::export::geometry::SheetGap`]).
+    pub fn sheet_gap(&self) -> SheetGap {
         self.creation
             .as_ref()
-            .and_then(|c| c.params.stretching.as_ref().map(|s| s.d_min * c.params.r0))
-            .unwrap_or(0.0)
+            .and_then(|c| {
+                c.params.stretching.as_ref().map(|s| SheetGap {
+                    d_min: s.d_min * c.params.r0,
+                    d_max: s.d_max * c.params.r0,
+                })
+            })
+            .unwrap_or_default()
     }
 }
 

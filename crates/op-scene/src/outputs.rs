@@ -38,7 +38,9 @@ pub struct Outputs {
     /// `f` elements wound along the normals. Default: false.
     pub triangulation: bool,
     /// Mutual-neighbour distance of the triangulation as a fraction of the
-    /// object's rest spacing, > 0. Default: 1.7.
+    /// object's rest spacing, > 0; the exported surface uses at least the
+    /// spacing cut-off of the object's material (a pair that still attracts
+    /// may be an edge). Default: 1.7.
     pub triangulation_radius: f64,
     /// The direction the camera of the scene's pictures looks along, in
     /// scene coordinates (z-up), chosen so the picture shows the scene's

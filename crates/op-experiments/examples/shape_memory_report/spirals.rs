@@ -26,6 +26,8 @@ fn law(l: CurvatureLaw) -> &'static str {
     match l {
         CurvatureLaw::Linear => "linear",
         CurvatureLaw::Geometric => "geometric",
+        CurvatureLaw::Quadratic => "quadratic",
+        CurvatureLaw::Sine => "sine",
     }
 }
 

@@ -175,28 +175,34 @@ pub fn tool_geometry(k: usize, tool: &Tool, t: Real) -> FrameMesh {
 /// then created, in that order) and their normals. Particles in no
 /// triangle are left out (they are in the particles' own mesh).
 ///
+/// The mutual-neighbour radius is at least the spacing cut-off of the
+/// object's materials ([`surface_radius`]): every pair that still attracts
+/// may be an edge. A cohesion shell (seed 002 §3) settles tighter than its
+/// `r0` (fig_12_plastic: mean nearest distance 0.82 r0, so 1.7 rest
+/// spacings are 1.40 r0, inside the cut-off 1.5 r0); where a finger
+/// stretches it, the diagonals of a cell that still attracts (1.40-1.43
+/// r0) were longer than the radius and the surface showed a hole.
+///
 /// Only what holds together is triangulated ([`interacting`]): an edge
 /// joins two particles that still attract, so a cut or a tear opens in the
-/// surface (seed 000 §6 fig. 7, §8 fig. 12c). `sheet_gap` (absolute
-/// length, 0 for none) is the exception: a pair closer than it is sheet
-/// even when it no longer attracts, the stretching rule's `d_min` in a
-/// scene that creates particles (a gap the rule has not yet had to fill,
-/// seed 000 §7).
+/// surface (seed 000 §6 fig. 7, §8 fig. 12c). `sheet_gap` is the
+/// exception: in a scene that creates particles by stretching, a pair the
+/// rule leaves as sheet is an edge even when it no longer attracts
+/// ([`SheetGap`]).
 pub fn surface_geometry(
     world: &World,
     object: &BuiltObject,
     outputs: &Outputs,
-    sheet_gap: Real,
+    sheet_gap: SheetGap,
 ) -> FrameMesh {
     let p = world.particles();
     let slots: Vec<usize> = object.all_ids().filter_map(|id| p.slot_of(id)).collect();
     let positions: Vec<_> = slots.iter().map(|&s| p.positions()[s]).collect();
     let normals: Vec<Vec3> = slots.iter().map(|&s| p.normal(s)).collect();
-    let params =
-        TriangulationParams::with_radius(outputs.triangulation_radius * object.rest_spacing);
+    let params = TriangulationParams::with_radius(surface_radius(world, &slots, object, outputs));
     let linked = |a: u32, b: u32| {
-        let (a, b) = (slots[a as usize], slots[b as usize]);
-        (p.positions()[a] - p.positions()[b]).norm() < sheet_gap || interacting(world, a, b)
+        let (i, j) = (slots[a as usize], slots[b as usize]);
+        interacting(world, i, j) || sheet_gap.holds(&positions, a as usize, b as usize)
     };
     // The radius is validated with the scene; a non-finite spacing leaves
     // the surface without triangles rather than failing the frame.
@@ -210,6 +216,74 @@ pub fn surface_geometry(
     };
     mesh.compact_triangles();
     mesh
+}
+
+/// The gaps between particles that no longer attract that the stretching
+/// rule of seed 000 §7 (op_dynamics::creation::stretching) leaves as sheet,
+/// in absolute lengths; the default (both 0) leaves none.
+///
+/// The rule inserts a particle at the midpoint of two particles `d` apart
+/// with `d_min <= d <= d_max` unless another particle lies within
+/// `d_min / 2` of that midpoint. So a pair closer than `d_min` is a gap
+/// the rule has not yet had to fill, and a pair up to `d_max` apart with a
+/// particle near its midpoint is one it counts as filled: both hold the
+/// surface together as far as the rule is concerned (fig_13_handle: the
+/// rims that join into the neck leave cells whose diagonals, 1.5-1.6 r0,
+/// are beyond the cohesion cut-off 1.5 r0 with a particle near their
+/// midpoints, which the exported surface showed as holes).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SheetGap {
+    /// The rule's smallest pair distance (absolute).
+    pub d_min: Real,
+    /// The rule's largest pair distance (absolute).
+    pub d_max: Real,
+}
+
+impl SheetGap {
+    /// Whether the pair `(a, b)` of `positions` (the object's particles)
+    /// is a gap the rule leaves as sheet.
+    pub fn holds(&self, positions: &[op_dynamics::Point3], a: usize, b: usize) -> bool {
+        let d = (positions[a] - positions[b]).norm();
+        if d < self.d_min {
+            return true;
+        }
+        if d > self.d_max {
+            return false;
+        }
+        let m = op_dynamics::Point3::from((positions[a].coords + positions[b].coords) / 2.0);
+        let r2 = 0.25 * self.d_min * self.d_min;
+        positions
+            .iter()
+            .enumerate()
+            .any(|(k, x)| k != a && k != b && (x - m).norm_squared() < r2)
+    }
+}
+
+/// The mutual-neighbour radius of an object's surface (absolute length):
+/// `triangulation_radius` rest spacings, or the largest spacing cut-off of
+/// the materials of the particles in `slots` when that is longer (a pair
+/// within it still attracts, seed 000 eq. 5, seed 002 §3, so it holds the
+/// surface together and may be an edge of it).
+pub fn surface_radius(
+    world: &World,
+    slots: &[usize],
+    object: &BuiltObject,
+    outputs: &Outputs,
+) -> Real {
+    let p = world.particles();
+    let materials = world.materials();
+    let mut seen = Vec::new();
+    let mut cutoff: Real = 0.0;
+    for &s in slots {
+        let m = p.materials()[s];
+        if !seen.contains(&m) {
+            seen.push(m);
+            if let Some(material) = materials.get(m as usize) {
+                cutoff = cutoff.max(material.spacing_cutoff());
+            }
+        }
+    }
+    (outputs.triangulation_radius * object.rest_spacing).max(cutoff)
 }
 
 /// Whether the particles in slots `a` and `b` still attract each other:

@@ -53,7 +53,7 @@ impl Write for SizedWriter<'_> {
     }
 }
 
-pub use geometry::FrameMesh;
+pub use geometry::{FrameMesh, SheetGap};
 pub use layout::{FrameFormat, Sequence, SequenceKind};
 
 /// Writes `bytes_fn`'s output to `path` atomically: a temporary file in the
@@ -136,7 +136,7 @@ pub struct FrameWriter {
     sequences: Vec<Sequence>,
     sources: Vec<Source>,
     vtu_files: Vec<(String, Real)>,
-    sheet_gap: Real,
+    sheet_gap: SheetGap,
 }
 
 impl FrameWriter {
@@ -198,14 +198,14 @@ impl FrameWriter {
             sequences,
             sources,
             vtu_files: Vec::new(),
-            sheet_gap: 0.0,
+            sheet_gap: SheetGap::default(),
         }
     }
 
-    /// Sets the largest gap the surfaces span between particles that no
-    /// longer attract ([`geometry::surface_geometry`]; the scene's
-    /// [`crate::BuiltScene::sheet_gap`]). Default 0.
-    pub fn with_sheet_gap(mut self, gap: Real) -> Self {
+    /// Sets the gaps the surfaces span between particles that no longer
+    /// attract ([`geometry::SheetGap`]; the scene's
+    /// [`crate::BuiltScene::sheet_gap`]). Default: none.
+    pub fn with_sheet_gap(mut self, gap: SheetGap) -> Self {
         self.sheet_gap = gap;
         self
     }

@@ -93,6 +93,12 @@ pub enum CurvatureLaw {
     /// (a constant relative growth per unit length, as along a logarithmic
     /// spiral). Both curvatures must be nonzero and of the same sign.
     Geometric,
+    /// Quadratic in arc length, flat at the start:
+    /// `κ(s) = κ_start + (κ_end - κ_start) (s/L)²`.
+    Quadratic,
+    /// A quarter sine in arc length, steepest at the start and flat at the
+    /// end: `κ(s) = κ_start + (κ_end - κ_start) sin(π s / 2L)`.
+    Sine,
 }
 
 /// How an object's particles are made.

@@ -45,6 +45,8 @@ pub(super) fn spiral_curvature(
     match law {
         CurvatureLaw::Linear => k0 + (k1 - k0) * x,
         CurvatureLaw::Geometric => k0 * (k1 / k0).powf(x),
+        CurvatureLaw::Quadratic => k0 + (k1 - k0) * x * x,
+        CurvatureLaw::Sine => k0 + (k1 - k0) * (std::f64::consts::FRAC_PI_2 * x).sin(),
     }
 }
 
@@ -62,6 +64,12 @@ fn spiral_angle(law: CurvatureLaw, k0: Real, k1: Real, s: Real, length: Real) ->
             } else {
                 k0 * length / log_ratio * (log_ratio * s / length).exp_m1()
             }
+        }
+        CurvatureLaw::Quadratic => k0 * s + (k1 - k0) * s * s * s / (3.0 * length * length),
+        CurvatureLaw::Sine => {
+            let q = std::f64::consts::FRAC_PI_2 / length;
+            // ∫ sin(q s) ds = (1 - cos(q s)) / q, written without cancellation.
+            k0 * s + (k1 - k0) * 2.0 * (0.5 * q * s).sin().powi(2) / q
         }
     }
 }
@@ -294,6 +302,33 @@ pub(super) fn torus_shell(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn spiral_angle_is_the_integral_of_the_curvature_for_every_law() {
+        let laws = [
+            CurvatureLaw::Linear,
+            CurvatureLaw::Geometric,
+            CurvatureLaw::Quadratic,
+            CurvatureLaw::Sine,
+        ];
+        let (k0, k1, length) = (0.1, 0.9, 13.0);
+        for law in laws {
+            assert_eq!(spiral_angle(law, k0, k1, 0.0, length), 0.0);
+            assert!((spiral_curvature(law, k0, k1, 0.0, length) - k0).abs() < 1e-12);
+            assert!((spiral_curvature(law, k0, k1, length, length) - k1).abs() < 1e-12);
+            for k in 1..13 {
+                let (s, h) = (k as Real, 1e-5);
+                let slope = (spiral_angle(law, k0, k1, s + h, length)
+                    - spiral_angle(law, k0, k1, s - h, length))
+                    / (2.0 * h);
+                let kappa = spiral_curvature(law, k0, k1, s, length);
+                assert!(
+                    (slope - kappa).abs() < 1e-8,
+                    "{law:?} at {s}: {slope} vs {kappa}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn spiral_of_constant_curvature_is_a_circle_with_outward_normals() {
