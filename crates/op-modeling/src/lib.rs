@@ -10,12 +10,16 @@
 //!   world with [`op_dynamics::World::set_tools`].
 //! - [`creation`] (seed 000 §7): the stretching and growing rules that add
 //!   particles where a surface opens up, and the merging rule.
+//! - [`fit`] (seed 000 §7): a surface of oriented particles through a
+//!   point set (normals, spacing, seeds, filling by the creation rules,
+//!   release, triangulation, holes).
 //! - [`triangulation`] (seed 000 §5): particles to triangles for rendering,
 //!   with the topology checks (Euler characteristic, boundary loops,
 //!   manifold).
 #![warn(missing_docs)]
 
 pub mod creation;
+pub mod fit;
 pub mod tools;
 pub mod triangulation;
 

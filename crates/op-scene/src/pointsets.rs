@@ -19,14 +19,9 @@ use op_dynamics::{Point3, Real, Vec3};
 pub use crate::input::EXCERPT_CHARS;
 use crate::input::{excerpt, read_regular_file, strip_bom, InputFileError};
 
-/// Samples of a surface, with normals when the file gives them.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PointSet {
-    /// Sample positions.
-    pub positions: Vec<Point3>,
-    /// Unit normals, one per position, or `None` when the file has none.
-    pub normals: Option<Vec<Vec3>>,
-}
+/// Samples of a surface, with normals when the file gives them (the input
+/// of the fit, [`op_modeling::fit::PointSet`]).
+pub use op_modeling::fit::PointSet;
 
 /// Largest point-set file read (1 GiB); a larger one is an error naming it.
 pub const MAX_POINT_FILE_BYTES: u64 = 1 << 30;

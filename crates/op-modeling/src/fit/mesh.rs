@@ -4,8 +4,8 @@ use std::collections::HashMap;
 
 use rayon::prelude::*;
 
+use crate::triangulation::{triangulate_points, Triangulation, TriangulationParams};
 use op_dynamics::{Point3, Real, Vec3};
-use op_modeling::triangulation::{triangulate_points, Triangulation, TriangulationParams};
 
 use super::FitError;
 

@@ -175,7 +175,7 @@ pub(super) fn pairs(points: &[Point3], radius: Real) -> PairList {
 
 /// Median over the points of the distance to the nearest other point (0
 /// for a point with a duplicate), by a k-d tree over the distinct points.
-pub(crate) fn median_nearest_distance(points: &[Point3]) -> Result<Real, FitError> {
+pub fn median_nearest_distance(points: &[Point3]) -> Result<Real, FitError> {
     let distinct = distinct_points(points);
     if distinct.len() < 2 {
         return Err(FitError::Input(

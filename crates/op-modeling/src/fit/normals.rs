@@ -13,11 +13,11 @@ use super::FitError;
 
 /// Unit normals by local PCA over the points within `radius`, oriented by
 /// propagation along the maximum spanning tree of `|n_i . n_j|` (the
-/// scenes' `creation.fit`; [`super::fit`] uses [`knn_normals`]).
+/// scenes' `creation.fit`; [`super::fit`] uses `knn_normals`).
 ///
 /// # Errors
 /// A point with fewer than 2 neighbours within `radius`.
-pub(crate) fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, FitError> {
+pub fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, FitError> {
     let n = points.len();
     let half = pairs(points, radius);
     let mut rows: Vec<Vec<usize>> = vec![Vec::new(); n];

@@ -2,8 +2,8 @@
 
 use op_dynamics::{Point3, Real, Vec3};
 
+use super::PointSet;
 use super::{FitError, MAX_PARTICLES};
-use crate::pointsets::PointSet;
 
 /// The data frame: a sample `p` is `2 (centre + scale q)` with `q` in
 /// `[-1, 1]³` (halves first, so no step overflows at any finite scale).

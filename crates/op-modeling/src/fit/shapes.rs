@@ -6,7 +6,7 @@
 
 use op_dynamics::{Point3, Real, Vec3};
 
-use crate::pointsets::PointSet;
+use super::PointSet;
 
 /// An analytic surface to sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,7 +1,8 @@
 //! Point-set interpolation with oriented particles (seed 000 §7
 //! and §6 `opsim fit`).
 //!
-//! Entry point: [`fit`] with [`FitParams`]; [`write_obj`] writes the mesh.
+//! Entry point: [`fit`] with [`FitParams`] (op-scene's `fit::write_obj`
+//! writes the mesh, `opsim fit` reads the samples from files).
 //!
 //! **Stages**, in units of the spacing `h` (every length below is a
 //! multiple of `h`). The data are first mapped into the unit box (the
@@ -115,7 +116,7 @@
 //! of each stage.
 //!
 //! **Scenes**: [`DataNeighbourhood`] and [`release`] also serve a scene's
-//! `creation.fit` ([`crate::schema::fit`]), which runs these stages
+//! `creation.fit` (op-scene's `schema::fit` and `fit::SceneFit`), which runs these stages
 //! frame by frame (`scenes/fig_10_interpolation.ron`); spacing, material
 //! and normals are then the scene's.
 //!
@@ -133,28 +134,34 @@ pub mod shapes;
 mod spacing;
 mod winding;
 
-use std::io::Write;
-use std::path::Path;
 use std::time::Instant;
 
+use crate::creation::{CreationParams, GrowingParams, StretchingParams};
 use op_dynamics::interactions::spacing::Spacing;
 use op_dynamics::interactions::CohesionParams;
 use op_dynamics::{
     ExternalParams, Flags, Material, ParamError, ParticleDesc, Particles, Point3, Real, Scheme,
     Vec3, World, WorldError, WorldParams,
 };
-use op_modeling::creation::{CreationParams, GrowingParams, StretchingParams};
-
-use crate::pointsets::PointSet;
 
 use input::median_of;
 use input::{collinear_within, Input};
 pub use mesh::{point_triangle_distance, sample_distances, SurfaceMesh};
 pub use neighbourhood::DataNeighbourhood;
-pub(crate) use normals::estimate_normals;
+pub use normals::estimate_normals;
 use normals::{curve_like_share, knn_normals};
-pub(crate) use spacing::median_nearest_distance;
+pub use spacing::median_nearest_distance;
 use spacing::{first_ring_mean, merge_close, nearest_distances, Knn};
+
+/// Samples of a surface, with normals when they are known (the input of
+/// [`fit`]; op-scene reads them from `.xyz`, `.ply` and `.obj` files).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointSet {
+    /// Sample positions.
+    pub positions: Vec<Point3>,
+    /// Unit normals, one per position, or `None` when there are none.
+    pub normals: Option<Vec<Vec3>>,
+}
 
 /// Settings of [`fit`]; lengths in units of the spacing unless said.
 #[derive(Clone, Debug, PartialEq)]
@@ -371,36 +378,7 @@ pub fn fit_with_stages(
     } = Input::check(data)?;
     let median = median_of(nearest_distances(&distinct));
     let smallest = median * (distinct.len() as Real / MAX_PARTICLES as Real).sqrt();
-    let h = match params.spacing {
-        None => default_spacing(&distinct),
-        Some(value) => {
-            let h = frame.length_to_local(value);
-            let range = |why: String| FitError::Spacing {
-                value,
-                min: frame.length_to_data(smallest),
-                max: frame.length_to_data(diagonal),
-                why,
-            };
-            if h > diagonal {
-                return Err(range(
-                    "it exceeds the diagonal of the samples' bounding box".into(),
-                ));
-            }
-            if h < smallest {
-                let needed = distinct.len() as Real * (median / h).powi(2);
-                let needed = if needed.is_finite() {
-                    format!("about {needed:.3e}")
-                } else {
-                    "more than 1e308".into()
-                };
-                return Err(range(format!(
-                    "below {:.3e} the surface would need more than the limit of {MAX_PARTICLES} particles: {needed} at this spacing",
-                    frame.length_to_data(smallest)
-                )));
-            }
-            h
-        }
-    };
+    let h = local_spacing(params, &frame, diagonal, &distinct, median, smallest)?;
     let spacing = match params.spacing {
         Some(value) => value,
         None => frame.length_to_data(h),
@@ -425,56 +403,12 @@ pub fn fit_with_stages(
         )));
     }
     let seeds: Vec<Point3> = kept.iter().map(|&k| unit[k]).collect();
-    let seed_normals: Vec<Vec3> = match &data.normals {
-        Some(v) => kept.iter().map(|&k| v[k]).collect(),
-        None => {
-            let knn = Knn::new(&seeds, params.neighbours);
-            let share = curve_like_share(&seeds, &knn);
-            if share > 0.5 {
-                return Err(FitError::Input(format!(
-                    "no surface: {:.0}% of the samples have neighbourhoods along a curve (their {} nearest samples spread in one direction only: samples along a curve, such as a circle)",
-                    100.0 * share,
-                    knn.k()
-                )));
-            }
-            knn_normals(&seeds, &knn)
-        }
-    };
+    let seed_normals = seed_normals(data, params, &kept, &seeds)?;
     let rest = first_ring_mean(&seeds, 1.5);
     stages.lap("spacing and normals");
 
-    // At least `rest + 0.45`: the taper (from 0.9 cutoff) must start
-    // beyond the maximum attraction, about `rest + 0.3` for the default
-    // `alpha` whatever `rest` (a rest of 0.83 spacings, from the
-    // 6th-neighbour spacing on samples along a curve, failed with
-    // `1.5 rest`).
-    let cutoff = (1.5 * rest).max(rest + 0.45);
-    let material = Material {
-        spacing: Some(Spacing::Cohesion(CohesionParams {
-            r0: rest,
-            cutoff: Some(cutoff),
-            ..CohesionParams::default()
-        })),
-        cocircularity: 5.0,
-        ..Material::empty()
-    };
-    let world_params = WorldParams {
-        scheme: Scheme::VelocityVerlet,
-        dt: STEP,
-        external: ExternalParams {
-            linear_damping: 2.0,
-            angular_damping: 0.2,
-            ..ExternalParams::default()
-        },
-        ..WorldParams::default()
-    };
-    let mut particles = Particles::new();
-    for (p, nrm) in seeds.iter().zip(&seed_normals) {
-        let mut d = ParticleDesc::at(*p).with_normal(*nrm);
-        d.flags = Flags::FIXED_POSITION.union(Flags::FIXED_ORIENTATION);
-        particles.push(d)?;
-    }
-    let mut world = World::new(particles, std::slice::from_ref(&material), world_params.clone()).map_err(|e| {
+    let relaxing = Relaxation::new(rest);
+    let mut world = relaxing.seed_world(&seeds, &seed_normals).map_err(|e| {
         FitError::Input(format!(
             "the spacing {spacing:.3e} does not suit these samples: {e} (the cohesion rest distance is the mean distance between neighbouring samples, {rest:.3} spacings; give a spacing near the median distance between samples, {:.3e})",
             frame.length_to_data(median)
@@ -482,39 +416,7 @@ pub fn fit_with_stages(
     })?;
 
     // Filling rounds (seed 000 §7).
-    let mut creation = CreationParams::new(rest);
-    creation.stretching = Some(StretchingParams {
-        d_min: params.d_min,
-        d_max: params.d_max,
-        reach: (0.6 * params.d_max).max(1.5),
-        ..StretchingParams::default()
-    });
-    if !params.open {
-        creation.growing = Some(GrowingParams {
-            max_gap: 170f64.to_radians(),
-            ..GrowingParams::default()
-        });
-    }
-    creation.max_particles = (20 * seeds.len() + 1000).min(MAX_PARTICLES);
-    let near = DataNeighbourhood::new(&seeds, &seed_normals, rest, params.d_max, params.open);
-    for _ in 0..params.max_rounds {
-        let mut descs = creation.candidates(world.particles())?;
-        descs.retain(|d| near.contains(&d.position));
-        if descs.is_empty() {
-            break;
-        }
-        let new = world.insert_particles(&descs)?;
-        rounds::relax_new(
-            &mut world,
-            &new,
-            0.1,
-            cutoff,
-            0.5 * rest,
-            &material,
-            &world_params,
-        )?;
-    }
-
+    relaxing.fill(&mut world, params, &seeds, &seed_normals)?;
     stages.lap("creation rounds");
     // Release (the seeds are the first ids) and relax.
     let seed_ids: Vec<u32> = (0..seeds.len() as u32).collect();
@@ -548,21 +450,7 @@ pub fn fit_with_stages(
     }
     // The final pass: close the holes narrower than the open-surface
     // threshold.
-    let max_width = if params.open {
-        // At least 3 seeds: k >= 2.
-        let knn = Knn::new(&seeds, 6);
-        let r6 = median_of(knn.distances_to(knn.k()));
-        (params.d_max * rest).max(holes::sampling_gap_width(seeds.len(), r6))
-    } else {
-        params.max_hole * rest
-    };
-    holes::fill_holes(
-        &mut mesh,
-        max_width,
-        &seeds,
-        &seed_normals,
-        params.neighbours,
-    );
+    close_holes(&mut mesh, params, &seeds, &seed_normals, rest);
     mesh.measure(&unit);
     stages.lap("holes and distances");
     let to_data = |q: &Point3| frame.to_data(&Point3::from(q.coords * h + centroid));
@@ -590,6 +478,202 @@ pub fn fit_with_stages(
     ))
 }
 
+/// The spacing in local units (`--spacing` mapped to them, or
+/// [`default_spacing`]), checked against the samples' bounding box and the
+/// particle limit.
+fn local_spacing(
+    params: &FitParams,
+    frame: &input::Frame,
+    diagonal: Real,
+    distinct: &[Point3],
+    median: Real,
+    smallest: Real,
+) -> Result<Real, FitError> {
+    Ok(match params.spacing {
+        None => default_spacing(distinct),
+        Some(value) => {
+            let h = frame.length_to_local(value);
+            let range = |why: String| FitError::Spacing {
+                value,
+                min: frame.length_to_data(smallest),
+                max: frame.length_to_data(diagonal),
+                why,
+            };
+            if h > diagonal {
+                return Err(range(
+                    "it exceeds the diagonal of the samples' bounding box".into(),
+                ));
+            }
+            if h < smallest {
+                let needed = distinct.len() as Real * (median / h).powi(2);
+                let needed = if needed.is_finite() {
+                    format!("about {needed:.3e}")
+                } else {
+                    "more than 1e308".into()
+                };
+                return Err(range(format!(
+                    "below {:.3e} the surface would need more than the limit of {MAX_PARTICLES} particles: {needed} at this spacing",
+                    frame.length_to_data(smallest)
+                )));
+            }
+            h
+        }
+    })
+}
+
+/// The seeds' normals: the samples' own when they have some, else by
+/// local PCA over the nearest seeds, oriented over the whole set
+/// (refused when most neighbourhoods lie along a curve).
+fn seed_normals(
+    data: &PointSet,
+    params: &FitParams,
+    kept: &[usize],
+    seeds: &[Point3],
+) -> Result<Vec<Vec3>, FitError> {
+    Ok(match &data.normals {
+        Some(v) => kept.iter().map(|&k| v[k]).collect(),
+        None => {
+            let knn = Knn::new(seeds, params.neighbours);
+            let share = curve_like_share(seeds, &knn);
+            if share > 0.5 {
+                return Err(FitError::Input(format!(
+                    "no surface: {:.0}% of the samples have neighbourhoods along a curve (their {} nearest samples spread in one direction only: samples along a curve, such as a circle)",
+                    100.0 * share,
+                    knn.k()
+                )));
+            }
+            knn_normals(seeds, &knn)
+        }
+    })
+}
+
+/// The material and world of a fit's particles at unit spacing: cohesion
+/// at the rest distance `rest` and co-circularity (module docs, stage 4).
+struct Relaxation {
+    rest: Real,
+    cutoff: Real,
+    material: Material,
+    params: WorldParams,
+}
+
+impl Relaxation {
+    fn new(rest: Real) -> Self {
+        // At least `rest + 0.45`: the taper (from 0.9 cutoff) must start
+        // beyond the maximum attraction, about `rest + 0.3` for the default
+        // `alpha` whatever `rest` (a rest of 0.83 spacings, from the
+        // 6th-neighbour spacing on samples along a curve, failed with
+        // `1.5 rest`).
+        let cutoff = (1.5 * rest).max(rest + 0.45);
+        let material = Material {
+            spacing: Some(Spacing::Cohesion(CohesionParams {
+                r0: rest,
+                cutoff: Some(cutoff),
+                ..CohesionParams::default()
+            })),
+            cocircularity: 5.0,
+            ..Material::empty()
+        };
+        let world_params = WorldParams {
+            scheme: Scheme::VelocityVerlet,
+            dt: STEP,
+            external: ExternalParams {
+                linear_damping: 2.0,
+                angular_damping: 0.2,
+                ..ExternalParams::default()
+            },
+            ..WorldParams::default()
+        };
+        Relaxation {
+            rest,
+            cutoff,
+            material,
+            params: world_params,
+        }
+    }
+
+    /// A world of the seeds, fixed in position and orientation.
+    fn seed_world(&self, seeds: &[Point3], normals: &[Vec3]) -> Result<World, WorldError> {
+        let mut particles = Particles::new();
+        for (p, nrm) in seeds.iter().zip(normals) {
+            let mut d = ParticleDesc::at(*p).with_normal(*nrm);
+            d.flags = Flags::FIXED_POSITION.union(Flags::FIXED_ORIENTATION);
+            particles.push(d)?;
+        }
+        World::new(
+            particles,
+            std::slice::from_ref(&self.material),
+            self.params.clone(),
+        )
+    }
+
+    /// Rounds of the creation rules near the data, each followed by a
+    /// short relaxation of the new particles (seed 000 §7), until a round
+    /// creates nothing or [`FitParams::max_rounds`].
+    fn fill(
+        &self,
+        world: &mut World,
+        params: &FitParams,
+        seeds: &[Point3],
+        seed_normals: &[Vec3],
+    ) -> Result<(), FitError> {
+        let rest = self.rest;
+        let mut creation = CreationParams::new(rest);
+        creation.stretching = Some(StretchingParams {
+            d_min: params.d_min,
+            d_max: params.d_max,
+            reach: (0.6 * params.d_max).max(1.5),
+            ..StretchingParams::default()
+        });
+        if !params.open {
+            creation.growing = Some(GrowingParams {
+                max_gap: 170f64.to_radians(),
+                ..GrowingParams::default()
+            });
+        }
+        creation.max_particles = (20 * seeds.len() + 1000).min(MAX_PARTICLES);
+        let near = DataNeighbourhood::new(seeds, seed_normals, rest, params.d_max, params.open);
+        for _ in 0..params.max_rounds {
+            let mut descs = creation.candidates(world.particles())?;
+            descs.retain(|d| near.contains(&d.position));
+            if descs.is_empty() {
+                break;
+            }
+            let new = world.insert_particles(&descs)?;
+            rounds::relax_new(
+                world,
+                &new,
+                0.1,
+                self.cutoff,
+                0.5 * rest,
+                &self.material,
+                &self.params,
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Closes the mesh's holes narrower than the open-surface threshold
+/// (`holes.rs`): `d_max` or the widest gap random sampling leaves by
+/// chance for open data, [`FitParams::max_hole`] spacings for closed data.
+fn close_holes(
+    mesh: &mut SurfaceMesh,
+    params: &FitParams,
+    seeds: &[Point3],
+    seed_normals: &[Vec3],
+    rest: Real,
+) {
+    let max_width = if params.open {
+        // At least 3 seeds: k >= 2.
+        let knn = Knn::new(seeds, 6);
+        let r6 = median_of(knn.distances_to(knn.k()));
+        (params.d_max * rest).max(holes::sampling_gap_width(seeds.len(), r6))
+    } else {
+        params.max_hole * rest
+    };
+    holes::fill_holes(mesh, max_width, seeds, seed_normals, params.neighbours);
+}
+
 /// The stages of a fit with their wall-clock seconds, in order.
 pub type StageSeconds = Vec<(&'static str, f64)>;
 
@@ -612,21 +696,6 @@ impl Stages {
         self.laps.push((stage, (now - self.last).as_secs_f64()));
         self.last = now;
     }
-}
-
-/// A fit running in a scene (`creation.fit`, [`crate::schema::fit`]): the
-/// creation rules act only in [`SceneFit::near`] and only before
-/// [`SceneFit::release_time`], when the seeds are freed.
-#[derive(Clone, Debug)]
-pub struct SceneFit {
-    /// Index of the object holding the samples.
-    pub object: usize,
-    /// Where particles may be created.
-    pub near: DataNeighbourhood,
-    /// World time of the release (after the settle phase, if any).
-    pub release_time: Real,
-    /// True once the seeds were released.
-    pub released: bool,
 }
 
 /// The default spacing (local units): 0.8 times the median over the
@@ -688,31 +757,6 @@ fn advance(world: &mut World, t: Real) -> Result<(), FitError> {
     world
         .advance_to(end)
         .map_err(|d| FitError::World(d.to_string()))
-}
-
-/// Writes the mesh as OBJ (`v`, `vn`, `f v//vn`), atomically.
-pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
-    let mesh = &fit.mesh;
-    crate::export::write_atomically(path, |w: &mut dyn Write| {
-        writeln!(
-            w,
-            "# opsim fit: {} vertices, {} faces, spacing {}",
-            mesh.vertices.len(),
-            mesh.faces.len(),
-            fit.spacing
-        )?;
-        for v in &mesh.vertices {
-            writeln!(w, "v {} {} {}", v.x, v.y, v.z)?;
-        }
-        for n in &mesh.normals {
-            writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
-        }
-        for f in &mesh.faces {
-            let [a, b, c] = f.map(|k| k + 1);
-            writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
-        }
-        Ok(())
-    })
 }
 
 #[cfg(test)]

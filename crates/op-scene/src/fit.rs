@@ -1,0 +1,51 @@
+//! Point-set fitting in scenes and for `opsim fit` (seed 000 §7): the fit
+//! itself is op-modeling's ([`op_modeling::fit`], re-exported here); this
+//! module adds a scene's fit state ([`SceneFit`], `creation.fit`) and the
+//! mesh's OBJ output ([`write_obj`]).
+
+use std::io::Write;
+use std::path::Path;
+
+use op_dynamics::Real;
+
+pub use op_modeling::fit::*;
+
+/// A fit running in a scene (`creation.fit`, [`crate::schema::fit`]): the
+/// creation rules act only in [`SceneFit::near`] and only before
+/// [`SceneFit::release_time`], when the seeds are freed.
+#[derive(Clone, Debug)]
+pub struct SceneFit {
+    /// Index of the object holding the samples.
+    pub object: usize,
+    /// Where particles may be created.
+    pub near: DataNeighbourhood,
+    /// World time of the release (after the settle phase, if any).
+    pub release_time: Real,
+    /// True once the seeds were released.
+    pub released: bool,
+}
+
+/// Writes the mesh as OBJ (`v`, `vn`, `f v//vn`), atomically.
+pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
+    let mesh = &fit.mesh;
+    crate::export::write_atomically(path, |w: &mut dyn Write| {
+        writeln!(
+            w,
+            "# opsim fit: {} vertices, {} faces, spacing {}",
+            mesh.vertices.len(),
+            mesh.faces.len(),
+            fit.spacing
+        )?;
+        for v in &mesh.vertices {
+            writeln!(w, "v {} {} {}", v.x, v.y, v.z)?;
+        }
+        for n in &mesh.normals {
+            writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
+        }
+        for f in &mesh.faces {
+            let [a, b, c] = f.map(|k| k + 1);
+            writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
+        }
+        Ok(())
+    })
+}
