@@ -17,24 +17,9 @@ use std::time::Duration;
 use criterion::{BenchmarkId, Criterion, SamplingMode};
 use op_dynamics::math::{Point3, Quat, Real, Vec3};
 use op_dynamics::neighbours::{search, spatial_order, NeighbourBackend, NeighbourList, PairList};
+use op_test_support::Rng;
 
 const RADIUS: Real = 2.5;
-
-/// A small deterministic generator (splitmix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn jitter(&mut self, a: Real) -> Real {
-        a * (2.0 * ((self.next_u64() >> 11) as Real / (1u64 << 53) as Real) - 1.0)
-    }
-}
 
 /// About `n` particles on a hexagonal sheet in the z = 0 plane, spacing 1.
 fn sheet(n: usize, rng: &mut Rng) -> Vec<Point3> {
@@ -43,8 +28,8 @@ fn sheet(n: usize, rng: &mut Rng) -> Vec<Point3> {
     (0..n)
         .map(|m| {
             let (r, c) = (m / cols, m % cols);
-            let x = c as Real + 0.5 * (r % 2) as Real + rng.jitter(0.05);
-            let y = r as Real * h + rng.jitter(0.05);
+            let x = c as Real + 0.5 * (r % 2) as Real + rng.uniform(-0.05, 0.05);
+            let y = r as Real * h + rng.uniform(-0.05, 0.05);
             Point3::new(x, y, 0.0)
         })
         .collect()
@@ -57,9 +42,9 @@ fn volume(n: usize, rng: &mut Rng) -> Vec<Point3> {
         .map(|m| {
             let (x, y, z) = (m % side, (m / side) % side, m / (side * side));
             Point3::new(
-                x as Real + rng.jitter(0.1),
-                y as Real + rng.jitter(0.1),
-                z as Real + rng.jitter(0.1),
+                x as Real + rng.uniform(-0.1, 0.1),
+                y as Real + rng.uniform(-0.1, 0.1),
+                z as Real + rng.uniform(-0.1, 0.1),
             )
         })
         .collect()
@@ -84,7 +69,7 @@ fn morton(pts: &[Point3]) -> Vec<Point3> {
 fn build_lists(c: &mut Criterion) {
     let rot = Quat::from_scaled_axis(Vec3::new(0.3, -0.5, 0.8));
     for n in [10_000usize, 100_000] {
-        let mut rng = Rng(n as u64);
+        let mut rng = Rng::new(n as u64);
         let flat = sheet(n, &mut rng);
         let rotated: Vec<Point3> = flat.iter().map(|p| rot * p).collect();
         let vol = volume(n, &mut rng);
@@ -114,7 +99,7 @@ fn build_lists(c: &mut Criterion) {
 }
 
 fn skin_check(c: &mut Criterion) {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let pts = morton(&volume(100_000, &mut rng));
     let mut list = NeighbourList::new(NeighbourBackend::CellList, 2.0, 0.5);
     list.update(&pts);

@@ -148,19 +148,19 @@ mod tests {
     use super::*;
     use crate::kernel::{iso_radius, ISO};
     use crate::primitives::Primitive;
-    use crate::test_util::Rng;
     use op_dynamics::Quat;
+    use op_test_support::Rng;
 
     fn random_field(seed: u64, n: usize) -> Field {
         let mut rng = Rng::new(seed);
         let prims = (0..n)
             .map(|i| {
-                let q = Quat::from_scaled_axis(rng.vec() * 3.0);
-                let x = Point3::from(rng.vec() * 3.0);
-                let r = 0.4 + 0.3 * rng.next().abs();
+                let q = Quat::from_scaled_axis(rng.vec3(1.0) * 3.0);
+                let x = Point3::from(rng.vec3(1.0) * 3.0);
+                let r = 0.4 + 0.3 * rng.uniform(-1.0, 1.0).abs();
                 let prim = match i % 4 {
-                    0 => Primitive::point(rng.vec() * 0.1, r),
-                    1 => Primitive::segment(rng.vec() * 0.2, rng.vec() * 0.2, r),
+                    0 => Primitive::point(rng.vec3(1.0) * 0.1, r),
+                    1 => Primitive::segment(rng.vec3(1.0) * 0.2, rng.vec3(1.0) * 0.2, r),
                     2 => Primitive::square(Vec3::z(), 0.2, r),
                     _ => Primitive::ellipsoid(Vec3::zeros(), q, Vec3::new(1.0, 0.5, 1.5), r),
                 };
@@ -193,7 +193,7 @@ mod tests {
         let mut rng = Rng::new(5);
         let mut nonzero = 0;
         for _ in 0..3000 {
-            let p = Point3::from(rng.vec() * 3.5);
+            let p = Point3::from(rng.vec3(1.0) * 3.5);
             let (f, g) = field.value_and_gradient(&p);
             let (fb, gb) = field.brute_force_value_and_gradient(&p);
             assert!((f - fb).abs() < 1e-12, "{f} vs {fb}");
@@ -213,7 +213,7 @@ mod tests {
         let mut rng = Rng::new(1);
         let h = 1e-6;
         for _ in 0..500 {
-            let p = Point3::from(rng.vec() * 3.0);
+            let p = Point3::from(rng.vec3(1.0) * 3.0);
             let (_, g) = field.value_and_gradient(&p);
             for k in 0..3 {
                 let mut e = Vec3::zeros();
@@ -228,7 +228,9 @@ mod tests {
     fn parallel_batch_is_ordered_and_thread_count_independent() {
         let field = random_field(4, 200);
         let mut rng = Rng::new(8);
-        let pts: Vec<Point3> = (0..5000).map(|_| Point3::from(rng.vec() * 3.0)).collect();
+        let pts: Vec<Point3> = (0..5000)
+            .map(|_| Point3::from(rng.vec3(1.0) * 3.0))
+            .collect();
         let run = |threads| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)

@@ -38,8 +38,6 @@ pub mod polygonize;
 pub mod primitives;
 pub mod skin;
 pub mod skin_stages;
-#[cfg(test)]
-mod test_util;
 
 pub use contact::{collider_reactions, ClippedField, ContactParams, Reaction, Reactions};
 pub use error::{PolygonizeError, SkinError};

@@ -325,7 +325,7 @@ impl PosedPrimitive {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_util::Rng;
+    use op_test_support::Rng;
 
     fn kinds() -> Vec<Primitive> {
         let rot = Quat::from_scaled_axis(Vec3::new(0.3, -0.7, 0.5));
@@ -344,11 +344,11 @@ mod tests {
         let h = 1e-6;
         for prim in kinds() {
             assert!(prim.is_valid());
-            let q = Quat::from_scaled_axis(rng.vec() * 2.0);
-            let x = Point3::from(rng.vec());
+            let q = Quat::from_scaled_axis(rng.vec3(1.0) * 2.0);
+            let x = Point3::from(rng.vec3(1.0));
             let posed = prim.posed(3, &x, &q);
             for _ in 0..200 {
-                let p = x + rng.vec() * 0.9;
+                let p = x + rng.vec3(1.0) * 0.9;
                 let (d2, g) = posed.distance2_and_gradient(&p);
                 let (f, gf) = posed.field_and_gradient(&p);
                 assert_eq!(f, posed.field(&p));
@@ -373,11 +373,11 @@ mod tests {
             let posed = prim.posed(
                 0,
                 &Point3::new(1.0, 2.0, 3.0),
-                &Quat::from_scaled_axis(rng.vec()),
+                &Quat::from_scaled_axis(rng.vec3(1.0)),
             );
             let (c, r) = posed.bounding_sphere();
             for _ in 0..2000 {
-                let p = c + rng.vec() * 2.0;
+                let p = c + rng.vec3(1.0) * 2.0;
                 if posed.field(&p) > 0.0 {
                     assert!((p - c).norm() <= r + 1e-12, "{prim:?}");
                 }

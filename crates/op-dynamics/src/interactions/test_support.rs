@@ -1,5 +1,9 @@
 //! Test support: a seeded RNG, random pair configurations and the
 //! finite-difference and momentum checks shared by the term tests.
+//!
+//! op-dynamics' own unit tests cannot use the workspace's op-test-support
+//! (it depends on op-dynamics: its types would be another copy's), so the
+//! generator here is the same SplitMix64, giving the same sequences.
 
 use super::material::{Material, PreparedMaterial};
 use super::pair::{evaluate_pair, Coupling, PairGeometry, ParticleView, TermGrad};

@@ -1,42 +1,25 @@
 //! Backend agreement, transpose, thread-count determinism and skin tests.
 
 use super::*;
+use crate::interactions::test_support::Rng;
 use crate::math::Vec3;
 
-/// A small deterministic generator (splitmix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn uniform(&mut self) -> Real {
-        (self.next_u64() >> 11) as Real / (1u64 << 53) as Real
-    }
-    fn range(&mut self, lo: Real, hi: Real) -> Real {
-        lo + (hi - lo) * self.uniform()
-    }
-    fn vec_in_ball(&mut self, r: Real) -> Vec3 {
-        loop {
-            let v = Vec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            if v.norm_squared() < 1.0 {
-                return v * r;
-            }
+/// A random vector uniform in the ball of radius `r` (rejection sampling).
+fn vec_in_ball(rng: &mut Rng, r: Real) -> Vec3 {
+    loop {
+        let v = Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        if v.norm_squared() < 1.0 {
+            return v * r;
         }
     }
 }
 
 fn random_volume(n: usize, side: Real, seed: u64) -> Vec<Point3> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     (0..n)
         .map(|_| {
             Point3::new(
@@ -50,7 +33,7 @@ fn random_volume(n: usize, side: Real, seed: u64) -> Vec<Point3> {
 
 /// A hexagonal sheet in the z = 0 plane, spacing 1, with jitter in the plane.
 fn hex_sheet(rows: usize, cols: usize, jitter: Real, seed: u64) -> Vec<Point3> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut pts = Vec::with_capacity(rows * cols);
     for r in 0..rows {
         for c in 0..cols {
@@ -68,9 +51,9 @@ fn rotated(pts: &[Point3]) -> Vec<Point3> {
 }
 
 fn clustered(n: usize, seed: u64) -> Vec<Point3> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let centres: Vec<Point3> = (0..5)
-        .map(|_| Point3::from(rng.vec_in_ball(20.0)))
+        .map(|_| Point3::from(vec_in_ball(&mut rng, 20.0)))
         .collect();
     (0..n)
         .map(|i| {
@@ -78,8 +61,8 @@ fn clustered(n: usize, seed: u64) -> Vec<Point3> {
             // Some tight clumps, some exact duplicates.
             match i % 7 {
                 0 => c,
-                1 => c + rng.vec_in_ball(1e-9),
-                _ => c + rng.vec_in_ball(2.0),
+                1 => c + vec_in_ball(&mut rng, 1e-9),
+                _ => c + vec_in_ball(&mut rng, 2.0),
             }
         })
         .collect()
@@ -386,7 +369,7 @@ fn update_rebuilds_only_when_the_two_largest_moves_exceed_the_skin() {
 fn skin_keeps_every_pair_within_cutoff() {
     let (cutoff, skin) = (1.5, 0.5);
     for backend in FAST {
-        let mut rng = Rng(15);
+        let mut rng = Rng::new(15);
         let mut pts = random_volume(1500, 10.0, 16);
         let mut list = NeighbourList::new(backend, cutoff, skin);
         let mut rebuilt = 0;
@@ -394,7 +377,7 @@ fn skin_keeps_every_pair_within_cutoff() {
             // Random moves of up to 0.45 skin/2 per step: several steps
             // accumulate past the bound and force rebuilds.
             for p in pts.iter_mut() {
-                *p += rng.vec_in_ball(0.45 * 0.5 * skin);
+                *p += vec_in_ball(&mut rng, 0.45 * 0.5 * skin);
             }
             if list.update(&pts) {
                 rebuilt += 1;

@@ -4,8 +4,8 @@
 use super::*;
 use crate::polygonize::{polygonize_field, PolygonizeParams};
 use crate::primitives::Primitive;
-use crate::test_util::Rng;
 use op_dynamics::{Material, ParticleDesc, Particles, Quat, WorldParams};
+use op_test_support::Rng;
 use std::collections::BTreeMap;
 
 fn world_at(points: &[Point3]) -> World {
@@ -200,7 +200,7 @@ fn deformed_skins_have_no_gap_and_no_overlap() {
             let mut worst = Real::NEG_INFINITY;
             let mut both_raw = 0;
             for _ in 0..5_000 {
-                let p = Point3::from(rng.vec() * 0.6);
+                let p = Point3::from(rng.vec3(1.0) * 0.6);
                 let (ea, eb) = (da.value(&p) - ISO, db.value(&p) - ISO);
                 worst = worst.max(ea.min(eb));
                 both_raw += usize::from(a.value(&p) > ISO && b.value(&p) > ISO);
@@ -300,7 +300,7 @@ fn deformed_gradient_and_c1_join() {
     let h = 1e-6;
     let mut tested = 0;
     for _ in 0..3000 {
-        let p = Point3::from(rng.vec() * 0.7);
+        let p = Point3::from(rng.vec3(1.0) * 0.7);
         let (ea, eb) = (a.value(&p) - ISO, b.value(&p) - ISO);
         if ea.abs().min(eb.abs()) < 1e-3 || (-eb - 0.1).abs() < 1e-3 || (-eb - 0.2).abs() < 1e-3 {
             continue;

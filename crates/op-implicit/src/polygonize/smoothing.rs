@@ -123,9 +123,9 @@ mod tests {
             &Quat::identity(),
         )]);
         let mut mesh = polygonize(&field, &PolygonizeParams::with_cell_size(0.1)).unwrap();
-        let mut rng = crate::test_util::Rng::new(7);
+        let mut rng = op_test_support::Rng::new(7);
         for p in &mut mesh.positions {
-            let noise = 0.02 * crate::iso_radius(radius) * rng.next();
+            let noise = 0.02 * crate::iso_radius(radius) * rng.uniform(-1.0, 1.0);
             *p += p.coords.normalize() * noise;
         }
         let before = off_sphere(&mesh);

@@ -1,19 +1,6 @@
 use super::*;
 use op_dynamics::particles::ParticleDesc;
-
-/// SplitMix64 for seeded jitter.
-struct Rng(u64);
-
-impl Rng {
-    fn uniform(&mut self, lo: Real, hi: Real) -> Real {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        lo + (hi - lo) * ((z >> 11) as Real / (1u64 << 53) as Real)
-    }
-}
+use op_test_support::Rng;
 
 fn hex_sheet(nx: usize, ny: usize) -> Vec<Point3> {
     let mut v = Vec::new();
@@ -167,7 +154,7 @@ fn sphere_shell_is_closed_and_faces_outward() {
 /// to 0.12 along each axis (seeded).
 fn jittered_sphere(seed: u64) -> (Vec<Point3>, Vec<Vec3>) {
     let (mut p, normals) = sphere(2.5, 1.0);
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     for x in &mut p {
         *x += Vec3::new(
             rng.uniform(-0.12, 0.12),
@@ -239,7 +226,7 @@ fn no_edge_is_left_in_three_triangles_on_coarse_curved_surfaces() {
 
 #[test]
 fn torus_has_euler_characteristic_zero() {
-    let (p, normals) = torus(4.0, 1.6, 0.45, &mut Rng(5));
+    let (p, normals) = torus(4.0, 1.6, 0.45, &mut Rng::new(5));
     let t = tri(&p, &normals, 1.7 * 0.45);
     assert_eq!(t.vertices().len(), p.len());
     assert_eq!(t.boundary_loops(), 0);
@@ -253,7 +240,7 @@ fn torus_has_euler_characteristic_zero() {
 /// where some kept triangles are obtuse.
 #[test]
 fn matches_the_brute_force_rule_and_holds_no_particle_in_its_spheres() {
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     let p: Vec<Point3> = hex_sheet(9, 8)
         .into_iter()
         .map(|q| {
