@@ -157,22 +157,20 @@ impl Stage<SceneState> for Creation {
             return Ok(Effects::default());
         };
         state.next_step = world.steps() + state.params.interval;
-        let merges = state.params.merges(world.particles()).map_err(err)?;
-        world.merge_particles(&merges).map_err(err)?;
-        let mut descs = state.params.candidates(world.particles()).map_err(err)?;
-        if let Some(fit) = &state.fit {
-            descs.retain(|d| fit.near.contains(&d.position));
-        }
-        let ids = world.insert_particles(&descs).map_err(err)?;
-        for (d, &id) in descs.iter().zip(&ids) {
-            if let Some(o) = ctx.objects.get_mut(d.object as usize) {
+        let fit = state.fit.as_ref();
+        let created = op_modeling::creation::apply_now(world, &state.params, |d| {
+            fit.is_none_or(|f| f.near.contains(&d.position))
+        })
+        .map_err(err)?;
+        for (&object, &id) in created.objects.iter().zip(&created.inserted) {
+            if let Some(o) = ctx.objects.get_mut(object as usize) {
                 o.created.push(id);
             }
         }
         Ok(Effects {
             forces_invalid: false,
-            inserted: ids,
-            removed: merges.iter().map(|m| m.removed).collect(),
+            inserted: created.inserted,
+            removed: created.removed,
         })
     }
 }

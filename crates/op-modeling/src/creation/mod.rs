@@ -15,8 +15,10 @@
 //!
 //! Each rule is a function that looks at the particles and returns what
 //! to change; [`CreationParams::merges`] and [`CreationParams::candidates`]
-//! run the enabled rules and [`apply`] merges, then inserts, into a world
-//! every `interval` steps (deletion is [`World::remove_particles`]).
+//! run the enabled rules; [`apply_now`] merges, then inserts, into a world
+//! (the scene's creation stage calls it on its schedule, keeping a fit's
+//! candidates near its data), and [`apply`] does so every `interval`
+//! steps (deletion is [`World::remove_particles`]).
 //! Lengths are fractions of the rest spacing [`CreationParams::r0`].
 //!
 //! **Determinism**: candidates are generated per particle in parallel
@@ -175,13 +177,45 @@ pub fn apply(world: &mut World, params: &CreationParams) -> Result<Applied, Worl
     if !world.steps().is_multiple_of(params.interval) {
         return Ok(Applied::default());
     }
-    let merges = params.merges(world.particles())?;
-    let merged = world.merge_particles(&merges)?;
-    let descs = params.candidates(world.particles())?;
-    world.insert_particles(&descs)?;
+    let created = apply_now(world, params, |_| true)?;
     Ok(Applied {
-        merged,
-        inserted: descs.len(),
+        merged: created.removed.len(),
+        inserted: created.inserted.len(),
+    })
+}
+
+/// What one application of the rules changed, by particle id.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Created {
+    /// Particles the merging rule removed (each joined a survivor).
+    pub removed: Vec<u32>,
+    /// Particles inserted by stretching and growing, in insertion order.
+    pub inserted: Vec<u32>,
+    /// The object of each inserted particle.
+    pub objects: Vec<u32>,
+}
+
+/// Applies the rules to `world` now (the caller keeps the schedule):
+/// merges first, then inserts the candidates of the merged particle set
+/// that `keep` accepts (a fit keeps those near its data).
+///
+/// # Errors
+/// When the world refuses the merges or the particles (nothing is
+/// inserted then).
+pub fn apply_now(
+    world: &mut World,
+    params: &CreationParams,
+    keep: impl Fn(&ParticleDesc) -> bool,
+) -> Result<Created, WorldError> {
+    let merges = params.merges(world.particles())?;
+    world.merge_particles(&merges)?;
+    let mut descs = params.candidates(world.particles())?;
+    descs.retain(|d| keep(d));
+    let inserted = world.insert_particles(&descs)?;
+    Ok(Created {
+        removed: merges.iter().map(|m| m.removed).collect(),
+        inserted,
+        objects: descs.iter().map(|d| d.object).collect(),
     })
 }
 
