@@ -10,7 +10,7 @@ use op_dynamics::{
     Particles, Point3, Real, World, WorldParams,
 };
 use op_modeling::creation::{CreationParams, StretchingParams};
-use op_modeling::tools::{Role, ToolError, ToolParams, ToolPath, ToolShape, Tools};
+use op_modeling::tools::{Role, ToolParams, ToolPath, ToolShape, Tools};
 use op_test_support::{
     assert_energy_gradients, assert_momentum_conserved, full_material, hex_sheet, in_pool,
     random_cluster, spacing_material, Rng,
@@ -154,9 +154,11 @@ fn heaters_heat_what_they_reach_and_conduction_spreads_it() {
             heat: heat(conduction, 0.0),
             ..WorldParams::default()
         };
-        let mut w = with_tools(
-            World::new(p, &[m], params),
-            vec![heater([0.0, 0.0, 0.0], 0.6, power, reach)],
+        let mut w = Tools::world(
+            p,
+            &[m],
+            params,
+            &[heater([0.0, 0.0, 0.0], 0.6, power, reach)],
         )
         .unwrap();
         assert!(w.enabled().contains(&"tool:heater".to_string()));
@@ -275,9 +277,11 @@ fn knives_push_like_obstacles_and_heat() {
             heat: heat(0.0, 0.0),
             ..WorldParams::default()
         };
-        let mut w = with_tools(
-            World::new(p, &[Material::empty()], params),
-            vec![ball([0.0; 3], 1.0, role)],
+        let mut w = Tools::world(
+            p,
+            &[Material::empty()],
+            params,
+            &[ball([0.0; 3], 1.0, role)],
         )
         .unwrap();
         let f = w.evaluate_forces().0.to_vec();
@@ -341,9 +345,11 @@ fn heaters_need_heat_settings() {
     let params = WorldParams {
         ..WorldParams::default()
     };
-    let err = with_tools(
-        World::new(Particles::new(), &[Material::empty()], params),
-        vec![heater([0.0; 3], 1.0, 1.0, 0.5)],
+    let err = Tools::world(
+        Particles::new(),
+        &[Material::empty()],
+        params,
+        &[heater([0.0; 3], 1.0, 1.0, 0.5)],
     )
     .err()
     .expect("refused");
@@ -393,11 +399,8 @@ fn heat_is_deterministic_across_thread_counts() {
             heat: heat(1.0, 0.5),
             ..WorldParams::default()
         };
-        let mut w = with_tools(
-            World::new(p, &[heated(full_material(false, 0.5))], params),
-            vec![knife],
-        )
-        .unwrap();
+        let mut w =
+            Tools::world(p, &[heated(full_material(false, 0.5))], params, &[knife]).unwrap();
         for _ in 0..300 {
             w.step().unwrap();
         }
@@ -424,9 +427,11 @@ fn changing_temperatures_refresh_forces_only_when_materials_weaken() {
             heat: heat(1.0, 0.5),
             ..WorldParams::default()
         };
-        let mut w = with_tools(
-            World::new(p, &[material], params),
-            vec![heater([3.0, 2.0, 0.0], 1.0, 5.0, 1.0)],
+        let mut w = Tools::world(
+            p,
+            &[material],
+            params,
+            &[heater([3.0, 2.0, 0.0], 1.0, 5.0, 1.0)],
         )
         .unwrap();
         w.step().unwrap();
@@ -498,14 +503,4 @@ fn cold_drag_slows_cold_particles_only() {
         .unwrap_err()
         .to_string()
         .contains("cold_drag"));
-}
-
-/// `world` with the tools `params` (`Tools::equip`).
-fn with_tools(
-    world: Result<World, op_dynamics::WorldError>,
-    params: Vec<ToolParams>,
-) -> Result<World, ToolError> {
-    let mut world = world?;
-    Tools::equip(&mut world, &params)?;
-    Ok(world)
 }

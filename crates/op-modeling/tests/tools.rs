@@ -7,7 +7,7 @@ use op_dynamics::{
     ExternalParams, Material, ParticleDesc, Particles, Point3, Real, Scheme, Vec3, World,
     WorldParams,
 };
-use op_modeling::tools::{Keyframe, Role, ToolError, ToolParams, ToolPath, ToolShape, Tools};
+use op_modeling::tools::{Keyframe, Role, ToolParams, ToolPath, ToolShape, Tools};
 use op_test_support::{in_pool, spacing_material};
 
 fn particles(points: &[Point3], object: impl Fn(usize) -> u32) -> Particles {
@@ -61,11 +61,7 @@ fn obstacle_carries_weight_at_the_penalty_depth() {
         ..WorldParams::default()
     };
     let p = particles(&[Point3::new(0.3, -0.2, 0.5)], |_| 0);
-    let mut w = with_tools(
-        World::new(p, &[Material::empty()], params),
-        vec![floor(k, 20.0)],
-    )
-    .unwrap();
+    let mut w = Tools::world(p, &[Material::empty()], params, &[floor(k, 20.0)]).unwrap();
     assert!(w.enabled().contains(&"tool:obstacle".to_string()));
     w.advance_to(4.0).unwrap();
     let z = w.particles().positions()[0].z;
@@ -133,9 +129,11 @@ fn tool_forces_are_the_gradient_of_the_tool_energies() {
         },
     ];
     let params = WorldParams::default();
-    let mut w = with_tools(
-        World::new(particles(&points, |_| 0), &[spacing_material()], params),
-        tools,
+    let mut w = Tools::world(
+        particles(&points, |_| 0),
+        &[spacing_material()],
+        params,
+        &tools,
     )
     .unwrap();
     let grabbed = |w: &World| {
@@ -215,9 +213,11 @@ fn mover_carries_grabbed_particles() {
     let params = WorldParams {
         ..WorldParams::default()
     };
-    let mut w = with_tools(
-        World::new(particles(&points, |_| 0), &[Material::empty()], params),
-        vec![tool],
+    let mut w = Tools::world(
+        particles(&points, |_| 0),
+        &[Material::empty()],
+        params,
+        &[tool],
     )
     .unwrap();
     w.advance_to(1.5).unwrap();
@@ -244,13 +244,11 @@ fn tools_act_only_on_their_objects() {
     let params = WorldParams {
         ..WorldParams::default()
     };
-    let mut w = with_tools(
-        World::new(
-            particles(&points, |k| k as u32),
-            &[Material::empty()],
-            params,
-        ),
-        vec![tool],
+    let mut w = Tools::world(
+        particles(&points, |k| k as u32),
+        &[Material::empty()],
+        params,
+        &[tool],
     )
     .unwrap();
     let f = w.evaluate_forces().0.to_vec();
@@ -309,9 +307,11 @@ fn tools_are_deterministic_across_thread_counts() {
                 },
                 ..WorldParams::default()
             };
-            let mut w = with_tools(
-                World::new(particles(&points, |_| 0), &[spacing_material()], params),
-                vec![cylinder.clone(), floor(500.0, 1.0)],
+            let mut w = Tools::world(
+                particles(&points, |_| 0),
+                &[spacing_material()],
+                params,
+                &[cylinder.clone(), floor(500.0, 1.0)],
             )
             .unwrap();
             w.advance_to(0.6).unwrap();
@@ -368,24 +368,10 @@ fn obstacle_damping_never_pulls() {
     let mut d = ParticleDesc::at(Point3::new(0.0, 0.0, -0.01));
     d.velocity = Vec3::new(0.0, 0.0, 10.0);
     p.push(d).unwrap();
-    let mut w = with_tools(
-        World::new(p, &[Material::empty()], params),
-        vec![floor(100.0, 100.0)],
-    )
-    .unwrap();
+    let mut w = Tools::world(p, &[Material::empty()], params, &[floor(100.0, 100.0)]).unwrap();
     assert_eq!(w.evaluate_forces().0[0], Vec3::zeros());
     // Approaching, the damping adds to the penalty push.
     w.particles_mut().set_velocity(0, Vec3::new(0.0, 0.0, -0.1));
     let f = w.evaluate_forces().0[0];
     assert!((f.z - (100.0 * 0.01 + 100.0 * 0.1)).abs() < 1e-12, "{f}");
-}
-
-/// `world` with the tools `params` (`Tools::equip`).
-fn with_tools(
-    world: Result<World, op_dynamics::WorldError>,
-    params: Vec<ToolParams>,
-) -> Result<World, ToolError> {
-    let mut world = world?;
-    Tools::equip(&mut world, &params)?;
-    Ok(world)
 }

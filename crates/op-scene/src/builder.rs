@@ -330,13 +330,7 @@ impl Scene {
             },
             heat: w.heat.clone(),
         };
-        let world = World::new(particles, &materials, params)
-            .map_err(op_modeling::tools::ToolError::from)
-            .and_then(|mut world| {
-                op_modeling::Tools::equip(&mut world, tools)?;
-                Ok(world)
-            });
-        world.map_err(|e| {
+        op_modeling::Tools::world(particles, &materials, params, tools).map_err(|e| {
             let mut message = format!("building the world: {e}");
             for (k, name) in used.iter().enumerate() {
                 message =

@@ -587,6 +587,20 @@ impl Tools {
         world.tools()?.as_any().downcast_ref::<Tools>()
     }
 
+    /// A world of `particles` and `materials` with `params`
+    /// ([`op_dynamics::World::new`]) and the tools of `tools`
+    /// ([`Tools::equip`]).
+    pub fn world(
+        particles: op_dynamics::Particles,
+        materials: &[op_dynamics::Material],
+        params: op_dynamics::WorldParams,
+        tools: &[ToolParams],
+    ) -> Result<op_dynamics::World, ToolError> {
+        let mut world = op_dynamics::World::new(particles, materials, params)?;
+        Tools::equip(&mut world, tools)?;
+        Ok(world)
+    }
+
     /// Builds the tools of `params` for `world`'s particles (movers grab
     /// the particles they start on) and gives them to it. Without tools the
     /// world is left as it is (it pays for no tool stage).

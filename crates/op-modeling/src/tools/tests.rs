@@ -2,18 +2,6 @@
 
 use super::*;
 
-use op_dynamics::World;
-
-/// `world` with the tools `params` ([`Tools::equip`]).
-fn with_tools(
-    world: Result<World, op_dynamics::WorldError>,
-    params: Vec<ToolParams>,
-) -> Result<World, ToolError> {
-    let mut world = world?;
-    Tools::equip(&mut world, &params)?;
-    Ok(world)
-}
-
 use op_dynamics::particles::ParticleDesc;
 
 /// An eraser ball sweeping along a row of still particles removes each
@@ -22,7 +10,7 @@ use op_dynamics::particles::ParticleDesc;
 /// their ids.
 #[test]
 fn eraser_removes_the_particles_it_passes_over() {
-    use op_dynamics::{Material, World, WorldParams};
+    use op_dynamics::{Material, WorldParams};
     let run = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -72,9 +60,11 @@ fn eraser_removes_the_particles_it_passes_over() {
                     dt: 0.01,
                     ..WorldParams::default()
                 };
-                let mut w = with_tools(
-                    World::new(p, &[Material::empty()], params),
-                    vec![eraser, holder(1.0), holder(8.0)],
+                let mut w = Tools::world(
+                    p,
+                    &[Material::empty()],
+                    params,
+                    &[eraser, holder(1.0), holder(8.0)],
                 )
                 .unwrap();
                 assert!(w.enabled().contains(&"tool:eraser".to_string()));
@@ -120,7 +110,7 @@ fn eraser_removes_the_particles_it_passes_over() {
 /// tool deletes nothing (a world with one does not even look).
 #[test]
 fn shapers_delete_the_particles_trapped_between_them() {
-    use op_dynamics::{Flags, Material, World, WorldParams};
+    use op_dynamics::{Flags, Material, WorldParams};
     let shaper = |from: Real, to: Real| ToolParams {
         name: "shaper".into(),
         shape: ToolShape::Ball { radius: 1.0 },
@@ -165,8 +155,7 @@ fn shapers_delete_the_particles_trapped_between_them() {
                     dt: 0.01,
                     ..WorldParams::default()
                 };
-                let mut w =
-                    with_tools(World::new(row(), &[Material::empty()], params), tools).unwrap();
+                let mut w = Tools::world(row(), &[Material::empty()], params, &tools).unwrap();
                 let mut erased = Vec::new();
                 let mut first = None;
                 while w.time() < 1.0 - 1e-9 {
