@@ -26,7 +26,9 @@ pub mod triangle;
 /// The workspace's root directory (where `scenes/`, `reports/` and `docs/`
 /// are), from this crate's manifest directory.
 pub fn workspace_root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    // The plain path when it cannot be resolved: it names the same place.
+    std::fs::canonicalize(&root).unwrap_or(root)
 }
 
 /// Runs `f` on a local pool of one worker thread. The experiments step

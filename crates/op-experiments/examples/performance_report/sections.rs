@@ -66,8 +66,8 @@ pub(crate) fn header(started: Instant, reps: usize, load: (&str, &str), peak: f6
     ]));
     writeln!(
         md,
-        "\nThe machine is shared (2 cores; other builds ran at the same time): \
-         absolute times drift between runs, the interleaved ratios hold better.\n"
+        "\nThe machine is shared (2 cores; the load averages above say how busy it \
+         was): absolute times drift between runs, the interleaved ratios hold better.\n"
     )?;
     Ok(md)
 }
