@@ -4,19 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
-}
-
-fn scene_files() -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(scenes_dir())
-        .expect("scenes/ exists")
-        .map(|e| e.unwrap().path())
-        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("ron" | "json")))
-        .collect();
-    v.sort();
-    v
-}
+use op_test_support::scene_files;
 
 /// The kind of error a bad scene must give.
 #[derive(Debug)]

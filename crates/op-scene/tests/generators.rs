@@ -1,14 +1,9 @@
 //! The generators make what they promise: counts, spacings, curvature
 //! laws, normals pointing outward, particles on their surfaces.
 
-use std::path::{Path, PathBuf};
-
 use op_dynamics::{Point3, Real, Vec3};
 use op_scene::{parse_scene, BuiltScene, CurvatureLaw, Format, Generator};
-
-fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
-}
+use op_test_support::scenes_dir;
 
 /// A scene from RON text, validated and built without a directory.
 fn build_ron(text: &str) -> BuiltScene {

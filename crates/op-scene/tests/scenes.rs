@@ -4,25 +4,12 @@
 //! world; and every scene of the bad-scene corpus (`tests/bad_scenes/`)
 //! fails with the right error.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use op_dynamics::diagnostics::rest_shape_rms;
 use op_dynamics::{Flags, ParticleType, Point3, Real, Vec3, World};
 use op_scene::{load_scene, parse_scene, BuiltScene, Format, Scene};
-
-fn scenes_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
-}
-
-fn scene_files() -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(scenes_dir())
-        .expect("scenes/ exists")
-        .map(|e| e.unwrap().path())
-        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("ron" | "json")))
-        .collect();
-    v.sort();
-    v
-}
+use op_test_support::{scene_files, scenes_dir};
 
 fn build(path: &Path) -> BuiltScene {
     let scene = load_scene(path).unwrap_or_else(|e| panic!("{e}"));

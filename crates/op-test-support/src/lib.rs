@@ -253,3 +253,28 @@ pub fn fresh_path(tag: &str) -> std::path::PathBuf {
     let _ = std::fs::remove_dir_all(&path);
     path
 }
+
+/// The workspace's root directory (where `scenes/` and `tests/data/` are).
+pub fn workspace_root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The shipped scenes' directory, `scenes/`.
+pub fn scenes_dir() -> std::path::PathBuf {
+    workspace_root().join("scenes")
+}
+
+/// The shipped scenes at the top of `scenes/` (`.ron` and `.json`), sorted.
+///
+/// # Panics
+///
+/// If `scenes/` cannot be read.
+pub fn scene_files() -> Vec<std::path::PathBuf> {
+    let mut v: Vec<std::path::PathBuf> = std::fs::read_dir(scenes_dir())
+        .expect("scenes/ exists")
+        .map(|e| e.expect("a readable entry of scenes/").path())
+        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("ron" | "json")))
+        .collect();
+    v.sort();
+    v
+}
