@@ -191,35 +191,13 @@ pub fn surface_topology(built: &BuiltScene, name: &str) -> SurfaceTopology {
     }
 }
 
-/// Number of edge-connected components of `triangles`.
+/// Number of pieces of `triangles` (triangles sharing a vertex are one).
 fn triangle_components(triangles: &[[u32; 3]]) -> usize {
-    let n = triangles
+    let piece = oriented_particles::op_modeling::triangulation::vertex_components(triangles);
+    piece
         .iter()
-        .flatten()
-        .map(|&v| v as usize + 1)
-        .max()
-        .unwrap_or(0);
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    let mut used = vec![false; n];
-    for t in triangles {
-        for k in 0..3 {
-            used[t[k] as usize] = true;
-            let (a, b) = (
-                root(&mut parent, t[k] as usize),
-                root(&mut parent, t[(k + 1) % 3] as usize),
-            );
-            parent[a.max(b)] = a.min(b);
-        }
-    }
-    (0..n)
-        .filter(|&i| used[i] && root(&mut parent, i) == i)
+        .enumerate()
+        .filter(|(i, p)| **p == Some(*i as u32))
         .count()
 }
 

@@ -610,6 +610,42 @@ fn canonical(t: [u32; 3]) -> [u32; 3] {
     [t[m], t[(m + 1) % 3], t[(m + 2) % 3]]
 }
 
+/// The pieces of a set of triangles (vertex indices): for each vertex
+/// index up to the largest used, the smallest vertex of its piece, `None`
+/// for an index no triangle uses. Triangles sharing a vertex are one piece
+/// (union-find with path halving).
+pub fn vertex_components(triangles: &[[u32; 3]]) -> Vec<Option<u32>> {
+    let n = triangles
+        .iter()
+        .flatten()
+        .map(|&v| v as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    let mut used = vec![false; n];
+    for t in triangles {
+        used[t[0] as usize] = true;
+        for k in 1..3 {
+            used[t[k] as usize] = true;
+            let (a, b) = (
+                root(&mut parent, t[0] as usize),
+                root(&mut parent, t[k] as usize),
+            );
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    (0..n)
+        .map(|i| used[i].then(|| root(&mut parent, i) as u32))
+        .collect()
+}
+
 impl Triangulation {
     /// Number of triangles.
     pub fn len(&self) -> usize {

@@ -21,6 +21,7 @@ use std::collections::{BTreeMap, HashMap};
 use op_dynamics::{Point3, Real, Vec3};
 
 use super::mesh::SurfaceMesh;
+use crate::triangulation::vertex_components;
 
 /// Closes the holes of `mesh` narrower than `max_width` (unit spacing);
 /// `samples` with unit `normals` place the centre vertices of large
@@ -68,44 +69,17 @@ pub(super) fn fill_holes(
 /// triangles closed on themselves, measured on 20,000 random samples of
 /// the saddle). Returns the number of triangles dropped.
 fn drop_specks(faces: &mut Vec<[u32; 3]>, min_vertices: usize) -> usize {
-    let n = faces
-        .iter()
-        .flatten()
-        .map(|&v| v as usize + 1)
-        .max()
-        .unwrap_or(0);
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
-    for f in faces.iter() {
-        for k in 1..3 {
-            let (a, b) = (
-                root(&mut parent, f[0] as usize),
-                root(&mut parent, f[k] as usize),
-            );
-            parent[a.max(b)] = a.min(b);
-        }
-    }
-    let mut size: HashMap<usize, usize> = HashMap::new();
-    let mut used = vec![false; n];
-    for f in faces.iter() {
-        for &v in f {
-            if !std::mem::replace(&mut used[v as usize], true) {
-                *size.entry(root(&mut parent, v as usize)).or_insert(0) += 1;
-            }
-        }
+    let piece = vertex_components(faces);
+    let mut size: HashMap<u32, usize> = HashMap::new();
+    for p in piece.iter().flatten() {
+        *size.entry(*p).or_insert(0) += 1;
     }
     let largest = size.values().copied().max().unwrap_or(0);
     if largest < min_vertices {
         return 0;
     }
     let before = faces.len();
-    faces.retain(|f| size[&root(&mut parent, f[0] as usize)] >= min_vertices);
+    faces.retain(|f| piece[f[0] as usize].is_some_and(|p| size[&p] >= min_vertices));
     before - faces.len()
 }
 
