@@ -373,6 +373,26 @@ impl Particles {
         live_slot(&self.statics.slot_of, id)
     }
 
+    /// The particle in `slot` as a description: every attribute and its
+    /// state (pushing it gives the same particle under a new id).
+    pub fn desc(&self, slot: usize) -> ParticleDesc {
+        ParticleDesc {
+            position: self.positions()[slot],
+            velocity: self.velocities()[slot],
+            orientation: self.orientations()[slot],
+            angular_velocity: self.angular_velocities()[slot],
+            mass: self.masses()[slot],
+            inertia: self.inertias()[slot],
+            normal_axis: self.normal_axes()[slot],
+            flags: self.flags()[slot],
+            object: self.objects()[slot],
+            kind: self.kinds()[slot],
+            material: self.materials()[slot],
+            curvature: self.curvatures()[slot],
+            temperature: self.temperatures()[slot],
+        }
+    }
+
     /// World normal `n = R(q) a` of the particle in `slot`.
     #[inline]
     pub fn normal(&self, slot: usize) -> Vec3 {

@@ -145,20 +145,7 @@ pub fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
 
 /// The description of the particle in `slot`, current state included.
 pub fn desc_of(p: &Particles, slot: usize) -> ParticleDesc {
-    let mut d = ParticleDesc::at(p.positions()[slot]);
-    d.velocity = p.velocities()[slot];
-    d.orientation = p.orientations()[slot];
-    d.angular_velocity = p.angular_velocities()[slot];
-    d.mass = p.masses()[slot];
-    d.inertia = p.inertias()[slot];
-    d.normal_axis = p.normal_axes()[slot];
-    d.flags = p.flags()[slot];
-    d.object = p.objects()[slot];
-    d.kind = p.kinds()[slot];
-    d.material = p.materials()[slot];
-    d.curvature = p.curvatures()[slot];
-    d.temperature = p.temperatures()[slot];
-    d
+    p.desc(slot)
 }
 
 /// Asserts that the forces and torques of the particles in `slots` are

@@ -732,23 +732,25 @@ pub fn release(world: &mut World, ids: &[u32]) -> Result<Vec<u32>, WorldError> {
                 message: format!("particle id {id} does not exist"),
             }));
         };
-        let mut d = ParticleDesc::at(p.positions()[s]);
-        d.orientation = p.orientations()[s];
-        d.mass = p.masses()[s];
-        d.inertia = p.inertias()[s];
-        d.normal_axis = p.normal_axes()[s];
-        d.object = p.objects()[s];
-        d.kind = p.kinds()[s];
-        d.material = p.materials()[s];
-        d.curvature = p.curvatures()[s];
-        let mut flags = p.flags()[s];
-        flags.remove(Flags::FIXED_POSITION);
-        flags.remove(Flags::FIXED_ORIENTATION);
-        d.flags = flags;
+        let mut d = at_rest(p, s);
+        d.flags.remove(Flags::FIXED_POSITION);
+        d.flags.remove(Flags::FIXED_ORIENTATION);
         descs.push(d);
     }
     world.remove_particles(ids)?;
     world.insert_particles(&descs)
+}
+
+/// The particle in `slot` at rest: its place, frame and attributes, no
+/// velocity and the default temperature (as the fit's particles are).
+pub(crate) fn at_rest(p: &Particles, slot: usize) -> ParticleDesc {
+    let fresh = ParticleDesc::at(p.positions()[slot]);
+    ParticleDesc {
+        velocity: fresh.velocity,
+        angular_velocity: fresh.angular_velocity,
+        temperature: fresh.temperature,
+        ..p.desc(slot)
+    }
 }
 
 /// Advances `world` by `t` (a divergence is an error).

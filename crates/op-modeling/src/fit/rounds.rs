@@ -17,9 +17,9 @@
 
 use std::collections::HashMap;
 
-use op_dynamics::{Flags, Material, ParticleDesc, Particles, Point3, Real, World, WorldParams};
+use op_dynamics::{Flags, Material, Particles, Point3, Real, World, WorldParams};
 
-use super::FitError;
+use super::{at_rest, FitError};
 
 /// Runs of a round with a growing margin before the last one is kept.
 pub(super) const MAX_TRIES: usize = 4;
@@ -126,15 +126,7 @@ pub(super) fn relax_new(
         let mut sub = Particles::new();
         let mut members = Vec::new();
         for s in (0..p.len()).filter(|&s| active[s] || ring[s]) {
-            let mut d = ParticleDesc::at(positions[s]);
-            d.orientation = p.orientations()[s];
-            d.mass = p.masses()[s];
-            d.inertia = p.inertias()[s];
-            d.normal_axis = p.normal_axes()[s];
-            d.object = p.objects()[s];
-            d.kind = p.kinds()[s];
-            d.material = p.materials()[s];
-            d.curvature = p.curvatures()[s];
+            let mut d = at_rest(p, s);
             d.flags = if active[s] {
                 flags[s]
             } else {
