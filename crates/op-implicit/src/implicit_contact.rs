@@ -313,6 +313,12 @@ impl<'a> ContactPair<'a> {
             });
         }
         let [nx, ny, nz] = dims;
+        // The grid centred on the box, so a symmetric contact is sampled
+        // symmetrically: a ball hitting a ribbon in the ribbon's plane
+        // pushes it in that plane, not out of it by the grid's offset.
+        let lo = Point3::from(
+            (lo.coords + hi.coords) * 0.5 - Vec3::from(dims.map(|n| 0.5 * (n - 1) as Real * h)),
+        );
         let node = |i: usize| {
             lo + Vec3::new(
                 (i % nx) as Real,

@@ -336,3 +336,31 @@ fn deformed_gradient_and_c1_join() {
         "{go:?} {gi:?}"
     );
 }
+
+/// Two blobs meeting along x, each symmetric about the planes y = 0 and
+/// z = 0: the sampling grid is centred on the common box, so the
+/// reaction has no y or z part (to rounding). Anchored at the box's
+/// corner, the grid's offset (the box is not a whole number of cells)
+/// made one, and a ball hitting a ribbon in its plane pushed it out of it
+/// (`scenes/ball_vs_spiral.ron`).
+#[test]
+fn symmetric_contact_is_sampled_symmetrically() {
+    let q = Quat::identity();
+    let a = Field::new(vec![
+        Primitive::point(Vec3::zeros(), 1.0).posed(0, &Point3::new(-0.4, 0.0, 0.0), &q)
+    ]);
+    let b = Field::new(vec![
+        Primitive::point(Vec3::zeros(), 1.13).posed(1, &Point3::new(0.43, 0.0, 0.0), &q)
+    ]);
+    for h in [0.03, 0.047, 0.061] {
+        let params = ImplicitContactParams {
+            cell_size: h,
+            ..PARAMS
+        };
+        let r = ContactPair::new(&a, &b).reactions(&params).unwrap();
+        let f = r.b().total_force();
+        assert!(f.x > 0.0, "B is pushed away from A: {f:?}");
+        let off_axis = f.y.hypot(f.z) / f.x;
+        assert!(off_axis < 1e-9, "cell {h}: off-axis force {off_axis:e} of the push");
+    }
+}
