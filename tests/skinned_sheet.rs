@@ -63,20 +63,23 @@ fn last_frame(out: &Path, stem: &str) -> String {
 
 #[test]
 fn sheet_lands_on_the_box_and_its_overhang_bends_down() {
-    let (summary, p, out) = run("sheet_on_box", 3.0);
+    // At t = 4 the overhang hangs down; at 2.4-3 the part on the box is
+    // still levered up by the falling overhang (up to 1.2 above the box).
+    let (summary, p, out) = run("sheet_on_box", 4.0);
     let contact = summary.contact.expect("contact figures");
     println!("{contact:?}");
     assert!(!summary.diverged);
     assert!(contact.total_impulse > 0.0, "{contact:?}");
     assert!(contact.max_penetration < 0.25, "{contact:?}");
     // The box's top face is z = 0 for |x| <= 3, |y| <= 5; the skin's
-    // half-thickness is 0.4 (iso radius of the 0.8 kernel).
+    // half-thickness is 0.4 (the default thickness, half the radius 0.8).
     let supported: Vec<&Point3> = p.iter().filter(|q| q.x.abs() < 2.5).collect();
     assert!(!supported.is_empty());
     for q in &supported {
         assert!(q.z > 0.15 && q.z < 1.0, "supported particle at {q:?}");
     }
-    let overhang: Vec<&Point3> = p.iter().filter(|q| q.x > 5.0).collect();
+    // Past the box's edge (x = 3).
+    let overhang: Vec<&Point3> = p.iter().filter(|q| q.x > 3.2).collect();
     assert!(!overhang.is_empty());
     let low = overhang.iter().map(|q| q.z).fold(Real::MAX, Real::min);
     assert!(low < -0.5, "the free edge bends down: lowest {low}");

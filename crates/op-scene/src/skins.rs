@@ -7,7 +7,7 @@
 //! for a scene without skins (see [`crate::BuiltScene::stages`]).
 //!
 //! **Two skins.** Contact acts on the skeleton's own skin, the plain
-//! kernel of support `radius` ([`SkinSpec::contact_primitive`]); the
+//! kernel of support `radius` ([`SkinSpec::contact_shape`]); the
 //! frames show the blended skin of [`SkinSpec::smoothness`] (the same when
 //! it is 1), deformed and clipped with the same contact surfaces.
 //!
@@ -20,7 +20,9 @@
 //! the exported field is the deformed one ([`ObjectSkin::mesh_in`]), so
 //! skins in contact meet on the exact contact surface.
 
-use op_dynamics::{Point3, Real, Vec3, World};
+use std::f64::consts::SQRT_2;
+
+use op_dynamics::{Point3, Quat, Real, Vec3, World};
 pub use op_implicit::object_skin::{
     contact_step, ContactError, ContactStats, ObjectSkin, SkinTool,
 };
@@ -68,24 +70,29 @@ pub struct SkinSpec {
     /// mean of its two). Default: 100.
     #[serde(default = "hundred")]
     pub stiffness: Real,
-    /// How far primitives blend in the displayed skin, in `[1, 4]`: the
-    /// kernel's support is `smoothness · radius` and its amplitude is
-    /// lowered so that an isolated primitive's skin stays at `radius / 2`;
-    /// neighbours within the support blend, so a larger smoothness rounds
-    /// a clump of particles and hides the rows of a sheet (polygonizing
-    /// costs more as each field sample reaches more primitives). 1 is the
-    /// plain kernel of Lombardo & Puech §6, on which contact always acts
-    /// ([`SkinSpec::contact_primitive`]). Default: [`DEFAULT_SMOOTHNESS`].
+    /// How far primitives blend in the displayed skin, in `[1, 4]`: its
+    /// kernel's support is `smoothness · radius` (a square's support also
+    /// reaches its half side further in its plane), so neighbours within
+    /// it blend: a larger smoothness rounds a clump of particles and hides
+    /// the rows of a sheet (polygonizing costs more as each field sample
+    /// reaches more primitives). Above 1 a square is shown by the smooth
+    /// ellipsoidal kernel of its support ([`SkinSpec::display_shape`]);
+    /// the displayed skin's amplitude is matched on the object to the
+    /// contact skin (the `skin_shape` module), so blending rounds the skin
+    /// without changing its size. 1 is the plain kernel of Lombardo &
+    /// Puech §6, on which contact always acts
+    /// ([`SkinSpec::contact_shape`]). Default: [`DEFAULT_SMOOTHNESS`].
     #[serde(default = "default_smoothness")]
     pub smoothness: Real,
-    /// Distance from a flat layer of the object's primitives (hexagonal, at
-    /// its rest spacing) to its skin, at least half the cell size and below
-    /// 0.9 `radius` (the contact skin's support): when set,
-    /// the amplitude is chosen for it instead of for the isolated size, so
-    /// a cloth can be as thin as asked whatever its blending (a sheet's
-    /// skin is then `2 thickness` thick). Default: none: the contact skin
-    /// has the isolated primitive's size (`radius / 2`) and the displayed
-    /// skin is matched to it on the object (`skin_shape` module).
+    /// Distance from the skeleton to the skin, at least half the cell size
+    /// and below 0.9 `radius` (the contact skin's support). The amplitude
+    /// is chosen on the object as built: along every particle's normal
+    /// axis, both ways, the contact field at this distance is the iso value
+    /// for the median particle (the `skin_shape` module), so a
+    /// cloth is `2 thickness` thick however many neighbours each particle
+    /// has. Default: `radius / 2` for squares (as thin as an isolated
+    /// primitive); none for points, whose contact skin keeps the isolated
+    /// primitive's size, `radius / 2` from each particle.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thickness: Option<Real>,
     /// Iterations of Taubin's volume-preserving smoothing applied to the
@@ -98,22 +105,26 @@ pub struct SkinSpec {
     pub smoothing: u32,
 }
 
-/// Default [`SkinSpec::smoothness`]: 2, so a clump of particles looks
-/// round and a sheet's rows do not show.
+/// Default [`SkinSpec::smoothness`]: 1.5, so a clump of particles looks
+/// round, a sheet's rows do not show and a curved ribbon has no bumps.
 ///
 /// Measured (`skin_shape` tests, cell size 0.05): the skin of four point
 /// primitives of radius 1.2 in a tetrahedron of edge 1 (the ball of
 /// `ball_vs_spiral`), its amplitude matched to the contact skin, is off
 /// its best-fit sphere by 9.2% RMS of its radius at smoothness 1, 0.49% at
-/// 1.5, 0.10% at 2; a hexagonal sheet of square primitives (half side 0.5,
-/// radius 1.2) with a `thickness` of 0.25 (0.4) is flat within 0.84% r0
-/// (0.66%) at smoothness 2; a ring ribbon of squares (half side 0.5,
-/// radius 0.8, spacing 1) keeps bumps of 0.13 r0 peak-to-peak (0.14 with
-/// the plain kernel). Contact does not depend on it
-/// ([`SkinSpec::contact_primitive`]): with the blended skin in contact,
-/// `ball_vs_spiral`'s spiral, which the ball's wider skin kept touching,
-/// ended at a rest shape error of 0.12 instead of below 0.02.
-pub const DEFAULT_SMOOTHNESS: Real = 2.0;
+/// 1.5, 0.10% at 2; a hexagonal sheet of squares (half side 0.5, radius
+/// 1.2) is flat within 0.24%, 0.38% and 0.81% r0 at thicknesses 0.25, 0.4
+/// and 0.6 (the default); ring ribbons of 8 to 30 squares (half side 0.5,
+/// radius 0.8, spacing 1) have bumps of 0.015-0.024 r0 peak-to-peak (0.10
+/// to 0.25 with the plain kernel) and both faces within 0.05 of their
+/// thickness. A wider blend rounds a clump further but thickens a
+/// ribbon's concave side at its convex side's expense (at 2, the convex
+/// face of a ring of 8 is 0.21 out instead of 0.4) and costs more to
+/// polygonize (the evaluations grow as the support's cube). Contact does
+/// not depend on it ([`SkinSpec::contact_shape`]): with the blended skin
+/// in contact, `ball_vs_spiral`'s spiral, which the ball's wider skin kept
+/// touching, ended at a rest shape error of 0.12 instead of below 0.02.
+pub const DEFAULT_SMOOTHNESS: Real = 1.5;
 
 fn default_smoothness() -> Real {
     DEFAULT_SMOOTHNESS
@@ -196,82 +207,104 @@ impl SkinSpec {
         self.smoothness * self.radius
     }
 
-    /// The primitive of the displayed skin in a particle's body frame
-    /// (`normal_axis`: the object's body-frame normal axis; `spacing`: its
-    /// rest spacing, for [`SkinSpec::thickness`]), with the support and
-    /// amplitude of [`SkinSpec::smoothness`] and [`SkinSpec::thickness`].
-    pub fn primitive(&self, normal_axis: [Real; 3], spacing: Real) -> Primitive {
-        self.primitive_with_support(normal_axis, spacing, self.support())
-    }
-
-    /// The primitive of the contact skin: the plain kernel of Lombardo &
-    /// Puech §6 (support `radius`, no blending), with the amplitude that
-    /// puts an isolated primitive's skin at `radius / 2` (1) or a flat layer's
-    /// at the [`SkinSpec::thickness`]. Contact acts on the skeleton's own
-    /// iso distance: the blending of [`SkinSpec::smoothness`] rounds what is
-    /// shown (a clump of four particles grows about 10% wider with it) but
-    /// does not change where objects touch, nor the contact stiffness,
-    /// which is per unit of removed excess of this field.
-    pub fn contact_primitive(&self, normal_axis: [Real; 3], spacing: Real) -> Primitive {
-        self.primitive_with_support(normal_axis, spacing, self.radius)
-    }
-
-    fn primitive_with_support(
-        &self,
-        normal_axis: [Real; 3],
-        spacing: Real,
-        support: Real,
-    ) -> Primitive {
-        let unit = match self.primitive {
-            SkinPrimitive::Square { half_side } => {
-                Primitive::square(normal_axis.into(), half_side, support)
+    /// How far from its particle the displayed skin's field reaches: the
+    /// support, plus a square's half side (in its plane).
+    pub fn reach(&self) -> Real {
+        match self.primitive {
+            SkinPrimitive::Square { half_side } if self.smoothness > 1.0 => {
+                half_side + self.support()
             }
-            SkinPrimitive::Point => Primitive::point(Default::default(), support),
-        };
-        let weight = match self.thickness {
-            Some(t) => op_implicit::ISO / layer_field(&unit, normal_axis.into(), spacing, t),
-            None => Primitive::weight_for_iso_distance(0.5 * self.radius, support),
-        };
-        unit.with_weight(weight)
+            SkinPrimitive::Square { half_side } => half_side * SQRT_2 + self.radius,
+            SkinPrimitive::Point => self.support(),
+        }
+    }
+
+    /// The primitive of the contact skin in a particle's body frame, of
+    /// unit amplitude: the plain kernel of Lombardo & Puech §6 (support
+    /// `radius`) on the skeleton (`normal_axis`: the object's body-frame
+    /// normal axis, a square's normal). Contact acts on this skeleton's
+    /// own iso surface: the blending of [`SkinSpec::smoothness`] rounds
+    /// what is shown but does not change where objects touch, nor the
+    /// contact stiffness, which is per unit of removed excess of this
+    /// field.
+    pub fn contact_shape(&self, normal_axis: Vec3) -> Primitive {
+        match self.primitive {
+            SkinPrimitive::Square { half_side } => {
+                Primitive::square(normal_axis, half_side, self.radius)
+            }
+            SkinPrimitive::Point => Primitive::point(Vec3::zeros(), self.radius),
+        }
+    }
+
+    /// The primitive of the displayed skin, of unit amplitude: the
+    /// contact one at smoothness 1; above, a kernel of support
+    /// `b = smoothness · radius`: the point's own for a point, and for a
+    /// square of half side `a` the ellipsoidal point kernel (seed 002 §6's
+    /// anisotropic potential) of semi-axes `a + b` in its plane and `b`
+    /// along its normal, the smooth kernel of the blended square's reach.
+    /// The square's own distance is flat over the square and creased at
+    /// its rim, so on a curved sheet or ribbon the blended squares leave a
+    /// ridge between particles (a flat polygon's corners); the ellipsoid
+    /// has neither, and a row of them at spacing below `b` sums to a
+    /// nearly constant field (measured on a ring ribbon of 13 squares of
+    /// half side 0.5, radius 0.8: bumps 0.13 r0 peak-to-peak with blended
+    /// squares, 0.03 with the ellipsoids; `skin_shape` tests).
+    pub fn display_shape(&self, normal_axis: Vec3) -> Primitive {
+        let b = self.support();
+        match self.primitive {
+            _ if self.smoothness <= 1.0 => self.contact_shape(normal_axis),
+            SkinPrimitive::Square { half_side } => {
+                let rotation =
+                    Quat::rotation_between(&Vec3::z(), &normal_axis).unwrap_or_else(|| {
+                        Quat::from_axis_angle(&Vec3::x_axis(), std::f64::consts::PI)
+                    });
+                let wide = (half_side + b) / b;
+                Primitive::ellipsoid(Vec3::zeros(), rotation, Vec3::new(wide, wide, 1.0), b)
+            }
+            SkinPrimitive::Point => Primitive::point(Vec3::zeros(), b),
+        }
+    }
+
+    /// The distance from the skeleton at which the contact skin is placed
+    /// ([`SkinSpec::thickness`]): the thickness asked for, else `radius / 2`
+    /// for a square; `None` for a point without one (isolated size).
+    fn offset(&self) -> Option<Real> {
+        match (self.thickness, self.primitive) {
+            (Some(t), _) => Some(t),
+            (None, SkinPrimitive::Square { .. }) => Some(0.5 * self.radius),
+            (None, SkinPrimitive::Point) => None,
+        }
     }
 }
 
-/// The field of `primitive` (weight 1) at distance `height` above the
-/// centre of a flat hexagonal layer of such primitives at spacing
-/// `spacing`, the layer perpendicular to `normal_axis` (the primitives'
-/// normal axis), wide enough to cover the support (up to 64 rings).
-fn layer_field(primitive: &Primitive, normal_axis: Vec3, spacing: Real, height: Real) -> Real {
-    let n = normal_axis.normalize();
-    let u = n.cross(&Vec3::x());
-    let u = if u.norm() < 1e-6 {
-        n.cross(&Vec3::y())
-    } else {
-        u
-    }
-    .normalize();
-    let v = n.cross(&u);
-    // Two rings beyond the support; at most 64 (a support of more than 62
-    // spacings is truncated there, which thickens the skin a little).
-    let rings = ((primitive.radius / spacing).ceil() as i64 + 2).min(64);
-    let probe = Point3::from(n * height);
-    let mut sum = 0.0;
-    for j in -rings..=rings {
-        for i in -rings..=rings {
-            let x = (i as Real + 0.5 * (j.rem_euclid(2)) as Real) * spacing;
-            let y = j as Real * spacing * (0.75 as Real).sqrt();
-            let at = Point3::from(u * x + v * y);
-            sum += primitive
-                .posed(0, &at, &op_dynamics::Quat::identity())
-                .field(&probe);
+/// Probe rays from every particle of `object` on `world`: both ways along
+/// each of `axes` (body frame when `body`, else world axes).
+fn probe_rays(
+    world: &World,
+    object: &BuiltObject,
+    axes: &[Vec3],
+    body: bool,
+) -> Vec<(Point3, Vec3)> {
+    let p = world.particles();
+    let mut rays = Vec::new();
+    for &id in &object.ids {
+        if let Some(k) = p.slot_of(id) {
+            let q = p.orientations()[k];
+            for a in axes {
+                let u = if body { q * a } else { *a };
+                rays.push((p.positions()[k], u));
+                rays.push((p.positions()[k], -u));
+            }
         }
     }
-    sum
+    rays
 }
 
 /// Builds the skin of `object` (index `index`) on `world` from its spec:
-/// the contact skin of [`SkinSpec::contact_primitive`] and, when it differs,
-/// the displayed skin of [`SkinSpec::primitive`], as large as the contact
-/// skin ([`crate::skin_shape`]).
+/// the contact skin of [`SkinSpec::contact_shape`] at the
+/// [`SkinSpec::thickness`] and, when smoother, the displayed skin of
+/// [`SkinSpec::display_shape`], as large as the contact skin (the
+/// `skin_shape` module).
 pub(crate) fn build_skin(
     world: &World,
     index: usize,
@@ -279,49 +312,46 @@ pub(crate) fn build_skin(
     spec: &SkinSpec,
     normal_axis: [Real; 3],
 ) -> Result<ObjectSkin, SkinError> {
-    let prim = spec.contact_primitive(normal_axis, object.rest_spacing);
-    let mut shown = spec.primitive(normal_axis, object.rest_spacing);
+    let axis = Vec3::from(normal_axis);
     let skin_of = |p: Primitive| Skin::new(world, object.ids.iter().map(|&id| (id, p)).collect());
+    let normal_rays = probe_rays(world, object, &[axis], true);
+    let unit = spec.contact_shape(axis);
+    let weight = match spec.offset() {
+        Some(t) => crate::skin_shape::offset_weight(skin_of(unit)?.field(), &normal_rays, t)
+            .unwrap_or_else(|| Primitive::weight_for_iso_distance(t, spec.radius)),
+        None => 1.0,
+    };
+    let prim = unit.with_weight(weight);
     let skin = skin_of(prim)?;
-    if spec.thickness.is_none() && shown != prim {
+    let mut shown = prim;
+    let mut display = None;
+    if spec.smoothness > 1.0 {
         // The blended skin as large as the contact skin
         // (crate::skin_shape).
-        let unit = skin_of(shown.with_weight(1.0))?;
-        let p = world.particles();
-        let axes: Vec<Vec3> = match spec.primitive {
-            SkinPrimitive::Square { .. } => vec![Vec3::from(normal_axis)],
-            SkinPrimitive::Point => vec![Vec3::x(), Vec3::y(), Vec3::z()],
-        };
-        let mut rays = Vec::new();
-        for &id in &object.ids {
-            if let Some(k) = p.slot_of(id) {
-                let q = p.orientations()[k];
-                for a in &axes {
-                    let u = match spec.primitive {
-                        SkinPrimitive::Square { .. } => q * a,
-                        SkinPrimitive::Point => *a,
-                    };
-                    rays.push((p.positions()[k], u));
-                    rays.push((p.positions()[k], -u));
-                }
+        let unit = spec.display_shape(axis);
+        let rays = match spec.primitive {
+            SkinPrimitive::Square { .. } => normal_rays,
+            SkinPrimitive::Point => {
+                probe_rays(world, object, &[Vec3::x(), Vec3::y(), Vec3::z()], false)
             }
-        }
+        };
         let reach = spec.radius * (1.0 + object.ids.len() as Real);
-        if let Some(w) = crate::skin_shape::matched_weight(
+        let w = crate::skin_shape::matched_weight(
             skin.field(),
-            unit.field(),
+            skin_of(unit)?.field(),
             &rays,
             0.25 * spec.cell_size,
             reach,
-        ) {
-            shown = shown.with_weight(w);
-        }
+        )
+        .unwrap_or_else(|| {
+            Primitive::weight_for_iso_distance(
+                spec.offset().unwrap_or(0.5 * spec.radius),
+                unit.radius,
+            )
+        });
+        shown = unit.with_weight(w);
+        display = Some(skin_of(shown)?);
     }
-    let display = if shown == prim {
-        None
-    } else {
-        Some(skin_of(shown)?)
-    };
     Ok(ObjectSkin {
         object: index,
         rest_spacing: object.rest_spacing,

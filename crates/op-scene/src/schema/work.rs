@@ -328,7 +328,7 @@ impl Scene {
                 ));
             }
             if let Some(skin) = &o.skin {
-                let nodes = (extent + 2.0 * skin.support()) / skin.cell_size + 3.0;
+                let nodes = (extent + 2.0 * skin.reach()) / skin.cell_size + 3.0;
                 if nodes.is_nan() || nodes > MAX_SKIN_NODES_PER_AXIS {
                     return Err(SceneError::value(
                         file,
@@ -339,12 +339,10 @@ impl Scene {
                              nodes per axis at this cell size, more than the polygonizer's {}: \
                              use a cell size of at least {}",
                             short(extent),
-                            short(skin.support()),
+                            short(skin.reach()),
                             short(nodes.ceil()),
                             MAX_SKIN_NODES_PER_AXIS,
-                            short(
-                                (extent + 2.0 * skin.support()) / (MAX_SKIN_NODES_PER_AXIS - 3.0)
-                            )
+                            short((extent + 2.0 * skin.reach()) / (MAX_SKIN_NODES_PER_AXIS - 3.0))
                         ),
                     ));
                 }
