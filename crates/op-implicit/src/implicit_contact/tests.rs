@@ -346,12 +346,16 @@ fn deformed_gradient_and_c1_join() {
 #[test]
 fn symmetric_contact_is_sampled_symmetrically() {
     let q = Quat::identity();
-    let a = Field::new(vec![
-        Primitive::point(Vec3::zeros(), 1.0).posed(0, &Point3::new(-0.4, 0.0, 0.0), &q)
-    ]);
-    let b = Field::new(vec![
-        Primitive::point(Vec3::zeros(), 1.13).posed(1, &Point3::new(0.43, 0.0, 0.0), &q)
-    ]);
+    let a = Field::new(vec![Primitive::point(Vec3::zeros(), 1.0).posed(
+        0,
+        &Point3::new(-0.4, 0.0, 0.0),
+        &q,
+    )]);
+    let b = Field::new(vec![Primitive::point(Vec3::zeros(), 1.13).posed(
+        1,
+        &Point3::new(0.43, 0.0, 0.0),
+        &q,
+    )]);
     for h in [0.03, 0.047, 0.061] {
         let params = ImplicitContactParams {
             cell_size: h,
@@ -361,6 +365,9 @@ fn symmetric_contact_is_sampled_symmetrically() {
         let f = r.b().total_force();
         assert!(f.x > 0.0, "B is pushed away from A: {f:?}");
         let off_axis = f.y.hypot(f.z) / f.x;
-        assert!(off_axis < 1e-9, "cell {h}: off-axis force {off_axis:e} of the push");
+        assert!(
+            off_axis < 1e-9,
+            "cell {h}: off-axis force {off_axis:e} of the push"
+        );
     }
 }

@@ -162,8 +162,9 @@ pub fn polygonize_with_stats(
     };
     let lists = BlockLists::new(field, &grid);
     let iso = params.iso;
+    let arch = pulp::Arch::new();
     Ok(extract(field, &grid, iso, |b| {
-        blocks::sample_band(field, &grid, &lists, b, iso)
+        blocks::sample_band(field, &grid, &lists, b, iso, arch)
     }))
 }
 
