@@ -203,6 +203,11 @@ impl<F: ScalarField + ?Sized> ScalarField for ClippedField<'_, F> {
     fn support_box(&self) -> Option<(Point3, Point3)> {
         self.field.support_box()
     }
+
+    /// The field's own bound: clipping only lowers the field.
+    fn bounding_field(&self) -> Option<&Field> {
+        self.field.bounding_field()
+    }
 }
 
 /// Serial accumulator of sample reactions into per-particle (force,

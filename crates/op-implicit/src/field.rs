@@ -127,6 +127,13 @@ pub trait ScalarField: Sync {
     /// An axis-aligned box `(lo, hi)` outside which the field is below
     /// [`crate::ISO`], or `None` when the field is empty.
     fn support_box(&self) -> Option<(Point3, Point3)>;
+    /// A sum of primitives that is nowhere below this field, if known: the
+    /// polygonizer then samples only the blocks where it can reach the
+    /// iso value (its narrow band, [`crate::polygonize_region`]). Default:
+    /// none (every node of the region is sampled).
+    fn bounding_field(&self) -> Option<&Field> {
+        None
+    }
 }
 
 impl ScalarField for Field {
@@ -140,6 +147,10 @@ impl ScalarField for Field {
 
     fn support_box(&self) -> Option<(Point3, Point3)> {
         Field::support_box(self)
+    }
+
+    fn bounding_field(&self) -> Option<&Field> {
+        Some(self)
     }
 }
 

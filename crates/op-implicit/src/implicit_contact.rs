@@ -163,6 +163,12 @@ impl ScalarField for DeformedField<'_> {
     fn support_box(&self) -> Option<(Point3, Point3)> {
         self.own.support_box()
     }
+
+    /// The own field without a bulge (the deformation only lowers it); a
+    /// bulge raises it.
+    fn bounding_field(&self) -> Option<&Field> {
+        self.bulge.is_none().then_some(self.own)
+    }
 }
 
 /// Parameters of [`ContactPair::reactions`].

@@ -200,23 +200,26 @@ pub(super) enum Sampled {
     Values(Vec<Real>, usize),
 }
 
-/// Bounds of the field on block `block` from the primitives `list`: a
-/// block outside every point primitive's support-bound interval, or inside
-/// enough of them, cannot cross `iso` (module doc).
-fn can_skip(field: &Field, grid: &Grid, block: &Block, list: &[u32], iso: Real) -> bool {
-    if list.is_empty() {
-        return true;
-    }
+/// Lower and upper bounds of the field on block `block` from the
+/// primitives `list` (module doc): each point or ellipsoid kernel at the
+/// block's farthest and nearest point (an ellipsoid's scaled distance lies
+/// between the distance over its largest and over its smallest semi-axis),
+/// any other shape between 0 and its weight.
+fn field_bounds(field: &Field, grid: &Grid, block: &Block, list: &[u32]) -> (Real, Real) {
     let (lo, hi) = block.bounds(grid);
     let (mut upper, mut lower) = (0.0, 0.0);
     for &i in list {
         let prim = &field.primitives()[i as usize];
         let (c, r) = prim.bounding_sphere();
         let w = prim.weight();
-        if !matches!(prim.shape(), Skeleton::Point) {
-            upper += w;
-            continue;
-        }
+        let inner = match prim.shape() {
+            Skeleton::Point => r,
+            Skeleton::Ellipsoid { scales } => r * scales.min() / scales.max(),
+            _ => {
+                upper += w;
+                continue;
+            }
+        };
         let (mut near, mut far) = (0.0, 0.0);
         for k in 0..3 {
             let d_near = (lo[k] - c[k]).max(c[k] - hi[k]).max(0.0);
@@ -224,13 +227,42 @@ fn can_skip(field: &Field, grid: &Grid, block: &Block, list: &[u32], iso: Real) 
             near += d_near * d_near;
             far += d_far * d_far;
         }
-        let inv = 1.0 / (r * r);
-        upper += w * value_sq(near * inv);
-        lower += w * value_sq(far * inv);
+        upper += w * value_sq(near / (r * r));
+        lower += w * value_sq(far / (inner * inner));
     }
-    // A margin well above the rounding of sums of a few hundred terms.
-    let margin = 1e-9 * (1.0 + upper);
-    upper + margin < iso || lower - margin > iso
+    (lower, upper)
+}
+
+/// A margin of the bounds well above the rounding of sums of a few
+/// hundred terms.
+fn margin(upper: Real) -> Real {
+    1e-9 * (1.0 + upper)
+}
+
+/// Whether block `block` cannot cross `iso`: outside every primitive's
+/// support, or inside enough of them ([`field_bounds`]).
+fn can_skip(field: &Field, grid: &Grid, block: &Block, list: &[u32], iso: Real) -> bool {
+    if list.is_empty() {
+        return true;
+    }
+    let (lower, upper) = field_bounds(field, grid, block, list);
+    upper + margin(upper) < iso || lower - margin(upper) > iso
+}
+
+/// Whether block `block` of a field nowhere above `bound` (its primitives
+/// `list`) is entirely below `iso`: no crossing there.
+pub(super) fn below_everywhere(
+    bound: &Field,
+    grid: &Grid,
+    block: &Block,
+    list: &[u32],
+    iso: Real,
+) -> bool {
+    if list.is_empty() {
+        return true;
+    }
+    let (_, upper) = field_bounds(bound, grid, block, list);
+    upper + margin(upper) < iso
 }
 
 /// Samples block `b` of the narrow band: skipped, or its node values

@@ -169,8 +169,10 @@ pub fn polygonize_with_stats(
 }
 
 /// As [`polygonize`], for any [`ScalarField`]: for instance the deformed
-/// skin of an object in contact, [`crate::DeformedField`]. Its primitives
-/// are unknown, so every node of the region is sampled.
+/// skin of an object in contact, [`crate::DeformedField`]. Its nodes are
+/// sampled one by one ([`ScalarField::value`]) in the blocks where its
+/// [`ScalarField::bounding_field`] can reach the iso value, every block
+/// of the region when it has none.
 pub fn polygonize_field<F: ScalarField + ?Sized>(
     field: &F,
     params: &PolygonizeParams,
@@ -191,9 +193,21 @@ pub fn polygonize_region<F: ScalarField + ?Sized>(
     let Some(grid) = grid(field, params, clip)? else {
         return Ok(Mesh::default());
     };
-    let (mesh, _) = extract(field, &grid, params.iso, |b| {
-        blocks::sample_dense(field, &grid, b)
-    });
+    let iso = params.iso;
+    let (mesh, _) = match field.bounding_field() {
+        // Only the band of the bounding field's primitives can cross.
+        Some(bound) => {
+            let lists = BlockLists::new(bound, &grid);
+            extract(field, &grid, iso, |b| {
+                if blocks::below_everywhere(bound, &grid, &grid.block(b), lists.of(b), iso) {
+                    Sampled::Skipped
+                } else {
+                    blocks::sample_dense(field, &grid, b)
+                }
+            })
+        }
+        None => extract(field, &grid, iso, |b| blocks::sample_dense(field, &grid, b)),
+    };
     Ok(mesh)
 }
 
@@ -574,6 +588,68 @@ mod tests {
         Field::new(prims)
     }
 
+    /// A field seen without its bounding field: every node sampled.
+    struct Dense<'a, F: ScalarField + ?Sized>(&'a F);
+
+    impl<F: ScalarField + ?Sized> ScalarField for Dense<'_, F> {
+        fn value(&self, p: &Point3) -> Real {
+            self.0.value(p)
+        }
+        fn value_and_gradient(&self, p: &Point3) -> crate::field::ValueGradient {
+            self.0.value_and_gradient(p)
+        }
+        fn support_box(&self) -> Option<(Point3, Point3)> {
+            self.0.support_box()
+        }
+    }
+
+    /// Ellipsoids (the displayed skin of squares): flat discs on a sheet.
+    fn sheet_of_ellipsoids(n: usize) -> Field {
+        let q = Quat::identity();
+        let disc = Primitive::ellipsoid(Vec3::zeros(), q, Vec3::new(1.6, 1.6, 1.0), 0.15);
+        let mut prims = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let at = Point3::new(i as Real * 0.1, j as Real * 0.1, 0.02 * (i as Real).sin());
+                prims.push(disc.posed(prims.len() as u32, &at, &q));
+            }
+        }
+        Field::new(prims)
+    }
+
+    /// Clipped and deformed fields are polygonized in the band of the
+    /// field they lower (their bounding field): the same mesh, bit for
+    /// bit, as sampling every node, with fewer nodes sampled.
+    #[test]
+    fn lowered_fields_are_sampled_in_their_bounds_band() {
+        use crate::{ClippedField, ContactPair};
+        use parry3d_f64::math::{Pose, Vector};
+        use parry3d_f64::shape::{Cuboid, Shape};
+        let torus = torus();
+        let ball = lattice(0.1, 6, 0.3, |p| {
+            (p - Point3::new(0.9, 0.0, 0.3)).norm() < 0.35
+        });
+        // A slab whose top face z = -0.1 cuts the torus.
+        let floor = Cuboid::new(Vector::new(3.0, 3.0, 1.0));
+        let pose = Pose::from_translation(Vector::new(0.0, 0.0, -1.1));
+        let params = PolygonizeParams::with_cell_size(0.04);
+        let clipped = ClippedField::new(&torus, vec![(&floor as &dyn Shape, pose)], ISO / 0.04);
+        let pair = ContactPair::new(&torus, &ball);
+        let deformed = pair.deformed_a();
+        let discs = sheet_of_ellipsoids(10);
+        let cases: Vec<(&str, &dyn ScalarField)> = vec![
+            ("clipped", &clipped),
+            ("deformed", &deformed),
+            ("ellipsoids", &discs),
+        ];
+        for (name, field) in cases {
+            let band = polygonize_field(field, &params).unwrap();
+            let dense = polygonize_field(&Dense(field), &params).unwrap();
+            assert!(band.triangles().len() > 200, "{name}");
+            assert_eq!(band, dense, "{name}");
+        }
+    }
+
     fn test_fields() -> Vec<(&'static str, Field, Real)> {
         let sphere = lattice(0.1, 6, 0.3, |p| p.coords.norm() < 0.55);
         vec![
@@ -597,7 +673,7 @@ mod tests {
                     ..PolygonizeParams::with_cell_size(h)
                 };
                 let (band, stats) = polygonize_with_stats(&field, &params).unwrap();
-                let dense = polygonize_field(&field, &params).unwrap();
+                let dense = polygonize_field(&Dense(&field), &params).unwrap();
                 eprintln!(
                     "{name} iso {iso}: {} triangles, {stats:?}",
                     band.triangles().len()
