@@ -580,6 +580,11 @@ fn machine_section(peer: Option<&Path>) -> String {
     let _ = writeln!(md, "| rustc | {} |", sh("rustc", &["-V"]));
     let _ = writeln!(
         md,
+        "| our splat's instruction set (runtime dispatch) | {} |",
+        op_dynamics::lanes::isa()
+    );
+    let _ = writeln!(
+        md,
         "| load average at the end (1, 5, 15 min) | {} |",
         std::fs::read_to_string("/proc/loadavg")
             .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(", "))
