@@ -126,6 +126,14 @@ pub struct SkinSpec {
 /// touching, ended at a rest shape error of 0.12 instead of below 0.02.
 pub const DEFAULT_SMOOTHNESS: Real = 1.5;
 
+/// The least in-plane reach of a square's displayed kernel, in rest
+/// spacings ([`SkinSpec::display_shape`]): below it a sheet's rows show
+/// through a thin skin, and squares small against the spacing leave holes
+/// (half side 0.25, radius 0.4: the skin reached the sheet's plane between
+/// particles; at 1.5 spacings it is flat within 0.4% r0). Wider, a tightly
+/// curved ribbon gets bumps (a ring of 8 at 2 spacings: 0.041 r0).
+const ROWS: Real = 1.5;
+
 fn default_smoothness() -> Real {
     DEFAULT_SMOOTHNESS
 }
@@ -240,8 +248,9 @@ impl SkinSpec {
     /// contact one at smoothness 1; above, a kernel of support
     /// `b = smoothness · radius`: the point's own for a point, and for a
     /// square of half side `a` the ellipsoidal point kernel (seed 002 §6's
-    /// anisotropic potential) of semi-axes `a + b` in its plane and `b`
-    /// along its normal, the smooth kernel of the blended square's reach.
+    /// anisotropic potential) of semi-axes `a + b` in its plane (at least
+    /// 1.5 rest spacings `spacing`, so rows do not show) and `b` along its
+    /// normal, the smooth kernel of the blended square's reach.
     /// The square's own distance is flat over the square and creased at
     /// its rim, so on a curved sheet or ribbon the blended squares leave a
     /// ridge between particles (a flat polygon's corners); the ellipsoid
@@ -249,7 +258,7 @@ impl SkinSpec {
     /// nearly constant field (measured on a ring ribbon of 13 squares of
     /// half side 0.5, radius 0.8: bumps 0.13 r0 peak-to-peak with blended
     /// squares, 0.03 with the ellipsoids; `skin_shape` tests).
-    pub fn display_shape(&self, normal_axis: Vec3) -> Primitive {
+    pub fn display_shape(&self, normal_axis: Vec3, spacing: Real) -> Primitive {
         let b = self.support();
         match self.primitive {
             _ if self.smoothness <= 1.0 => self.contact_shape(normal_axis),
@@ -258,7 +267,7 @@ impl SkinSpec {
                     Quat::rotation_between(&Vec3::z(), &normal_axis).unwrap_or_else(|| {
                         Quat::from_axis_angle(&Vec3::x_axis(), std::f64::consts::PI)
                     });
-                let wide = (half_side + b) / b;
+                let wide = (half_side + b).max(ROWS * spacing) / b;
                 Primitive::ellipsoid(Vec3::zeros(), rotation, Vec3::new(wide, wide, 1.0), b)
             }
             SkinPrimitive::Point => Primitive::point(Vec3::zeros(), b),
@@ -328,7 +337,7 @@ pub(crate) fn build_skin(
     if spec.smoothness > 1.0 {
         // The blended skin as large as the contact skin
         // (crate::skin_shape).
-        let unit = spec.display_shape(axis);
+        let unit = spec.display_shape(axis, object.rest_spacing);
         let rays = match spec.primitive {
             SkinPrimitive::Square { .. } => normal_rays,
             SkinPrimitive::Point => {
