@@ -66,6 +66,8 @@ pub(crate) const BLOCK: usize = 2048;
 
 mod uniform_spacing;
 use uniform_spacing::uniform_spacing_pass;
+mod uniform_oriented;
+use uniform_oriented::uniform_oriented_pass;
 
 /// Result of one pair in the oriented kernel.
 #[derive(Copy, Clone, Debug, Default)]
@@ -271,6 +273,18 @@ impl ForceContext<'_> {
                             )
                         };
                         accumulate::<true, _>(list, blocks, Scalar(pair), out);
+                    } else if let Some(c) = (!heated && !friction && uniform_oriented(a))
+                        .then(|| m[0].oriented_lane_constants())
+                        .flatten()
+                    {
+                        let input = crate::lanes::OrientedInput {
+                            c: &c,
+                            cutoff2,
+                            p: s.positions,
+                            normals: nv,
+                            curvatures: a.curvatures,
+                        };
+                        uniform_oriented_pass(input, list, blocks, out);
                     } else if !heated && uniform_oriented(a) {
                         let pair = |i: usize, j: usize| {
                             oriented_pair::<true>(
