@@ -4,6 +4,7 @@ use crate::interactions::{
     evaluate_pair, Coupling, LennardJonesParams, Material, PreparedMaterial, Spacing, WeightParams,
     WeightShape,
 };
+use pulp::Simd;
 
 const COMPLETE: Coupling = Coupling::Complete { oriented: true };
 
@@ -178,5 +179,63 @@ fn only_lane_materials_have_lane_constants() {
         },
     ] {
         assert!(m.prepare().unwrap().oriented_lane_constants().is_none());
+    }
+}
+
+/// Every instruction set the lanes compile for gives the same bits: the
+/// dispatched one, AVX2 (`x86-64-v3`, 4 lanes) when the CPU has it, and
+/// pulp's scalar fallback, on one row of random pairs of every material
+/// shape.
+#[test]
+fn every_instruction_set_gives_the_same_bits() {
+    let mut rng = Rng::new(184);
+    for (normalized, anisotropic) in [(true, false), (false, true)] {
+        let m = material(normalized, anisotropic, 0.9);
+        let c = m.oriented_lane_constants().unwrap();
+        let rc = m.cutoff();
+        let n = 60;
+        let p: Vec<Point3> = (0..n)
+            .map(|k| {
+                let d = if k == 0 {
+                    0.0
+                } else {
+                    rng.range(0.05, 1.1 * rc)
+                };
+                Point3::origin() + rng.unit_vector() * d
+            })
+            .collect();
+        let normals: Vec<Vec3> = (0..n).map(|_| rng.unit_vector()).collect();
+        let kappa: Vec<Real> = (0..n).map(|_| rng.range(-1.0, 1.0)).collect();
+        let input = OrientedInput {
+            c: &c,
+            cutoff2: rc * rc,
+            p: &p,
+            normals: &normals,
+            curvatures: &kappa,
+        };
+        let row: Vec<u32> = (1..n as u32).collect();
+        let run = |isa: &dyn Fn(Row<'_, '_>)| {
+            let mut out = OrientedRow::default();
+            out.resize(row.len());
+            isa(Row {
+                input: &input,
+                i: 0,
+                row: &row,
+                out: &mut out,
+            });
+            (0..row.len())
+                .map(|k| bits(out.get(k, rc * rc)))
+                .collect::<Vec<_>>()
+        };
+        let dispatched = run(&|r| pulp::Arch::new().dispatch(r));
+        assert!(dispatched.iter().flatten().count() > 20);
+        assert_eq!(
+            dispatched,
+            run(&|r| Simd::vectorize(pulp::Scalar::new(), r))
+        );
+        #[cfg(target_arch = "x86_64")]
+        if let Some(v3) = pulp::x86::V3::try_new() {
+            assert_eq!(dispatched, run(&|r| Simd::vectorize(v3, r)));
+        }
     }
 }
