@@ -30,6 +30,9 @@
 //! spacing material run a loop per potential (`uniform_spacing`); with
 //! 12-6 Lennard-Jones its pairs are evaluated in SIMD lanes dispatched at
 //! run time ([`crate::lanes`]), which add up to the scalar loop's bits.
+//! Oriented worlds of one such material (no heat, bonds, friction or spin)
+//! evaluate the full oriented pair in lanes the same way
+//! (`uniform_oriented`).
 
 use rayon::prelude::*;
 
