@@ -30,6 +30,9 @@
 //! spacing material run a loop per potential (`uniform_spacing`); with
 //! 12-6 Lennard-Jones its pairs are evaluated in SIMD lanes dispatched at
 //! run time ([`crate::lanes`]), which add up to the scalar loop's bits.
+//! Oriented worlds of one such material (no heat, bonds, friction or spin)
+//! evaluate the full oriented pair in lanes the same way
+//! (`uniform_oriented`).
 
 use rayon::prelude::*;
 
@@ -66,6 +69,8 @@ pub(crate) const BLOCK: usize = 2048;
 
 mod uniform_spacing;
 use uniform_spacing::uniform_spacing_pass;
+mod uniform_oriented;
+use uniform_oriented::uniform_oriented_pass;
 
 /// Result of one pair in the oriented kernel.
 #[derive(Copy, Clone, Debug, Default)]
@@ -271,6 +276,18 @@ impl ForceContext<'_> {
                             )
                         };
                         accumulate::<true, _>(list, blocks, Scalar(pair), out);
+                    } else if let Some(c) = (!heated && !friction && uniform_oriented(a))
+                        .then(|| m[0].oriented_lane_constants())
+                        .flatten()
+                    {
+                        let input = crate::lanes::OrientedInput {
+                            c: &c,
+                            cutoff2,
+                            p: s.positions,
+                            normals: nv,
+                            curvatures: a.curvatures,
+                        };
+                        uniform_oriented_pass(input, list, blocks, out);
                     } else if !heated && uniform_oriented(a) {
                         let pair = |i: usize, j: usize| {
                             oriented_pair::<true>(

@@ -26,6 +26,11 @@
 use crate::interactions::LennardJones;
 use crate::math::{Point3, Real, Vec3};
 
+mod oriented;
+pub(crate) use oriented::{
+    oriented_row, OrientedInput, OrientedLaneConstants, OrientedRow, WeightLaneConstants,
+};
+
 /// Pairs per lane batch: one AVX-512 register of `f64`, two AVX2 ones.
 pub(crate) const LANES: usize = 8;
 
@@ -218,49 +223,139 @@ fn lj_12_6<S: pulp::Simd>(
     d2: S::f64s,
     inv_d2: S::f64s,
 ) -> (S::f64s, S::f64s) {
-    let (add, sub, mul) = (
-        |a, b| simd.add_f64s(a, b),
-        |a, b| simd.sub_f64s(a, b),
-        |a, b| simd.mul_f64s(a, b),
-    );
-    let k = |x: Real| simd.splat_f64s(x);
-    let zero = k(0.0);
-    let x2 = mul(k(c.r0_sq), inv_d2);
-    let x6 = mul(mul(x2, x2), x2);
-    let (xn, xm) = (mul(x6, x6), x6);
-    let u = sub(mul(k(c.c_n), xn), mul(k(c.c_m), xm));
-    let g = mul(mul(k(c.c_g), sub(xm, xn)), x2);
+    let l = L(simd);
+    let zero = l.k(0.0);
+    let x2 = l.mul(l.k(c.r0_sq), inv_d2);
+    let x6 = l.mul(l.mul(x2, x2), x2);
+    let (xn, xm) = (l.mul(x6, x6), x6);
+    let u = l.sub(l.mul(l.k(c.c_n), xn), l.mul(l.k(c.c_m), xm));
+    let g = l.mul(l.mul(l.k(c.c_g), l.sub(xm, xn)), x2);
     let r = simd.sqrt_f64s(d2);
-    // The taper (`Taper::eval_select`, `smooth_fall_select`).
-    let x = mul(sub(r, k(c.r_on)), k(c.inv_width));
-    let y = sub(k(1.0), x);
-    let y2 = mul(y, y);
-    let s = mul(
-        mul(y2, y),
-        add(sub(k(10.0), mul(k(15.0), y)), mul(k(6.0), y2)),
-    );
-    let ds = mul(mul(mul(k(-30.0), x), x), y2);
-    let (low, high) = (
-        simd.less_than_or_equal_f64s(x, zero),
-        simd.greater_than_or_equal_f64s(x, k(1.0)),
-    );
-    let s = simd.select_f64s(high, zero, s);
-    let s = simd.select_f64s(low, k(1.0), s);
-    let ds = simd.select_f64s(high, zero, ds);
-    let ds = simd.select_f64s(low, zero, ds);
-    let before = simd.less_than_or_equal_f64s(r, k(c.r_on));
-    let s = simd.select_f64s(before, k(1.0), s);
-    let ds = simd.select_f64s(before, zero, mul(ds, k(c.inv_width)));
-    let ut = mul(u, s);
-    let gt = add(mul(g, s), mul(mul(u, ds), mul(r, inv_d2)));
-    let inner = simd.less_than_or_equal_f64s(d2, k(c.r_on_sq));
-    let outside = simd.greater_than_or_equal_f64s(d2, k(c.rc_sq));
+    let (s, ds) = taper(simd, r, c.r_on, c.inv_width);
+    let ut = l.mul(u, s);
+    let gt = l.add(l.mul(g, s), l.mul(l.mul(u, ds), l.mul(r, inv_d2)));
+    let inner = simd.less_than_or_equal_f64s(d2, l.k(c.r_on_sq));
+    let outside = simd.greater_than_or_equal_f64s(d2, l.k(c.rc_sq));
     let u = simd.select_f64s(inner, u, ut);
     let g = simd.select_f64s(inner, g, gt);
     (
         simd.select_f64s(outside, zero, u),
         simd.select_f64s(outside, zero, g),
     )
+}
+
+/// The taper `(s(r), ds/dr)` of [`crate::interactions::cutoff::Taper`]
+/// starting at `r_on`, `1/(r_c - r_on) = inv_width`, on `S::F64_LANES`
+/// distances: the operations of `Taper::eval_select` and
+/// `smooth_fall_select` in the same order, cases selected.
+#[inline(always)]
+fn taper<S: pulp::Simd>(simd: S, r: S::f64s, r_on: Real, inv_width: Real) -> (S::f64s, S::f64s) {
+    let l = L(simd);
+    let zero = l.k(0.0);
+    let x = l.mul(l.sub(r, l.k(r_on)), l.k(inv_width));
+    let y = l.sub(l.k(1.0), x);
+    let y2 = l.mul(y, y);
+    let s = l.mul(
+        l.mul(y2, y),
+        l.add(l.sub(l.k(10.0), l.mul(l.k(15.0), y)), l.mul(l.k(6.0), y2)),
+    );
+    let ds = l.mul(l.mul(l.mul(l.k(-30.0), x), x), y2);
+    let (low, high) = (
+        simd.less_than_or_equal_f64s(x, zero),
+        simd.greater_than_or_equal_f64s(x, l.k(1.0)),
+    );
+    let s = simd.select_f64s(high, zero, s);
+    let s = simd.select_f64s(low, l.k(1.0), s);
+    let ds = simd.select_f64s(high, zero, ds);
+    let ds = simd.select_f64s(low, zero, ds);
+    let before = simd.less_than_or_equal_f64s(r, l.k(r_on));
+    let s = simd.select_f64s(before, l.k(1.0), s);
+    let ds = simd.select_f64s(before, zero, l.mul(ds, l.k(inv_width)));
+    (s, ds)
+}
+
+/// A vector of three lane vectors.
+#[derive(Copy, Clone)]
+struct V3<T> {
+    x: T,
+    y: T,
+    z: T,
+}
+
+/// Lane arithmetic for one instruction set: the scalar kernel's
+/// operations, one per method.
+#[derive(Copy, Clone)]
+struct L<S: pulp::Simd>(S);
+
+impl<S: pulp::Simd> L<S> {
+    #[inline(always)]
+    fn k(self, x: Real) -> S::f64s {
+        self.0.splat_f64s(x)
+    }
+    #[inline(always)]
+    fn add(self, a: S::f64s, b: S::f64s) -> S::f64s {
+        self.0.add_f64s(a, b)
+    }
+    #[inline(always)]
+    fn sub(self, a: S::f64s, b: S::f64s) -> S::f64s {
+        self.0.sub_f64s(a, b)
+    }
+    #[inline(always)]
+    fn mul(self, a: S::f64s, b: S::f64s) -> S::f64s {
+        self.0.mul_f64s(a, b)
+    }
+    #[inline(always)]
+    fn div(self, a: S::f64s, b: S::f64s) -> S::f64s {
+        self.0.div_f64s(a, b)
+    }
+    #[inline(always)]
+    fn neg(self, a: S::f64s) -> S::f64s {
+        self.0.neg_f64s(a)
+    }
+    #[inline(always)]
+    fn sel(self, m: S::m64s, a: S::f64s, b: S::f64s) -> S::f64s {
+        self.0.select_f64s(m, a, b)
+    }
+    /// `a · b` as nalgebra sums it: `(a.x b.x + a.y b.y) + a.z b.z`.
+    #[inline(always)]
+    fn dot(self, a: V3<S::f64s>, b: V3<S::f64s>) -> S::f64s {
+        self.add(
+            self.add(self.mul(a.x, b.x), self.mul(a.y, b.y)),
+            self.mul(a.z, b.z),
+        )
+    }
+    #[inline(always)]
+    fn cross(self, a: V3<S::f64s>, b: V3<S::f64s>) -> V3<S::f64s> {
+        V3 {
+            x: self.sub(self.mul(a.y, b.z), self.mul(a.z, b.y)),
+            y: self.sub(self.mul(a.z, b.x), self.mul(a.x, b.z)),
+            z: self.sub(self.mul(a.x, b.y), self.mul(a.y, b.x)),
+        }
+    }
+    #[inline(always)]
+    fn scale(self, a: V3<S::f64s>, s: S::f64s) -> V3<S::f64s> {
+        V3 {
+            x: self.mul(a.x, s),
+            y: self.mul(a.y, s),
+            z: self.mul(a.z, s),
+        }
+    }
+    #[inline(always)]
+    fn add3(self, a: V3<S::f64s>, b: V3<S::f64s>) -> V3<S::f64s> {
+        V3 {
+            x: self.add(a.x, b.x),
+            y: self.add(a.y, b.y),
+            z: self.add(a.z, b.z),
+        }
+    }
+    #[inline(always)]
+    fn sub3(self, a: V3<S::f64s>, b: V3<S::f64s>) -> V3<S::f64s> {
+        V3 {
+            x: self.sub(a.x, b.x),
+            y: self.sub(a.y, b.y),
+            z: self.sub(a.z, b.z),
+        }
+    }
 }
 
 /// The folded constants of a 12-6 [`LennardJones`] the lanes read.

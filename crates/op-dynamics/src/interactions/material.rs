@@ -453,6 +453,28 @@ impl PreparedMaterial {
         }
     }
 
+    /// The constants of the oriented SIMD lanes ([`crate::lanes`]), which
+    /// evaluate [`Self::direction`] of both directions of a pair of this
+    /// material with 12-6 Lennard-Jones spacing; `None` when the material
+    /// has another spacing (or none), no orientation term, or spin (the
+    /// scalar kernel evaluates those).
+    pub(crate) fn oriented_lane_constants(&self) -> Option<crate::lanes::OrientedLaneConstants> {
+        let lj = match &self.spacing {
+            Some(SpacingKernel::LennardJones(l)) if l.is_12_6() => l.lane_constants(),
+            _ => return None,
+        };
+        (self.oriented && !self.has_spin()).then(|| crate::lanes::OrientedLaneConstants {
+            lj,
+            weight: self.weight.lane_constants(),
+            normalized: self.normalized,
+            w_p: self.w_p,
+            w_n: self.w_n,
+            w_c: self.w_c,
+            w_f: self.w_f,
+            near: self.near,
+        })
+    }
+
     /// This material's spacing potential `(U(r), dU/dr)` (not halved);
     /// zero without spacing.
     #[inline]

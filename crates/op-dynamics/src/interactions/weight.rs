@@ -141,6 +141,20 @@ impl Weight {
         !self.anisotropic
     }
 
+    /// The constants the oriented SIMD lanes ([`crate::lanes`]) evaluate
+    /// [`Self::eval_scalar`] with.
+    pub(crate) fn lane_constants(&self) -> crate::lanes::WeightLaneConstants {
+        crate::lanes::WeightLaneConstants {
+            k: self.k,
+            inv_a2: self.inv_a2,
+            c: self.c,
+            anisotropic: self.anisotropic,
+            r_on: self.taper.r_on(),
+            inv_width: self.taper.inv_width(),
+            cutoff: self.taper.cutoff(),
+        }
+    }
+
     /// [`Self::eval`] as scalars, for the fused pair kernel: `(ψ, w_r, w_n)`
     /// with `∂ψ/∂r = w_r r + w_n n_i` and `∂ψ/∂n_i = w_n r`, from
     /// `d2 = |r|²`, `dist = |r|`, `inv_dist = 1/|r|` and `z = n_i·r`
