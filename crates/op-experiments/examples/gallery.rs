@@ -59,6 +59,8 @@ const GALLERY: &[Picture] = &[
     shaded("fig_14_sphere_to_torus"),
     shaded("fig_13_handle"),
     shaded("fig_12_tearing"),
+    shaded("sheet_on_sphere"),
+    shaded("cookbook/skinned_hit"),
 ];
 
 /// Width and height of one frame of a contact sheet, pixels.
@@ -110,7 +112,7 @@ fn draw(root: &Path, picture: &Picture) -> anyhow::Result<PathBuf> {
     let rendering = render::render_path(&out, &opts, picture.frames)?;
     let png = root
         .join("docs/gallery")
-        .join(format!("{}.png", picture.name));
+        .join(format!("{}.png", picture.name.replace('/', "_")));
     render::save_png(&rendering.image, &png)?;
     Ok(png)
 }
