@@ -192,3 +192,68 @@ pub fn planar_modes(world: &mut World) -> PlanarModes {
             .collect(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{parse_scene, Format};
+
+    fn world(scene: &str) -> World {
+        let scene = parse_scene(scene, Format::Ron, "<test>").unwrap();
+        scene.build(None, None).unwrap().world
+    }
+
+    /// Two particles at the Lennard-Jones minimum (`U''(r0) = n m ε / r0²`),
+    /// no orientation terms: of the three deformation modes of the pair only
+    /// the stretch is stiff, `ω² = U''(r0) (1/m1 + 1/m2)`.
+    #[test]
+    fn a_pair_stretches_at_the_lennard_jones_frequency() {
+        let mut w = world(
+            r#"(name: "pair", world: (dt: 0.001),
+                materials: {"lj": (spacing: LennardJones((epsilon: 10, r0: 1, cutoff: 1.5)))},
+                objects: [(name: "p", material: "lj", mass: 2,
+                           generator: Chain(count: 2, spacing: 1))])"#,
+        );
+        let modes = planar_modes(&mut w);
+        assert_eq!(
+            modes.omega2.len(),
+            3,
+            "6 planar degrees of freedom, 3 rigid"
+        );
+        let expected = 72.0 * 10.0 * (1.0 / 2.0 + 1.0 / 2.0);
+        assert!(
+            (modes.omega2[2] / expected - 1.0).abs() < 1e-6,
+            "{:?}",
+            modes.omega2
+        );
+        assert!(modes.omega2[0].abs() < 1e-6 * expected);
+        assert!(modes.omega2[1].abs() < 1e-6 * expected);
+        let bonds = [(0, 1)];
+        let positions = w.particles().positions().to_vec();
+        let share = modes.stretch_share(2, &positions, &bonds).unwrap();
+        assert!((share - 1.0).abs() < 1e-9, "{share}");
+    }
+
+    /// Rigid motions are left out and the state is restored: a chain of
+    /// three has `9 - 3` modes, none negative at its rest state, and the
+    /// world's positions are the same bits afterwards.
+    #[test]
+    fn rigid_motions_are_projected_out_and_the_state_restored() {
+        let mut w = world(
+            r#"(name: "chain", world: (dt: 0.001),
+                materials: {"lj": (spacing: LennardJones((epsilon: 1, r0: 1, cutoff: 1.5)))},
+                objects: [(name: "c", material: "lj", generator: Chain(count: 3, spacing: 1))])"#,
+        );
+        let before = w.particles().positions().to_vec();
+        let modes = planar_modes(&mut w);
+        assert_eq!(modes.omega2.len(), 6);
+        assert_eq!(modes.shapes.len(), 6);
+        assert!(
+            modes.omega2.iter().all(|l| *l > -1e-6),
+            "{:?}",
+            modes.omega2
+        );
+        assert!(modes.omega2.windows(2).all(|p| p[0] <= p[1]));
+        assert_eq!(w.particles().positions(), &before[..]);
+    }
+}
