@@ -93,7 +93,7 @@ const PASSES: usize = 8;
 ///
 /// A message when the scene does not build, a settle diverges, or no
 /// settled state with a positive slowest frequency is found in
-/// [`PASSES`] passes.
+/// eight passes.
 pub fn critical_recipe(
     base: &SpiralRecipe,
     shape: &SpiralShape,

@@ -36,10 +36,10 @@ pub enum Role {
         /// Default: 0.
         #[serde(default)]
         damping: Real,
-        /// Coulomb friction coefficient `μ` of skins meeting the obstacle,
-        /// >= 0 (dissipative): each skinned particle pressed on it by the
-        /// skin contact reaction `N` (seed 002 §6) gets a tangential force
-        /// against its sliding of at most `μ |N|`
+        /// Coulomb friction coefficient `μ` (at least 0) of skins meeting
+        /// the obstacle (dissipative): each skinned particle pressed on it
+        /// by the skin contact reaction `N` (seed 002 §6) gets a tangential
+        /// force against its sliding of at most `μ |N|`
         /// (`op_implicit::friction`). Particles meeting the obstacle
         /// without a skin feel no friction. Default: 0.
         #[serde(default)]
