@@ -31,6 +31,7 @@ fn cold_knife(scene: &Scene) -> Scene {
                 stiffness,
                 margin,
                 damping,
+                friction: 0.0,
             };
         }
     }

@@ -7,6 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use oriented_particles::op_dynamics::{Point3, Real};
+use oriented_particles::op_modeling;
 use oriented_particles::op_scene::{self, load_scene, RunOptions, Summary};
 
 /// Runs the scene for `duration` into a fresh directory; returns the
@@ -91,6 +92,76 @@ fn sheet_lands_on_the_box_and_its_overhang_bends_down() {
     let lowest = over_box.map(|v| v[2]).fold(Real::MAX, Real::min);
     assert!(lowest > -1e-4, "skin vertex inside the box at z = {lowest}");
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The claim of `scenes/sheet_on_box.ron`: the sheet rests on the box and
+/// does not slide off. Stepped frame by frame to the scene's end: once
+/// landed (t >= 2), the particles over the box top (|x| <= 3, within a
+/// unit above it) are at least the 60 that land there, and their mean x
+/// stays within a quarter spacing of where it was at landing (measured:
+/// 0.18, the overhang's bending pulls the sheet a little towards it); the overhang hangs below
+/// the top at the end. Without friction (the same scene, `friction: 0`)
+/// the sheet slides off: fewer than half are left over the top.
+#[test]
+fn sheet_rests_on_the_box_and_friction_keeps_it_there() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sheet_on_box.ron");
+    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    let over_top = |p: &[Point3]| -> (usize, Real) {
+        let on: Vec<&Point3> = p
+            .iter()
+            .filter(|q| q.x.abs() <= 3.0 && q.y.abs() <= 5.0 && q.z > -0.2 && q.z < 1.0)
+            .collect();
+        let mean = on.iter().map(|q| q.x).sum::<Real>() / on.len().max(1) as Real;
+        (on.len(), mean)
+    };
+    let frames = (scene.world.duration * scene.world.frame_rate).round() as usize;
+    let run = |scene: &op_scene::Scene| -> Vec<(usize, Real, Real)> {
+        let mut built = scene.build(None, None).expect("builds");
+        (1..=frames)
+            .map(|k| {
+                let t = k as Real / scene.world.frame_rate;
+                built.advance_to(t).expect("runs");
+                let p = built.world.particles().positions();
+                let (n, mean) = over_top(p);
+                let low = p.iter().map(|q| q.z).fold(Real::MAX, Real::min);
+                (n, mean, low)
+            })
+            .collect()
+    };
+    let with = run(&scene);
+    let landed = (2.0 * scene.world.frame_rate) as usize - 1;
+    let (n0, x0, _) = with[landed];
+    println!("claim: {}", oriented_particles_claim(&path));
+    println!("landed (t = 2): {n0} particles over the top, mean x {x0:.3}");
+    assert!(n0 >= 60, "{n0}");
+    let mut drift: Real = 0.0;
+    for (k, &(n, mean, _)) in with.iter().enumerate().skip(landed) {
+        assert!(n >= n0, "frame {}: {n} over the top", k + 1);
+        drift = drift.max((mean - x0).abs());
+    }
+    let low = with.last().unwrap().2;
+    println!("friction 1: largest drift of their mean x {drift:.3}; lowest particle at the end z = {low:.2}");
+    assert!(drift < 0.25, "{drift}");
+    assert!(low < -1.0, "the overhang hangs down: {low}");
+    let mut frictionless = scene.clone();
+    for t in &mut frictionless.tools {
+        if let op_modeling::tools::Role::Obstacle { friction, .. } = &mut t.role {
+            *friction = 0.0;
+        }
+    }
+    let without = run(&frictionless);
+    let (n_end, x_end, _) = *without.last().unwrap();
+    println!("friction 0: {n_end} over the top at the end, mean x {x_end:.2}");
+    assert!(n_end < 50, "slides off without friction: {n_end}");
+}
+
+/// The claim line of a scene file.
+fn oriented_particles_claim(path: &Path) -> String {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .find_map(|l| l.strip_prefix("// claim: ").map(str::to_string))
+        .unwrap_or_default()
 }
 
 #[test]

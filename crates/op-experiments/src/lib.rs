@@ -20,6 +20,7 @@ pub mod plot;
 pub mod plot_loglog;
 pub mod scaling;
 pub mod spiral;
+pub mod spiral_damping;
 pub mod stability;
 pub mod triangle;
 

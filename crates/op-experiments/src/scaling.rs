@@ -362,10 +362,13 @@ impl Scaling {
                 stiffness,
                 margin,
                 damping,
+                friction,
             } => Role::Obstacle {
                 stiffness: stiffness * k,
                 margin: margin * s,
                 damping: damping * c,
+                // Dimensionless.
+                friction,
             },
             Role::Attractor { strength, reach } => Role::Attractor {
                 strength: strength * k,

@@ -90,6 +90,40 @@ impl SpiralShape {
         }
     }
 
+    /// A spiral of `count` particles one unit apart whose curvature follows
+    /// `law` from `κ` to `ratio κ` (a constant curvature for `ratio = 1`),
+    /// `κ` chosen for `turns` turns (the turning is proportional to `κ`)
+    /// but no larger than keeps `|κ| <= 0.9` everywhere (the generator
+    /// needs `|κ| L <= 1`).
+    ///
+    /// # Errors
+    ///
+    /// The generator's message for a count below 2 or a ratio that is not
+    /// finite and positive.
+    pub fn with_turns(
+        count: usize,
+        law: CurvatureLaw,
+        ratio: Real,
+        turns: Real,
+    ) -> Result<SpiralShape, String> {
+        let unit = SpiralShape {
+            count,
+            spacing: 1.0,
+            curvature_start: 0.1,
+            curvature_end: 0.1 * ratio,
+            law,
+        };
+        unit.generator()
+            .generate(None, "<spiral>", "generator")
+            .map_err(|e| e.to_string())?;
+        let kappa = (0.1 * turns / unit.turns()).min(0.9 / ratio.max(1.0));
+        Ok(SpiralShape {
+            curvature_start: kappa,
+            curvature_end: kappa * ratio,
+            ..unit
+        })
+    }
+
     /// Its generator.
     pub fn generator(&self) -> Generator {
         Generator::Spiral {

@@ -30,6 +30,7 @@
 pub mod contact;
 pub mod error;
 pub mod field;
+pub mod friction;
 mod grid;
 pub mod implicit_contact;
 pub mod kernel;

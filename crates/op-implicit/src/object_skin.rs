@@ -194,16 +194,28 @@ pub struct SkinTool {
     pub skins: Vec<usize>,
     /// Reaction per unit depth, per sample.
     pub stiffness: Real,
+    /// Coulomb friction coefficient of the skinned particles on the tool
+    /// ([`crate::friction`]), >= 0.
+    pub friction: Real,
+    /// Damping of the normal velocity of the skinned particles it presses,
+    /// relative to the tool, >= 0 ([`crate::friction::normal_damping`]).
+    pub damping: Real,
 }
 
 impl SkinTool {
     /// Adds the reactions on skin `skin` at world time `t` to `held` and
     /// returns (total reaction force, deepest sample depth).
+    /// Each particle the reaction presses also gets its Coulomb friction
+    /// over the interval `interval` and the damping of its normal velocity
+    /// ([`crate::friction`]), from its velocity relative to the tool in
+    /// `world`.
     fn react(
         &self,
         held: &mut ExternalAccumulator,
         skin: &ObjectSkin,
+        world: &World,
         t: Real,
+        interval: Real,
     ) -> Result<(Vec3, Real), ContactError> {
         let pose = self.tool.pose(t);
         let frame = parry_pose(&pose.position, &pose.rotation);
@@ -230,6 +242,25 @@ impl SkinTool {
             },
         );
         r.add_to(held);
+        if self.friction > 0.0 || self.damping > 0.0 {
+            let p = world.particles();
+            for reaction in r.reactions() {
+                let Some(slot) = p.slot_of(reaction.particle) else {
+                    continue;
+                };
+                let x = p.positions()[slot].coords;
+                let v = p.velocities()[slot] - pose.velocity_at(&x);
+                let f = crate::friction::coulomb(
+                    reaction.force,
+                    v,
+                    p.masses()[slot],
+                    self.friction,
+                    interval,
+                );
+                let d = crate::friction::normal_damping(reaction.force, v, self.damping);
+                held.add(reaction.particle, f + d, Vec3::zeros());
+            }
+        }
         Ok((r.total_force(), r.max_depth()))
     }
 }
@@ -293,7 +324,7 @@ pub fn contact_step(
     for tool in tools {
         for &k in &tool.skins {
             let skin = &skins[k];
-            let (force, depth) = tool.react(held, skin, t)?;
+            let (force, depth) = tool.react(held, skin, world, t, dt)?;
             let r0 = skin.rest_spacing.max(Real::MIN_POSITIVE);
             stats.max_penetration = stats.max_penetration.max(depth / r0);
             stats.total_impulse += force.norm() * dt;

@@ -292,6 +292,7 @@ fn knives_push_like_obstacles_and_heat() {
         stiffness: 40.0,
         margin: 0.2,
         damping: 0.0,
+        friction: 0.0,
     });
     let (f_knife, t_knife) = run(Role::Knife {
         stiffness: 40.0,

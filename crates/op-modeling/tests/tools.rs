@@ -31,6 +31,7 @@ fn floor(stiffness: Real, damping: Real) -> ToolParams {
             stiffness,
             margin: 0.0,
             damping,
+            friction: 0.0,
         },
         objects: None,
     }
@@ -104,6 +105,7 @@ fn tool_forces_are_the_gradient_of_the_tool_energies() {
                 stiffness: 50.0,
                 margin: 0.2,
                 damping: 0.0,
+                friction: 0.0,
             },
         ),
         ball(
@@ -294,6 +296,7 @@ fn tools_are_deterministic_across_thread_counts() {
             stiffness: 500.0,
             margin: 0.1,
             damping: 1.0,
+            friction: 0.0,
         },
         objects: None,
     };

@@ -98,7 +98,7 @@ impl Scene {
         }
         let skin_tools = skin_tool_params
             .into_iter()
-            .map(|(k, params, objects, stiffness)| {
+            .map(|(k, params, objects, (stiffness, friction, damping))| {
                 let tool = Tool::new(&params, world.particles())
                     .map_err(|e| SceneError::param(file, &format!("tools[{k}]"), e))?;
                 let skins = skins
@@ -111,6 +111,8 @@ impl Scene {
                     tool,
                     skins,
                     stiffness,
+                    friction,
+                    damping,
                 })
             })
             .collect::<Result<Vec<_>, SceneError>>()?;
@@ -448,8 +450,8 @@ impl Scene {
 }
 
 /// One tool met by skins: (scene index, shifted params, skinned objects,
-/// stiffness).
-type SkinToolParams = (usize, ToolParams, Vec<usize>, Real);
+/// (contact stiffness, friction coefficient, normal damping)).
+type SkinToolParams = (usize, ToolParams, Vec<usize>, (Real, Real, Real));
 
 impl Scene {
     /// The world's tools, the obstacle tools skins meet, and every tool (for
@@ -491,8 +493,22 @@ impl Scene {
                 role,
                 objects: Some(bare.iter().map(|&o| o as u32).collect()),
             };
-            if let (false, Role::Obstacle { stiffness, .. }) = (skinned.is_empty(), &params.role) {
-                skin_tools.push((k, params.clone(), skinned, *stiffness));
+            if let (
+                false,
+                Role::Obstacle {
+                    stiffness,
+                    friction,
+                    damping,
+                    ..
+                },
+            ) = (skinned.is_empty(), &params.role)
+            {
+                skin_tools.push((
+                    k,
+                    params.clone(),
+                    skinned,
+                    (*stiffness, *friction, *damping),
+                ));
             }
             all.push(ToolParams {
                 objects: None,

@@ -12,6 +12,7 @@ pub mod export;
 pub mod fit;
 pub mod health;
 pub mod input;
+pub mod modes;
 pub mod outputs;
 pub mod pointsets;
 pub mod presets;

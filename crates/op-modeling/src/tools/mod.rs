@@ -358,6 +358,7 @@ impl Tool {
                                 stiffness,
                                 margin,
                                 damping,
+                                ..
                             }
                             | Role::Knife {
                                 stiffness,

@@ -31,9 +31,19 @@ pub enum Role {
         /// Damping of the normal relative velocity while in contact,
         /// `-c ((v - v_tool) · n) n`, >= 0 (dissipative, not from an
         /// energy; the total normal force is kept >= 0: contact never
-        /// pulls). Default: 0.
+        /// pulls). Skinned particles pressed on the obstacle through their
+        /// skin are damped the same way (`op_implicit::friction`).
+        /// Default: 0.
         #[serde(default)]
         damping: Real,
+        /// Coulomb friction coefficient `μ` (at least 0) of skins meeting
+        /// the obstacle (dissipative): each skinned particle pressed on it
+        /// by the skin contact reaction `N` (seed 002 §6) gets a tangential
+        /// force against its sliding of at most `μ |N|`
+        /// (`op_implicit::friction`). Particles meeting the obstacle
+        /// without a skin feel no friction. Default: 0.
+        #[serde(default)]
+        friction: Real,
     },
     /// An attractor (seed 000 §6: "attract particles to its surface"): a
     /// smooth well of depth `k R² / 2` and width `R` on both sides of the
@@ -141,10 +151,12 @@ impl Role {
                 stiffness,
                 margin,
                 damping,
+                friction,
             } => {
                 error::positive("Obstacle.stiffness", *stiffness)?;
                 error::non_negative("Obstacle.margin", *margin)?;
-                error::non_negative("Obstacle.damping", *damping)
+                error::non_negative("Obstacle.damping", *damping)?;
+                error::non_negative("Obstacle.friction", *friction)
             }
             Role::Attractor { strength, reach } => {
                 error::positive("Attractor.strength", *strength)?;

@@ -236,6 +236,7 @@ fn surface_meshes_are_outward_and_posed() {
                     stiffness: 1.0,
                     margin: 0.0,
                     damping: 0.0,
+                    friction: 0.0,
                 },
                 objects: None,
             },

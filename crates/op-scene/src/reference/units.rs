@@ -114,6 +114,7 @@ pub const UNITS: &[(&str, &str)] = &[
     ("RepulsionParams.strength", "M·L²/T²"),
     ("RepulsionParams.taper", "1"),
     ("Role.Obstacle.damping", "M/T"),
+    ("Role.Obstacle.friction", "1"),
     ("Role.Obstacle.margin", "L"),
     ("Role.Obstacle.stiffness", "M/T²"),
     ("Role.Attractor.reach", "L"),

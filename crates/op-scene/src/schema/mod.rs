@@ -527,7 +527,7 @@ pub struct ToolSpec {
     /// vector. Default: still at the origin.
     #[serde(default)]
     pub path: ToolPath,
-    /// `Obstacle(stiffness, margin, damping)`, `Attractor(strength, reach)`
+    /// `Obstacle(stiffness, margin, damping, friction)`, `Attractor(strength, reach)`
     /// or `Mover(stiffness, damping, release)`.
     pub role: Role,
     /// Names of the objects it acts on. Default: all.
