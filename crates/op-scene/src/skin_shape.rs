@@ -6,9 +6,10 @@
 //! **Thickness.** A primitive's field adds to its neighbours', so with the
 //! amplitude of an isolated primitive (whose skin is `radius / 2` from it)
 //! a sheet's skin is thicker than that, the more so the more neighbours
-//! reach: a hexagonal sheet of squares of radius 0.8 was 1.27 r0 thick.
-//! [`offset_weight`] sets the amplitude so the skin passes at the distance
-//! asked for along the particles' normals, for the median particle.
+//! reach: a hexagonal sheet of squares of radius 0.8 is 1.27 r0 thick.
+//! With a thickness, [`offset_weight`] sets the amplitude so the skin
+//! passes at that distance along the particles' normals, for the median
+//! particle.
 //!
 //! Blending (a kernel support of `smoothness · radius`, seed 002 §6's sum
 //! of potentials over a wider reach) adds the neighbours' potentials to
@@ -204,8 +205,7 @@ mod tests {
     /// radius 0.8: the spiral of `ball_vs_spiral`) at spacing 1 (the
     /// chord) on a closed ring of `n` (13: radius 2.09, curvature 0.48,
     /// mid-range of the spiral's 0.25-0.85; closed so no end tapers the
-    /// skin), each perpendicular to the radius, at the default thickness
-    /// 0.4. Over rays from the ring's axis at mid-height, 20 per spacing:
+    /// skin), each perpendicular to the radius, at a thickness of 0.4. Over rays from the ring's axis at mid-height, 20 per spacing:
     /// the mean distance of the inner face and of the outer face from the
     /// ring (their offsets from the skeleton), and the larger
     /// peak-to-peak spread of either face, all in units of the spacing
@@ -228,7 +228,7 @@ mod tests {
             cell_size: 0.05,
             stiffness: 100.0,
             smoothness,
-            thickness: None,
+            thickness: Some(0.4),
             smoothing: 0,
         };
         let mesh = oriented_skin_of(&frames, &spec, 1.0);
@@ -284,8 +284,9 @@ mod tests {
         (r_in, r_out, inner.max(outer))
     }
 
-    /// A curved ribbon's default skin ([`ring_ribbon`]) shows no bumps
-    /// between its particles and lies at its thickness on both faces, on
+    /// A curved ribbon's skin at the default smoothness ([`ring_ribbon`])
+    /// shows no bumps between its particles and lies at its thickness on
+    /// both faces, on
     /// rings of 8 to 30 particles (curvature 0.77 to 0.21). The plain
     /// kernel of squares keeps the polygon of flat squares (bumps 0.10 to
     /// 0.25 r0, the convex face 0.44 to 0.54 out); blending squares does
@@ -314,10 +315,10 @@ mod tests {
 
     /// A flat hexagonal sheet of square primitives: its skin is flat (the
     /// top vertices over the inner sheet within 1% r0 of one height) at the
-    /// thickness asked for, within 2% r0, by default `radius / 2`.
+    /// thickness asked for, within 2% r0.
     /// Square primitives small against the spacing (half side 0.25 and
     /// radius 0.4, or half side 0.1 and radius 0.3, at spacing 1) still
-    /// make a flat, closed sheet at the default thickness: the displayed
+    /// make a flat, closed sheet at a thickness of half the radius: the displayed
     /// kernel reaches at least 1.5 spacings in the sheet's plane. Measured
     /// flat within 0.43% and 0.31% r0 (without the floor the skin reached
     /// the sheet's plane between particles).
@@ -337,7 +338,7 @@ mod tests {
                 cell_size: 0.04,
                 stiffness: 100.0,
                 smoothness: DEFAULT_SMOOTHNESS,
-                thickness: None,
+                thickness: Some(0.5 * radius),
                 smoothing: 0,
             };
             let mesh = skin_of(&at, &spec, 1.0);
@@ -366,17 +367,17 @@ mod tests {
                 at.push(Point3::new(x, j as Real * (0.75 as Real).sqrt(), 0.0));
             }
         }
-        for asked in [Some(0.25), Some(0.4), None] {
+        for asked in [0.25, 0.4, 0.6] {
             let spec = SkinSpec {
                 primitive: SkinPrimitive::Square { half_side: 0.5 },
                 radius: 1.2,
                 cell_size: 0.05,
                 stiffness: 100.0,
                 smoothness: DEFAULT_SMOOTHNESS,
-                thickness: asked,
+                thickness: Some(asked),
                 smoothing: 0,
             };
-            let thickness = asked.unwrap_or(0.6);
+            let thickness = asked;
             let mesh = skin_of(&at, &spec, 1.0);
             let top: Vec<Real> = mesh
                 .positions()

@@ -88,11 +88,14 @@ pub struct SkinSpec {
     /// and below 0.9 `radius` (the contact skin's support). The amplitude
     /// is chosen on the object as built: along every particle's normal
     /// axis, both ways, the contact field at this distance is the iso value
-    /// for the median particle (the `skin_shape` module), so a
-    /// cloth is `2 thickness` thick however many neighbours each particle
-    /// has. Default: `radius / 2` for squares (as thin as an isolated
-    /// primitive); none for points, whose contact skin keeps the isolated
-    /// primitive's size, `radius / 2` from each particle.
+    /// for the median particle (the `skin_shape` module), so a cloth is
+    /// `2 thickness` thick however many neighbours each particle has.
+    /// Default: none: each primitive has the isolated size (`radius / 2`
+    /// from it), so a sheet's skin is thicker than that where neighbours
+    /// add up (a hexagonal sheet of squares of radius 0.8: 0.64 each side).
+    /// A thin cloth needs a contact stiff enough that the skin sinks into a
+    /// collider by much less than its thickness: at 0.4 `sheet_on_sphere`'s
+    /// sheet, pressed 0.3 into the ball, had its skin clipped through.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thickness: Option<Real>,
     /// Iterations of Taubin's volume-preserving smoothing applied to the
@@ -114,7 +117,7 @@ pub struct SkinSpec {
 /// its best-fit sphere by 9.2% RMS of its radius at smoothness 1, 0.49% at
 /// 1.5, 0.10% at 2; a hexagonal sheet of squares (half side 0.5, radius
 /// 1.2) is flat within 0.24%, 0.38% and 0.81% r0 at thicknesses 0.25, 0.4
-/// and 0.6 (the default); ring ribbons of 8 to 30 squares (half side 0.5,
+/// and 0.6; ring ribbons of 8 to 30 squares (half side 0.5,
 /// radius 0.8, spacing 1) have bumps of 0.015-0.024 r0 peak-to-peak (0.10
 /// to 0.25 with the plain kernel) and both faces within 0.05 of their
 /// thickness. A wider blend rounds a clump further but thickens a
@@ -273,17 +276,6 @@ impl SkinSpec {
             SkinPrimitive::Point => Primitive::point(Vec3::zeros(), b),
         }
     }
-
-    /// The distance from the skeleton at which the contact skin is placed
-    /// ([`SkinSpec::thickness`]): the thickness asked for, else `radius / 2`
-    /// for a square; `None` for a point without one (isolated size).
-    fn offset(&self) -> Option<Real> {
-        match (self.thickness, self.primitive) {
-            (Some(t), _) => Some(t),
-            (None, SkinPrimitive::Square { .. }) => Some(0.5 * self.radius),
-            (None, SkinPrimitive::Point) => None,
-        }
-    }
 }
 
 /// Probe rays from every particle of `object` on `world`: both ways along
@@ -325,7 +317,7 @@ pub(crate) fn build_skin(
     let skin_of = |p: Primitive| Skin::new(world, object.ids.iter().map(|&id| (id, p)).collect());
     let normal_rays = probe_rays(world, object, &[axis], true);
     let unit = spec.contact_shape(axis);
-    let weight = match spec.offset() {
+    let weight = match spec.thickness {
         Some(t) => crate::skin_shape::offset_weight(skin_of(unit)?.field(), &normal_rays, t)
             .unwrap_or_else(|| Primitive::weight_for_iso_distance(t, spec.radius)),
         None => 1.0,
@@ -354,7 +346,7 @@ pub(crate) fn build_skin(
         )
         .unwrap_or_else(|| {
             Primitive::weight_for_iso_distance(
-                spec.offset().unwrap_or(0.5 * spec.radius),
+                spec.thickness.unwrap_or(0.5 * spec.radius),
                 unit.radius,
             )
         });
