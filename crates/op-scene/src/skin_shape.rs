@@ -316,6 +316,34 @@ mod tests {
     /// A flat hexagonal sheet of square primitives: its skin is flat (the
     /// top vertices over the inner sheet within 1% r0 of one height) at the
     /// thickness asked for, within 2% r0.
+    /// A flat hexagonal sheet of 12 x 12 particles at spacing 1 in the
+    /// plane z = 0.
+    fn hex_sheet() -> Vec<Point3> {
+        let mut at = Vec::new();
+        for j in 0..12 {
+            for i in 0..12 {
+                let x = i as Real + 0.5 * (j % 2) as Real;
+                at.push(Point3::new(x, j as Real * (0.75 as Real).sqrt(), 0.0));
+            }
+        }
+        at
+    }
+
+    /// The heights of the top vertices of a [`hex_sheet`]'s skin over its
+    /// inner part (away from the rim), and their range.
+    fn top_face(mesh: &Mesh) -> (Vec<Real>, Real, Real) {
+        let top: Vec<Real> = mesh
+            .positions()
+            .iter()
+            .filter(|p| (3.0..8.0).contains(&p.x) && (3.0..7.0).contains(&p.y) && p.z > 0.0)
+            .map(|p| p.z)
+            .collect();
+        let (lo, hi) = top
+            .iter()
+            .fold((Real::MAX, Real::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+        (top, lo, hi)
+    }
+
     /// Square primitives small against the spacing (half side 0.25 and
     /// radius 0.4, or half side 0.1 and radius 0.3, at spacing 1) still
     /// make a flat, closed sheet at a thickness of half the radius: the displayed
@@ -324,13 +352,7 @@ mod tests {
     /// the sheet's plane between particles).
     #[test]
     fn small_squares_still_cover_a_sheet() {
-        let mut at = Vec::new();
-        for j in 0..12 {
-            for i in 0..12 {
-                let x = i as Real + 0.5 * (j % 2) as Real;
-                at.push(Point3::new(x, j as Real * (0.75 as Real).sqrt(), 0.0));
-            }
-        }
+        let at = hex_sheet();
         for (half_side, radius) in [(0.25, 0.4), (0.1, 0.3)] {
             let spec = SkinSpec {
                 primitive: SkinPrimitive::Square { half_side },
@@ -343,15 +365,7 @@ mod tests {
             };
             let mesh = skin_of(&at, &spec, 1.0);
             assert!(mesh.is_closed_oriented_manifold());
-            let top: Vec<Real> = mesh
-                .positions()
-                .iter()
-                .filter(|p| (3.0..8.0).contains(&p.x) && (3.0..7.0).contains(&p.y) && p.z > 0.0)
-                .map(|p| p.z)
-                .collect();
-            let (lo, hi) = top
-                .iter()
-                .fold((Real::MAX, Real::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+            let (_, lo, hi) = top_face(&mesh);
             println!("half side {half_side}, radius {radius}: top at {lo:.4}..{hi:.4}");
             assert!(hi - lo < 0.01, "flat within 1% r0: {lo}..{hi}");
             assert!((0.5 * (lo + hi) - 0.5 * radius).abs() < 0.02, "{lo}..{hi}");
@@ -360,13 +374,7 @@ mod tests {
 
     #[test]
     fn sheet_skin_is_flat_at_the_thickness_asked_for() {
-        let mut at = Vec::new();
-        for j in 0..12 {
-            for i in 0..12 {
-                let x = i as Real + 0.5 * (j % 2) as Real;
-                at.push(Point3::new(x, j as Real * (0.75 as Real).sqrt(), 0.0));
-            }
-        }
+        let at = hex_sheet();
         for asked in [0.25, 0.4, 0.6] {
             let spec = SkinSpec {
                 primitive: SkinPrimitive::Square { half_side: 0.5 },
@@ -379,15 +387,7 @@ mod tests {
             };
             let thickness = asked;
             let mesh = skin_of(&at, &spec, 1.0);
-            let top: Vec<Real> = mesh
-                .positions()
-                .iter()
-                .filter(|p| (3.0..8.0).contains(&p.x) && (3.0..7.0).contains(&p.y) && p.z > 0.0)
-                .map(|p| p.z)
-                .collect();
-            let (lo, hi) = top
-                .iter()
-                .fold((Real::MAX, Real::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+            let (top, lo, hi) = top_face(&mesh);
             println!(
                 "thickness {thickness}: {} top vertices at z {lo:.4}..{hi:.4}",
                 top.len()
