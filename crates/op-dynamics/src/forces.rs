@@ -203,13 +203,17 @@ impl crate::integrators::ForceField for ForceContext<'_> {
 }
 
 impl ForceContext<'_> {
-    /// Computes forces, torques and the potential energy at state `s`.
+    /// Computes forces, torques and the per-particle potential energies at
+    /// state `s`: updates the neighbour list (rebuilding it when the
+    /// particles moved too far), evaluates the pair kernel chosen when the
+    /// world was built, then adds the contributors (tools, uniform field,
+    /// accumulated actions, extra contributors, force windows), sums the
+    /// potential energy and zeroes what fixed particles hold.
     ///
-    /// On one thread the pairs are scattered directly into the particle
-    /// sums; on several, each pair's result goes into its slot of a pair
-    /// buffer and each particle gathers its slots. Both add, for every
-    /// particle, its incoming pairs in ascending order and then its own row
-    /// in list order, so the two paths give the same bits.
+    /// The pairs are summed by fixed blocks and an ordered merge of their
+    /// spills (see the module docs): one path at every thread count, so
+    /// every particle's sum is added in the same order, with the same
+    /// bits, on any number of threads.
     pub fn evaluate(
         &mut self,
         t: Real,

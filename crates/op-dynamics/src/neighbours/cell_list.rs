@@ -1,5 +1,8 @@
 //! Sorted uniform cell list: particles counting-sorted into cubic cells of
-//! side `h >= radius`, each particle scanning the 27 cells around its own.
+//! side `h >= radius / 2`, each particle scanning the 125 cells within two
+//! cells of its own (LAMMPS' default bin size, half the neighbour radius;
+//! Plimpton 1995), or, when the cell cap coarsens such cells, cells of side
+//! `h >= radius` scanned one cell around (27 cells).
 //!
 //! The grid is dense over the bounding box of the finite positions, its
 //! number of cells capped at `MAX_CELLS_PER_PARTICLE * n + 1024` (and
@@ -7,8 +10,8 @@
 //! empty) cells, hence the generous cap; a sparse cloud with a huge extent
 //! gets larger cells instead (still correct, more candidates per particle).
 //! Coordinates are clamped into the grid, which keeps any two particles
-//! within `h` of each other in the same or adjacent cells, so overflowing
-//! or outlying coordinates cost time, never pairs.
+//! within `reach * h` of each other within `reach` cells of each other, so
+//! overflowing or outlying coordinates cost time, never pairs.
 //!
 //! Rows are searched in particle order, so the search is fastest when the
 //! particles are in spatial order (see [`spatial_order`](super::spatial_order)).
@@ -20,7 +23,8 @@ use crate::math::{Point3, Real};
 
 /// Relative margin of the cell size over the radius: it absorbs the
 /// round-off of the cell coordinates and of the pair test, so particles
-/// that pass the pair test are never more than one cell apart.
+/// that pass the pair test are never more than `reach` cells apart (cells
+/// of side `radius / reach`).
 const MARGIN: Real = 1e-6;
 /// At most this many cells along one axis (keeps cell coordinates exact to
 /// far better than `MARGIN`).
@@ -178,14 +182,20 @@ pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) 
         out.set_empty(n);
         return;
     }
-    let grid = Grid::new(
-        min,
-        max,
-        radius,
-        n.saturating_mul(MAX_CELLS_PER_PARTICLE)
-            .saturating_add(1024)
-            .min(1 << 31),
-    );
+    let max_cells = n
+        .saturating_mul(MAX_CELLS_PER_PARTICLE)
+        .saturating_add(1024)
+        .min(1 << 31);
+    // Half cells scanned two cells around (LAMMPS' default bins of half
+    // the neighbour radius): 125 cells of (h/2)^3 hold 58% of the
+    // candidates of 27 cells of h^3. When the cap would coarsen them,
+    // whole cells scanned one around.
+    let half = Grid::new(min, max, 0.5 * radius, max_cells);
+    let (grid, reach) = if half.h <= 0.5 * radius * (1.0 + 2.0 * MARGIN) {
+        (half, 2)
+    } else {
+        (Grid::new(min, max, radius, max_cells), 1)
+    };
     let mut s = std::mem::take(&mut out.scratch.grid);
 
     // Cell of every particle.
@@ -237,10 +247,10 @@ pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) 
         }
         let p = arr(&positions[i]);
         let [cx, cy, cz] = grid.decode(c as usize);
-        let x0 = cx.saturating_sub(1);
-        let x1 = (cx + 1).min(grid.dims[0] - 1);
-        for z in cz.saturating_sub(1)..=(cz + 1).min(grid.dims[2] - 1) {
-            for y in cy.saturating_sub(1)..=(cy + 1).min(grid.dims[1] - 1) {
+        let x0 = cx.saturating_sub(reach);
+        let x1 = (cx + reach).min(grid.dims[0] - 1);
+        for z in cz.saturating_sub(reach)..=(cz + reach).min(grid.dims[2] - 1) {
+            for y in cy.saturating_sub(reach)..=(cy + reach).min(grid.dims[1] - 1) {
                 // Cells x0..=x1 of this (y, z) line are contiguous.
                 let a = scratch.cell_start[grid.cell_id([x0, y, z])] as usize;
                 let b = scratch.cell_start[grid.cell_id([x1, y, z]) + 1] as usize;
