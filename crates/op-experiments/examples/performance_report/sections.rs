@@ -428,16 +428,18 @@ pub(crate) fn targets_section(targets: &[(String, String, bool)]) -> Res<String>
         md,
         "\nWhat bounds the targets not met: (1) spacing: the pairs are evaluated in \
          SIMD lanes ({isa}, bit for bit the scalar kernel's results); what remains at \
-         one thread is the scalar gather of the neighbours' positions, the \
-         per-particle sums in a fixed order (the price of the same bits at any thread \
-         count) and the neighbour list, rebuilt when the two largest displacements \
-         add up to the skin (a bound that holds for every pair) where LAMMPS rebuilds \
-         every 20 steps unchecked; (2) the full oriented kernel is scalar code (its \
-         orientation terms are not in lanes yet); (3) the wall-clock speed-ups are \
-         bounded by the machine's load (2 cores shared with other builds while this \
-         ran), the work-bound speed-up shows what the code does with two free cores; \
-         (4) the 1M-particle oriented step needs the 1-thread kernel speed of (2) and \
-         two free cores: its CPU time per step over two cores is the bound.\n",
+         one thread (profile of the spacing child: lanes about 30%, the neighbour \
+         list's build about 15% with its candidate filter 8%, the per-particle sums \
+         5%, the integrator 3%) is the neighbour list, rebuilt when the two largest \
+         displacements add up to the skin (a bound that holds for every pair) where \
+         LAMMPS rebuilds every 20 steps unchecked, and the per-particle sums in a \
+         fixed order (the price of the same bits at any thread count); (2) the full \
+         oriented pair also runs in lanes (both directions from one geometry), and at \
+         2 threads its wall-clock speed-up is well below its work-bound one: part of \
+         the 2-thread oriented step waits on something not parallel, not yet located \
+         (the spacing step, with the same driver, scales); (3) the wall-clock \
+         speed-ups are also bounded by the machine's load (the load averages above), \
+         the work-bound speed-up shows what the code does with two free cores.\n",
         isa = lanes::isa()
     )?;
     Ok(md)
@@ -456,9 +458,8 @@ pub(crate) fn flops_section(results: &[[Runs; 2]], peak: f64) -> Res<String> {
          pair (both directions, all four terms); the whole step's time is charged to \
          the pairs (neighbour builds and integration included), so these are lower \
          bounds of the kernel's rate. The peak is the one measured above ({peak:.1} \
-         GFLOP/s per core, fused multiply-adds on {isa}); the spacing kernel's pairs \
-         run on that instruction set without fusing (same bits as scalar code), the \
-         oriented kernel is scalar code.\n",
+         GFLOP/s per core, fused multiply-adds on {isa}); both kernels' pairs run on \
+         that instruction set without fusing (same bits as scalar code).\n",
         isa = lanes::isa()
     )?;
     writeln!(
