@@ -256,10 +256,11 @@ fn euler_characteristic(obj: &str) -> i64 {
 
 /// A sheet pressed on a collider keeps a whole skin: in every frame of
 /// `sheet_on_box` and `sheet_on_sphere` the sheet's skin is one closed
-/// surface without a hole through it (Euler characteristic 2). A skin
-/// thinner than the contact lets the sheet sink was clipped through by
-/// the ball (characteristic 0 to -6 in frames 15-31 at a thickness of
-/// 0.4).
+/// surface without a hole through it (Euler characteristic 2), at the
+/// default thickness (0.4 each side). Before the skins kept their
+/// thickness as the sheet stretches (op-implicit `stretch`), the thin
+/// skin opened over the top of the ball (characteristic 0 to -6 in
+/// frames 15-31), where the sheet was stretched to 1.05-1.3 spacings.
 #[test]
 fn pressed_sheets_keep_a_whole_skin_in_every_frame() {
     for name in ["sheet_on_box", "sheet_on_sphere"] {

@@ -38,6 +38,15 @@ impl Field {
         }
     }
 
+    /// Multiplies the amplitude of primitive `i` by `factors[i]` (> 0;
+    /// supports, and so the pruning grid, do not depend on amplitudes).
+    /// Missing factors leave their primitives as they are.
+    pub fn scale_weights(&mut self, factors: &[Real]) {
+        for (p, &f) in self.primitives.iter_mut().zip(factors) {
+            p.scale_weight(f);
+        }
+    }
+
     /// The posed primitives, in the order given to [`Field::new`].
     pub fn primitives(&self) -> &[PosedPrimitive] {
         &self.primitives

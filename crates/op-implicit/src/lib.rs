@@ -39,6 +39,7 @@ pub mod polygonize;
 pub mod primitives;
 pub mod skin;
 pub mod skin_stages;
+pub mod stretch;
 
 pub use contact::{collider_reactions, ClippedField, ContactParams, Reaction, Reactions};
 pub use error::{PolygonizeError, SkinError};
@@ -53,3 +54,4 @@ pub use polygonize::{
 };
 pub use primitives::{PosedPrimitive, Primitive, Skeleton};
 pub use skin::Skin;
+pub use stretch::StretchCompensation;

@@ -314,8 +314,10 @@ pub fn contact_step(
 ) -> Result<(), ContactError> {
     held.clear();
     held.grow(world.particles().id_bound());
+    // Contact acts on the contact skins only; the displayed ones follow
+    // when a frame is written (crate::skin_stages).
     for s in skins.iter_mut() {
-        s.repose(world).map_err(|source| ContactError::Pose {
+        s.skin.repose(world).map_err(|source| ContactError::Pose {
             skin: s.name.clone(),
             source,
         })?;

@@ -278,6 +278,12 @@ impl PosedPrimitive {
         self.weight
     }
 
+    /// Multiplies the amplitude by `factor` (the support is unchanged).
+    #[inline]
+    pub fn scale_weight(&mut self, factor: Real) {
+        self.weight *= factor;
+    }
+
     /// Centre and radius of a sphere holding the field's support.
     #[inline]
     pub fn bounding_sphere(&self) -> (Point3, Real) {

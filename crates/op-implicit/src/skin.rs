@@ -6,6 +6,7 @@ use op_dynamics::{Particles, World};
 use crate::error::SkinError;
 use crate::field::Field;
 use crate::primitives::Primitive;
+use crate::stretch::StretchCompensation;
 
 /// An implicit object: skeleton primitives attached to particles of an
 /// op-dynamics world, and the field they produce at the particles' current
@@ -14,6 +15,7 @@ use crate::primitives::Primitive;
 pub struct Skin {
     attachments: Vec<(u32, Primitive)>,
     field: Field,
+    stretch: Option<StretchCompensation>,
 }
 
 impl Skin {
@@ -34,6 +36,7 @@ impl Skin {
         let mut skin = Skin {
             attachments,
             field: Field::default(),
+            stretch: None,
         };
         skin.repose_particles(particles)?;
         Ok(skin)
@@ -62,7 +65,19 @@ impl Skin {
             })
             .collect::<Result<Vec<_>, _>>()?;
         self.field = Field::new(posed);
+        if let Some(stretch) = self.stretch.as_mut() {
+            stretch.apply(&mut self.field);
+        }
         Ok(())
+    }
+
+    /// From now on, keeps the skin's thickness as the object stretches
+    /// ([`crate::stretch`]), with the reference densities `compensation`
+    /// (measured on [`Skin::field`] at rest), applied now and at every
+    /// [`Skin::repose`].
+    pub fn keep_thickness(&mut self, mut compensation: StretchCompensation) {
+        compensation.apply(&mut self.field);
+        self.stretch = Some(compensation);
     }
 
     /// Attaches more primitives (particle id, primitive in its body frame),
@@ -88,6 +103,11 @@ impl Skin {
     pub fn retain(&mut self, mut keep: impl FnMut(u32) -> bool) -> usize {
         let before = self.attachments.len();
         self.attachments.retain(|(id, _)| keep(*id));
+        if let Some(stretch) = self.stretch.as_mut() {
+            let kept: std::collections::HashSet<u32> =
+                self.attachments.iter().map(|(id, _)| *id).collect();
+            stretch.retain(|id| kept.contains(&id));
+        }
         before - self.attachments.len()
     }
 

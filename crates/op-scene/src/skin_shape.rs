@@ -7,9 +7,10 @@
 //! amplitude of an isolated primitive (whose skin is `radius / 2` from it)
 //! a sheet's skin is thicker than that, the more so the more neighbours
 //! reach: a hexagonal sheet of squares of radius 0.8 is 1.27 r0 thick.
-//! With a thickness, [`offset_weight`] sets the amplitude so the skin
-//! passes at that distance along the particles' normals, for the median
-//! particle.
+//! [`offset_weight`] sets the amplitude so the skin passes at the
+//! thickness asked for (by default `radius / 2` for squares) along the
+//! particles' normals, for the median particle; op-implicit's `stretch`
+//! then keeps that thickness at the rim and as the sheet stretches.
 //!
 //! Blending (a kernel support of `smoothness · radius`, seed 002 §6's sum
 //! of potentials over a wider reach) adds the neighbours' potentials to
@@ -205,7 +206,9 @@ mod tests {
     /// radius 0.8: the spiral of `ball_vs_spiral`) at spacing 1 (the
     /// chord) on a closed ring of `n` (13: radius 2.09, curvature 0.48,
     /// mid-range of the spiral's 0.25-0.85; closed so no end tapers the
-    /// skin), each perpendicular to the radius, at a thickness of 0.4. Over rays from the ring's axis at mid-height, 20 per spacing:
+    /// skin), each perpendicular to the radius, at a thickness of 0.4 (the
+    /// default, `radius / 2`). Over rays from the ring's axis at
+    /// mid-height, 20 per spacing:
     /// the mean distance of the inner face and of the outer face from the
     /// ring (their offsets from the skeleton), and the larger
     /// peak-to-peak spread of either face, all in units of the spacing

@@ -26,7 +26,7 @@ use op_dynamics::{Point3, Quat, Real, Vec3, World};
 pub use op_implicit::object_skin::{
     contact_step, ContactError, ContactStats, ObjectSkin, SkinTool,
 };
-use op_implicit::{Primitive, Skin, SkinError};
+use op_implicit::{Primitive, Skin, SkinError, StretchCompensation};
 use serde::{Deserialize, Serialize};
 
 use crate::built_scene::BuiltObject;
@@ -89,13 +89,14 @@ pub struct SkinSpec {
     /// is chosen on the object as built: along every particle's normal
     /// axis, both ways, the contact field at this distance is the iso value
     /// for the median particle (the `skin_shape` module), so a cloth is
-    /// `2 thickness` thick however many neighbours each particle has.
-    /// Default: none: each primitive has the isolated size (`radius / 2`
-    /// from it), so a sheet's skin is thicker than that where neighbours
-    /// add up (a hexagonal sheet of squares of radius 0.8: 0.64 each side).
-    /// A thin cloth needs a contact stiff enough that the skin sinks into a
-    /// collider by much less than its thickness: at 0.4 `sheet_on_sphere`'s
-    /// sheet, pressed 0.3 into the ball, had its skin clipped through.
+    /// `2 thickness` thick however many neighbours each particle has, and
+    /// both skins keep their thickness as the object stretches
+    /// (op-implicit `stretch`: each primitive's amplitude follows its
+    /// neighbourhood's density). Default: `radius / 2` for squares (as
+    /// thin as an isolated primitive: a cloth of squares of radius 0.8 is
+    /// 0.8 thick); none for points, whose skin keeps the isolated
+    /// primitive's size, `radius / 2` from each particle, so a clump of
+    /// points is round.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thickness: Option<Real>,
     /// Iterations of Taubin's volume-preserving smoothing applied to the
@@ -142,6 +143,17 @@ fn default_smoothness() -> Real {
 }
 
 impl SkinSpec {
+    /// The distance from the skeleton at which the contact skin is placed
+    /// ([`SkinSpec::thickness`]): the thickness asked for, else `radius / 2`
+    /// for a square; `None` for a point without one (isolated size).
+    fn offset(&self) -> Option<Real> {
+        match (self.thickness, self.primitive) {
+            (Some(t), _) => Some(t),
+            (None, SkinPrimitive::Square { .. }) => Some(0.5 * self.radius),
+            (None, SkinPrimitive::Point) => None,
+        }
+    }
+
     /// Checks the numbers; `path` is the skin's scene path for messages.
     pub(crate) fn validate(&self, file: &str, path: &str) -> Result<(), SceneError> {
         positive(file, &format!("{path}.radius"), self.radius)?;
@@ -317,13 +329,26 @@ pub(crate) fn build_skin(
     let skin_of = |p: Primitive| Skin::new(world, object.ids.iter().map(|&id| (id, p)).collect());
     let normal_rays = probe_rays(world, object, &[axis], true);
     let unit = spec.contact_shape(axis);
-    let weight = match spec.thickness {
+    let weight = match spec.offset() {
         Some(t) => crate::skin_shape::offset_weight(skin_of(unit)?.field(), &normal_rays, t)
             .unwrap_or_else(|| Primitive::weight_for_iso_distance(t, spec.radius)),
         None => 1.0,
     };
     let prim = unit.with_weight(weight);
-    let skin = skin_of(prim)?;
+    // Both skins keep their thickness as the object stretches
+    // (op_implicit::stretch): what is shown is where contact acts. A
+    // sheet's skin has one thickness to its rim; a clump keeps its shape.
+    let kept = |p: Primitive| {
+        skin_of(p).map(|mut skin| {
+            let compensation = match spec.primitive {
+                SkinPrimitive::Square { .. } => StretchCompensation::uniform(skin.field()),
+                SkinPrimitive::Point => StretchCompensation::per_particle(skin.field()),
+            };
+            skin.keep_thickness(compensation);
+            skin
+        })
+    };
+    let skin = kept(prim)?;
     let mut shown = prim;
     let mut display = None;
     if spec.smoothness > 1.0 {
@@ -346,12 +371,12 @@ pub(crate) fn build_skin(
         )
         .unwrap_or_else(|| {
             Primitive::weight_for_iso_distance(
-                spec.thickness.unwrap_or(0.5 * spec.radius),
+                spec.offset().unwrap_or(0.5 * spec.radius),
                 unit.radius,
             )
         });
         shown = unit.with_weight(w);
-        display = Some(skin_of(shown)?);
+        display = Some(kept(shown)?);
     }
     Ok(ObjectSkin {
         object: index,
