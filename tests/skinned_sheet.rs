@@ -178,16 +178,25 @@ fn oriented_particles_claim(path: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// `sheet_on_sphere`'s claim: the cloth drapes over the ball, its middle
+/// resting on top, its rim below the ball's equator at the end, its skin
+/// never deeper than a quarter spacing inside the ball and its particles
+/// outside it (whole skins in every frame: the test below). Measured:
+/// top 2.31, rim -1.61, deepest skin sample 0.11 r0.
 #[test]
 fn sheet_drapes_over_the_sphere_without_entering_it() {
-    let (summary, p, out) = run("sheet_on_sphere", 3.0);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sheet_on_sphere.ron");
+    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    let (summary, p, out) = run("sheet_on_sphere", scene.world.duration);
     let contact = summary.contact.expect("contact figures");
+    println!("claim: {}", oriented_particles_claim(&path));
     println!("{contact:?}");
     assert!(!summary.diverged);
     assert!(contact.total_impulse > 0.0, "{contact:?}");
     assert!(contact.max_penetration < 0.25, "{contact:?}");
     // Sphere of radius 2 at the origin: particles stay outside it (their
-    // skin is 0.4 thick), the centre rests on top, the rim hangs lower.
+    // skin is 0.4 thick), the middle rests on top, the rim hangs below
+    // the equator.
     let closest = p.iter().map(|q| q.coords.norm()).fold(Real::MAX, Real::min);
     assert!(closest > 2.15, "a particle is {closest} from the centre");
     let top = p
@@ -195,9 +204,10 @@ fn sheet_drapes_over_the_sphere_without_entering_it() {
         .filter(|q| q.x.hypot(q.y) < 1.0)
         .map(|q| q.z)
         .fold(Real::MIN, Real::max);
-    assert!(top > 2.2 && top < 3.0, "top of the sheet at {top}");
     let rim = p.iter().map(|q| q.z).fold(Real::MAX, Real::min);
-    assert!(rim < top - 1.0, "rim at {rim}, top at {top}");
+    println!("top of the sheet at z = {top:.2}, rim at z = {rim:.2}");
+    assert!(top > 2.2 && top < 2.6, "top of the sheet at {top}");
+    assert!(rim < 0.0, "rim at {rim}: not below the equator");
     assert!(last_frame(&out, "sheet_skin").contains("o sheet_skin"));
     let _ = std::fs::remove_dir_all(&out);
 }
