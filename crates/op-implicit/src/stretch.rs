@@ -189,6 +189,7 @@ mod tests {
         // Between particles too.
         let between = mid2 + Vec3::new(0.625, 0.0, 0.0);
         let gap = top(&kept, between);
+        println!("stretched 25%: over a particle {plain} -> {thick}, between two {gap}");
         assert!(plain < 0.3, "plain {plain}");
         assert!((thick - 0.4).abs() < 0.04, "compensated {thick}");
         assert!(gap > 0.3, "between particles {gap}");
