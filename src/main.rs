@@ -154,7 +154,8 @@ enum Command {
         view: Option<[f64; 3]>,
         /// Up direction of the picture, `X,Y,Z` in scene coordinates.
         /// Default: the run's up (the scene's `outputs.up`, else against its
-        /// gravity, from summary.json), else +z.
+        /// gravity, from summary.json), else +z; +y instead when that is
+        /// along the view (looking straight down or up).
         #[arg(long, value_parser = parse_direction, allow_hyphen_values = true)]
         up: Option<[f64; 3]>,
     },
@@ -263,8 +264,8 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
         }) => {
             // The frames are y-up OBJ files of a z-up scene: directions
             // given in scene coordinates are converted like the frames.
-            let up = up.or_else(|| render::run_up_axis(&input));
             let view = view.or_else(|| render::run_view_axis(&input));
+            let up = up.or_else(|| default_up(render::run_up_axis(&input), view));
             let opts = RenderOptions {
                 width,
                 height,
@@ -282,6 +283,30 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             outln!("{}", out.display());
             Ok(())
         }
+    }
+}
+
+/// The up direction of a picture when none is given: the run's `up`
+/// (else +z), or +y (+z if the run's up is +y) when that is along the view
+/// direction `view`, so that `--view 0,0,-1` alone looks straight down
+/// with +y up.
+fn default_up(run_up: Option<[f64; 3]>, view: Option<[f64; 3]>) -> Option<[f64; 3]> {
+    let along = |a: [f64; 3], b: [f64; 3]| {
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let n = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        n(c) <= 1e-6 * n(a) * n(b)
+    };
+    match (run_up, view) {
+        (up, Some(v)) if along(up.unwrap_or([0.0, 0.0, 1.0]), v) => {
+            [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+                .into_iter()
+                .find(|&u| !along(u, v))
+        }
+        (up, _) => up,
     }
 }
 

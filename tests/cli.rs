@@ -120,7 +120,8 @@ fn rows_of_cloth_and_tool(png: &Path) -> (f64, f64) {
 
 /// `render` shows a z-up scene upright by default (the cloth above the
 /// sphere it falls on), from any `--view`, and upside down when asked
-/// with `--up`; bad directions exit 2.
+/// with `--up`; looking straight down takes +y as up; bad directions exit
+/// 2.
 #[test]
 fn render_is_upright_by_default_and_follows_view_and_up() {
     let out = temp_dir("upright");
@@ -161,6 +162,15 @@ fn render_is_upright_by_default_and_follows_view_and_up() {
         cloth > tool + 20.0,
         "upside down: cloth row {cloth}, sphere row {tool}"
     );
+    // Straight down without an up: the default up (the run's, +z) is
+    // along the view, so +y is taken instead of refusing.
+    let png = out.join("top.png");
+    let o = opsim(
+        &["render", ".", "--out", "top.png", "--view", "0,0,-1"],
+        &out,
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(png.exists());
     for bad in [
         vec!["--view", "0,0,0"],
         vec!["--view", "1,2"],
