@@ -12,10 +12,11 @@
 //! takes well under a minute.
 
 //!
-//! Modules: `cohesion_vs_lj` (section 1), `spirals` (section 2),
-//! `membership` (section 3).
+//! Modules: `cohesion_vs_lj` (section 1), `spirals` and `critical`
+//! (section 2), `membership` (section 3).
 
 mod cohesion_vs_lj;
+mod critical;
 mod membership;
 mod spirals;
 
@@ -28,6 +29,7 @@ use op_experiments::single_threaded;
 use op_scene::{load_scene, Scene};
 
 use cohesion_vs_lj::cohesion_vs_lj;
+use critical::critical_damping;
 use membership::typing_and_membership;
 use spirals::spirals;
 
@@ -46,6 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     single_threaded(|| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         sections.push_str(&cohesion_vs_lj(&figures_dir)?);
         sections.push_str(&spirals(root, &figures_dir)?);
+        sections.push_str(&critical_damping()?);
         sections.push_str(&typing_and_membership(root)?);
         Ok(())
     })
