@@ -406,3 +406,64 @@ fn unlinked_pairs_open_a_cut() {
     assert_eq!(t.boundary_loops(), 2);
     assert!(t.is_manifold());
 }
+
+/// The triangles of an `n x n` grid of unit squares in the plane z = 0,
+/// two per cell on its (i, j)-(i+1, j+1) diagonal, wound along +z.
+fn grid_cells(n: u32) -> (Vec<Point3>, Vec<[u32; 3]>) {
+    let w = n + 1;
+    let points = (0..w * w)
+        .map(|k| Point3::new((k % w) as Real, (k / w) as Real, 0.0))
+        .collect();
+    let mut tris = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let v = j * w + i;
+            tris.push(canonical([v, v + 1, v + w + 1]));
+            tris.push(canonical([v, v + w + 1, v + w]));
+        }
+    }
+    tris.sort_unstable();
+    (points, tris)
+}
+
+/// A cell of four linked sides that no triangle covers is closed, wound
+/// with the surface around it, and so is a missing triangle; with a side
+/// that no longer holds (a cut) the cell stays open, and the rims of a
+/// lone cell and a lone triangle are not holes.
+#[test]
+fn held_cells_are_closed_and_cuts_stay_open() {
+    let (points, full) = grid_cells(3);
+    // The middle cell: corners 5, 6, 9, 10 of the 4 x 4 points.
+    let holed: Vec<[u32; 3]> = full
+        .iter()
+        .copied()
+        .filter(|t| !(t.iter().all(|v| [5, 6, 9, 10].contains(v))))
+        .collect();
+    assert_eq!(holed.len(), full.len() - 2);
+    let mut closed = holed.clone();
+    close_held_cells(&mut closed, &points, &|_, _| true);
+    let t = Triangulation {
+        triangles: closed.clone(),
+    };
+    assert_eq!(closed.len(), full.len());
+    assert_eq!(t.boundary_loops(), 1, "only the rim is left");
+    assert!(t.is_manifold() && t.is_consistently_oriented());
+    // A cut along the side 5-6: left open.
+    let mut cut = holed.clone();
+    close_held_cells(&mut cut, &points, &|a, b| (a, b) != (5, 6));
+    assert_eq!(cut, holed);
+    // One missing triangle is put back, wound as it was.
+    let missing: Vec<[u32; 3]> = full.iter().copied().filter(|&t| t != [5, 6, 10]).collect();
+    let mut back = missing.clone();
+    close_held_cells(&mut back, &points, &|_, _| true);
+    assert_eq!(back, full);
+    // One cell alone: its rim is four linked sides around its diagonal;
+    // one triangle alone: its rim is not a hole either.
+    let (points, one) = grid_cells(1);
+    let mut rim = one.clone();
+    close_held_cells(&mut rim, &points, &|_, _| true);
+    assert_eq!(rim, one);
+    let mut lone = vec![one[0]];
+    close_held_cells(&mut lone, &points, &|_, _| true);
+    assert_eq!(lone, vec![one[0]]);
+}
