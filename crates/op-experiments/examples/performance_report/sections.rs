@@ -461,9 +461,9 @@ fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
         parts.push(
             "the 2-thread step: the serial part of the oriented step was velocity \
              Verlet's per-particle kicks and drifts (18% of the CPU samples on the \
-             calling thread while the pool waited); they now run in parallel, and 2% \
+             calling thread while the pool waited); they now run in parallel, and 1.8% \
              of the samples remain on the calling thread (the step's bookkeeping, the \
-             potential-energy sum), the pool's two threads carrying 50% and 47%. A \
+             potential-energy sum), the pool's two threads carrying 49.1% each. A \
              wall-clock speed-up below the work-bound one then measures the machine's \
              load (the load averages above): two free cores give the work-bound figure"
                 .to_string(),
