@@ -506,6 +506,47 @@ trait PairSource: Sync {
     fn pair_or_zero(&self, i: usize, j: usize, k: usize, scratch: &Self::Row) -> Self::Out {
         self.pair(i, j, k, scratch).unwrap_or_default()
     }
+    /// The pairs of row `i` whose second particle lies in the block
+    /// starting at `b0` (`row`: the row's in-block prefix), in row order:
+    /// each pair's force is subtracted from the row's running sums, which
+    /// are returned `(force, torque, energy)` (starting from zero), and
+    /// added to the second particle's slot of `local_f` (and `local_t`)
+    /// (see [`accumulate`]). Sources whose row scratch is a set of flat
+    /// arrays override it with the same additions in the same order over
+    /// slices (no bounds check per pair, the sums kept in registers).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn in_block<const TORQUES: bool>(
+        &self,
+        i: usize,
+        row: &[u32],
+        b0: usize,
+        scratch: &Self::Row,
+        local_f: &mut [Vec3],
+        local_t: &mut [Vec3],
+    ) -> (Vec3, Vec3, Real) {
+        let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
+        for (k, &j) in row.iter().enumerate() {
+            let j = j as usize;
+            let o = if Self::DENSE {
+                self.pair_or_zero(i, j, k, scratch)
+            } else {
+                let Some(o) = self.pair(i, j, k, scratch) else {
+                    continue;
+                };
+                o
+            };
+            let fj = o.force_j();
+            fo -= fj;
+            eo += o.energy();
+            local_f[j - b0] += fj;
+            if TORQUES {
+                to += o.torque_i();
+                local_t[j - b0] += o.torque_j();
+            }
+        }
+        (fo, to, eo)
+    }
 }
 
 /// A pair kernel evaluated one pair at a time.
@@ -560,44 +601,20 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
             block.spill_torques.clear();
             let mut scratch = P::Row::default();
             for i in b0..b1 {
-                let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
                 // The row is sorted: targets in this block, then later ones.
                 let row = &nbrs[pairs.row_range(i)];
                 src.prepare(i, row, &mut scratch);
                 let split = row.partition_point(|&j| (j as usize) < b1);
-                for (k, &j) in row[..split].iter().enumerate() {
-                    let j = j as usize;
-                    let o = if P::DENSE {
-                        src.pair_or_zero(i, j, k, &scratch)
-                    } else {
-                        let Some(o) = src.pair(i, j, k, &scratch) else {
-                            continue;
-                        };
-                        o
-                    };
-                    let fj = o.force_j();
-                    fo -= fj;
-                    eo += o.energy();
-                    block.local_f[j - b0] += fj;
-                    if TORQUES {
-                        to += o.torque_i();
-                        block.local_t[j - b0] += o.torque_j();
-                    }
-                }
-                for (k, &j) in row.iter().enumerate().skip(split) {
-                    let Some(o) = src.pair(i, j as usize, k, &scratch) else {
-                        continue;
-                    };
-                    let fj = o.force_j();
-                    fo -= fj;
-                    eo += o.energy();
-                    block.spill_targets.push(j);
-                    block.spill_forces.push(fj);
-                    if TORQUES {
-                        to += o.torque_i();
-                        block.spill_torques.push(o.torque_j());
-                    }
-                }
+                let (mut fo, mut to, mut eo) = src.in_block::<TORQUES>(
+                    i,
+                    &row[..split],
+                    b0,
+                    &scratch,
+                    &mut block.local_f,
+                    &mut block.local_t,
+                );
+                (fo, to, eo) =
+                    spill_row::<TORQUES, P>(&src, i, row, split, &scratch, block, (fo, to, eo));
                 f[i - b0] = block.local_f[i - b0] + fo;
                 t[i - b0] = if TORQUES {
                     block.local_t[i - b0] + to
@@ -617,6 +634,40 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
         .for_each(|(b, (((block, f), t), e))| work(b, block, f, t, e));
     // Pass 2: each block adds the spills aimed at it, earlier blocks first.
     add_spills::<TORQUES>(blocks, forces, torques);
+}
+
+/// The pairs of row `i` from `split` on (second particles in later
+/// blocks), in row order: each pair's force is subtracted from the row's
+/// running `sums` `(force, torque, energy)`, which are returned, and the
+/// pair is pushed to the block's spill (see [`accumulate`]). Not inlined:
+/// inlined into the block loop, the running sums lived in stack slots
+/// (the pushes may call the allocator), a store-to-load chain per pair.
+#[inline(never)]
+fn spill_row<const TORQUES: bool, P: PairSource>(
+    src: &P,
+    i: usize,
+    row: &[u32],
+    split: usize,
+    scratch: &P::Row,
+    block: &mut BlockScratch,
+    sums: (Vec3, Vec3, Real),
+) -> (Vec3, Vec3, Real) {
+    let (mut fo, mut to, mut eo) = sums;
+    for (k, &j) in row.iter().enumerate().skip(split) {
+        let Some(o) = src.pair(i, j as usize, k, scratch) else {
+            continue;
+        };
+        let fj = o.force_j();
+        fo -= fj;
+        eo += o.energy();
+        block.spill_targets.push(j);
+        block.spill_forces.push(fj);
+        if TORQUES {
+            to += o.torque_i();
+            block.spill_torques.push(o.torque_j());
+        }
+    }
+    (fo, to, eo)
 }
 
 /// Pass 2 of [`accumulate`]: each block of `forces` and `torques` adds the

@@ -84,6 +84,35 @@ impl RowLanes {
         )
     }
 
+    /// The accumulation's in-block pairs of the row (its first
+    /// `row.len()` pairs, every second particle in the block starting at
+    /// `b0`): in row order, subtracts each pair's force from the row's
+    /// running sum and adds its energy (both starting from zero), and adds
+    /// the force to the second particle's slot of `local`; returns the
+    /// sums. The additions of the pair-by-pair loop of
+    /// `forces::accumulate`, in its order, over slices (no bounds check
+    /// per pair). Not inlined: inlined into the block loop, whose spill
+    /// pushes may call the allocator, the running sums were kept in stack
+    /// slots, a store-to-load chain per pair.
+    #[inline(never)]
+    pub fn add_in_block(&self, row: &[u32], b0: usize, local: &mut [Vec3]) -> (Vec3, Real) {
+        let m = row.len();
+        let (fx, fy, fz, en) = (
+            &self.fx[..m],
+            &self.fy[..m],
+            &self.fz[..m],
+            &self.energy[..m],
+        );
+        let (mut fo, mut eo) = (Vec3::zeros(), 0.0);
+        for ((((&j, &x), &y), &z), &e) in row.iter().zip(fx).zip(fy).zip(fz).zip(en) {
+            let fj = Vec3::new(x, y, z);
+            fo -= fj;
+            eo += e;
+            local[j as usize - b0] += fj;
+        }
+        (fo, eo)
+    }
+
     fn resize(&mut self, n: usize) {
         let n = n.div_ceil(LANES) * LANES;
         if self.fx.len() < n {

@@ -12,6 +12,7 @@
 //! neighbour lists, because memory order dominates speed, and removal
 //! compacts the survivors (keeping their relative slot order).
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{self, ParamError};
@@ -505,8 +506,15 @@ impl Particles {
     /// Keeps only the slots in `order`, new slot `s` holding old slot
     /// `order[s]` (distinct, in range), and updates `slot_of` for them.
     fn select(&mut self, order: &[u32]) {
-        fn apply<T: Clone>(v: &mut Vec<T>, order: &[u32]) {
-            let new: Vec<T> = order.iter().map(|&o| v[o as usize].clone()).collect();
+        // A gather per array, in parallel (an indexed collect: the same
+        // array at any thread count); the world re-sorts at every
+        // neighbour-list rebuild.
+        fn apply<T: Clone + Send + Sync>(v: &mut Vec<T>, order: &[u32]) {
+            let new: Vec<T> = order
+                .par_iter()
+                .with_min_len(4096)
+                .map(|&o| v[o as usize].clone())
+                .collect();
             *v = new;
         }
         apply(&mut self.statics.ids, order);

@@ -188,6 +188,7 @@ pub(crate) fn apply(
     scratch: &mut PlasticScratch,
 ) -> bool {
     list.update(particles.positions());
+    list.build_incoming();
     let n = particles.len();
     let updated = &mut scratch.updated;
     updated.resize(n, 0.0);

@@ -1,6 +1,8 @@
 //! The world: particles, materials, the enabled interaction kernel, the
 //! neighbour list, external actions and the integrator, stepped in time.
 
+use rayon::prelude::*;
+
 use crate::bonds::Bonds;
 use crate::contributors::Contributor;
 use crate::diagnostics::{self, Diagnostics};
@@ -685,7 +687,7 @@ impl World {
         // Without torques (spacing kernel, no pending torque) and without
         // initial spin, orientations cannot change: skip reading them.
         let rotating = self.model.kernel == Kernel::Oriented || self.may_rotate;
-        let bad = (0..p.len()).find_map(|i| {
+        let check = |i: usize| {
             let finite = p.positions()[i].iter().all(|c| c.is_finite())
                 && p.velocities()[i].iter().all(|c| c.is_finite())
                 && (!rotating
@@ -708,7 +710,17 @@ impl World {
             } else {
                 None
             }
-        });
+        };
+        // In parallel over fixed chunks, each scanned in slot order; the
+        // first chunk with a bad slot reports it: the same report at any
+        // thread count.
+        const CHUNK: usize = 4096;
+        let n = p.len();
+        let bad = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| (c * CHUNK..((c + 1) * CHUNK).min(n)).find_map(check))
+            .find_first(Option::is_some)
+            .flatten();
         match bad {
             None => Ok(()),
             Some((i, reason)) => Err(Divergence {

@@ -6,6 +6,7 @@
 
 use super::{accumulate, BlockScratch, OrientedPair, PairSource, Sums};
 use crate::lanes::{self, OrientedInput, OrientedRow};
+use crate::math::{Real, Vec3};
 use crate::neighbours::NeighbourList;
 
 /// The full oriented pair of one material in SIMD lanes.
@@ -31,6 +32,18 @@ impl PairSource for OrientedLanes<'_> {
             torque_j,
             energy,
         }
+    }
+    #[inline(always)]
+    fn in_block<const TORQUES: bool>(
+        &self,
+        _: usize,
+        row: &[u32],
+        b0: usize,
+        scratch: &OrientedRow,
+        local_f: &mut [Vec3],
+        local_t: &mut [Vec3],
+    ) -> (Vec3, Vec3, Real) {
+        scratch.add_in_block(row, b0, local_f, local_t)
     }
     #[inline(always)]
     fn pair(&self, _: usize, _: usize, k: usize, scratch: &OrientedRow) -> Option<OrientedPair> {

@@ -6,7 +6,7 @@
 use super::{accumulate, BlockScratch, PairSource, Scalar, SpacingPair, Sums};
 use crate::interactions::{LennardJones, PreparedMaterial, SpacingKernel};
 use crate::lanes::{self, RowLanes};
-use crate::math::{Point3, Real};
+use crate::math::{Point3, Real, Vec3};
 use crate::neighbours::NeighbourList;
 
 /// The uniform 12-6 spacing pass in SIMD lanes ([`crate::lanes`]).
@@ -35,6 +35,19 @@ impl PairSource for LjLanes<'_> {
         scratch
             .get(k, self.cutoff2)
             .map(|(force_j, energy)| SpacingPair { force_j, energy })
+    }
+    #[inline(always)]
+    fn in_block<const TORQUES: bool>(
+        &self,
+        _: usize,
+        row: &[u32],
+        b0: usize,
+        scratch: &RowLanes,
+        local_f: &mut [Vec3],
+        _: &mut [Vec3],
+    ) -> (Vec3, Vec3, Real) {
+        let (fo, eo) = scratch.add_in_block(row, b0, local_f);
+        (fo, Vec3::zeros(), eo)
     }
 }
 

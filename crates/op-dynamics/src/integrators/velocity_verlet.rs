@@ -42,7 +42,7 @@
 //! order.
 
 use super::rigid::{self, angular_momentum, angular_velocity_from_momentum};
-use super::{Bodies, ForceField, Particle, StateMut};
+use super::{per_particle, Bodies, ForceField, Particle, StateMut};
 use crate::math::{rotate_by, Quat, Real, Vec3};
 
 /// Fixed-point iterations of [`midpoint_drift`] at most.
@@ -200,54 +200,62 @@ pub(crate) fn step_all<F: ForceField>(
         field.forces(t, state.view(), forces, torques);
         evals += 1;
     }
-    for i in 0..n {
-        if state.angular_velocities[i] == Vec3::zeros() && torques[i] == Vec3::zeros() {
-            // Translation only (see `kick_drift`): touch only p and v.
-            let v = state.velocities[i] + (0.5 * h * bodies.inv_mass[i]) * forces[i];
-            state.velocities[i] = v;
-            state.positions[i] += h * v;
-            momenta.l[i] = Vec3::zeros();
-            continue;
-        }
-        let s = state.view().particle(i);
-        let l0 = (carried && momenta.w[i] == s.w).then_some(momenta.l[i]);
-        let (s1, l) = kick_drift(
-            &s,
-            &forces[i],
-            &torques[i],
-            bodies.inv_mass[i],
-            &bodies.inertia[i],
-            h,
-            l0,
-        );
-        state.set(i, s1);
-        momenta.l[i] = l;
-    }
+    // Per-particle kick and drift, in parallel (each particle reads and
+    // writes only its own slots: the same bits at any thread count).
+    let (f0, t0) = (&*forces, &*torques);
+    per_particle::update_each(
+        state.reborrow(),
+        &mut momenta.l,
+        &mut momenta.w,
+        |i, s, l, w1| {
+            if s.w == Vec3::zeros() && t0[i] == Vec3::zeros() {
+                // Translation only (see `kick_drift`): p and v.
+                s.v += (0.5 * h * bodies.inv_mass[i]) * f0[i];
+                s.p += h * s.v;
+                *l = Vec3::zeros();
+                return;
+            }
+            let l0 = (carried && *w1 == s.w).then_some(*l);
+            let (s1, l1) = kick_drift(
+                s,
+                &f0[i],
+                &t0[i],
+                bodies.inv_mass[i],
+                &bodies.inertia[i],
+                h,
+                l0,
+            );
+            *s = s1;
+            *l = l1;
+        },
+    );
     field.forces(t + h, state.view(), forces, torques);
     evals += 1;
-    for i in 0..n {
-        if momenta.l[i] == Vec3::zeros()
-            && torques[i] == Vec3::zeros()
-            && state.angular_velocities[i] == Vec3::zeros()
-        {
-            state.velocities[i] += (0.5 * h * bodies.inv_mass[i]) * forces[i];
-            momenta.w[i] = Vec3::zeros();
-            continue;
-        }
-        let s = state.view().particle(i);
-        let (s1, l1) = kick(
-            &s,
-            &momenta.l[i],
-            &forces[i],
-            &torques[i],
-            bodies.inv_mass[i],
-            &bodies.inertia[i],
-            h,
-        );
-        state.set(i, s1);
-        momenta.l[i] = l1;
-        momenta.w[i] = s1.w;
-    }
+    let (f1, t1) = (&*forces, &*torques);
+    per_particle::update_each(
+        state.reborrow(),
+        &mut momenta.l,
+        &mut momenta.w,
+        |i, s, l, w1| {
+            if *l == Vec3::zeros() && t1[i] == Vec3::zeros() && s.w == Vec3::zeros() {
+                s.v += (0.5 * h * bodies.inv_mass[i]) * f1[i];
+                *w1 = Vec3::zeros();
+                return;
+            }
+            let (s1, l1) = kick(
+                s,
+                l,
+                &f1[i],
+                &t1[i],
+                bodies.inv_mass[i],
+                &bodies.inertia[i],
+                h,
+            );
+            *s = s1;
+            *l = l1;
+            *w1 = s1.w;
+        },
+    );
     momenta.valid = true;
     evals
 }
@@ -260,7 +268,7 @@ pub(crate) fn step_translation<F: ForceField>(
     bodies: &Bodies<'_>,
     t: Real,
     h: Real,
-    state: StateMut<'_>,
+    mut state: StateMut<'_>,
     forces: &mut [Vec3],
     torques: &mut [Vec3],
     momenta: &mut Momenta,
@@ -273,24 +281,17 @@ pub(crate) fn step_translation<F: ForceField>(
         field.forces(t, state.view(), forces, torques);
         evals += 1;
     }
-    for ((p, v), (f, &w)) in state
-        .positions
-        .iter_mut()
-        .zip(state.velocities.iter_mut())
-        .zip(forces.iter().zip(bodies.inv_mass))
-    {
-        *v += (0.5 * h * w) * f;
+    let (f0, m) = (&*forces, bodies.inv_mass);
+    per_particle::update_translation(state.reborrow(), |i, p, v| {
+        *v += (0.5 * h * m[i]) * f0[i];
         *p += h * *v;
-    }
+    });
     field.forces(t + h, state.view(), forces, torques);
     evals += 1;
-    for (v, (f, &w)) in state
-        .velocities
-        .iter_mut()
-        .zip(forces.iter().zip(bodies.inv_mass))
-    {
-        *v += (0.5 * h * w) * f;
-    }
+    let f1 = &*forces;
+    per_particle::update_translation(state.reborrow(), |i, _, v| {
+        *v += (0.5 * h * m[i]) * f1[i];
+    });
     evals
 }
 

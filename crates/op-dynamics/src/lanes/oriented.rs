@@ -80,6 +80,41 @@ impl OrientedRow {
         (v(&self.f), v(&self.ti), v(&self.tj), self.energy[k])
     }
 
+    /// The accumulation's in-block pairs of the row (its first
+    /// `row.len()` pairs, every second particle in the block starting at
+    /// `b0`), as [`super::RowLanes::add_in_block`] with the torques: in
+    /// row order, subtracts each pair's force from the row's running sum,
+    /// adds its energy and its torque on `i`, and adds its force and its
+    /// torque on `j` to `j`'s slots of `local_f` and `local_t`; returns the
+    /// sums `(force, torque, energy)`. Not inlined, so that the sums stay
+    /// in registers (see there).
+    #[inline(never)]
+    pub fn add_in_block(
+        &self,
+        row: &[u32],
+        b0: usize,
+        local_f: &mut [Vec3],
+        local_t: &mut [Vec3],
+    ) -> (Vec3, Vec3, Real) {
+        let m = row.len();
+        fn s(a: &[Vec<Real>; 3], m: usize) -> [&[Real]; 3] {
+            [&a[0][..m], &a[1][..m], &a[2][..m]]
+        }
+        let (f, ti, tj) = (s(&self.f, m), s(&self.ti, m), s(&self.tj, m));
+        let en = &self.energy[..m];
+        let (mut fo, mut to, mut eo) = (Vec3::zeros(), Vec3::zeros(), 0.0);
+        for (k, (&j, &e)) in row.iter().zip(en).enumerate() {
+            let j = j as usize - b0;
+            let fj = Vec3::new(f[0][k], f[1][k], f[2][k]);
+            fo -= fj;
+            eo += e;
+            local_f[j] += fj;
+            to += Vec3::new(ti[0][k], ti[1][k], ti[2][k]);
+            local_t[j] += Vec3::new(tj[0][k], tj[1][k], tj[2][k]);
+        }
+        (fo, to, eo)
+    }
+
     fn resize(&mut self, n: usize) {
         let n = n.div_ceil(LANES) * LANES;
         if self.energy.len() < n {

@@ -1,8 +1,8 @@
 //! Neighbour lists: radius queries with a skin (seed 000 §4.2, docs/model.md §5).
 //!
 //! - [`PairList`]: the flat (CSR) **half** list every consumer reads: row
-//!   `i` holds the neighbours `j > i` (ascending), plus the transposed
-//!   incoming index for deterministic per-particle gathers.
+//!   `i` holds the neighbours `j > i` (ascending), plus, on request, the
+//!   transposed incoming index for deterministic per-particle gathers.
 //! - [`search`]: one radius search with a chosen [`NeighbourBackend`]
 //!   (sorted cell list, kiddo k-d tree, or the all-pairs oracle). All
 //!   backends give identical lists.
@@ -97,7 +97,8 @@ pub enum NeighbourBackend {
 }
 
 /// Fills `out` with the half list of every pair within `radius` (inclusive)
-/// of `positions`, using `backend`. `out`'s buffers are reused.
+/// of `positions`, using `backend`, with its incoming index. `out`'s
+/// buffers are reused.
 ///
 /// A NaN or negative radius gives a list without pairs; particles with a
 /// non-finite coordinate have no neighbours.
@@ -106,6 +107,13 @@ pub enum NeighbourBackend {
 /// If there are `u32::MAX` particles or more, or more than `u32::MAX` pairs
 /// (a radius far too large for the system).
 pub fn search(backend: NeighbourBackend, positions: &[Point3], radius: Real, out: &mut PairList) {
+    search_rows(backend, positions, radius, out);
+    out.build_incoming();
+}
+
+/// [`search`] without the incoming index (built on request,
+/// [`PairList::build_incoming`]).
+fn search_rows(backend: NeighbourBackend, positions: &[Point3], radius: Real, out: &mut PairList) {
     match backend {
         NeighbourBackend::CellList => cell_list::cell_list(positions, radius, out),
         NeighbourBackend::KdTree => kd_tree::kd_tree(positions, radius, out),
@@ -282,14 +290,22 @@ impl NeighbourList {
     }
 
     /// Rebuilds the list unconditionally, taking `positions` as the new
-    /// reference positions.
+    /// reference positions. The incoming index is not built
+    /// ([`NeighbourList::build_incoming`]).
     pub fn rebuild(&mut self, positions: &[Point3]) {
-        search(self.backend, positions, self.radius(), &mut self.pairs);
+        search_rows(self.backend, positions, self.radius(), &mut self.pairs);
         self.reference.clear();
         self.reference.extend_from_slice(positions);
         self.built = true;
         self.rebuilds += 1;
         self.last_shift = 0.0;
+    }
+
+    /// Builds the incoming index of the current list if it is not built
+    /// ([`PairList::build_incoming`]): the stages that gather per particle
+    /// call it after [`NeighbourList::update`].
+    pub fn build_incoming(&mut self) {
+        self.pairs.build_incoming();
     }
 
     /// The half list of the last build (empty before the first).

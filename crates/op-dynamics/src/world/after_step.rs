@@ -100,6 +100,7 @@ impl World {
         };
         let pairs = self.model.neighbours.as_mut().map(|list| {
             list.update(self.particles.positions());
+            list.build_incoming();
             let cutoff = list.cutoff();
             (&*list, cutoff)
         });
