@@ -369,8 +369,24 @@ fn run_fit(
             "null".to_string()
         }
     };
+    // The thin features: where the two sides lie within the
+    // triangulation radius (ears, fingers), largest first.
+    let thin: Vec<String> = fit
+        .thin_features
+        .iter()
+        .map(|t| {
+            format!(
+                "{{\"centre\": [{}, {}, {}], \"samples\": {}, \"thickness\": {}}}",
+                number(t.centre.x),
+                number(t.centre.y),
+                number(t.centre.z),
+                t.samples,
+                number(t.thickness)
+            )
+        })
+        .collect();
     outln!(
-        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}}}",
+        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"thin_features\": [{}]}}",
         fit.particles,
         fit.mesh.vertices.len(),
         fit.mesh.faces.len(),
@@ -378,7 +394,8 @@ fn run_fit(
         fit.mesh.boundary_loops,
         number(fit.mesh.rms_distance),
         number(fit.mesh.max_distance),
-        number(fit.spacing)
+        number(fit.spacing),
+        thin.join(", ")
     );
     Ok(())
 }

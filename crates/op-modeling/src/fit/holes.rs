@@ -39,7 +39,7 @@ pub(super) fn fill_holes(
     min_vertices: usize,
 ) -> usize {
     drop_overfull_edges(&mut mesh.faces);
-    super::winding::orient(mesh);
+    super::winding::cut_crosscaps(mesh);
     split_pinched_vertices(mesh);
     let mut edges = edge_counts(&mesh.faces);
     let mut closed = 0;

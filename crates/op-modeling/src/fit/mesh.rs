@@ -33,7 +33,9 @@ pub struct SurfaceMesh {
 
 impl SurfaceMesh {
     /// Triangulates particles at `positions` with unit `normals`
-    /// ([`triangulate_points`], mutual-neighbour distance `radius`) and
+    /// ([`triangulate_points`], mutual-neighbour distance `radius`, the
+    /// two sides of thin features kept apart:
+    /// [`TriangulationParams::separate_sides`]) and
     /// measures the distances from `samples` to the triangles.
     ///
     /// # Errors
@@ -47,7 +49,10 @@ impl SurfaceMesh {
         let triangles = triangulate_points(
             positions,
             normals,
-            &TriangulationParams::with_radius(radius),
+            &TriangulationParams {
+                separate_sides: true,
+                ..TriangulationParams::with_radius(radius)
+            },
         )?;
         let mesh = Triangulation {
             triangles: triangles.clone(),

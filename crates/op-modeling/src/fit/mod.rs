@@ -64,8 +64,14 @@
 //!    scaled by it, then created little.
 //! 5. *Triangulation* (seed 000 §5, [`SurfaceMesh`]) with
 //!    mutual-neighbour radius [`FitParams::triangulation_radius`] (`d_min`),
+//!    the two sides of a feature thinner than that radius kept apart by
+//!    their normals (no triangle joins particles facing more than 90°
+//!    apart, nor does a particle facing away from a triangle empty it:
+//!    [`crate::triangulation::TriangulationParams::separate_sides`]),
 //!    and the figures: Euler characteristic, boundary loops, RMS and
 //!    largest distance from the input samples to the mesh triangles.
+//!    The samples' *thin features* (`thin.rs`: two sides within that
+//!    radius, facing each other) are named in [`Fit::thin_features`].
 //! 6. *Holes* (`holes.rs`): after the triangulation, the holes (boundary
 //!    loops) narrower than [`FitParams::max_hole`] spacings (closed data)
 //!    or, for open data, the wider of `d_max` (the stretching search
@@ -73,7 +79,10 @@
 //!    at the samples' density (Miles 1970; 4.7 spacings on 5,000 samples)
 //!    are closed with triangles, a new vertex at the centre of a large
 //!    one; edges held by more than two triangles are dropped first, so
-//!    every edge ends in at most two triangles. Pinched vertices (two fans
+//!    every edge ends in at most two triangles, and the triangles are
+//!    wound consistently, those of an edge where no winding agrees (a
+//!    Möbius band across a thin rim) dropped so that the cut is filled as
+//!    a hole. Pinched vertices (two fans
 //!    meeting at a point) are split, and pieces with fewer vertices than
 //!    [`FitParams::neighbours`] dropped. Before the chance-gap width, 9
 //!    chance holes stayed open on 5,000 random samples of the saddle
@@ -132,6 +141,7 @@ mod normals;
 mod rounds;
 pub mod shapes;
 mod spacing;
+mod thin;
 mod winding;
 
 use std::time::Instant;
@@ -152,6 +162,7 @@ pub use normals::estimate_normals;
 use normals::{curve_like_share, knn_normals};
 pub use spacing::median_nearest_distance;
 use spacing::{first_ring_mean, merge_close, nearest_distances, Knn};
+pub use thin::ThinFeature;
 
 /// Samples of a surface, with normals when they are known (the input of
 /// [`fit`]; op-scene reads them from `.xyz`, `.ply` and `.obj` files).
@@ -278,6 +289,13 @@ pub struct Fit {
     /// The triangulated particles, in data coordinates, and their
     /// distances to the input samples (absolute).
     pub mesh: SurfaceMesh,
+    /// The features of the samples thinner than the triangulation radius
+    /// (two sides facing each other within it: ears, fingers), largest
+    /// first, in data coordinates. The triangulation keeps their sides
+    /// apart by their normals; where the normals could not tell them apart
+    /// (a rim turning within a spacing) the mesh may be open or joined
+    /// there, and this says where to look (or to give a finer spacing).
+    pub thin_features: Vec<ThinFeature>,
 }
 
 impl FitParams {
@@ -405,6 +423,7 @@ pub fn fit_with_stages(
     let seeds: Vec<Point3> = kept.iter().map(|&k| unit[k]).collect();
     let seed_normals = seed_normals(data, params, &kept, &seeds)?;
     let rest = first_ring_mean(&seeds, 1.5);
+    let thin = thin::thin_features(&seeds, &seed_normals, params.triangulation_radius * rest);
     stages.lap("spacing and normals");
 
     let relaxing = Relaxation::new(rest);
@@ -468,11 +487,20 @@ pub fn fit_with_stages(
             frame.length_to_data(diagonal)
         )));
     }
+    let thin_features = thin
+        .into_iter()
+        .map(|t| ThinFeature {
+            centre: to_data(&t.centre),
+            thickness: frame.length_to_data(t.thickness * h),
+            ..t
+        })
+        .collect();
     Ok((
         Fit {
             spacing,
             particles: p.len(),
             mesh,
+            thin_features,
         },
         stages.laps,
     ))

@@ -38,7 +38,7 @@ pub fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, Fi
         .enumerate()
         .map(|(i, row)| pca_normal(points, i, row))
         .collect();
-    orient(points, &rows, &mut normals, 0);
+    orient(points, &rows, &mut normals, 0, false);
     Ok(normals)
 }
 
@@ -46,7 +46,8 @@ pub fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, Fi
 /// least-variance direction of the sample and its neighbours), oriented
 /// over the symmetric k-nearest-neighbour graph (§3.3) from the sample
 /// of largest `z`, whose normal is made to point along `+z` (outward on a
-/// closed surface). Independent of the particle spacing; no sample is
+/// closed surface), along the tangent edges first (see [`orient`]'s
+/// `tangent`). Independent of the particle spacing; no sample is
 /// refused (every sample has `k` nearest others when there are `k + 1`).
 pub(crate) fn knn_normals(points: &[Point3], knn: &Knn) -> Vec<Vec3> {
     let n = points.len();
@@ -63,7 +64,7 @@ pub(crate) fn knn_normals(points: &[Point3], knn: &Knn) -> Vec<Vec3> {
         r.sort_unstable();
         r.dedup();
     });
-    orient(points, &rows, &mut normals, 2);
+    orient(points, &rows, &mut normals, 2, true);
     normals
 }
 
@@ -128,7 +129,25 @@ fn pca_normal(points: &[Point3], i: usize, row: &[usize]) -> Vec3 {
 /// of largest coordinate along `axis` (ties by index), whose normal is
 /// made to point along `+axis` (for `axis` 0, the x of the scenes: its
 /// largest component positive).
-fn orient(points: &[Point3], rows: &[Vec<usize>], normals: &mut [Vec3], axis: usize) {
+///
+/// With `tangent`, an edge's weight `|n_i . n_j|` is multiplied by the
+/// cosines of the angles at which the edge leaves the two tangent planes
+/// (`sqrt(1 - (n . e)²)`, `e` the edge's direction). Across a feature
+/// thinner than the neighbourhood (the two sides of an ear, two parallel
+/// sheets) the normals are parallel, so Hoppe's weight prefers the edge
+/// straight across, which carries one side's orientation to the other
+/// unchanged: all wrong on that side. Such an edge stands steeply on both
+/// tangent planes, so with the factors the tree goes round the rim, along
+/// which the normals turn. Measured on a coin (two discs 2.25 spacings
+/// apart joined by a round rim, 3,000 random samples): 1,260 of the
+/// bottom's 1,261 normals wrong without the factors.
+fn orient(
+    points: &[Point3],
+    rows: &[Vec<usize>],
+    normals: &mut [Vec3],
+    axis: usize,
+    tangent: bool,
+) {
     let n = points.len();
     let mut done = vec![false; n];
     let mut order: Vec<usize> = (0..n).collect();
@@ -152,8 +171,16 @@ fn orient(points: &[Point3], rows: &[Vec<usize>], normals: &mut [Vec3], axis: us
         let mut heap = BinaryHeap::new();
         let push = |heap: &mut BinaryHeap<Edge>, normals: &[Vec3], i: usize| {
             for &j in &rows[i] {
+                let mut weight = normals[i].dot(&normals[j]).abs();
+                if tangent {
+                    let e = (points[j] - points[i])
+                        .try_normalize(0.0)
+                        .unwrap_or(Vec3::zeros());
+                    let leave = |n: &Vec3| (1.0 - n.dot(&e).powi(2)).max(0.0).sqrt();
+                    weight *= leave(&normals[i]) * leave(&normals[j]);
+                }
                 heap.push(Edge {
-                    weight: normals[i].dot(&normals[j]).abs(),
+                    weight,
                     from: i,
                     to: j,
                 });

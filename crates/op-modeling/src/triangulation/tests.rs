@@ -1,3 +1,4 @@
+use super::held_cells::close_held_cells;
 use super::*;
 use op_dynamics::particles::ParticleDesc;
 use op_test_support::Rng;
