@@ -59,6 +59,7 @@ pub(super) fn fill_holes(
     }
     split_pinched_vertices(mesh);
     drop_specks(&mut mesh.faces, min_vertices);
+    mesh.drop_unused_vertices();
     closed
 }
 
