@@ -248,33 +248,13 @@ fn a_skinned_shell_is_smooth_at_its_thickness() {
     }
 }
 
-/// Euler characteristic `V - E + F` of the mesh of OBJ text `obj`.
-fn euler_characteristic(obj: &str) -> i64 {
-    let mut edges = std::collections::HashSet::new();
-    let (mut v, mut f) = (0i64, 0i64);
-    for line in obj.lines() {
-        if line.starts_with("v ") {
-            v += 1;
-        } else if let Some(face) = line.strip_prefix("f ") {
-            f += 1;
-            let ids: Vec<u64> = face
-                .split_whitespace()
-                .map(|t| t.split('/').next().unwrap().parse().unwrap())
-                .collect();
-            for k in 0..ids.len() {
-                let (a, b) = (ids[k], ids[(k + 1) % ids.len()]);
-                edges.insert((a.min(b), a.max(b)));
-            }
-        }
-    }
-    v - edges.len() as i64 + f
-}
-
-/// Every edge of the mesh of OBJ text `obj` is shared by exactly two
-/// faces (closed and manifold).
-fn closed_and_manifold(obj: &str) -> bool {
+/// The faces of OBJ text `obj` (vertex indices, 1-based) and how many
+/// faces use each undirected edge.
+fn edge_uses(obj: &str) -> (usize, std::collections::HashMap<(u64, u64), usize>) {
     let mut uses = std::collections::HashMap::new();
+    let mut faces = 0;
     for face in obj.lines().filter_map(|l| l.strip_prefix("f ")) {
+        faces += 1;
         let ids: Vec<u64> = face
             .split_whitespace()
             .map(|t| t.split('/').next().unwrap().parse().unwrap())
@@ -284,6 +264,20 @@ fn closed_and_manifold(obj: &str) -> bool {
             *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
         }
     }
+    (faces, uses)
+}
+
+/// Euler characteristic `V - E + F` of the mesh of OBJ text `obj`.
+fn euler_characteristic(obj: &str) -> i64 {
+    let v = obj.lines().filter(|l| l.starts_with("v ")).count() as i64;
+    let (f, uses) = edge_uses(obj);
+    v - uses.len() as i64 + f as i64
+}
+
+/// Every edge of the mesh of OBJ text `obj` is shared by exactly two
+/// faces (closed and manifold).
+fn closed_and_manifold(obj: &str) -> bool {
+    let (_, uses) = edge_uses(obj);
     !uses.is_empty() && uses.values().all(|&n| n == 2)
 }
 
