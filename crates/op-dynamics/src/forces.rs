@@ -71,6 +71,8 @@ mod uniform_spacing;
 use uniform_spacing::uniform_spacing_pass;
 mod uniform_oriented;
 use uniform_oriented::uniform_oriented_pass;
+#[cfg(test)]
+mod pass_bits;
 
 /// Result of one pair in the oriented kernel.
 #[derive(Copy, Clone, Debug, Default)]

@@ -77,12 +77,13 @@ pub(super) fn uniform_oriented_pass(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::forces::pass_bits::{jittered_block, pass_bits};
     use crate::forces::Scalar;
     use crate::interactions::test_support::Rng;
     use crate::interactions::{
         evaluate_pair, Coupling, LennardJonesParams, Material, ParticleView, Spacing, WeightParams,
     };
-    use crate::math::{Point3, Real, Vec3};
+    use crate::math::{Real, Vec3};
     use crate::neighbours::NeighbourBackend;
 
     /// The dispatched oriented lanes pass and the scalar pass (the
@@ -113,38 +114,15 @@ mod tests {
         .unwrap();
         let c = m.oriented_lane_constants().unwrap();
         let mut rng = Rng::new(183);
-        let side = 17;
-        let (mut p, mut normals, mut kappa) = (Vec::new(), Vec::new(), Vec::new());
-        for k in 0..side * side * side {
-            let (x, y, z) = (k % side, (k / side) % side, k / (side * side));
-            let mut jitter = || 0.2 * (rng.uniform() - 0.5);
-            p.push(Point3::new(
-                1.1 * x as Real + jitter(),
-                1.1 * y as Real + jitter(),
-                1.1 * z as Real + jitter(),
-            ));
-            normals.push(rng.unit_vector());
-            kappa.push(rng.range(-0.5, 0.5));
-        }
-        let n = p.len();
+        let p = jittered_block(17, &mut rng);
+        let normals: Vec<Vec3> = p.iter().map(|_| rng.unit_vector()).collect();
+        let kappa: Vec<Real> = p.iter().map(|_| rng.range(-0.5, 0.5)).collect();
         let cutoff = m.cutoff();
         let cutoff2 = cutoff * cutoff;
         let mut list = NeighbourList::new(NeighbourBackend::CellList, cutoff, 0.3);
         list.update(&p);
         let run = |lanes: bool, threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
-                let (mut f, mut t, mut e) =
-                    (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n], vec![0.0; n]);
-                let mut blocks = Vec::new();
-                let out = Sums {
-                    forces: &mut f,
-                    torques: &mut t,
-                    energies: &mut e,
-                };
+            pass_bits(p.len(), threads, |blocks, out| {
                 if lanes {
                     let input = OrientedInput {
                         c: &c,
@@ -153,7 +131,7 @@ mod tests {
                         normals: &normals,
                         curvatures: &kappa,
                     };
-                    uniform_oriented_pass(input, &list, &mut blocks, out);
+                    uniform_oriented_pass(input, &list, blocks, out);
                 } else {
                     let view = |q: usize| ParticleView {
                         position: p[q],
@@ -177,14 +155,8 @@ mod tests {
                             }
                         })
                     };
-                    accumulate::<true, _>(&list, &mut blocks, Scalar(pair), out);
+                    accumulate::<true, _>(&list, blocks, Scalar(pair), out);
                 }
-                f.iter()
-                    .chain(&t)
-                    .flat_map(|v| [v.x, v.y, v.z])
-                    .chain(e)
-                    .map(Real::to_bits)
-                    .collect::<Vec<u64>>()
             })
         };
         let scalar = run(false, 1);

@@ -123,8 +123,9 @@ pub(super) fn uniform_spacing_pass(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::forces::pass_bits::{jittered_block, pass_bits};
+    use crate::interactions::test_support::Rng;
     use crate::interactions::{LennardJonesParams, Material, Spacing};
-    use crate::math::Vec3;
     use crate::neighbours::NeighbourBackend;
 
     /// The dispatched SIMD pass and the scalar loop give the same bits:
@@ -143,48 +144,13 @@ mod tests {
         }
         .prepare()
         .unwrap();
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
-        };
-        let side = 17;
-        let p: Vec<Point3> = (0..side * side * side)
-            .map(|k| {
-                let (x, y, z) = (k % side, (k / side) % side, k / (side * side));
-                Point3::new(
-                    1.1 * x as Real + 0.2 * rnd(),
-                    1.1 * y as Real + 0.2 * rnd(),
-                    1.1 * z as Real + 0.2 * rnd(),
-                )
-            })
-            .collect();
-        let n = p.len();
+        let p = jittered_block(17, &mut Rng::new(0x2545_f491));
         let cutoff = m.cutoff();
         let mut list = NeighbourList::new(NeighbourBackend::CellList, cutoff, 0.3);
         list.update(&p);
         let run = |lanes: bool, threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
-                let (mut f, mut t, mut e) =
-                    (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n], vec![0.0; n]);
-                let mut blocks = Vec::new();
-                let out = Sums {
-                    forces: &mut f,
-                    torques: &mut t,
-                    energies: &mut e,
-                };
-                uniform_spacing_pass(&m, cutoff * cutoff, &p, &list, &mut blocks, out, lanes);
-                f.iter()
-                    .flat_map(|v| [v.x, v.y, v.z])
-                    .chain(e)
-                    .map(Real::to_bits)
-                    .collect::<Vec<u64>>()
+            pass_bits(p.len(), threads, |blocks, out| {
+                uniform_spacing_pass(&m, cutoff * cutoff, &p, &list, blocks, out, lanes)
             })
         };
         let scalar = run(false, 1);
