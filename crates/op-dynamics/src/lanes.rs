@@ -223,10 +223,7 @@ fn lj_12_6_lanes<S: pulp::Simd>(
             );
             // Coincident (d2 = 0), NaN and beyond-cut-off pairs contribute
             // nothing (`RowLanes::get`); their lanes compute on a stand-in.
-            let valid = simd.and_m64s(
-                simd.less_than_or_equal_f64s(d2, simd.splat_f64s(cutoff2)),
-                simd.greater_than_f64s(d2, simd.splat_f64s(0.0)),
-            );
+            let valid = L(simd).in_range(d2, cutoff2);
             let one = simd.splat_f64s(1.0);
             let d2s = simd.select_f64s(valid, d2, one);
             let (u, g) = lj_12_6(simd, &c, d2s, simd.div_f64s(one, d2s));
@@ -344,6 +341,15 @@ impl<S: pulp::Simd> L<S> {
     #[inline(always)]
     fn sel(self, m: S::m64s, a: S::f64s, b: S::f64s) -> S::f64s {
         self.0.select_f64s(m, a, b)
+    }
+    /// The lanes whose pair contributes: `0 < d2 <= cutoff2` (coincident,
+    /// NaN and beyond-cut-off pairs compute on a stand-in and add nothing).
+    #[inline(always)]
+    fn in_range(self, d2: S::f64s, cutoff2: Real) -> S::m64s {
+        self.0.and_m64s(
+            self.0.less_than_or_equal_f64s(d2, self.k(cutoff2)),
+            self.0.greater_than_f64s(d2, self.k(0.0)),
+        )
     }
     /// `a · b` as nalgebra sums it: `(a.x b.x + a.y b.y) + a.z b.z`.
     #[inline(always)]

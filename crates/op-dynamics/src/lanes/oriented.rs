@@ -239,10 +239,7 @@ fn batch<S: pulp::Simd>(
             };
             let d2 = l.dot(r, r);
             d2o[v] = d2;
-            let valid = simd.and_m64s(
-                simd.less_than_or_equal_f64s(d2, l.k(input.cutoff2)),
-                simd.greater_than_f64s(d2, l.k(0.0)),
-            );
+            let valid = l.in_range(d2, input.cutoff2);
             let d2 = l.sel(valid, d2, l.k(1.0));
             // `Weight::eval_scalar`: -d²/2a², minus c z² when anisotropic.
             let e = l.mul(l.mul(l.k(-0.5), d2), l.k(w.inv_a2));
@@ -340,10 +337,7 @@ fn stage_2<S: pulp::Simd>(
         };
         let d2 = l.dot(r, r);
         sq[v] = d2;
-        let valid = simd.and_m64s(
-            simd.less_than_or_equal_f64s(d2, l.k(input.cutoff2)),
-            simd.greater_than_f64s(d2, zero),
-        );
+        let valid = l.in_range(d2, input.cutoff2);
         let d2 = l.sel(valid, d2, one);
         let inv_d2 = l.div(one, d2);
         // Spacing (`evaluate_spacing_sq`): U and the force on j, -g r.
