@@ -205,10 +205,14 @@ fn recovery_is_not_tuned_to_one_case() {
 /// deformation frequency, by one rule for every law and size. Spirals of 8,
 /// 14 and 20 particles at 0.75 turns (or less, to keep `|κ| <= 0.9`), with
 /// a constant curvature and linear, sine and quadratic laws of ratio 3.4
-/// (the seed's 0.85/0.25), and a geometric law of ratio 9 at 8 particles,
-/// are uncoiled (error at least 0.5 spacings) and recover below 0.01 within
-/// the same window, 20 periods `1/ω1` after the release. With the fixed
-/// recipe the 20-particle spirals end about one spacing away.
+/// (the seed's 0.85/0.25), and a geometric law of ratio 9, are uncoiled
+/// (error at least 0.5 spacings) and recover below 0.01 within the same
+/// window, 20 periods `1/ω1` after the release, in their plane bit for bit
+/// (a chain's torsion costs no energy: an out-of-plane round-off of 1e-16,
+/// which a tip normal opposite to the body axis used to get, grew to a
+/// twisted tip 0.26 out of the plane and a final error of 0.14 for the
+/// geometric law at 14 particles). With the fixed recipe the 20-particle
+/// spirals end about one spacing away.
 #[test]
 fn critical_damping_recovers_laws_and_sizes() {
     let laws = [
@@ -219,16 +223,10 @@ fn critical_damping_recovers_laws_and_sizes() {
         ("geometric", CurvatureLaw::Geometric, 9.0),
     ];
     let schedule = CriticalSchedule::default();
-    let mut cases = Vec::new();
-    for count in [8, 14, 20] {
-        for (name, law, ratio) in laws {
-            // Geometric of ratio 9 only at 8 particles: see the report.
-            if name != "geometric" || count == 8 {
-                cases.push((count, name, law, ratio));
-            }
-        }
-    }
-    for (count, name, law, ratio) in cases {
+    for (count, (name, law, ratio)) in [8, 14, 20]
+        .into_iter()
+        .flat_map(|count| laws.map(|law| (count, law)))
+    {
         let shape = SpiralShape::with_turns(count, law, ratio, 0.75).unwrap();
         let critical =
             single_threaded(|| critical_recipe(&SpiralRecipe::default(), &shape, &schedule))
@@ -257,6 +255,7 @@ fn critical_damping_recovers_laws_and_sizes() {
             "{count} {name}: {}",
             run.final_error
         );
+        assert_eq!(run.max_out_of_plane, 0.0, "{count} {name}: left its plane");
     }
 }
 

@@ -114,15 +114,19 @@ impl ParticleDesc {
 
     /// Orients the particle so that its world normal is `normal` (the
     /// shortest rotation from the body normal axis).
+    ///
+    /// A normal opposite to the axis has no shortest rotation: it gets the
+    /// half turn about the axis's tangent ([`tangent_axis`]), written
+    /// exactly (scalar part 0). `Quat::from_axis_angle(t, π)` would give
+    /// the scalar part `cos(π/2) = 6e-17`, which tilts the normal by
+    /// 1e-16 out of every plane containing the axis: enough to seed an
+    /// out-of-plane motion of a planar object whose terms leave such motion
+    /// free (a chain's torsion, which no orientation term sees), as the
+    /// tip of a spiral whose last normal is `-x` showed.
     pub fn with_normal(mut self, normal: Vec3) -> Self {
         let a = self.normal_axis.normalize();
         let n = normal.normalize();
-        self.orientation = Quat::rotation_between(&a, &n).unwrap_or_else(|| {
-            Quat::from_axis_angle(
-                &nalgebra::Unit::new_normalize(tangent_axis(&a)),
-                std::f64::consts::PI,
-            )
-        });
+        self.orientation = Quat::rotation_between(&a, &n).unwrap_or_else(|| half_turn(&a));
         self
     }
 
@@ -562,9 +566,41 @@ impl Particles {
         + std::mem::size_of::<Real>();
 }
 
+/// The rotation by half a turn about the unit tangent of `a`
+/// ([`tangent_axis`]), with an exactly zero scalar part: it takes `a` to
+/// `-a` and keeps every plane through `a` and the tangent exactly.
+fn half_turn(a: &Vec3) -> Quat {
+    let t = tangent_axis(a);
+    Quat::new_normalize(nalgebra::Quaternion::new(0.0, t.x, t.y, t.z))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A normal opposite to the normal axis gets an exact half turn: the
+    /// normal is exactly `-axis`, and a particle of a planar object (axis
+    /// `+x`, normals in the plane z = 0) keeps its normal exactly in the
+    /// plane as it turns about z.
+    #[test]
+    fn a_normal_opposite_to_the_axis_is_exact() {
+        for axis in [Vec3::x(), Vec3::y(), Vec3::z(), Vec3::new(1.0, -2.0, 0.5)] {
+            let mut d = ParticleDesc::at(Point3::origin());
+            d.normal_axis = axis;
+            let d = d.with_normal(-axis);
+            let a = axis.normalize();
+            assert!(d.orientation.w == 0.0, "scalar part {}", d.orientation.w);
+            assert!((d.orientation * a + a).norm() < 1e-15, "{axis:?}");
+        }
+        let mut d = ParticleDesc::at(Point3::origin());
+        d.normal_axis = Vec3::x();
+        let d = d.with_normal(-Vec3::x());
+        assert_eq!(d.orientation * Vec3::x(), -Vec3::x());
+        for k in 1..50 {
+            let turn = Quat::from_scaled_axis(Vec3::z() * (0.1 * k as Real));
+            assert_eq!((turn * d.orientation * Vec3::x()).z, 0.0, "turn {k}");
+        }
+    }
 
     #[test]
     fn typing_rules_of_seed_002() {
