@@ -1,5 +1,8 @@
 //! A free sphere shell of the `elastic_shell` preset with light damping
-//! gained energy by bursts (+63 between t = 9 and 10 at dt 0.0005, the same
+//! never gains energy and stays in one piece. When the preset was cohesion
+//! and normalized co-circularity (it is now the bonded shape-memory
+//! material of `scenes/sphere_shell.ron`), such a shell gained energy by
+//! bursts (+63 between t = 9 and 10 at dt 0.0005, the same
 //! at 0.002 and 0.01) and tore into about 30 pieces: its particles overlap
 //! (the cohesion core is soft at alpha 16) and the normalized
 //! co-circularity has no limit at coincidence, so pairs passing close to

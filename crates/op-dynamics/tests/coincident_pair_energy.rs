@@ -1,5 +1,5 @@
-//! A free sphere shell of the `elastic_shell` preset (cohesion with a soft
-//! core, `α = 16`, plus normalized co-circularity) gained energy by bursts
+//! A free sphere shell of the first `elastic_shell` preset (cohesion with a
+//! soft core, `α = 16`, plus normalized co-circularity) gained energy by bursts
 //! and tore apart at any step: its particles can overlap, and a pair
 //! passing close to coincidence swept the direction `r/|r|` of the
 //! normalized co-circularity `((n_i + n_j)·r)²/|r|²` through half a turn
@@ -12,7 +12,8 @@
 use op_dynamics::interactions::{CohesionParams, Spacing};
 use op_dynamics::{Material, ParticleDesc, Particles, Point3, Real, Vec3, World, WorldParams};
 
-/// The `elastic_shell` preset's material.
+/// The first `elastic_shell` preset's material (cohesion and normalized
+/// co-circularity).
 fn elastic_shell() -> Material {
     Material {
         spacing: Some(Spacing::Cohesion(CohesionParams {

@@ -80,10 +80,12 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "elastic_shell",
-        summary: "a closed surface that springs back to round: cohesion spacing and \
-                  co-circularity (Lombardo & Puech §3, Szeliski & Tonnesen eq. 6)",
+        summary: "a closed surface that springs back to round: cohesion, the form interaction \
+                  with the generator's curvature, friction and bonds to the nearest neighbours \
+                  (Lombardo & Puech §3-5); co-circularity alone keeps a squeezed shell flat",
         material_ron: "(spacing: Cohesion((e: 200, r0: 1, alpha: 16, cutoff: 1.5)), \
-                       cocircularity: 5)",
+                       weight: (k: 1, a: 1, cutoff: 1.5), form: 2, coplanarity: 0.2, \
+                       friction: 1, bonds: (radius: 1.2))",
         scene: "scenes/sphere_shell.ron",
         dt: 0.01,
         linear_damping: 0.5,

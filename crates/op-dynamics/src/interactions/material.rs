@@ -17,8 +17,9 @@
 //! spacing core lets particles overlap (cohesion with a large `α`,
 //! docs/model.md §7), a pair passing close to coincidence swept its direction through
 //! half a turn within a few steps and the term's energy (up to `4 α ψ` per
-//! side) jumped by whatever the step missed: a free shell of the
-//! `elastic_shell` preset gained energy by bursts and tore apart at any
+//! side) jumped by whatever the step missed: a free shell of the first
+//! `elastic_shell` preset (cohesion and co-circularity) gained energy by
+//! bursts and tore apart at any
 //! step size. These terms are therefore faded to zero below the
 //! coincidence radius `r_near = NEAR_FRACTION · r_w` (`r_w` the bottom of
 //! the spacing well, about `r0`; the weight's width `a` without spacing)

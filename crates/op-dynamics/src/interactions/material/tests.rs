@@ -161,7 +161,8 @@ fn validation_names_the_field_path() {
 /// Normalized co-planarity and co-circularity depend on `r` only
 /// through its direction: a pair passing close to coincidence saw its
 /// energy jump by up to `4 α ψ` per side between two steps, and a free
-/// sphere of the `elastic_shell` preset gained energy by bursts and tore
+/// sphere of the first `elastic_shell` preset (cohesion and co-circularity)
+/// gained energy by bursts and tore
 /// apart. Below `r_near` they now fade to zero: energy and gradients
 /// vanish at coincidence, stay bounded (`~ α/r_near`, not `~ α/|r|`) and
 /// match finite differences; from `r_near` on nothing changes.
