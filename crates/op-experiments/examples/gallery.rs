@@ -33,6 +33,17 @@ const fn shaded(name: &'static str) -> Picture {
     }
 }
 
+/// A shaded picture of `frames` frames (a claim that happens between the
+/// quarters of the run: the squeeze of `sphere_shell` is deepest at frame
+/// 30 of 240).
+const fn shaded_frames(name: &'static str, frames: usize) -> Picture {
+    Picture {
+        name,
+        frames,
+        style: Style::Shaded,
+    }
+}
+
 const fn wireframe(name: &'static str) -> Picture {
     Picture {
         name,
@@ -61,6 +72,7 @@ const GALLERY: &[Picture] = &[
     shaded("fig_12_tearing"),
     shaded("sheet_on_sphere"),
     shaded("cookbook/skinned_hit"),
+    shaded_frames("sphere_shell", 9),
 ];
 
 /// Width and height of one frame of a contact sheet, pixels.
