@@ -52,6 +52,12 @@ impl Field {
         &self.primitives
     }
 
+    /// The primitives' bounding spheres `(centre, radius)`, in primitive
+    /// order: the field is zero outside their union.
+    pub(crate) fn spheres(&self) -> &[(Point3, Real)] {
+        &self.spheres
+    }
+
     /// Calls `visit(index, primitive)` for every primitive whose bounding
     /// sphere contains `p` (a superset of those with `p` in their support),
     /// in increasing index.

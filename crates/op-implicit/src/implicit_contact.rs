@@ -38,7 +38,9 @@
 //! [`crate::contact`]: over both objects, forces and torques about any
 //! point sum to zero up to round-off.
 //!
-//! Grid nodes and edge bisections run in parallel with ordered collects;
+//! Only the blocks of the grid that both objects' primitives reach are
+//! sampled (the narrow band, [`band`]). Grid nodes and edge bisections run
+//! in parallel with ordered collects;
 //! reactions are accumulated serially in edge order: the same bits for any
 //! thread count. Contact regions thinner than a cell, whose crossing edges
 //! have no endpoint inside either object, may be missed.
@@ -51,6 +53,9 @@ use crate::contact::{ReactionAccumulator, Reactions};
 use crate::error::PolygonizeError;
 use crate::field::{Field, ScalarField, ValueGradient};
 use crate::kernel::ISO;
+use band::ContactGrid;
+
+mod band;
 
 /// The optional bulge of Gascuel's propagation region (Gascuel 1993).
 ///
@@ -302,66 +307,10 @@ impl<'a> ContactPair<'a> {
         if !(h.is_finite() && h > 0.0) {
             return Err(PolygonizeError::InvalidCellSize(h));
         }
-        let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) = (self.a.support_box(), self.b.support_box())
-        else {
+        let Some(grid) = self.sampling_grid(h, params.max_nodes_per_axis)? else {
             return Ok(PairReactions::default());
         };
-        let (lo, hi) = (lo_a.sup(&lo_b), hi_a.inf(&hi_b));
-        if (0..3).any(|k| hi[k] <= lo[k]) {
-            return Ok(PairReactions::default());
-        }
-        let dims = [0, 1, 2].map(|k| ((hi[k] - lo[k]) / h).ceil() as usize + 1);
-        let needed = dims.into_iter().max().unwrap_or(1);
-        if needed > params.max_nodes_per_axis {
-            return Err(PolygonizeError::TooManyNodes {
-                needed,
-                max: params.max_nodes_per_axis,
-            });
-        }
-        let [nx, ny, nz] = dims;
-        // The grid centred on the box, so a symmetric contact is sampled
-        // symmetrically: a ball hitting a ribbon in the ribbon's plane
-        // pushes it in that plane, not out of it by the grid's offset.
-        let lo = Point3::from(
-            (lo.coords + hi.coords) * 0.5 - Vec3::from(dims.map(|n| 0.5 * (n - 1) as Real * h)),
-        );
-        let node = |i: usize| {
-            lo + Vec3::new(
-                (i % nx) as Real,
-                ((i / nx) % ny) as Real,
-                (i / (nx * ny)) as Real,
-            ) * h
-        };
-        let excess: Vec<(Real, Real)> = (0..nx * ny * nz)
-            .into_par_iter()
-            .map(|i| {
-                let p = node(i);
-                (self.a.value(&p) - ISO, self.b.value(&p) - ISO)
-            })
-            .collect();
-        let strides = [1, nx, nx * ny];
-        let mut edges: Vec<(usize, usize)> = Vec::new();
-        for (i, &(ea, eb)) in excess.iter().enumerate() {
-            let ijk = [i % nx, (i / nx) % ny, i / (nx * ny)];
-            for k in 0..3 {
-                if ijk[k] + 1 == dims[k] {
-                    continue;
-                }
-                let (fa, fb) = excess[i + strides[k]];
-                let crosses = (ea > eb) != (fa > fb);
-                if crosses && ea.max(eb).max(fa).max(fb) > 0.0 {
-                    edges.push((i, k));
-                }
-            }
-        }
-        let samples: Vec<ContactSample> = edges
-            .par_iter()
-            .filter_map(|&(i, k)| {
-                let mut dir = Vec3::zeros();
-                dir[k] = h;
-                self.sample_on_edge(&node(i), &dir, k, h)
-            })
-            .collect();
+        let samples = self.samples(&grid, &band::crossing_edges(&grid, self.a, self.b));
         let mut acc_a = ReactionAccumulator::default();
         let mut acc_b = ReactionAccumulator::default();
         for s in &samples {
@@ -374,6 +323,50 @@ impl<'a> ContactPair<'a> {
             b: acc_b.finish(),
             samples,
         })
+    }
+
+    /// The sampling grid of cell size `h` over the intersection of the two
+    /// support boxes, centred on it; `None` when the boxes do not overlap.
+    fn sampling_grid(
+        &self,
+        h: Real,
+        max_nodes: usize,
+    ) -> Result<Option<ContactGrid>, PolygonizeError> {
+        let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) = (self.a.support_box(), self.b.support_box())
+        else {
+            return Ok(None);
+        };
+        let (lo, hi) = (lo_a.sup(&lo_b), hi_a.inf(&hi_b));
+        if (0..3).any(|k| hi[k] <= lo[k]) {
+            return Ok(None);
+        }
+        let dims = [0, 1, 2].map(|k| ((hi[k] - lo[k]) / h).ceil() as usize + 1);
+        let needed = dims.into_iter().max().unwrap_or(1);
+        if needed > max_nodes {
+            return Err(PolygonizeError::TooManyNodes {
+                needed,
+                max: max_nodes,
+            });
+        }
+        // The grid centred on the box, so a symmetric contact is sampled
+        // symmetrically: a ball hitting a ribbon in the ribbon's plane
+        // pushes it in that plane, not out of it by the grid's offset.
+        let lo = Point3::from(
+            (lo.coords + hi.coords) * 0.5 - Vec3::from(dims.map(|n| 0.5 * (n - 1) as Real * h)),
+        );
+        Ok(Some(ContactGrid { lo, h, dims }))
+    }
+
+    /// The samples on the crossed `edges` of `grid`, in edge order.
+    fn samples(&self, grid: &ContactGrid, edges: &[(usize, usize)]) -> Vec<ContactSample> {
+        edges
+            .par_iter()
+            .filter_map(|&(i, k)| {
+                let mut dir = Vec3::zeros();
+                dir[k] = grid.h;
+                self.sample_on_edge(&grid.node(i), &dir, k, grid.h)
+            })
+            .collect()
     }
 
     /// Bisects `e_A - e_B` on the edge from `p0` to `p0 + dir` (axis `k`,

@@ -371,3 +371,75 @@ fn symmetric_contact_is_sampled_symmetrically() {
         );
     }
 }
+
+/// A: a wavy row of squares along x (particles 0..24); B: a clump of point
+/// blobs (particles 100..) around `centre`.
+fn ribbon_and_clump(rng: &mut Rng, centre: Point3) -> (Field, Field) {
+    let a = Field::new(
+        (0..24)
+            .map(|i| {
+                let x = 0.5 * i as Real - 6.0;
+                let q = Quat::from_scaled_axis(Vec3::new(0.0, 0.3 * (0.4 * x).cos(), 0.0));
+                Primitive::square(Vec3::z(), 0.25, 0.4).posed(
+                    i,
+                    &Point3::new(x, 0.0, 0.4 * (0.4 * x).sin()),
+                    &q,
+                )
+            })
+            .collect(),
+    );
+    let b = Field::new(
+        (0..12)
+            .map(|i| {
+                Primitive::point(Vec3::zeros(), 0.6).posed(
+                    100 + i,
+                    &(centre + rng.vec3(0.6)),
+                    &rng.quat(3.0),
+                )
+            })
+            .collect(),
+    );
+    (a, b)
+}
+
+/// The narrow band ([`super::band`]) samples exactly what the scan of
+/// every node of the common box samples, bit for bit, and in the same
+/// order: two blobs, a rectangle and a point, and a clump pressed into a
+/// long ribbon at random places (where the common box is the clump's and
+/// most of it is away from the ribbon), at two cell sizes.
+#[test]
+fn the_band_samples_what_every_node_samples() {
+    let mut rng = Rng::new(41);
+    let mut cases = vec![blobs(), rectangle_and_point()];
+    for _ in 0..6 {
+        let centre = Point3::new(rng.uniform(-5.0, 5.0), rng.uniform(-0.5, 0.5), 0.6);
+        cases.push(ribbon_and_clump(&mut rng, centre));
+    }
+    let mut compared = 0;
+    for (n, (a, b)) in cases.iter().enumerate() {
+        let pair = ContactPair::new(a, b);
+        for h in [0.04, 0.1] {
+            let grid = pair
+                .sampling_grid(h, 512)
+                .unwrap()
+                .expect("overlapping boxes");
+            let band = band::crossing_edges(&grid, a, b);
+            let dense = band::crossing_edges_dense(&grid, a, b);
+            assert!(
+                band.iter().all(|e| dense.binary_search(e).is_ok()),
+                "case {n}"
+            );
+            let samples = pair.samples(&grid, &band);
+            assert_eq!(samples, pair.samples(&grid, &dense), "case {n}, h {h}");
+            eprintln!(
+                "case {n}, h {h}: {} nodes, {} crossed edges of {} in the band, {} samples",
+                grid.dims.iter().product::<usize>(),
+                band.len(),
+                dense.len(),
+                samples.len()
+            );
+            compared += samples.len();
+        }
+    }
+    assert!(compared > 100, "{compared} samples compared");
+}
