@@ -2,6 +2,7 @@
 //! overlap of the deformed skins, determinism, C1 bulge.
 
 use super::*;
+use super::{crossing, BRACKET};
 use crate::polygonize::{polygonize_field, PolygonizeParams};
 use crate::primitives::Primitive;
 use op_dynamics::{Material, ParticleDesc, Particles, Quat, WorldParams};
@@ -442,4 +443,90 @@ fn the_band_samples_what_every_node_samples() {
         }
     }
     assert!(compared > 100, "{compared} samples compared");
+}
+
+/// Plain bisection to round-off (48 halvings, to 2^-49 of the edge): the
+/// oracle of [`crossing`].
+fn bisected(phi: impl Fn(Real) -> Real) -> Real {
+    let (mut t0, mut t1) = (0.0, 1.0);
+    let positive0 = phi(0.0) > 0.0;
+    for _ in 0..48 {
+        let tm = 0.5 * (t0 + t1);
+        if (phi(tm) > 0.0) == positive0 {
+            t0 = tm;
+        } else {
+            t1 = tm;
+        }
+    }
+    0.5 * (t0 + t1)
+}
+
+/// The Illinois crossing brackets the root of the edge to `1e-12` of its
+/// length, where bisection to round-off puts it, in a fraction of the
+/// evaluations: on every crossed edge of the contacts of
+/// [`the_band_samples_what_every_node_samples`]'s cases, and on steep and
+/// flat one-dimensional functions.
+#[test]
+fn iterations_of_the_crossing() {
+    use std::cell::Cell;
+    let count = |phi: &dyn Fn(Real) -> Real| {
+        let n = Cell::new(0usize);
+        let (t0, t1) = crossing(|t| {
+            n.set(n.get() + 1);
+            phi(t)
+        });
+        (t0, t1, n.get())
+    };
+    type Phi = Box<dyn Fn(Real) -> Real>;
+    let functions: [(&str, Phi); 4] = [
+        ("linear", Box::new(|t| 0.3 - t)),
+        (
+            "cubic",
+            Box::new(|t| (t - 0.71).powi(3) + 0.01 * (t - 0.71)),
+        ),
+        ("steep", Box::new(|t| (40.0 * (t - 0.2)).tanh())),
+        ("flat end", Box::new(|t| (1.0 - t).powi(4) - 0.0001)),
+    ];
+    for (name, phi) in &functions {
+        let (t0, t1, n) = count(phi.as_ref());
+        let root = bisected(phi.as_ref());
+        eprintln!("{name}: {n} evaluations, bracket {:.1e}", t1 - t0);
+        assert!(
+            t1 - t0 <= BRACKET && t0 <= root + 4e-15 && root <= t1 + 4e-15,
+            "{name}"
+        );
+        assert!(n <= 25, "{name}: {n} evaluations (bisection: 50)");
+    }
+    let mut rng = Rng::new(41);
+    let mut cases = vec![blobs(), rectangle_and_point()];
+    for _ in 0..6 {
+        let centre = Point3::new(rng.uniform(-5.0, 5.0), rng.uniform(-0.5, 0.5), 0.6);
+        cases.push(ribbon_and_clump(&mut rng, centre));
+    }
+    let (mut edges, mut evaluations, mut most, mut worst) = (0, 0, 0, 0.0 as Real);
+    for (a, b) in &cases {
+        let pair = ContactPair::new(a, b);
+        let grid = pair.sampling_grid(0.04, 512).unwrap().unwrap();
+        for (i, k) in band::crossing_edges(&grid, a, b) {
+            let p0 = grid.node(i);
+            let mut dir = Vec3::zeros();
+            dir[k] = grid.h;
+            let phi = |t: Real| {
+                let p = p0 + dir * t;
+                a.value(&p) - b.value(&p)
+            };
+            let (t0, t1, n) = count(&phi);
+            worst = worst.max((0.5 * (t0 + t1) - bisected(phi)).abs());
+            edges += 1;
+            evaluations += n;
+            most = most.max(n);
+        }
+    }
+    let mean = evaluations as Real / edges as Real;
+    eprintln!(
+        "{edges} crossed edges: {mean:.1} evaluations on average, {most} at most (bisection: 50); \
+         farthest from the bisected crossing {worst:.1e} of the edge"
+    );
+    assert!(worst <= BRACKET, "{worst}");
+    assert!(mean <= 12.0, "{mean}");
 }
