@@ -22,9 +22,9 @@
 //! **Reaction.** The contact surface `e_A = e_B > 0` is sampled on a grid
 //! of cubic cells over the intersection of the two objects' support boxes:
 //! every grid edge along which `e_A - e_B` changes sign is searched to
-//! `1e-12` of its length ([`crossing`]), and the crossing is a sample when the common excess
-//! `e = e_A = e_B` is positive there. A crossing on an edge along axis `k`
-//! stands for the area `h^2 |n_k|` (`h` the cell size, `n` the unit
+//! `1e-12` of its length (Illinois regula falsi), and the crossing is a
+//! sample when the common excess `e = e_A = e_B` is positive there. A
+//! crossing on an edge along axis `k` stands for the area `h^2 |n_k|` (`h` the cell size, `n` the unit
 //! contact normal): summed over the three axes this is, on average, the
 //! surface area, so the total reaction does not depend on `h` (unlike the
 //! per-sample stiffness of [`crate::contact`]). The contact normal is
@@ -39,7 +39,7 @@
 //! point sum to zero up to round-off.
 //!
 //! Only the blocks of the grid that both objects' primitives reach are
-//! sampled (the narrow band, [`band`]). Grid nodes and edge searches run
+//! sampled (the narrow band, module `band`). Grid nodes and edge searches run
 //! in parallel with ordered collects;
 //! reactions are accumulated serially in edge order: the same bits for any
 //! thread count. Contact regions thinner than a cell, whose crossing edges
