@@ -25,9 +25,9 @@
 //! `1e-12` of its length (Illinois regula falsi), and the crossing is a
 //! sample when the common excess `e = e_A = e_B` is positive there. A
 //! crossing on an edge along axis `k` stands for the area `h^2 |n_k|`
-//! (`h` the cell size, `n` the unit contact normal): summed over the three axes this is, on average, the
-//! surface area, so the total reaction does not depend on `h` (unlike the
-//! per-sample stiffness of [`crate::contact`]). The contact normal is
+//! (`h` the cell size, `n` the unit contact normal): summed over the
+//! three axes this is, on average, the surface area, so the total
+//! reaction does not depend on `h` (unlike the per-sample stiffness of [`crate::contact`]). The contact normal is
 //! `n = (grad e_B - grad e_A) / |...|`, pointing out of A into B. The
 //! pressure is `stiffness * e` (the removed excess, `e_B` for A and `e_A`
 //! for B, equal on the surface); the sample's reaction `stiffness * e *
