@@ -27,8 +27,9 @@
 //! crossing on an edge along axis `k` stands for the area `h^2 |n_k|`
 //! (`h` the cell size, `n` the unit contact normal): summed over the
 //! three axes this is, on average, the surface area, so the total
-//! reaction does not depend on `h` (unlike the per-sample stiffness of [`crate::contact`]). The contact normal is
-//! `n = (grad e_B - grad e_A) / |...|`, pointing out of A into B. The
+//! reaction does not depend on `h` (unlike the per-sample stiffness of
+//! [`crate::contact`]). The contact normal is `n = (grad e_B - grad e_A)
+//! / |...|`, pointing out of A into B. The
 //! pressure is `stiffness * e` (the removed excess, `e_B` for A and `e_A`
 //! for B, equal on the surface); the sample's reaction `stiffness * e *
 //! area * n` pushes B along `+n` and A along `-n`, equal and opposite.
