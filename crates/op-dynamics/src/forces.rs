@@ -508,6 +508,17 @@ trait PairSource: Sync {
     fn pair_or_zero(&self, i: usize, j: usize, k: usize, scratch: &Self::Row) -> Self::Out {
         self.pair(i, j, k, scratch).unwrap_or_default()
     }
+    /// [`Self::pair`] as a result and whether the pair contributes: `(+0
+    /// everywhere, false)` for `None`. `DENSE` sources override it without
+    /// a branch, so the spill ([`spill_row`]) writes every pair and keeps
+    /// those that contribute.
+    #[inline(always)]
+    fn pair_kept(&self, i: usize, j: usize, k: usize, scratch: &Self::Row) -> (Self::Out, bool) {
+        match self.pair(i, j, k, scratch) {
+            Some(o) => (o, true),
+            None => (Self::Out::default(), false),
+        }
+    }
     /// The pairs of row `i` whose second particle lies in the block
     /// starting at `b0` (`row`: the row's in-block prefix), in row order:
     /// each pair's force is subtracted from the row's running sums, which
@@ -641,9 +652,15 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
 /// The pairs of row `i` from `split` on (second particles in later
 /// blocks), in row order: each pair's force is subtracted from the row's
 /// running `sums` `(force, torque, energy)`, which are returned, and the
-/// pair is pushed to the block's spill (see [`accumulate`]). Not inlined:
-/// inlined into the block loop, the running sums lived in stack slots
-/// (the pushes may call the allocator), a store-to-load chain per pair.
+/// pair is pushed to the block's spill (see [`accumulate`]).
+///
+/// Branch-free: every pair is written at the spill's end and the length
+/// advances only for pairs that contribute ([`PairSource::pair_kept`]; a
+/// branch on the cut-off mispredicts for the ~30% of listed pairs beyond
+/// it). A pair that contributes nothing is `+0` everywhere, so adding it
+/// to the running sums leaves their bits as skipping it would (see
+/// [`PairSource`]). Not inlined: inlined into the block loop, the running
+/// sums lived in stack slots, a store-to-load chain per pair.
 #[inline(never)]
 fn spill_row<const TORQUES: bool, P: PairSource>(
     src: &P,
@@ -655,20 +672,31 @@ fn spill_row<const TORQUES: bool, P: PairSource>(
     sums: (Vec3, Vec3, Real),
 ) -> (Vec3, Vec3, Real) {
     let (mut fo, mut to, mut eo) = sums;
+    let mut len = block.spill_targets.len();
+    let end = len + (row.len() - split);
+    block.spill_targets.resize(end, 0);
+    block.spill_forces.resize(end, Vec3::zeros());
+    if TORQUES {
+        block.spill_torques.resize(end, Vec3::zeros());
+    }
+    let targets = &mut block.spill_targets[..end];
+    let forces = &mut block.spill_forces[..end];
     for (k, &j) in row.iter().enumerate().skip(split) {
-        let Some(o) = src.pair(i, j as usize, k, scratch) else {
-            continue;
-        };
+        let (o, kept) = src.pair_kept(i, j as usize, k, scratch);
         let fj = o.force_j();
         fo -= fj;
         eo += o.energy();
-        block.spill_targets.push(j);
-        block.spill_forces.push(fj);
+        targets[len] = j;
+        forces[len] = fj;
         if TORQUES {
             to += o.torque_i();
-            block.spill_torques.push(o.torque_j());
+            block.spill_torques[len] = o.torque_j();
         }
+        len += usize::from(kept);
     }
+    block.spill_targets.truncate(len);
+    block.spill_forces.truncate(len);
+    block.spill_torques.truncate(if TORQUES { len } else { 0 });
     (fo, to, eo)
 }
 
