@@ -33,7 +33,10 @@ impl PairSource for LjLanes<'_> {
     #[inline(always)]
     fn pair_kept(&self, _: usize, _: usize, k: usize, scratch: &RowLanes) -> (SpacingPair, bool) {
         let (force_j, energy) = scratch.get_or_zero(k);
-        (SpacingPair { force_j, energy }, scratch.kept(k, self.cutoff2))
+        (
+            SpacingPair { force_j, energy },
+            scratch.kept(k, self.cutoff2),
+        )
     }
     #[inline(always)]
     fn pair(&self, _: usize, _: usize, k: usize, scratch: &RowLanes) -> Option<SpacingPair> {
