@@ -97,6 +97,10 @@ struct BlockScratch {
     spill_targets: Vec<u32>,
     spill_forces: Vec<Vec3>,
     spill_torques: Vec<Vec3>,
+    /// The spill's entries in use (its first `spill_len`). The spill's
+    /// vectors only grow, their tails being scratch, so a row's pairs are
+    /// written without first zeroing their slots ([`spill_row`]).
+    spill_len: usize,
     /// Visiting order of the spill, grouped by target block.
     order: Vec<u32>,
     /// Start of each later block's group in `order` (block `b + 1 + g`
@@ -609,9 +613,7 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
             if TORQUES {
                 block.local_t.resize(f.len(), Vec3::zeros());
             }
-            block.spill_targets.clear();
-            block.spill_forces.clear();
-            block.spill_torques.clear();
+            block.spill_len = 0;
             let mut scratch = P::Row::default();
             for i in b0..b1 {
                 // The row is sorted: targets in this block, then later ones.
@@ -672,12 +674,17 @@ fn spill_row<const TORQUES: bool, P: PairSource>(
     sums: (Vec3, Vec3, Real),
 ) -> (Vec3, Vec3, Real) {
     let (mut fo, mut to, mut eo) = sums;
-    let mut len = block.spill_targets.len();
+    let mut len = block.spill_len;
     let end = len + (row.len() - split);
-    block.spill_targets.resize(end, 0);
-    block.spill_forces.resize(end, Vec3::zeros());
-    if TORQUES {
-        block.spill_torques.resize(end, Vec3::zeros());
+    let grown = |have: usize| end.max(2 * have);
+    if block.spill_targets.len() < end {
+        let m = grown(block.spill_targets.len());
+        block.spill_targets.resize(m, 0);
+        block.spill_forces.resize(m, Vec3::zeros());
+    }
+    if TORQUES && block.spill_torques.len() < end {
+        let m = grown(block.spill_torques.len());
+        block.spill_torques.resize(m, Vec3::zeros());
     }
     let targets = &mut block.spill_targets[..end];
     let forces = &mut block.spill_forces[..end];
@@ -694,9 +701,7 @@ fn spill_row<const TORQUES: bool, P: PairSource>(
         }
         len += usize::from(kept);
     }
-    block.spill_targets.truncate(len);
-    block.spill_forces.truncate(len);
-    block.spill_torques.truncate(if TORQUES { len } else { 0 });
+    block.spill_len = len;
     (fo, to, eo)
 }
 
@@ -736,17 +741,18 @@ impl BlockScratch {
         let first = b + 1;
         self.starts.clear();
         self.starts.resize(nblocks - first + 1, 0);
-        for &j in &self.spill_targets {
+        let spill = &self.spill_targets[..self.spill_len];
+        for &j in spill {
             self.starts[j as usize / BLOCK - first + 1] += 1;
         }
         for g in 1..self.starts.len() {
             self.starts[g] += self.starts[g - 1];
         }
         self.order.clear();
-        self.order.resize(self.spill_targets.len(), 0);
+        self.order.resize(spill.len(), 0);
         self.cursor.clear();
         self.cursor.extend_from_slice(&self.starts);
-        for (k, &j) in self.spill_targets.iter().enumerate() {
+        for (k, &j) in spill.iter().enumerate() {
             let c = &mut self.cursor[j as usize / BLOCK - first];
             self.order[*c as usize] = k as u32;
             *c += 1;
