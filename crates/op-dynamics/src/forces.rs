@@ -420,23 +420,15 @@ fn uniform_spacing(a: &Attributes<'_>) -> bool {
         _ => return true,
     };
     k != crate::particles::ParticleType::Hinge
-        && all_of(a.materials, |&m| m == 0)
-        && all_of(a.objects, |&x| x == o)
-        && all_of(a.kinds, |&x| x == k)
-}
-
-/// Whether every item satisfies `f`, tested by the pool: run once per
-/// force evaluation on the calling thread, these scans were a serial
-/// section of the step (about a quarter of the calling thread's samples in
-/// the 2-thread spacing child) while the pool waited.
-fn all_of<T: Sync>(items: &[T], f: impl Fn(&T) -> bool + Sync + Send) -> bool {
-    items.par_iter().with_min_len(4096).all(f)
+        && a.materials.iter().all(|&m| m == 0)
+        && a.objects.iter().all(|&x| x == o)
+        && a.kinds.iter().all(|&x| x == k)
 }
 
 /// [`uniform_spacing`] and no particle unoriented: every pair is complete
 /// and oriented, of material 0.
 fn uniform_oriented(a: &Attributes<'_>) -> bool {
-    uniform_spacing(a) && all_of(a.flags, |f| !f.contains(Flags::UNORIENTED))
+    uniform_spacing(a) && a.flags.iter().all(|f| !f.contains(Flags::UNORIENTED))
 }
 
 /// The per-particle sums a force evaluation fills.
