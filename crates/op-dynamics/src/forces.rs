@@ -97,6 +97,10 @@ struct BlockScratch {
     spill_targets: Vec<u32>,
     spill_forces: Vec<Vec3>,
     spill_torques: Vec<Vec3>,
+    /// The spill's entries in use (its first `spill_len`). The spill's
+    /// vectors only grow, their tails being scratch, so a row's pairs are
+    /// written without first zeroing their slots ([`spill_row`]).
+    spill_len: usize,
     /// Visiting order of the spill, grouped by target block.
     order: Vec<u32>,
     /// Start of each later block's group in `order` (block `b + 1 + g`
@@ -508,6 +512,17 @@ trait PairSource: Sync {
     fn pair_or_zero(&self, i: usize, j: usize, k: usize, scratch: &Self::Row) -> Self::Out {
         self.pair(i, j, k, scratch).unwrap_or_default()
     }
+    /// [`Self::pair`] as a result and whether the pair contributes: `(+0
+    /// everywhere, false)` for `None`. `DENSE` sources override it without
+    /// a branch, so the spill ([`spill_row`]) writes every pair and keeps
+    /// those that contribute.
+    #[inline(always)]
+    fn pair_kept(&self, i: usize, j: usize, k: usize, scratch: &Self::Row) -> (Self::Out, bool) {
+        match self.pair(i, j, k, scratch) {
+            Some(o) => (o, true),
+            None => (Self::Out::default(), false),
+        }
+    }
     /// The pairs of row `i` whose second particle lies in the block
     /// starting at `b0` (`row`: the row's in-block prefix), in row order:
     /// each pair's force is subtracted from the row's running sums, which
@@ -598,9 +613,7 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
             if TORQUES {
                 block.local_t.resize(f.len(), Vec3::zeros());
             }
-            block.spill_targets.clear();
-            block.spill_forces.clear();
-            block.spill_torques.clear();
+            block.spill_len = 0;
             let mut scratch = P::Row::default();
             for i in b0..b1 {
                 // The row is sorted: targets in this block, then later ones.
@@ -641,9 +654,15 @@ fn accumulate<const TORQUES: bool, P: PairSource>(
 /// The pairs of row `i` from `split` on (second particles in later
 /// blocks), in row order: each pair's force is subtracted from the row's
 /// running `sums` `(force, torque, energy)`, which are returned, and the
-/// pair is pushed to the block's spill (see [`accumulate`]). Not inlined:
-/// inlined into the block loop, the running sums lived in stack slots
-/// (the pushes may call the allocator), a store-to-load chain per pair.
+/// pair is pushed to the block's spill (see [`accumulate`]).
+///
+/// Branch-free: every pair is written at the spill's end and the length
+/// advances only for pairs that contribute ([`PairSource::pair_kept`]; a
+/// branch on the cut-off mispredicts for the ~30% of listed pairs beyond
+/// it). A pair that contributes nothing is `+0` everywhere, so adding it
+/// to the running sums leaves their bits as skipping it would (see
+/// [`PairSource`]). Not inlined: inlined into the block loop, the running
+/// sums lived in stack slots, a store-to-load chain per pair.
 #[inline(never)]
 fn spill_row<const TORQUES: bool, P: PairSource>(
     src: &P,
@@ -655,20 +674,34 @@ fn spill_row<const TORQUES: bool, P: PairSource>(
     sums: (Vec3, Vec3, Real),
 ) -> (Vec3, Vec3, Real) {
     let (mut fo, mut to, mut eo) = sums;
+    let mut len = block.spill_len;
+    let end = len + (row.len() - split);
+    let grown = |have: usize| end.max(2 * have);
+    if block.spill_targets.len() < end {
+        let m = grown(block.spill_targets.len());
+        block.spill_targets.resize(m, 0);
+        block.spill_forces.resize(m, Vec3::zeros());
+    }
+    if TORQUES && block.spill_torques.len() < end {
+        let m = grown(block.spill_torques.len());
+        block.spill_torques.resize(m, Vec3::zeros());
+    }
+    let targets = &mut block.spill_targets[..end];
+    let forces = &mut block.spill_forces[..end];
     for (k, &j) in row.iter().enumerate().skip(split) {
-        let Some(o) = src.pair(i, j as usize, k, scratch) else {
-            continue;
-        };
+        let (o, kept) = src.pair_kept(i, j as usize, k, scratch);
         let fj = o.force_j();
         fo -= fj;
         eo += o.energy();
-        block.spill_targets.push(j);
-        block.spill_forces.push(fj);
+        targets[len] = j;
+        forces[len] = fj;
         if TORQUES {
             to += o.torque_i();
-            block.spill_torques.push(o.torque_j());
+            block.spill_torques[len] = o.torque_j();
         }
+        len += usize::from(kept);
     }
+    block.spill_len = len;
     (fo, to, eo)
 }
 
@@ -708,17 +741,18 @@ impl BlockScratch {
         let first = b + 1;
         self.starts.clear();
         self.starts.resize(nblocks - first + 1, 0);
-        for &j in &self.spill_targets {
+        let spill = &self.spill_targets[..self.spill_len];
+        for &j in spill {
             self.starts[j as usize / BLOCK - first + 1] += 1;
         }
         for g in 1..self.starts.len() {
             self.starts[g] += self.starts[g - 1];
         }
         self.order.clear();
-        self.order.resize(self.spill_targets.len(), 0);
+        self.order.resize(spill.len(), 0);
         self.cursor.clear();
         self.cursor.extend_from_slice(&self.starts);
-        for (k, &j) in self.spill_targets.iter().enumerate() {
+        for (k, &j) in spill.iter().enumerate() {
             let c = &mut self.cursor[j as usize / BLOCK - first];
             self.order[*c as usize] = k as u32;
             *c += 1;

@@ -70,8 +70,15 @@ impl RowLanes {
     /// coincident, or NaN: the scalar pair's test).
     #[inline(always)]
     pub fn get(&self, k: usize, cutoff2: Real) -> Option<(Vec3, Real)> {
+        self.kept(k, cutoff2).then(|| self.get_or_zero(k))
+    }
+
+    /// Whether the `k`-th pair contributes (the test of [`Self::get`]),
+    /// without a branch.
+    #[inline(always)]
+    pub fn kept(&self, k: usize, cutoff2: Real) -> bool {
         let d2 = self.d2[k];
-        (d2 <= cutoff2 && d2 > 0.0).then(|| self.get_or_zero(k))
+        (d2 <= cutoff2) & (d2 > 0.0)
     }
 
     /// The result of the `k`-th pair, `(+0, +0)` when it contributes

@@ -46,6 +46,17 @@ impl PairSource for OrientedLanes<'_> {
         scratch.add_in_block(row, b0, local_f, local_t)
     }
     #[inline(always)]
+    fn pair_kept(
+        &self,
+        i: usize,
+        j: usize,
+        k: usize,
+        scratch: &OrientedRow,
+    ) -> (OrientedPair, bool) {
+        let o = self.pair_or_zero(i, j, k, scratch);
+        (o, scratch.kept(k, self.input.cutoff2))
+    }
+    #[inline(always)]
     fn pair(&self, _: usize, _: usize, k: usize, scratch: &OrientedRow) -> Option<OrientedPair> {
         scratch
             .get(k, self.input.cutoff2)

@@ -31,6 +31,14 @@ impl PairSource for LjLanes<'_> {
         SpacingPair { force_j, energy }
     }
     #[inline(always)]
+    fn pair_kept(&self, _: usize, _: usize, k: usize, scratch: &RowLanes) -> (SpacingPair, bool) {
+        let (force_j, energy) = scratch.get_or_zero(k);
+        (
+            SpacingPair { force_j, energy },
+            scratch.kept(k, self.cutoff2),
+        )
+    }
+    #[inline(always)]
     fn pair(&self, _: usize, _: usize, k: usize, scratch: &RowLanes) -> Option<SpacingPair> {
         scratch
             .get(k, self.cutoff2)

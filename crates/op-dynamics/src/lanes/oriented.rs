@@ -70,7 +70,15 @@ impl OrientedRow {
     /// zeros, as the scalar pair does).
     #[inline(always)]
     pub fn get(&self, k: usize, cutoff2: Real) -> Option<OrientedResult> {
-        (self.d2[k] <= cutoff2 || self.d2[k].is_nan()).then(|| self.get_or_zero(k))
+        self.kept(k, cutoff2).then(|| self.get_or_zero(k))
+    }
+
+    /// Whether the `k`-th pair contributes (the test of [`Self::get`]),
+    /// without a branch.
+    #[inline(always)]
+    pub fn kept(&self, k: usize, cutoff2: Real) -> bool {
+        let d2 = self.d2[k];
+        (d2 <= cutoff2) | d2.is_nan()
     }
 
     /// The result of the `k`-th pair, zeros when it contributes nothing.

@@ -249,28 +249,41 @@ pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) 
         let [cx, cy, cz] = grid.decode(c as usize);
         let x0 = cx.saturating_sub(reach);
         let x1 = (cx + reach).min(grid.dims[0] - 1);
-        for z in cz.saturating_sub(reach)..=(cz + reach).min(grid.dims[2] - 1) {
-            for y in cy.saturating_sub(reach)..=(cy + reach).min(grid.dims[1] - 1) {
-                // Cells x0..=x1 of this (y, z) line are contiguous.
-                let a = scratch.cell_start[grid.cell_id([x0, y, z])] as usize;
-                let b = scratch.cell_start[grid.cell_id([x1, y, z]) + 1] as usize;
+        let zs = cz.saturating_sub(reach)..=(cz + reach).min(grid.dims[2] - 1);
+        let ys = cy.saturating_sub(reach)..=(cy + reach).min(grid.dims[1] - 1);
+        // Cells x0..=x1 of a (y, z) line are contiguous in cell order.
+        let line = |y: usize, z: usize| {
+            let a = scratch.cell_start[grid.cell_id([x0, y, z])] as usize;
+            let b = scratch.cell_start[grid.cell_id([x1, y, z]) + 1] as usize;
+            a..b
+        };
+        // Room for every candidate, made once per row (one fill, not one
+        // per line).
+        let candidates: usize = zs
+            .clone()
+            .flat_map(|z| ys.clone().map(move |y| (y, z)))
+            .map(|(y, z)| line(y, z).len())
+            .sum();
+        let start = row.len();
+        row.resize(start + candidates, 0);
+        let mut len = start;
+        for z in zs {
+            for y in ys.clone() {
                 // Branch-free filter: every candidate is written, the
                 // length advances only for kept ones (whether `j > i` is
                 // a coin toss in spatial order: a branch on it mispredicts
                 // half the time).
-                let start = row.len();
-                row.resize(start + (b - a), 0);
-                let mut len = start;
-                for (q, &j) in scratch.sorted_pos[a..b]
+                let r = line(y, z);
+                for (q, &j) in scratch.sorted_pos[r.clone()]
                     .iter()
-                    .zip(&scratch.sorted_idx[a..b])
+                    .zip(&scratch.sorted_idx[r])
                 {
                     row[len] = j;
                     len += usize::from((j as usize > i) & (dist2(&p, q) <= r2));
                 }
-                row.truncate(len);
             }
         }
+        row.truncate(len);
     });
     out.scratch.grid = s;
 }

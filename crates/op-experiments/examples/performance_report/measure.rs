@@ -209,25 +209,36 @@ pub(crate) fn interleaved_runs(
     Ok(results)
 }
 
-/// One scaling run: lattice cells a side, the work, ours at 1 and at 2
-/// threads.
-pub(crate) type ScalingRun = (usize, &'static str, Measure, Measure);
+/// The scaling runs of one size and work: lattice cells a side, the work,
+/// and per repetition ours at 1 and at 2 threads.
+pub(crate) type ScalingRun = (usize, &'static str, Vec<(Measure, Measure)>);
 
-/// Scaling at 100k and 1M particles (100k only when `quick`): our own
-/// Maxwell velocities, 10 steps, 5 at 1M, one run each, 1 then 2 threads.
+/// Repetitions of the scaling runs. One 10-step run at 100k takes 0.7 s
+/// at 2 threads, so a time slice lost to another process moves its
+/// speed-up by several percent: the figures are medians over interleaved
+/// repetitions, as the side-by-side ones are.
+const SCALING_REPS: usize = 3;
+
+/// Scaling at 100k and 1M particles (100k only and one repetition when
+/// `quick`): our own Maxwell velocities, 10 steps, 5 at 1M; every
+/// repetition runs each size and work at 1 then 2 threads.
 pub(crate) fn scaling_runs(quick: bool) -> Res<Vec<ScalingRun>> {
-    let mut scaling = Vec::new();
     let sizes: &[usize] = if quick { &[29] } else { &[29, 63] };
-    for &cells in sizes {
-        for kind in ["spacing", "oriented"] {
-            let steps = if cells > 40 { 5 } else { 10 };
-            let one = ours(kind, 1, steps, "-", cells)?;
-            let two = ours(kind, 2, steps, "-", cells)?;
+    let reps = if quick { 1 } else { SCALING_REPS };
+    let mut scaling: Vec<ScalingRun> = sizes
+        .iter()
+        .flat_map(|&cells| ["spacing", "oriented"].map(|kind| (cells, kind, Vec::new())))
+        .collect();
+    for rep in 0..reps {
+        for (cells, kind, runs) in scaling.iter_mut() {
+            let steps = if *cells > 40 { 5 } else { 10 };
+            let one = ours(kind, 1, steps, "-", *cells)?;
+            let two = ours(kind, 2, steps, "-", *cells)?;
             eprintln!(
-                "scaling {kind} cells={cells}: {:.3} s / {:.3} s",
+                "rep {rep} scaling {kind} cells={cells}: {:.3} s / {:.3} s",
                 one["seconds"], two["seconds"]
             );
-            scaling.push((cells, kind, one, two));
+            runs.push((one, two));
         }
     }
     Ok(scaling)

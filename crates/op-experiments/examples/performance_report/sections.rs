@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use crate::measure::ScalingRun;
-use crate::{Res, Runs, FLOPS_ORIENTED, FLOPS_SPACING, STEPS, WORKS};
+use crate::{Measure, Res, Runs, FLOPS_ORIENTED, FLOPS_SPACING, STEPS, WORKS};
 
 /// The median of `v` (the mean of the middle two when even).
 pub(crate) fn median(v: &[f64]) -> f64 {
@@ -303,25 +303,56 @@ fn memory(results: &[[Runs; 2]]) -> Vec<Memory> {
     memory
 }
 
+/// The medians over the repetitions of one size and work: seconds per
+/// step at 1 and 2 threads, the wall-clock and work-bound speed-ups (of
+/// each repetition), peak memory (kB) at 1 and 2 threads.
+struct Scaled {
+    step1: f64,
+    step2: f64,
+    wall: f64,
+    work: f64,
+    peak1: f64,
+    peak2: f64,
+}
+
+fn scaled(runs: &[(Measure, Measure)]) -> Scaled {
+    let m = |f: &dyn Fn(&Measure, &Measure) -> f64| {
+        median(&runs.iter().map(|(o, t)| f(o, t)).collect::<Vec<_>>())
+    };
+    Scaled {
+        step1: m(&|o, _| o["seconds"] / o["steps"]),
+        step2: m(&|_, t| t["seconds"] / t["steps"]),
+        wall: m(&|o, t| o["seconds"] / t["seconds"]),
+        work: m(&|o, t| 2.0 * o["cpu"] / t["cpu"]),
+        peak1: m(&|o, _| o["peak_kb"]),
+        peak2: m(&|_, t| t["peak_kb"]),
+    }
+}
+
 /// Our time per step, speed-ups and peak memory at 100k and 1M particles.
 pub(crate) fn scaling_section(scaling: &[ScalingRun]) -> Res<String> {
     let mut md = String::new();
+    let runs = match scaling.first().map_or(0, |s| s.2.len()) {
+        1 => "one run".to_string(),
+        reps => format!("medians of {reps} interleaved runs"),
+    };
     writeln!(
         md,
-        "\n## Scaling with N (ours; 10 steps, 5 at 1M, Maxwell velocities at 1.44, one run each)\n"
+        "\n## Scaling with N (ours; 10 steps, 5 at 1M, Maxwell velocities at 1.44; {runs})\n"
     )?;
     writeln!(md, "| particles | work | 1 thread s/step | 2 threads s/step | speed-up, wall | speed-up, work-bound | peak MB 1 / 2 threads |\n|---|---|---|---|---|---|---|")?;
-    for (cells, kind, one, two) in scaling {
+    for (cells, kind, runs) in scaling {
         let n = 4 * cells * cells * cells;
+        let s = scaled(runs);
         writeln!(
             md,
             "| {n} | {kind} | {:.3} | {:.3} | {:.2} | {:.2} | {:.0} / {:.0} |",
-            one["seconds"] / one["steps"],
-            two["seconds"] / two["steps"],
-            one["seconds"] / two["seconds"],
-            2.0 * one["cpu"] / two["cpu"],
-            one["peak_kb"] / 1024.0,
-            two["peak_kb"] / 1024.0,
+            s.step1,
+            s.step2,
+            s.wall,
+            s.work,
+            s.peak1 / 1024.0,
+            s.peak2 / 1024.0,
         )?;
     }
     Ok(md)
@@ -383,23 +414,23 @@ pub(crate) fn targets(
             w2 <= bound,
         ));
     }
-    for (cells, kind, one, two) in scaling {
+    for (cells, kind, runs) in scaling {
         let n = 4 * cells * cells * cells;
-        let wall = one["seconds"] / two["seconds"];
-        let work = 2.0 * one["cpu"] / two["cpu"];
+        let s = scaled(runs);
+        let (wall, work) = (s.wall, s.work);
         targets.push((
             format!("speed-up 1 to 2 threads >= 1.8, {kind}, {n} particles"),
             format!("{wall:.2} (wall), {work:.2} (work-bound)"),
             wall >= 1.8,
         ));
-        let mem = two["peak_kb"] / one["peak_kb"];
+        let mem = s.peak2 / s.peak1;
         targets.push((
             format!("peak memory 2 threads / 1 thread <= 1.25, {kind}, {n} particles"),
             format!("{mem:.2}"),
             mem <= 1.25,
         ));
         if *cells > 40 && *kind == "oriented" {
-            let step = two["seconds"] / two["steps"];
+            let step = s.step2;
             targets.push((
                 format!("{n} particles, full oriented: one step under 1 s on 2 threads"),
                 format!("{step:.2} s"),
@@ -441,31 +472,43 @@ fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
     if unmet("spacing only") {
         parts.push(format!(
             "spacing: the pairs run in SIMD lanes ({isa}, bit for bit the scalar \
-             kernel's results) and the per-particle sums in registers; the profile of the \
-             spacing child at one thread is then the lanes about 37%, the pairs that \
+             kernel's results), the per-particle sums in registers, and the pairs that \
              cross an accumulation block (the spill, summed in a second pass for the \
-             same bits at any thread count) 9%, the in-block sums 5%, the neighbour \
-             list's builds about 20% (candidate filter, row sorts, binning; 13 per 100 \
-             steps). The rebuild count is not what bounds it: raising our skin from 0.3 \
-             to 0.6 sigma cuts the rebuilds from 16 to 7 per 100 steps (Maxwell start) \
-             and leaves the CPU time as it was (1.68-1.71 and 1.77-1.80 s per 100 \
-             steps), the \
-             builds saved being paid in listed pairs. What is left is per-pair work: \
-             the lanes evaluate every listed pair (30% of them beyond the cut-off in \
-             the open block) with a division and a square root (the smooth taper needs \
-             r), where LAMMPS' `lj/cut` skips them with a branch and takes no root",
+             same bits at any thread count) are written without a branch on the \
+             cut-off. The profile of the spacing child at one thread (`perf record -e \
+             cpu-clock`) is then the lanes about 40%, the neighbour list's builds about \
+             21% (candidate filter 15%, row sorts 5%; 13 builds per 100 steps), the \
+             block sums 16% (in-block 6%, spill 6%, its grouping and second pass 4%). \
+             The rebuild count is not what bounds it: raising our skin from 0.3 to 0.6 \
+             sigma cuts the rebuilds from 16 to 7 per 100 steps (Maxwell start) and \
+             leaves the CPU time as it was (1.68-1.71 and 1.77-1.80 s per 100 steps), \
+             the builds saved being paid in listed pairs. Nor is the lanes' cost the \
+             taper or the pairs beyond the cut-off: the samples in the lanes sit after \
+             the gathers of the neighbours' positions (about 21%) and the division \
+             (about 10%); a second lane pass that takes the square root and the taper \
+             only for the pairs in the taper band (about a fifth of the listed pairs, \
+             the others evaluated as the plain potential; same bits) was slower, 1.55 \
+             against 1.39 CPU s per 100 steps (interleaved runs, medians of 3), the \
+             band's classification and gather-back costing more than the roots saved, \
+             and so were 16 pairs per gather batch (two independent lane registers: \
+             1.45 against 1.38 s, medians of 6)",
             isa = lanes::isa()
         ));
     }
     if unmet("full oriented") || unmet("speed-up") {
         parts.push(
             "the 2-thread step: the serial part of the oriented step was velocity \
-             Verlet's per-particle kicks and drifts (18% of the CPU samples on the \
-             calling thread while the pool waited); they now run in parallel, and 1.8% \
-             of the samples remain on the calling thread (the step's bookkeeping, the \
-             potential-energy sum), the pool's two threads carrying 49.1% each. A \
-             wall-clock speed-up below the work-bound one then measures the machine's \
-             load (the load averages above): two free cores give the work-bound figure"
+             Verlet's per-particle kicks and drifts; they run in parallel, and within \
+             the timed loop of the oriented child at 97,556 particles and 2 threads \
+             (30 steps, `perf record -D` past the set-up) the calling thread holds \
+             0.85% of the CPU samples, the pool's two threads the rest (52.0% and 47.2% \
+             on a loaded machine): no serial section is left to remove. On a loaded \
+             machine (load average 4-7) the CPU time at 2 threads is that at 1 \
+             (2.40-2.45 against 2.39-2.43 s per 20 steps: work-bound speed-up \
+             1.97-2.0); a lower work-bound figure on a quiet machine is time the \
+             pool's idle threads spend spinning at the ends of parallel loops, counted \
+             as CPU time, and a wall-clock speed-up below the work-bound one measures \
+             the machine's load (the load averages above)"
                 .to_string(),
         );
     }
