@@ -39,6 +39,24 @@ pub fn tangent_axis(a: &Vec3) -> Vec3 {
     }
 }
 
+/// The shortest rotation taking the direction `from` to the direction
+/// `to` (neither need be unit; `from` must not be zero). Opposite
+/// directions have no shortest rotation: they get the half turn about
+/// [`tangent_axis`] of `from`, written exactly (scalar part 0).
+/// `Quat::from_axis_angle(t, π)` would give the scalar part
+/// `cos(π/2) = 6e-17`, which tilts the image of `from` by 1e-16 out of
+/// every plane containing it: enough to seed an out-of-plane motion of a
+/// planar object whose terms leave such motion free (a chain's torsion,
+/// which no orientation term sees), as the tip of a spiral whose last
+/// normal is `-x` showed.
+pub fn shortest_rotation(from: &Vec3, to: &Vec3) -> Quat {
+    let (a, b) = (from.normalize(), to.normalize());
+    Quat::rotation_between(&a, &b).unwrap_or_else(|| {
+        let t = tangent_axis(&a);
+        Quat::new_normalize(nalgebra::Quaternion::new(0.0, t.x, t.y, t.z))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

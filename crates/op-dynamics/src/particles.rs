@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{self, ParamError};
 use crate::flags::Flags;
 use crate::integrators::{Bodies, StateMut, StateRef};
-use crate::math::{tangent_axis, Point3, Quat, Real, Vec3};
+use crate::math::{shortest_rotation, tangent_axis, Point3, Quat, Real, Vec3};
 
 /// Particle type of seed 002 §5.
 ///
@@ -113,20 +113,10 @@ impl ParticleDesc {
     }
 
     /// Orients the particle so that its world normal is `normal` (the
-    /// shortest rotation from the body normal axis).
-    ///
-    /// A normal opposite to the axis has no shortest rotation: it gets the
-    /// half turn about the axis's tangent ([`tangent_axis`]), written
-    /// exactly (scalar part 0). `Quat::from_axis_angle(t, π)` would give
-    /// the scalar part `cos(π/2) = 6e-17`, which tilts the normal by
-    /// 1e-16 out of every plane containing the axis: enough to seed an
-    /// out-of-plane motion of a planar object whose terms leave such motion
-    /// free (a chain's torsion, which no orientation term sees), as the
-    /// tip of a spiral whose last normal is `-x` showed.
+    /// shortest rotation from the body normal axis, exact for a normal
+    /// opposite to it: [`shortest_rotation`]).
     pub fn with_normal(mut self, normal: Vec3) -> Self {
-        let a = self.normal_axis.normalize();
-        let n = normal.normalize();
-        self.orientation = Quat::rotation_between(&a, &n).unwrap_or_else(|| half_turn(&a));
+        self.orientation = shortest_rotation(&self.normal_axis, &normal);
         self
     }
 
@@ -564,14 +554,6 @@ impl Particles {
         + std::mem::size_of::<ParticleType>()
         + std::mem::size_of::<u16>()
         + std::mem::size_of::<Real>();
-}
-
-/// The rotation by half a turn about the unit tangent of `a`
-/// ([`tangent_axis`]), with an exactly zero scalar part: it takes `a` to
-/// `-a` and keeps every plane through `a` and the tangent exactly.
-fn half_turn(a: &Vec3) -> Quat {
-    let t = tangent_axis(a);
-    Quat::new_normalize(nalgebra::Quaternion::new(0.0, t.x, t.y, t.z))
 }
 
 #[cfg(test)]

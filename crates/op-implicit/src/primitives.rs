@@ -22,6 +22,7 @@
 //! point of the (convex) skeleton, and `grad d^2 = 2 (p - proj(p))`.
 
 use nalgebra::{Isometry3, Translation3};
+use op_dynamics::math::shortest_rotation;
 use op_dynamics::{Point3, Quat, Real, Vec3};
 
 use crate::kernel;
@@ -137,13 +138,11 @@ impl Primitive {
     /// The segment from `a` to `b` (body frame).
     pub fn segment(a: Vec3, b: Vec3, radius: Real) -> Self {
         let d = b - a;
-        let rotation = Quat::rotation_between(&Vec3::x(), &d).unwrap_or_else(|| {
-            if d.x < 0.0 {
-                Quat::from_axis_angle(&Vec3::z_axis(), std::f64::consts::PI)
-            } else {
-                Quat::identity()
-            }
-        });
+        let rotation = if d == Vec3::zeros() {
+            Quat::identity()
+        } else {
+            shortest_rotation(&Vec3::x(), &d)
+        };
         Primitive {
             offset: (a + b) * 0.5,
             rotation,
@@ -171,8 +170,7 @@ impl Primitive {
     /// normal to the body-frame axis `normal_axis` (the particle's normal
     /// axis, usually +z), half side `half_side`.
     pub fn square(normal_axis: Vec3, half_side: Real, radius: Real) -> Self {
-        let rotation = Quat::rotation_between(&Vec3::z(), &normal_axis)
-            .unwrap_or_else(|| Quat::from_axis_angle(&Vec3::x_axis(), std::f64::consts::PI));
+        let rotation = shortest_rotation(&Vec3::z(), &normal_axis);
         Self::rectangle(Vec3::zeros(), rotation, [half_side; 2], radius)
     }
 

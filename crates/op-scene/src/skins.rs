@@ -22,7 +22,8 @@
 
 use std::f64::consts::SQRT_2;
 
-use op_dynamics::{Point3, Quat, Real, Vec3, World};
+use op_dynamics::math::shortest_rotation;
+use op_dynamics::{Point3, Real, Vec3, World};
 pub use op_implicit::object_skin::{
     contact_step, ContactError, ContactStats, ObjectSkin, SkinTool,
 };
@@ -278,10 +279,7 @@ impl SkinSpec {
         match self.primitive {
             _ if self.smoothness <= 1.0 => self.contact_shape(normal_axis),
             SkinPrimitive::Square { half_side } => {
-                let rotation =
-                    Quat::rotation_between(&Vec3::z(), &normal_axis).unwrap_or_else(|| {
-                        Quat::from_axis_angle(&Vec3::x_axis(), std::f64::consts::PI)
-                    });
+                let rotation = shortest_rotation(&Vec3::z(), &normal_axis);
                 let wide = (half_side + b).max(ROWS * spacing) / b;
                 Primitive::ellipsoid(Vec3::zeros(), rotation, Vec3::new(wide, wide, 1.0), b)
             }
