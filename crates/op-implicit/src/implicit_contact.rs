@@ -54,7 +54,7 @@ use crate::contact::{ReactionAccumulator, Reactions};
 use crate::error::PolygonizeError;
 use crate::field::{Field, ScalarField, ValueGradient};
 use crate::kernel::ISO;
-use band::ContactGrid;
+use crate::polygonize::blocks::Grid;
 
 mod band;
 
@@ -328,11 +328,7 @@ impl<'a> ContactPair<'a> {
 
     /// The sampling grid of cell size `h` over the intersection of the two
     /// support boxes, centred on it; `None` when the boxes do not overlap.
-    fn sampling_grid(
-        &self,
-        h: Real,
-        max_nodes: usize,
-    ) -> Result<Option<ContactGrid>, PolygonizeError> {
+    fn sampling_grid(&self, h: Real, max_nodes: usize) -> Result<Option<Grid>, PolygonizeError> {
         let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) = (self.a.support_box(), self.b.support_box())
         else {
             return Ok(None);
@@ -355,17 +351,17 @@ impl<'a> ContactPair<'a> {
         let lo = Point3::from(
             (lo.coords + hi.coords) * 0.5 - Vec3::from(dims.map(|n| 0.5 * (n - 1) as Real * h)),
         );
-        Ok(Some(ContactGrid { lo, h, dims }))
+        Ok(Some(Grid { lo, h, dims }))
     }
 
     /// The samples on the crossed `edges` of `grid`, in edge order.
-    fn samples(&self, grid: &ContactGrid, edges: &[(usize, usize)]) -> Vec<ContactSample> {
+    fn samples(&self, grid: &Grid, edges: &[(usize, usize)]) -> Vec<ContactSample> {
         edges
             .par_iter()
             .filter_map(|&(i, k)| {
                 let mut dir = Vec3::zeros();
                 dir[k] = grid.h;
-                self.sample_on_edge(&grid.node(i), &dir, k, grid.h)
+                self.sample_on_edge(&band::node(grid, i), &dir, k, grid.h)
             })
             .collect()
     }

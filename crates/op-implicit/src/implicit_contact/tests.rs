@@ -508,7 +508,7 @@ fn iterations_of_the_crossing() {
         let pair = ContactPair::new(a, b);
         let grid = pair.sampling_grid(0.04, 512).unwrap().unwrap();
         for (i, k) in band::crossing_edges(&grid, a, b) {
-            let p0 = grid.node(i);
+            let p0 = band::node(&grid, i);
             let mut dir = Vec3::zeros();
             dir[k] = grid.h;
             let phi = |t: Real| {

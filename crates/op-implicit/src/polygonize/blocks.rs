@@ -23,11 +23,11 @@ use crate::primitives::Skeleton;
 
 /// Cells per block along x, y, z: long along x, the rows the primitives
 /// are splatted along, so a row's setup is shared by more nodes.
-pub(super) const BLOCK: [usize; 3] = [16, 8, 8];
+pub(crate) const BLOCK: [usize; 3] = [16, 8, 8];
 
 /// The node grid: origin, cell size and nodes per axis.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Grid {
+pub(crate) struct Grid {
     pub lo: Point3,
     pub h: Real,
     pub dims: [usize; 3],
@@ -57,7 +57,7 @@ impl Grid {
 
 /// A block: its first node and its cells per axis (nodes: one more).
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Block {
+pub(crate) struct Block {
     pub start: [usize; 3],
     pub cells: [usize; 3],
 }

@@ -17,7 +17,7 @@
 //! (5) vertex normals are the normalized analytic gradient,
 //! `-grad f / |grad f|` (outward).
 
-mod blocks;
+pub(crate) mod blocks;
 pub mod smoothing;
 mod tables;
 
