@@ -8,6 +8,8 @@
 //! one recipe of `op_experiments::spiral`. Runs take well
 //! under a second each (tiny worlds, run on one thread).
 
+mod figure_support;
+
 use std::path::{Path, PathBuf};
 
 use op_experiments::membership::{run_collision, run_hinge};
@@ -15,6 +17,7 @@ use op_experiments::scaling::Scaling;
 use op_experiments::single_threaded;
 use op_experiments::spiral::{experiment_shapes, run_spiral, SpiralRecipe, SpiralShape, Units};
 use op_experiments::spiral_damping::{critical_recipe, CriticalSchedule};
+use oriented_particles::op_dynamics::Vec3;
 use oriented_particles::op_scene::outputs::ParticleOutput;
 use oriented_particles::op_scene::{self, load_scene, CurvatureLaw, RunOptions, Scene, Summary};
 use serde_json::Value;
@@ -352,12 +355,7 @@ fn colliding_objects_repel_and_never_merge() {
 /// Height over width (z extent over the mean of the x and y extents) and
 /// mean distance from the centroid of the first object's particles.
 fn proportions(built: &op_scene::BuiltScene) -> (f64, f64) {
-    let p = built.world.particles();
-    let pos: Vec<_> = built.objects[0]
-        .ids
-        .iter()
-        .map(|&id| p.positions()[p.slot_of(id).unwrap()])
-        .collect();
+    let pos = figure_support::positions(built, &built.objects[0].ids);
     let extent = |k: usize| {
         let (lo, hi) = pos
             .iter()
@@ -367,50 +365,41 @@ fn proportions(built: &op_scene::BuiltScene) -> (f64, f64) {
         hi - lo
     };
     let n = pos.len() as f64;
-    let centre = pos
-        .iter()
-        .fold(oriented_particles::op_dynamics::Vec3::zeros(), |c, q| {
-            c + q.coords
-        })
-        / n;
+    let centre = pos.iter().map(|q| q.coords).sum::<Vec3>() / n;
     let radius = pos.iter().map(|q| (q.coords - centre).norm()).sum::<f64>() / n;
     (extent(2) / (0.5 * (extent(0) + extent(1))), radius)
 }
 
 /// `scenes/sphere_shell.ron`: a bonded shape-memory shell squeezed between
 /// two plates springs back round. Measured (ci profile) on the particles,
-/// the centres of the exported discs: height over width 1.012 when settled
-/// (the Fibonacci sampling is not quite round), 0.687 at the deepest
-/// (t = 4), back within 1% of the settled ratio from t = 17.6 on and 1.009
-/// at the end (t = 24); mean radius 5.239 settled and 5.238 at the end;
-/// rest shape error 0.71 at most, 0.019 at the end. Its own time step,
-/// 0.01, takes 1.7 s.
+/// the centres of the exported discs, frame by frame as `opsim run` steps:
+/// height over width 1.012 when settled (the Fibonacci sampling is not
+/// quite round), 0.687 at the deepest (t = 4), back within 1% of the
+/// settled ratio from t = 17.6 on and 1.009 at the end (t = 24); mean
+/// radius 5.239 settled and 5.238 at the end; rest shape error 0.71 at
+/// most, 0.019 at the end. Its own time step, 0.01, takes 1.7 s.
 #[test]
 fn sphere_shell_springs_back_round() {
-    let claim = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sphere_shell.ron"),
-    )
-    .unwrap();
-    println!("{}", claim.lines().next().unwrap());
-    let mut built = scene("sphere_shell").build(None, None).unwrap();
-    single_threaded(|| built.settle()).unwrap();
-    let (settled, radius) = proportions(&built);
-    let t0 = built.world.time();
-    let frames = (built.duration * built.frame_rate).round() as usize;
-    let (mut deepest, mut back_from, mut max_error) = (settled, None, 0.0f64);
-    for k in 1..=frames {
-        let t = t0 + k as f64 / built.frame_rate;
-        single_threaded(|| built.world.advance_to(t)).unwrap();
-        let (ratio, _) = proportions(&built);
-        deepest = deepest.min(ratio);
-        max_error = max_error.max(op_scene::run::rest_shape_error(&built, &built.objects[0]));
-        let within = (ratio / settled - 1.0).abs() <= 0.01;
-        back_from = match (within, back_from) {
-            (true, None) => Some(built.scene_time()),
-            (true, b) => b,
-            (false, _) => None,
-        };
-    }
+    println!("claim: {}", figure_support::claim("sphere_shell"));
+    let scene = figure_support::load("sphere_shell");
+    let (mut settled, mut radius) = (0.0, 0.0);
+    let (mut deepest, mut back_from, mut max_error) = (f64::INFINITY, None, 0.0f64);
+    let built = single_threaded(|| {
+        figure_support::each_frame(&scene, |k, built| {
+            let (ratio, r) = proportions(built);
+            if k == 0 {
+                (settled, radius) = (ratio, r);
+            }
+            deepest = deepest.min(ratio);
+            max_error = max_error.max(op_scene::run::rest_shape_error(built, &built.objects[0]));
+            let within = (ratio / settled - 1.0).abs() <= 0.01;
+            back_from = match (within, back_from) {
+                (true, None) => Some(built.scene_time()),
+                (true, b) => b,
+                (false, _) => None,
+            };
+        })
+    });
     let (end, end_radius) = proportions(&built);
     let error = op_scene::run::rest_shape_error(&built, &built.objects[0]);
     eprintln!(
