@@ -11,6 +11,7 @@
 //! the fit's thin features.
 
 use op_dynamics::{Point3, Real};
+use op_modeling::triangulation::vertex_components;
 use op_scene::fit::{fit, Fit, FitParams};
 use op_scene::pointsets::PointSet;
 use op_test_support::Rng;
@@ -66,41 +67,24 @@ fn coin_samples(n: usize, t: Real, seed: u64) -> PointSet {
 fn closed_sphere(f: &Fit) -> Result<(), String> {
     let (chi, loops) = (f.mesh.euler_characteristic, f.mesh.boundary_loops);
     let mut half_edges = std::collections::HashMap::new();
-    let mut pieces: Vec<usize> = (0..f.mesh.vertices.len()).collect();
-    fn root(p: &mut [usize], mut x: usize) -> usize {
-        while p[x] != x {
-            p[x] = p[p[x]];
-            x = p[x];
-        }
-        x
-    }
     for t in &f.mesh.faces {
         for k in 0..3 {
             *half_edges.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
-            let (a, b) = (
-                root(&mut pieces, t[k] as usize),
-                root(&mut pieces, t[(k + 1) % 3] as usize),
-            );
-            pieces[a.max(b)] = a.min(b);
         }
     }
     let wound = half_edges
         .iter()
         .all(|(&(a, b), &c)| c == 1 && half_edges.get(&(b, a)) == Some(&1));
-    let mut roots: Vec<usize> = f
-        .mesh
-        .faces
+    let pieces = vertex_components(&f.mesh.faces)
         .iter()
-        .map(|t| root(&mut pieces, t[0] as usize))
-        .collect();
-    roots.sort_unstable();
-    roots.dedup();
-    if (chi, loops, roots.len(), wound) == (2, 0, 1, true) {
+        .enumerate()
+        .filter(|(i, p)| **p == Some(*i as u32))
+        .count();
+    if (chi, loops, pieces, wound) == (2, 0, 1, true) {
         Ok(())
     } else {
         Err(format!(
-            "χ {chi}, {loops} loops, {} pieces, wound consistently: {wound}",
-            roots.len()
+            "χ {chi}, {loops} loops, {pieces} pieces, wound consistently: {wound}"
         ))
     }
 }
