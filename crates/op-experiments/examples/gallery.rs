@@ -26,11 +26,7 @@ struct Picture {
 }
 
 const fn shaded(name: &'static str) -> Picture {
-    Picture {
-        name,
-        frames: 4,
-        style: Style::Shaded,
-    }
+    shaded_frames(name, 4)
 }
 
 /// A shaded picture of `frames` frames (a claim that happens between the
