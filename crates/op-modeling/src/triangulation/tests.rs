@@ -468,3 +468,55 @@ fn held_cells_are_closed_and_cuts_stay_open() {
     close_held_cells(&mut lone, &points, &|_, _| true);
     assert_eq!(lone, vec![one[0]]);
 }
+
+/// The surface's normals, not only the particles' own: a flat sheet whose
+/// particle normals all lean 70° off the sheet (normals that have not
+/// followed their positions) is triangulated in full through the fitted
+/// normals, wound along the particles' side.
+#[test]
+fn leaning_normals_keep_their_surface() {
+    let (nx, ny) = (8, 7);
+    let p = hex_sheet(nx, ny);
+    let lean = 70f64.to_radians();
+    let n = Vec3::new(lean.sin(), 0.0, lean.cos());
+    let t = tri(&p, &vec![n; p.len()], 1.5);
+    assert_eq!(t.len(), 2 * (nx - 1) * (ny - 1), "every interior cell");
+    assert_eq!(t.euler_characteristic(), 1);
+    assert!(t.is_consistently_oriented());
+    for f in &t.triangles {
+        let q = |k: usize| p[f[k] as usize];
+        assert!((q(1) - q(0)).cross(&(q(2) - q(0))).z > 0.0, "wound along +z");
+    }
+}
+
+/// A sphere with a dent whose walls stand steeper than the tilt limit from
+/// the particles' normals, which stay radial (as the normals of a pushed
+/// shape-memory shell do): closed, every particle in a triangle, and some
+/// triangles are kept through their fitted normals only.
+#[test]
+fn a_dent_the_normals_did_not_follow_stays_closed() {
+    let (mut p, normals) = sphere(5.0, 1.0);
+    for x in &mut p {
+        let theta = (x.x / 5.0).clamp(-1.0, 1.0).acos();
+        // Depth 1.5 inside 0.45 rad, a wall ramping out to 0.6 rad.
+        let depth = 1.5 * ((0.6 - theta) / 0.15).clamp(0.0, 1.0);
+        *x = Point3::from(x.coords * (5.0 - depth) / 5.0);
+    }
+    let t = tri(&p, &normals, 1.8);
+    assert_eq!(t.vertices().len(), p.len());
+    assert_eq!(t.boundary_loops(), 0, "closed");
+    assert_eq!(t.euler_characteristic(), 2);
+    assert!(t.is_manifold());
+    let steep = t
+        .triangles
+        .iter()
+        .filter(|f| {
+            let q = |k: usize| p[f[k] as usize];
+            let face = (q(1) - q(0)).cross(&(q(2) - q(0))).normalize();
+            let ns: Vec3 = f.iter().map(|&m| normals[m as usize]).sum();
+            face.dot(&ns.normalize()).abs() < 0.5
+        })
+        .count();
+    println!("{} triangles, {steep} beyond 60° from their particle normals", t.len());
+    assert!(steep > 0, "the dent's walls are kept through the fitted normals");
+}
