@@ -61,7 +61,15 @@
 //! flow by the normals' reading stops that, and the dent then springs
 //! back (the memory hardly moves); a fit with a free normal (above)
 //! still runs away. A plastic dent that stays needs normals that take
-//! the dent.
+//! the dent, and more than one curvature per particle: the rim of a dent
+//! is a crease, sharply curved across and gently along, and a scalar
+//! `κ_i` of -0.7 to -1.2 there pushes the particle through its ring along
+//! the rim as well. The flow that only ever lowers the stored energy
+//! (towards the `κ` that minimizes the particle's form energy, the
+//! normals' reading above) is stable, and the dent springs back with it
+//! (`scenes/fig_12_plastic.ron`: 2.48 -> 3.56). Seed 002 §7 names the
+//! missing piece as future work: a form interaction whose curvature
+//! depends on the direction to the neighbour.
 //!
 //! **Return mapping.** With `e = κ_i - κ̂_i` and the yield curvature
 //! `y >= 0`: within the band `|e| <= y` nothing changes (elastic); beyond
