@@ -69,6 +69,7 @@ const GALLERY: &[Picture] = &[
     shaded("sheet_on_sphere"),
     shaded("cookbook/skinned_hit"),
     shaded_frames("sphere_shell", 9),
+    shaded_frames("fig_12_plastic_memory", 9),
 ];
 
 /// Width and height of one frame of a contact sheet, pixels.
