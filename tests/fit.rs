@@ -110,12 +110,6 @@ fn patch_with_hole(size: usize, hole: f64) -> Vec<Point3> {
     pts
 }
 
-/// RMS over the mesh vertices of `dist(vertex)`.
-fn vertex_rms(f: &Fit, dist: impl Fn(&Point3) -> f64) -> f64 {
-    let s: f64 = f.mesh.vertices.iter().map(|v| dist(v).powi(2)).sum();
-    (s / f.mesh.vertices.len() as f64).sqrt()
-}
-
 /// [`fit`] at spacing `h` with triangulation radius `radius`.
 fn fit_at(data: &PointSet, h: f64, radius: f64) -> Fit {
     let params = FitParams {
@@ -151,7 +145,7 @@ fn sphere_without_normals_is_closed_and_on_the_sphere() {
     assert!(h > 0.15 && h < 0.22, "spacing {h}");
     assert_eq!(f.mesh.euler_characteristic, 2, "{f:?}");
     assert_eq!(f.mesh.boundary_loops, 0);
-    let rms = vertex_rms(&f, |v| v.coords.norm() - 1.0);
+    let rms = f.mesh.vertex_rms(|v| v.coords.norm() - 1.0);
     assert!(rms < 0.1 * h, "vertex RMS {rms} vs spacing {h}");
     assert!(
         f.mesh.rms_distance < 0.1 * h,
@@ -182,7 +176,7 @@ fn torus_with_normals_has_euler_characteristic_zero() {
     .unwrap();
     assert_eq!(f.mesh.euler_characteristic, 0, "{f:?}");
     assert_eq!(f.mesh.boundary_loops, 0);
-    let rms = vertex_rms(&f, |v| {
+    let rms = f.mesh.vertex_rms(|v| {
         let ring = (v.x * v.x + v.y * v.y).sqrt() - big;
         (ring * ring + v.z * v.z).sqrt() - small
     });
@@ -268,7 +262,7 @@ fn sparse_sphere_samples_are_filled_on_the_sphere() {
     let h = 0.5 * estimate;
     let f = fit_at(&data, h, FitParams::default().triangulation_radius);
     assert!(f.particles > 3 * 400, "{} particles", f.particles);
-    let rms = vertex_rms(&f, |v| v.coords.norm() - 1.0);
+    let rms = f.mesh.vertex_rms(|v| v.coords.norm() - 1.0);
     assert!(rms < 0.1 * h, "vertex RMS {rms} vs spacing {h}");
     assert!(
         f.mesh.max_distance < h,
@@ -577,7 +571,7 @@ fn random_samples_fit_with_the_right_topology(shape: Shape, n: usize) {
         edges.values().all(|&c| c <= 2),
         "{name}, {n}: overfull edge"
     );
-    let rms = vertex_rms(&f, |p| shape.distance(p));
+    let rms = f.mesh.vertex_rms(|p| shape.distance(p));
     assert!(
         rms < 0.1 * f.spacing,
         "{name}, {n}: vertex RMS {rms} vs spacing {}",

@@ -89,17 +89,6 @@ fn closed_sphere(f: &Fit) -> Result<(), String> {
     }
 }
 
-/// RMS distance of the mesh vertices to the coin of half thickness `t`.
-fn vertex_rms(f: &Fit, t: Real) -> Real {
-    (f.mesh
-        .vertices
-        .iter()
-        .map(|v| coin_distance(v, t).powi(2))
-        .sum::<Real>()
-        / f.mesh.vertices.len() as Real)
-        .sqrt()
-}
-
 /// The coin 2.2 spacings thick (thicker than the triangulation radius,
 /// but its two faces within the 12 nearest samples of each other),
 /// 3,000 uneven samples: closed, one piece, wound consistently, vertices
@@ -115,7 +104,7 @@ fn a_coin_two_spacings_thick_closes() {
     if let Err(e) = closed_sphere(&f) {
         panic!("{e}: spacing {}, {} particles", f.spacing, f.particles);
     }
-    let rms = vertex_rms(&f, t);
+    let rms = f.mesh.vertex_rms(|v| coin_distance(v, t));
     assert!(
         rms < 0.1 * f.spacing,
         "vertex RMS {rms}, spacing {}",
@@ -135,7 +124,7 @@ fn a_coin_thinner_than_the_spacing_closes_or_is_reported() {
     let thickness = 2.0 * t / f.spacing;
     assert!((0.5..1.0).contains(&thickness), "{thickness} spacings");
     if closed_sphere(&f).is_ok() {
-        let rms = vertex_rms(&f, t);
+        let rms = f.mesh.vertex_rms(|v| coin_distance(v, t));
         assert!(
             rms < 0.1 * f.spacing,
             "vertex RMS {rms}, spacing {}",

@@ -10,7 +10,7 @@
 
 mod figure_support;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use op_experiments::membership::{run_collision, run_hinge};
 use op_experiments::scaling::Scaling;
@@ -19,13 +19,10 @@ use op_experiments::spiral::{experiment_shapes, run_spiral, SpiralRecipe, Spiral
 use op_experiments::spiral_damping::{critical_recipe, CriticalSchedule};
 use oriented_particles::op_dynamics::Vec3;
 use oriented_particles::op_scene::outputs::ParticleOutput;
-use oriented_particles::op_scene::{self, load_scene, CurvatureLaw, RunOptions, Scene, Summary};
+use oriented_particles::op_scene::{self, CurvatureLaw, RunOptions, Scene, Summary};
 use serde_json::Value;
 
-fn scene(name: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.ron"));
-    load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
-}
+use figure_support::load;
 
 /// Numbers equal to 1e-9 relative, everything else identical.
 fn assert_close(a: &Value, b: &Value, path: &str) {
@@ -87,20 +84,20 @@ fn run_scene(mut scene: Scene) -> Summary {
 fn spiral_scenes_follow_the_one_recipe() {
     let recipe = SpiralRecipe::default();
     for (name, shape) in experiment_shapes() {
-        let file = scene(name);
+        let file = load(name);
         assert_close(&json(&file), &json(&recipe.scene(name, &shape)), name);
         assert!(shape.turns() <= 1.0, "{name}: {} turns", shape.turns());
     }
     // The hinge and collision scenes use the recipe's material too.
     let memory = json(&recipe.scene("m", &SpiralShape::seed()))["materials"].clone();
     for name in ["hinge_spiral", "colliding_objects"] {
-        assert_close(&json(&scene(name))["materials"], &memory, name);
+        assert_close(&json(&load(name))["materials"], &memory, name);
     }
-    let mut scaled = Scaling::length(10.0).scene(&scene("spiral")).unwrap();
+    let mut scaled = Scaling::length(10.0).scene(&load("spiral")).unwrap();
     scaled.name = "spiral_x10".into();
-    assert_close(&json(&scaled), &json(&scene("spiral_x10")), "x10");
+    assert_close(&json(&scaled), &json(&load("spiral_x10")), "x10");
     assert!(matches!(
-        scene("spiral_13").objects[0].generator,
+        load("spiral_13").objects[0].generator,
         op_scene::Generator::Spiral {
             law: CurvatureLaw::Geometric,
             count: 13,
@@ -113,7 +110,7 @@ fn spiral_scenes_follow_the_one_recipe() {
 /// apart that non-adjacent particles do not interact at rest.
 #[test]
 fn seed_spiral_turns_are_apart() {
-    let s = scene("spiral");
+    let s = load("spiral");
     let shape = SpiralShape::seed();
     assert_eq!(s.objects[0].generator, shape.generator());
     assert!(shape.turns() < 1.0);
@@ -140,7 +137,7 @@ fn seed_spiral_turns_are_apart() {
 /// one); released it returns (final error <= 0.01).
 #[test]
 fn seed_spiral_uncoils_and_recovers() {
-    let s = scene("spiral");
+    let s = load("spiral");
     let summary = run_scene(s.clone());
     let o = &summary.objects[0];
     eprintln!(
@@ -183,7 +180,7 @@ fn seed_spiral_uncoils_and_recovers() {
 #[test]
 fn recovery_is_not_tuned_to_one_case() {
     for name in ["spiral_8", "spiral_13", "spiral_x10"] {
-        let summary = run_scene(scene(name));
+        let summary = run_scene(load(name));
         let o = &summary.objects[0];
         eprintln!(
             "{name}: rest_shape_error_max {:.4}, rest_shape_error_final {:.5}",
@@ -268,8 +265,8 @@ fn critical_damping_recovers_laws_and_sizes() {
 fn scaled_spiral_repeats_the_seed_motion_and_geometry_alone_does_not() {
     let recipe = SpiralRecipe::default();
     let schedule = recipe.schedule(&Units::of(&SpiralShape::seed()));
-    let seed = single_threaded(|| run_spiral(&scene("spiral"), &schedule)).unwrap();
-    let x10 = single_threaded(|| run_spiral(&scene("spiral_x10"), &schedule)).unwrap();
+    let seed = single_threaded(|| run_spiral(&load("spiral"), &schedule)).unwrap();
+    let x10 = single_threaded(|| run_spiral(&load("spiral_x10"), &schedule)).unwrap();
     assert_eq!(seed.errors.len(), x10.errors.len());
     // The motion is exactly planar (see `SpiralRecipe::object`), so the
     // runs agree to round-off all along, recoil included.
@@ -281,7 +278,7 @@ fn scaled_spiral_repeats_the_seed_motion_and_geometry_alone_does_not() {
         .fold(0.0, f64::max);
     eprintln!("x10 against seed: rest shape errors differ by at most {worst:.1e}");
     assert!(worst < 1e-9, "{worst}");
-    let naive = Scaling::geometry_only(&scene("spiral"), 10.0).unwrap();
+    let naive = Scaling::geometry_only(&load("spiral"), 10.0).unwrap();
     let g = single_threaded(|| run_spiral(&naive, &schedule)).unwrap();
     eprintln!(
         "geometry only x10: error max {:.3}, final {:.3}",
@@ -298,7 +295,7 @@ fn scaled_spiral_repeats_the_seed_motion_and_geometry_alone_does_not() {
 /// shape, the joint keeps no memory.
 #[test]
 fn hinge_spiral_stays_connected() {
-    let s = scene("hinge_spiral");
+    let s = load("hinge_spiral");
     let built = s.build(None, None).unwrap();
     assert!(built.world.enabled().iter().any(|e| e == "term:repulsion"));
     let run = single_threaded(|| run_hinge(&s)).unwrap();
@@ -334,7 +331,7 @@ fn hinge_spiral_stays_connected() {
 /// apart beyond every cut-off and each recovers its own shape.
 #[test]
 fn colliding_objects_repel_and_never_merge() {
-    let s = scene("colliding_objects");
+    let s = load("colliding_objects");
     let run = single_threaded(|| run_collision(&s, 0.05)).unwrap();
     eprintln!("colliding objects: {run:?}");
     assert!(run.min_distance < 1.5, "they came within reach");
@@ -381,7 +378,7 @@ fn proportions(built: &op_scene::BuiltScene) -> (f64, f64) {
 #[test]
 fn sphere_shell_springs_back_round() {
     println!("claim: {}", figure_support::claim("sphere_shell"));
-    let scene = figure_support::load("sphere_shell");
+    let scene = load("sphere_shell");
     let (mut settled, mut radius) = (0.0, 0.0);
     let (mut deepest, mut back_from, mut max_error) = (f64::INFINITY, None, 0.0f64);
     let built = single_threaded(|| {

@@ -86,6 +86,14 @@ impl SurfaceMesh {
         })
     }
 
+    /// Root mean square over the vertices of `distance`, a distance to the
+    /// surface the samples came from (known for synthetic data): how close
+    /// the particles lie to it. NaN without a vertex.
+    pub fn vertex_rms(&self, distance: impl Fn(&Point3) -> Real) -> Real {
+        let sum: Real = self.vertices.iter().map(|v| distance(v).powi(2)).sum();
+        (sum / self.vertices.len() as Real).sqrt()
+    }
+
     /// Drops the vertices no face uses any more (the faces of a Möbius
     /// band's cut or of a speck were dropped), keeping the order of the
     /// others: every vertex is then a particle used by some triangle, and

@@ -485,7 +485,10 @@ fn leaning_normals_keep_their_surface() {
     assert!(t.is_consistently_oriented());
     for f in &t.triangles {
         let q = |k: usize| p[f[k] as usize];
-        assert!((q(1) - q(0)).cross(&(q(2) - q(0))).z > 0.0, "wound along +z");
+        assert!(
+            (q(1) - q(0)).cross(&(q(2) - q(0))).z > 0.0,
+            "wound along +z"
+        );
     }
 }
 
@@ -517,6 +520,12 @@ fn a_dent_the_normals_did_not_follow_stays_closed() {
             face.dot(&ns.normalize()).abs() < 0.5
         })
         .count();
-    println!("{} triangles, {steep} beyond 60° from their particle normals", t.len());
-    assert!(steep > 0, "the dent's walls are kept through the fitted normals");
+    println!(
+        "{} triangles, {steep} beyond 60° from their particle normals",
+        t.len()
+    );
+    assert!(
+        steep > 0,
+        "the dent's walls are kept through the fitted normals"
+    );
 }
