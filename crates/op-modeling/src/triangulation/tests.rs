@@ -101,12 +101,9 @@ fn oracle(points: &[Point3], radius: Real) -> Vec<[u32; 3]> {
     out
 }
 
-#[test]
-fn flat_hex_sheet_triangulates_every_cell() {
-    let (nx, ny) = (12, 10);
-    let p = hex_sheet(nx, ny);
-    let normals = vec![Vec3::z(); p.len()];
-    let t = tri(&p, &normals, 1.5);
+/// Every interior cell of the `nx` by `ny` hexagonal sheet `p` in two
+/// triangles, one disc, every triangle wound along +z.
+fn assert_whole_sheet_wound_up(t: &Triangulation, p: &[Point3], nx: usize, ny: usize) {
     assert_eq!(t.len(), 2 * (nx - 1) * (ny - 1), "every interior cell");
     assert_eq!(t.vertices().len(), nx * ny);
     assert_eq!(t.euler_characteristic(), 1);
@@ -119,6 +116,17 @@ fn flat_hex_sheet_triangulates_every_cell() {
             (q(1) - q(0)).cross(&(q(2) - q(0))).z > 0.0,
             "wound along +z"
         );
+    }
+}
+
+#[test]
+fn flat_hex_sheet_triangulates_every_cell() {
+    let (nx, ny) = (12, 10);
+    let p = hex_sheet(nx, ny);
+    let normals = vec![Vec3::z(); p.len()];
+    let t = tri(&p, &normals, 1.5);
+    assert_whole_sheet_wound_up(&t, &p, nx, ny);
+    for f in &t.triangles {
         assert!(f[0] < f[1] && f[0] < f[2], "smallest id first");
     }
     // Flipped normals flip every triangle.
@@ -480,16 +488,7 @@ fn leaning_normals_keep_their_surface() {
     let lean = 70f64.to_radians();
     let n = Vec3::new(lean.sin(), 0.0, lean.cos());
     let t = tri(&p, &vec![n; p.len()], 1.5);
-    assert_eq!(t.len(), 2 * (nx - 1) * (ny - 1), "every interior cell");
-    assert_eq!(t.euler_characteristic(), 1);
-    assert!(t.is_consistently_oriented());
-    for f in &t.triangles {
-        let q = |k: usize| p[f[k] as usize];
-        assert!(
-            (q(1) - q(0)).cross(&(q(2) - q(0))).z > 0.0,
-            "wound along +z"
-        );
-    }
+    assert_whole_sheet_wound_up(&t, &p, nx, ny);
 }
 
 /// A sphere with a dent whose walls stand steeper than the tilt limit from
