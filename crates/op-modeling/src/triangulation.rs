@@ -706,7 +706,9 @@ fn fitted_normals(positions: &[Point3], normals: &[Vec3], full: &[Vec<u32>]) -> 
             let mut order = [0usize, 1, 2];
             order.sort_by(|&a, &b| e[a].total_cmp(&e[b]));
             let (least, middle) = (e[order[0]], e[order[1]]);
-            if !(least < 0.5 * middle) {
+            // False for NaN spreads too.
+            let flat = least < 0.5 * middle;
+            if !flat {
                 return Vec3::zeros();
             }
             let n: Vec3 = eigen.eigenvectors.column(order[0]).into_owned();
