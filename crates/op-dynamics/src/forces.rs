@@ -117,8 +117,6 @@ pub(crate) struct ForceScratch {
     tangents: Vec<Vec3>,
     /// Potential energy attributed to each particle (its row's pairs).
     energies: Vec<Real>,
-    /// Total potential energy of the last evaluation.
-    pub potential: Real,
     /// Number of force evaluations since the world was built.
     pub evaluations: u64,
     /// Seconds spent updating neighbour lists (accumulated).
@@ -173,6 +171,15 @@ pub(crate) struct ForceModel {
     pub scratch: ForceScratch,
 }
 
+impl ForceScratch {
+    /// Total potential energy of the last evaluation: the per-particle
+    /// energies summed in slot order. Summed when asked (a serial pass
+    /// over every particle, which the steps themselves never read).
+    pub fn potential(&self) -> Real {
+        self.energies.iter().sum()
+    }
+}
+
 impl ForceModel {
     /// The force field of the world's particles with these attributes and
     /// external actions.
@@ -213,8 +220,9 @@ impl ForceContext<'_> {
     /// state `s`: updates the neighbour list (rebuilding it when the
     /// particles moved too far), evaluates the pair kernel chosen when the
     /// world was built, then adds the contributors (tools, uniform field,
-    /// accumulated actions, extra contributors, force windows), sums the
-    /// potential energy and zeroes what fixed particles hold.
+    /// accumulated actions, extra contributors, force windows), and
+    /// zeroes what fixed particles hold (the total potential energy is summed
+    /// on request, [`ForceScratch::potential`]).
     ///
     /// The pairs are summed by fixed blocks and an ordered merge of their
     /// spills (see the module docs): one path at every thread count, so
@@ -233,7 +241,6 @@ impl ForceContext<'_> {
             normals,
             tangents,
             energies,
-            potential,
             evaluations,
             neighbour_seconds,
         } = &mut *self.scratch;
@@ -343,7 +350,6 @@ impl ForceContext<'_> {
                 c.contribute(&input, &mut out);
             }
         }
-        *potential = energies.iter().sum();
         if self.has_fixed {
             fix(&self.attributes, forces, torques);
         }
