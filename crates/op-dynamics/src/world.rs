@@ -15,7 +15,7 @@ use crate::heat;
 use crate::integrators::{per_particle, Integrator};
 use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
-use crate::neighbours::{spatial_order, NeighbourList};
+use crate::neighbours::{copy_positions, spatial_order, NeighbourList};
 use crate::particles::{ParticleType, Particles};
 use crate::plasticity::PlasticScratch;
 use crate::tooling::ToolSet;
@@ -793,16 +793,4 @@ fn on_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
         return f();
     }
     rayon::scope(|_| f())
-}
-
-/// `prev = positions`, in parallel over fixed chunks (the world keeps the
-/// positions before each step for the oscillation measure: a copy of
-/// every position each step, on the calling thread while the others
-/// waited).
-fn copy_positions(prev: &mut Vec<Point3>, positions: &[Point3]) {
-    const CHUNK: usize = 4096;
-    prev.resize(positions.len(), Point3::origin());
-    prev.par_chunks_mut(CHUNK)
-        .zip(positions.par_chunks(CHUNK))
-        .for_each(|(a, b)| a.copy_from_slice(b));
 }
