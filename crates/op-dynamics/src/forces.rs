@@ -76,11 +76,10 @@ pub(crate) const BLOCK: usize = 2048;
 ///
 /// Equal halves for two threads: blocks are the units the pool's threads
 /// share, so with `ceil(n / BLOCK)` full blocks one thread could be left
-/// with a whole block more than the other. Measured on the 32,000-particle
-/// block of the performance report (2 threads): 15 full blocks and one of
-/// 1,280 particles gave one thread 16,384 particles' rows and the other
-/// 15,616, the pass waiting on the first; 16 blocks of 2,000 give 16,000
-/// each.
+/// with a whole block more than the other: the 32,000-particle block of
+/// the performance report was 15 full blocks and one of 1,280 particles,
+/// one thread's half 16,384 particles' rows and the other's 15,616, the
+/// pass waiting on the first; 16 blocks of 2,000 give 16,000 each.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Blocks {
     /// Particles per block (at least 2).
