@@ -555,8 +555,9 @@ impl World {
     /// for divergence (the oscillation measure is computed on demand from
     /// the positions before and after the step).
     ///
-    /// The step runs on a thread of the current rayon pool (see
-    /// [`on_pool`]).
+    /// A world of more than 1024 particles takes the step on a thread of
+    /// the current rayon pool (the calling thread waits), so that the
+    /// step's parallel passes fork and join by work stealing.
     pub fn step(&mut self) -> Result<&StepReport, Divergence> {
         let dt = self.dt_next.min(self.params.dt);
         let n = self.particles.len();
@@ -577,7 +578,8 @@ impl World {
     /// evaluated once per interval (op-scene's skin contact) acts over all
     /// of it, also when an adaptive scheme takes several steps. Cached
     /// forces are dropped when the interval ends if some of them was
-    /// active: the next interval's contributions differ.
+    /// active: the next interval's contributions differ. The steps run on
+    /// a pool thread as [`World::step`]'s do.
     pub fn advance_to_with(
         &mut self,
         t_end: Real,
