@@ -511,7 +511,7 @@ fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
              energy is summed only when asked, the copies and the Morton bounds run \
              in parallel, and the pair pass's blocks are an even number of equal \
              blocks (16 of 2,000 rather than 15 of 2,048 and one of 1,280, which left \
-             one thread 384 particles' rows more). Measured, this code against the \
+             one thread 768 particles' rows more than the other). Measured, this code against the \
              one before (spacing child, interleaved pairs, medians; the machine shared): \
              wall time at 1 thread 1.35 -> 1.29 s per 100 steps (4 pairs), CPU time at \
              2 threads 1.335 -> 1.315 s, but the wall time at 2 threads not resolved: \
@@ -520,8 +520,8 @@ fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
              (2 threads, 4 quiet pairs each): the steps on a pool thread 0.699 -> \
              0.686 s (ratio 0.97 [0.94-1.01]), the equal blocks 0.686 -> 0.680 s \
              (0.99 [0.94-1.01]). An ordinary step takes 4.8 ms at 2 threads against \
-             9.0 at 1 (1.9x), a step with a list build 21 ms against 41 (1.95x). What is left above half the 1-thread time is in the \
-             passes themselves: the pair pass's rows took 8.5 ms of thread time per \
+             9.0 at 1 (1.9x), a step with a list build 21 ms against 41 (1.95x). \
+             What is left above half the 1-thread time is in the passes themselves: the pair pass's rows took 8.5 ms of thread time per \
              step at 2 threads (4.6 and 3.9 ms on the two threads) against 7.8 ms at \
              1; and the list builds (13 x 16 ms) are 30% of the 2-thread wall time"
                 .to_string(),
