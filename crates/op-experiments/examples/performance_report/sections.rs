@@ -522,8 +522,9 @@ fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
              (0.99 [0.94-1.01]). An ordinary step takes 4.8 ms at 2 threads against \
              9.0 at 1 (1.9x), a step with a list build 21 ms against 41 (1.95x). \
              What is left above half the 1-thread time is in the passes themselves: \
-             the pair pass's rows took 8.5 ms of thread time per step at 2 threads (4.6 and 3.9 ms on the two threads) against 7.8 ms at \
-             1; and the list builds (13 x 16 ms) are 30% of the 2-thread wall time"
+             the pair pass's rows took 8.5 ms of thread time per step at 2 threads \
+             (4.6 and 3.9 ms on the two threads) against 7.8 ms at 1; and the list \
+             builds (13 x 16 ms) are 30% of the 2-thread wall time"
                 .to_string(),
         );
     }
