@@ -3,7 +3,7 @@
 //! identical at any thread count.
 //!
 //! The scheme is "fixed blocks, ordered merge": particles are cut
-//! into blocks of consecutive slots ([`Blocks`]: an even number of equal
+//! into blocks of consecutive slots (`Blocks`: an even number of equal
 //! blocks of at most `BLOCK` (2048) particles, a function of the particle
 //! count only, never of the thread count; the world keeps particles in
 //! spatial order, so a block is a compact region). Each block, in parallel, visits the half-list rows
