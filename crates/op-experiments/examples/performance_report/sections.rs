@@ -513,8 +513,10 @@ fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
              blocks (16 of 2,000 rather than 15 of 2,048 and one of 1,280, which left \
              one thread 768 particles' rows more than the other). Measured, this code against the \
              one before (spacing child, interleaved pairs, medians; the machine shared): \
-             wall time at 1 thread 1.35 -> 1.29 s per 100 steps (4 pairs), CPU time at \
-             2 threads 1.335 -> 1.315 s, but the wall time at 2 threads not resolved: \
+             wall time at 1 thread 1.35 -> 1.29 s per 100 steps in one set of 4 \
+             pairs, 1.29 -> 1.32 s (ratio 1.00 [0.93-1.09]) in another; CPU time at 2 \
+             threads 1.335 -> 1.315 s (1.325 -> 1.275 s in 8 loaded pairs); the wall \
+             time at 2 threads not resolved: \
              0.702 -> 0.713 s, per-pair ratio 1.02 [0.985-1.065] over 14 pairs \
              without other load. Each change switched on and off in one executable \
              (2 threads, 4 quiet pairs each): the steps on a pool thread 0.699 -> \
