@@ -518,7 +518,8 @@ fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
              threads 1.335 -> 1.315 s (1.325 -> 1.275 s in 8 loaded pairs); the wall \
              time at 2 threads not resolved: \
              0.702 -> 0.713 s, per-pair ratio 1.02 [0.985-1.065] over 14 pairs \
-             without other load. Each change switched on and off in one executable \
+             without other load, then 0.709 -> 0.680 s, ratio 0.95 [0.93-0.98], over \
+             4 more. Each change switched on and off in one executable \
              (2 threads, 4 quiet pairs each): the steps on a pool thread 0.699 -> \
              0.686 s (ratio 0.97 [0.94-1.01]), the equal blocks 0.686 -> 0.680 s \
              (0.99 [0.94-1.01]). An ordinary step takes 4.8 ms at 2 threads against \
