@@ -12,10 +12,10 @@ use crate::external::ExternalAccumulator;
 use crate::flags::Flags;
 use crate::forces::{ForceModel, ForceScratch, Kernel};
 use crate::heat;
-use crate::integrators::Integrator;
+use crate::integrators::{per_particle, Integrator};
 use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
-use crate::neighbours::{spatial_order, NeighbourList};
+use crate::neighbours::{copy_positions, spatial_order, NeighbourList};
 use crate::particles::{ParticleType, Particles};
 use crate::plasticity::PlasticScratch;
 use crate::tooling::ToolSet;
@@ -554,9 +554,15 @@ impl World {
     /// the new positions first); (7) erasers remove particles; (8) check
     /// for divergence (the oscillation measure is computed on demand from
     /// the positions before and after the step).
+    ///
+    /// A world of more than 1024 particles takes the step on a thread of
+    /// the current rayon pool (the calling thread waits), so that the
+    /// step's parallel passes fork and join by work stealing.
     pub fn step(&mut self) -> Result<&StepReport, Divergence> {
         let dt = self.dt_next.min(self.params.dt);
-        self.step_by(dt, false, &[])
+        let n = self.particles.len();
+        on_pool(n, || self.step_by(dt, false, &[]).map(|_| ()))?;
+        Ok(&self.report)
     }
 
     /// Advances until `t_end`, landing on it exactly: the last step is
@@ -572,7 +578,8 @@ impl World {
     /// evaluated once per interval (op-scene's skin contact) acts over all
     /// of it, also when an adaptive scheme takes several steps. Cached
     /// forces are dropped when the interval ends if some of them was
-    /// active: the next interval's contributions differ.
+    /// active: the next interval's contributions differ. The steps run on
+    /// a pool thread as [`World::step`]'s do.
     pub fn advance_to_with(
         &mut self,
         t_end: Real,
@@ -582,6 +589,17 @@ impl World {
             self.may_rotate = true;
         }
         let active = extra.iter().any(|c| c.is_active());
+        let n = self.particles.len();
+        on_pool(n, || self.advance_steps(t_end, extra, active))
+    }
+
+    /// The steps of [`World::advance_to_with`] (on a pool thread).
+    fn advance_steps(
+        &mut self,
+        t_end: Real,
+        extra: &[&dyn Contributor],
+        active: bool,
+    ) -> Result<(), Divergence> {
         loop {
             let remaining = t_end - self.time;
             if remaining <= 1e-12 * self.params.dt {
@@ -622,9 +640,7 @@ impl World {
                 report.reordered = true;
             }
         }
-        self.prev_positions.clear();
-        self.prev_positions
-            .extend_from_slice(self.particles.positions());
+        copy_positions(&mut self.prev_positions, self.particles.positions());
         report.seconds[Stage::Reorder as usize] = clock.elapsed().as_secs_f64();
 
         let clock = std::time::Instant::now();
@@ -741,7 +757,7 @@ impl World {
             .model
             .context(attributes, &self.params.external, &self.accumulator, &[]);
         ctx.evaluate(self.time, state, &mut self.forces, &mut self.torques);
-        (&self.forces, &self.torques, self.model.scratch.potential)
+        (&self.forces, &self.torques, self.model.scratch.potential())
     }
 
     /// Energies, momenta and the oscillation measure at the current state
@@ -759,4 +775,24 @@ impl World {
     pub fn force_evaluations(&self) -> u64 {
         self.model.scratch.evaluations
     }
+}
+
+/// Runs `f`, the steps of a world of `n` particles, on a thread of the
+/// current rayon pool: on the calling thread when it is one (inside
+/// [`rayon::ThreadPool::install`]), else on one of the global pool's
+/// threads while the caller waits. A step has several parallel passes
+/// (the neighbour list's motion check, the integrator's kick and drift,
+/// the pair passes, the divergence check): entered from a pool thread,
+/// each fork-join hands its work to the other threads by work stealing;
+/// entered from outside the pool, each one injects a job, wakes a pool
+/// thread and puts the caller to sleep until it is done, two thread
+/// wake-ups per pass. Worlds of at most one integrator chunk
+/// ([`per_particle::CHUNK`]) have no parallel pass and stay on the
+/// caller's thread. Same work, same bits: only the thread that runs the
+/// serial parts changes.
+fn on_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
+    if n <= per_particle::CHUNK || rayon::current_thread_index().is_some() {
+        return f();
+    }
+    rayon::scope(|_| f())
 }

@@ -38,7 +38,7 @@
 
 mod adaptive;
 mod explicit_euler;
-mod per_particle;
+pub(crate) mod per_particle;
 pub mod rigid;
 mod rk4;
 mod rkmk;

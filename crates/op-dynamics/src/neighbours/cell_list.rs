@@ -136,8 +136,9 @@ impl Grid {
     }
 }
 
-/// Bounding box and count of the finite positions.
-fn finite_bounds(positions: &[Point3]) -> ([Real; 3], [Real; 3], usize) {
+/// Bounding box and count of the finite positions (in parallel; minima
+/// and maxima are exact, so the same box at any thread count).
+pub(super) fn finite_bounds(positions: &[Point3]) -> ([Real; 3], [Real; 3], usize) {
     let empty = ([Real::INFINITY; 3], [Real::NEG_INFINITY; 3], 0usize);
     positions
         .par_iter()

@@ -294,8 +294,7 @@ impl NeighbourList {
     /// ([`NeighbourList::build_incoming`]).
     pub fn rebuild(&mut self, positions: &[Point3]) {
         search_rows(self.backend, positions, self.radius(), &mut self.pairs);
-        self.reference.clear();
-        self.reference.extend_from_slice(positions);
+        copy_positions(&mut self.reference, positions);
         self.built = true;
         self.rebuilds += 1;
         self.last_shift = 0.0;
@@ -354,4 +353,16 @@ fn top_two(a: Real, b: Real, x: Real) -> (Real, Real) {
     } else {
         (a, b)
     }
+}
+
+/// `dst = positions`, in parallel over fixed chunks: the world keeps the
+/// positions before each step (the oscillation measure) and the list its
+/// reference positions at each build, a copy of every position that ran
+/// on one thread while the others waited.
+pub(crate) fn copy_positions(dst: &mut Vec<Point3>, positions: &[Point3]) {
+    const CHUNK: usize = 4096;
+    dst.resize(positions.len(), Point3::origin());
+    dst.par_chunks_mut(CHUNK)
+        .zip(positions.par_chunks(CHUNK))
+        .for_each(|(a, b)| a.copy_from_slice(b));
 }

@@ -6,6 +6,7 @@
 
 use rayon::prelude::*;
 
+use super::cell_list::finite_bounds;
 use super::csr::{arr, is_finite};
 use crate::math::{Point3, Real};
 
@@ -31,15 +32,7 @@ pub fn spatial_order(positions: &[Point3], cell: Real) -> Vec<u32> {
         positions.len() <= u32::MAX as usize,
         "spatial_order indexes particles with u32"
     );
-    let mut lo = [Real::INFINITY; 3];
-    let mut hi = [Real::NEG_INFINITY; 3];
-    for p in positions.iter().filter(|p| is_finite(p)) {
-        let a = arr(p);
-        for k in 0..3 {
-            lo[k] = lo[k].min(a[k]);
-            hi[k] = hi[k].max(a[k]);
-        }
-    }
+    let (lo, hi, _) = finite_bounds(positions);
     let ext =
         (0..3).map(|k| hi[k] - lo[k]).fold(
             0.0,
@@ -76,7 +69,7 @@ pub fn spatial_order(positions: &[Point3], cell: Real) -> Vec<u32> {
         .collect();
     // Keys with the index appended are unique: any sort gives one result.
     keyed.par_sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
+    keyed.par_iter().map(|&(_, i)| i).collect()
 }
 
 /// Spreads the low 21 bits of `x` to every third bit.

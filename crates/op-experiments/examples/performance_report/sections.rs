@@ -495,6 +495,42 @@ fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
             isa = lanes::isa()
         ));
     }
+    if unmet("spacing only, per step: at most 1x LAMMPS at 2 threads") {
+        parts.push(
+            "spacing at 2 threads: the step's phases timed inside the spacing child \
+             (ms per step, 1 thread / 2 threads, before the changes below): pair pass \
+             7.9 / 4.2, spill pass 0.43 / 0.23, re-sort and list builds 4.3 / 2.3 (13 \
+             per 100 steps: candidate rows 3.5 / 1.8, Morton order 0.22 / 0.12, \
+             permutation of the particles 0.24 / 0.15, the serial counting sort into \
+             cells 0.03 / 0.03), the two integrator halves 0.44 / 0.19, the motion \
+             checks 0.11 / 0.06, the divergence check 0.11 / 0.06, and two serial \
+             passes, the copy of the positions before the step 0.05 and the energy \
+             sum 0.03. A step had 8 parallel passes, each entered from outside the \
+             rayon pool (16-18 us per pass against 4.6 us from a pool thread, \
+             rayon 1.12, 32k additions). Now the steps run on a pool thread, the \
+             energy is summed only when asked, the copies and the Morton bounds run \
+             in parallel, and the pair pass's blocks are an even number of equal \
+             blocks (16 of 2,000 rather than 15 of 2,048 and one of 1,280, which left \
+             one thread 768 particles' rows more than the other). Measured, this code against the \
+             one before (spacing child, interleaved pairs, medians; the machine shared): \
+             wall time at 1 thread 1.35 -> 1.29 s per 100 steps in one set of 4 \
+             pairs, 1.29 -> 1.32 s (ratio 1.00 [0.93-1.09]) in another; CPU time at 2 \
+             threads 1.335 -> 1.315 s (1.325 -> 1.275 s in 8 loaded pairs); the wall \
+             time at 2 threads not resolved: \
+             0.702 -> 0.713 s, per-pair ratio 1.02 [0.985-1.065] over 14 pairs \
+             without other load, then 0.709 -> 0.680 s, ratio 0.95 [0.93-0.98], over \
+             4 more. Each change switched on and off in one executable \
+             (2 threads, 4 quiet pairs each): the steps on a pool thread 0.699 -> \
+             0.686 s (ratio 0.97 [0.94-1.01]), the equal blocks 0.686 -> 0.680 s \
+             (0.99 [0.94-1.01]). An ordinary step takes 4.8 ms at 2 threads against \
+             9.0 at 1 (1.9x), a step with a list build 21 ms against 41 (1.95x). \
+             What is left above half the 1-thread time is in the passes themselves: \
+             the pair pass's rows took 8.5 ms of thread time per step at 2 threads \
+             (4.6 and 3.9 ms on the two threads) against 7.8 ms at 1; and the list \
+             builds (13 x 16 ms) are 30% of the 2-thread wall time"
+                .to_string(),
+        );
+    }
     if unmet("full oriented") || unmet("speed-up") {
         parts.push(
             "the 2-thread step: the serial part of the oriented step was velocity \
