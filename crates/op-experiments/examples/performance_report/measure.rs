@@ -213,14 +213,16 @@ pub(crate) fn interleaved_runs(
 /// and per repetition ours at 1 and at 2 threads.
 pub(crate) type ScalingRun = (usize, &'static str, Vec<(Measure, Measure)>);
 
-/// Repetitions of the scaling runs. One 10-step run at 100k takes 0.7 s
-/// at 2 threads, so a time slice lost to another process moves its
-/// speed-up by several percent: the figures are medians over interleaved
-/// repetitions, as the side-by-side ones are.
+/// Repetitions of the scaling runs. A time slice lost to another process
+/// moves a short run's speed-up by several percent (10 steps at 100k took
+/// 0.3-0.7 s at 2 threads, and three runs of the same code gave the
+/// spacing speed-up 1.65, 1.77 and 1.86 with work-bound 1.88-2.00): the
+/// figures are medians over interleaved repetitions, as the side-by-side
+/// ones are, and the 100k runs take 40 steps.
 const SCALING_REPS: usize = 3;
 
 /// Scaling at 100k and 1M particles (100k only and one repetition when
-/// `quick`): our own Maxwell velocities, 10 steps, 5 at 1M; every
+/// `quick`): our own Maxwell velocities, 40 steps, 5 at 1M; every
 /// repetition runs each size and work at 1 then 2 threads.
 pub(crate) fn scaling_runs(quick: bool) -> Res<Vec<ScalingRun>> {
     let sizes: &[usize] = if quick { &[29] } else { &[29, 63] };
@@ -231,7 +233,7 @@ pub(crate) fn scaling_runs(quick: bool) -> Res<Vec<ScalingRun>> {
         .collect();
     for rep in 0..reps {
         for (cells, kind, runs) in scaling.iter_mut() {
-            let steps = if *cells > 40 { 5 } else { 10 };
+            let steps = if *cells > 40 { 5 } else { 40 };
             let one = ours(kind, 1, steps, "-", *cells)?;
             let two = ours(kind, 2, steps, "-", *cells)?;
             eprintln!(

@@ -338,7 +338,7 @@ pub(crate) fn scaling_section(scaling: &[ScalingRun]) -> Res<String> {
     };
     writeln!(
         md,
-        "\n## Scaling with N (ours; 10 steps, 5 at 1M, Maxwell velocities at 1.44; {runs})\n"
+        "\n## Scaling with N (ours; 40 steps at 100k, 5 at 1M, Maxwell velocities at 1.44; {runs})\n"
     )?;
     writeln!(md, "| particles | work | 1 thread s/step | 2 threads s/step | speed-up, wall | speed-up, work-bound | peak MB 1 / 2 threads |\n|---|---|---|---|---|---|---|")?;
     for (cells, kind, runs) in scaling {
