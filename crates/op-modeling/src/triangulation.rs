@@ -130,7 +130,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use op_dynamics::error::{self, ParamError};
-use op_dynamics::math::{Mat3, Point3, Real, Vec3};
+use op_dynamics::math::{Point3, Real, Vec3};
 use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
 use op_dynamics::particles::Particles;
 
@@ -692,15 +692,10 @@ fn fitted_normals(positions: &[Point3], normals: &[Vec3], full: &[Vec<u32>]) -> 
             if row.len() < 2 {
                 return Vec3::zeros();
             }
-            let points = || std::iter::once(i).chain(row.iter().map(|&j| j as usize));
-            let mean =
-                points().map(|k| positions[k].coords).sum::<Vec3>() / (row.len() + 1) as Real;
-            let spread: Mat3 = points()
-                .map(|k| {
-                    let d = positions[k].coords - mean;
-                    d * d.transpose()
-                })
-                .sum();
+            let points = std::iter::once(i)
+                .chain(row.iter().map(|&j| j as usize))
+                .map(|k| &positions[k]);
+            let (_, spread) = crate::fit::covariance(points);
             let eigen = spread.symmetric_eigen();
             let e = eigen.eigenvalues;
             let mut order = [0usize, 1, 2];

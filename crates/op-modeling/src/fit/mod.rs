@@ -138,6 +138,7 @@ mod input;
 mod mesh;
 mod neighbourhood;
 mod normals;
+pub(crate) use normals::covariance;
 mod rounds;
 pub mod shapes;
 mod spacing;

@@ -86,7 +86,7 @@ pub(crate) fn curve_like_share(points: &[Point3], knn: &Knn) -> Real {
 
 /// Mean and covariance (the sum of the outer products of the deviations)
 /// of `points`, summed in the order given.
-pub(super) fn covariance<'a>(
+pub(crate) fn covariance<'a>(
     points: impl Iterator<Item = &'a Point3> + Clone,
 ) -> (Vec3, op_dynamics::Mat3) {
     let (sum, n) = points
