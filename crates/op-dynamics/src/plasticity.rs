@@ -71,6 +71,21 @@
 //! missing piece as future work: a form interaction whose curvature
 //! depends on the direction to the neighbour.
 //!
+//! A per-bond form of it was built and measured on that scene (issue
+//! 15, not merged): each bond remembers, in each emitter's body frame, an
+//! offset of the form residual `κ r + n_i - n_j`, and a shift of its rest
+//! length, both flowing beyond a yield (forces and torques from the
+//! energy `ψ |κ r + n_i - n_j - m|²` and `U(|r| - δ)`, checked against
+//! finite differences). It never runs away and the shell stays closed,
+//! but the dent springs back (the side 2.0 -> 3.3-3.5, with yields from
+//! 0.005 to 0.2, with hardening, and with pushes of balls of radius 2.5
+//! and 3.5): the dent stretches the shell, and elastic rest lengths, or
+//! rest lengths that flow back to the bond's force at rest, pull it out
+//! (the cohesion lattice's rest forces are large and balance only in the
+//! shape they formed in). Rest lengths that flow to zero force keep the
+//! dent (the side stays at 2.2), but the pushed particles then sink as a
+//! plug and the pit's walls stretch open (15-29 of 101 frames closed).
+//!
 //! **Return mapping.** With `e = κ_i - κ̂_i` and the yield curvature
 //! `y >= 0`: within the band `|e| <= y` nothing changes (elastic); beyond
 //! it the excess `x = e - sign(e) y` relaxes at `rate`, integrated exactly
