@@ -274,40 +274,88 @@ fn description(s: &Value) -> Option<String> {
     Some(text)
 }
 
-/// `[`a::b::C`]` → `` `C` ``, `[`C`](x)` → `` `C` ``, `[text](x)` → `text`.
+/// `[`a::b::C`]` → `` `C` ``, `[`C`](x)` → `` `C` ``, `[text](x)` → `text`,
+/// `[C]` → `C`. Square brackets that are not links stay: inside code spans
+/// (`` `List([0, 5, 9])` ``) and in prose that is not a link (an interval
+/// `[0, 1]`).
 fn strip_links(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     let mut rest = s;
-    while let Some(open) = rest.find('[') {
-        out.push_str(&rest[..open]);
-        let after = &rest[open + 1..];
+    loop {
+        let Some(at) = rest.find(['[', '`']) else {
+            break;
+        };
+        out.push_str(&rest[..at]);
+        let from = &rest[at..];
+        if from.starts_with('`') {
+            // A code span: copied as it is, brackets and all.
+            match from[1..].find('`') {
+                Some(close) => {
+                    out.push_str(&from[..close + 2]);
+                    rest = &from[close + 2..];
+                }
+                None => {
+                    out.push_str(from);
+                    return out;
+                }
+            }
+            continue;
+        }
+        let after = &from[1..];
         let Some(close) = after.find(']') else {
-            out.push_str(&rest[open..]);
+            out.push_str(from);
             return out;
         };
         let inner = &after[..close];
         let mut tail = &after[close + 1..];
-        if tail.starts_with('(') {
+        let inline = tail.starts_with('(') && tail.contains(')');
+        let code = inner
+            .strip_prefix('`')
+            .and_then(|c| c.strip_suffix('`'))
+            .filter(|c| is_path(c));
+        if !(inline || code.is_some() || is_path(inner)) {
+            // Not a link: keep the bracket and go on after it.
+            out.push('[');
+            rest = after;
+            continue;
+        }
+        if inline {
             if let Some(end) = tail.find(')') {
                 tail = &tail[end + 1..];
             }
         }
-        if let Some(code) = inner.strip_prefix('`').and_then(|c| c.strip_suffix('`')) {
-            // Drop the module path: `crate::creation` → `creation`,
-            // `super::Integrator::step` → `Integrator::step`.
-            let segments: Vec<&str> = code.split("::").collect();
-            let first_type = segments
-                .iter()
-                .position(|s| s.starts_with(|c: char| c.is_ascii_uppercase()))
-                .unwrap_or(segments.len() - 1);
-            let _ = write!(out, "`{}`", segments[first_type..].join("::"));
-        } else {
-            out.push_str(inner);
+        match code.or_else(|| is_path(inner).then_some(inner)) {
+            Some(code) => {
+                // Drop the module path: `crate::creation` → `creation`,
+                // `super::Integrator::step` → `Integrator::step`.
+                let segments: Vec<&str> = code.split("::").collect();
+                let first_type = segments
+                    .iter()
+                    .position(|s| s.starts_with(|c: char| c.is_ascii_uppercase()))
+                    .unwrap_or(segments.len() - 1);
+                let name = segments[first_type..].join("::");
+                if inner.starts_with('`') {
+                    let _ = write!(out, "`{name}`");
+                } else {
+                    out.push_str(&name);
+                }
+            }
+            None => out.push_str(inner),
         }
         rest = tail;
     }
     out.push_str(rest);
     out
+}
+
+/// True when `s` reads as a Rust path (`a::B`, `Material`, `Vec<T>`): the
+/// text of an intra-doc link.
+fn is_path(s: &str) -> bool {
+    !s.is_empty()
+        && s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+        && s.chars().all(|c| {
+            c.is_ascii_alphanumeric() || matches!(c, '_' | ':' | '<' | '>' | '(' | ')' | '!')
+        })
 }
 
 /// Citations of this repository's docs, written from the repository root
@@ -460,7 +508,12 @@ mod tests {
             !md.contains("DESIGN"),
             "a citation of notes outside the repository"
         );
-        assert!(!md.contains("[`"), "a rustdoc link leaked");
+        // `[`path`]`, not an interval such as `[`min_gap`, 2π]`.
+        let leaked = md.match_indices("[`").any(|(at, _)| {
+            let inner = &md[at + 2..];
+            inner.find("`]").is_some_and(|end| is_path(&inner[..end]))
+        });
+        assert!(!leaked, "a rustdoc link leaked");
         assert!(!md.contains("crate::"), "a crate path leaked");
         assert!(md.contains("## Material"));
         assert!(md.contains("### Generator::HexSheet"));
@@ -495,6 +548,11 @@ mod tests {
         assert_eq!(
             strip_links("see [`crate::creation`] and [x](y)"),
             "see `creation` and x"
+        );
+        // Brackets that are not links stay: in code spans and intervals.
+        assert_eq!(
+            strip_links("RON: `List([0, 5, 9])`, in [0, 1], [`Material`], [Weight]"),
+            "RON: `List([0, 5, 9])`, in [0, 1], `Material`, Weight"
         );
     }
 }
