@@ -96,3 +96,50 @@ fn a_skinned_sheet_with_creation_heat_eraser_and_obstacle_runs_with_its_skin() {
     assert!(skin.iter().filter(|v| v[0] > 4.0).count() > 100);
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `outputs.particles: None` leaves out the particles, not the skin: a
+/// skinned sheet still writes its skin in every frame (found by a new
+/// user, whose run wrote nothing).
+#[test]
+fn a_skin_is_written_without_particle_output() {
+    let text = r#"(
+        name: "skin_only",
+        world: (dt: 0.005, duration: 0.1, frame_rate: 10),
+        objects: [(
+            name: "cloth",
+            material: "cloth",
+            generator: HexSheet(nx: 6, ny: 6, spacing: 1),
+            skin: Some((primitive: Square(half_side: 0.5), radius: 1.2, cell_size: 0.25)),
+        )],
+        outputs: (particles: None),
+    )"#;
+    let scene = op_scene::parse_scene(text, op_scene::Format::Ron, "skin_only.ron").unwrap();
+    let mut built = scene.build(None, None).expect("the scene builds");
+    let out = std::env::temp_dir().join(format!("opsim-skin-only-{}", std::process::id()));
+    let opts = op_scene::RunOptions {
+        out_dir: out.clone(),
+        frames: None,
+        formats: vec![op_scene::export::FrameFormat::Obj],
+    };
+    let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
+    let dirs: Vec<String> = std::fs::read_dir(out.join("frames"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        dirs,
+        ["cloth_skin"],
+        "no particle sequence, one skin sequence"
+    );
+    let frames = std::fs::read_dir(out.join("frames/cloth_skin"))
+        .unwrap()
+        .count();
+    assert_eq!(frames, summary.frames);
+    for e in std::fs::read_dir(out.join("frames/cloth_skin")).unwrap() {
+        let skin = objects(&e.unwrap().path())
+            .remove("cloth_skin")
+            .unwrap_or_default();
+        assert!(skin.len() > 100, "a skin of {} vertices", skin.len());
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -8,7 +8,7 @@ use op_modeling::Tool;
 
 use crate::creation::CreationState;
 use crate::export::geometry::SheetGap;
-use crate::outputs::{Outputs, ParticleOutput};
+use crate::outputs::Outputs;
 use crate::skins::{ContactStats, ObjectSkin, SkinTool};
 use crate::stages::SceneState;
 
@@ -157,15 +157,13 @@ impl BuiltScene {
 
     /// What the scene computes: the world's stages
     /// ([`World::enabled`]) followed by `skin` (skins are posed) and
-    /// `polygonize` (skins are written in the frames) when some object has
-    /// a skin, and `contact` when at least two have (implicit contact).
+    /// `polygonize` (skins are written in the frames, whatever
+    /// [`Outputs::particles`] is) when some object has a skin, and `contact` when at least two have (implicit contact).
     pub fn stages(&self) -> Vec<String> {
         let mut stages = self.world.enabled();
         if !self.skins.is_empty() {
             stages.push("skin".into());
-            if self.outputs.particles != ParticleOutput::None {
-                stages.push("polygonize".into());
-            }
+            stages.push("polygonize".into());
         }
         if self.has_contact() {
             stages.push("contact".into());

@@ -8,7 +8,8 @@ use serde::{Deserialize, Serialize};
     Copy, Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
 )]
 pub enum ParticleOutput {
-    /// Not written.
+    /// Not written (an object's skin, and its surface when
+    /// `triangulation` is set, still are).
     None,
     /// One vertex per particle with its normal as the `vn` of the same
     /// rank (no element: loose vertices, a point cloud).

@@ -142,7 +142,7 @@ pub struct FrameWriter {
 impl FrameWriter {
     /// The writer of a scene's frames under `out` in `formats` (duplicates
     /// ignored): unless [`Outputs::particles`] is `None`, a particle
-    /// sequence per object and a skin sequence per skin; a surface sequence
+    /// sequence per object; a skin sequence per skin; a surface sequence
     /// per object when [`Outputs::triangulation`] is set; a tool sequence
     /// per tool when any of these is written; in that order.
     pub fn new(
@@ -163,11 +163,11 @@ impl FrameWriter {
                     Source::Particles(k),
                 ));
             }
-            // Skins are polygonized for the frames only with particles
-            // (`BuiltScene::stages`' `polygonize`).
-            for (k, s) in skins.iter().enumerate() {
-                named.push((s.name.clone(), SequenceKind::Skin, Source::Skin(k)));
-            }
+        }
+        // An object's skin is written whenever it has one
+        // (`BuiltScene::stages`' `polygonize`), with or without particles.
+        for (k, s) in skins.iter().enumerate() {
+            named.push((s.name.clone(), SequenceKind::Skin, Source::Skin(k)));
         }
         if outputs.triangulation {
             for (k, o) in objects.iter().enumerate() {
@@ -178,7 +178,7 @@ impl FrameWriter {
                 ));
             }
         }
-        if particles || outputs.triangulation {
+        if particles || outputs.triangulation || !skins.is_empty() {
             for (k, t) in tools.iter().enumerate() {
                 named.push((
                     geometry::tool_name(k, t),
