@@ -100,7 +100,9 @@ enum Command {
         /// Samples: .xyz (`x y z [nx ny nz]` per line), .ply (ascii or
         /// binary_little_endian) or .obj (`v`, optional `vn`).
         points: PathBuf,
-        /// Output mesh (.obj), written atomically.
+        /// Output mesh (.obj), written atomically, in the samples' own
+        /// coordinates (no axis change, so it overlays the input; run
+        /// frames are written y-up instead, see the README).
         #[arg(long)]
         out: PathBuf,
         /// Sample spacing. Default: the median nearest-sample distance.
@@ -338,6 +340,17 @@ fn run_fit(
     open: bool,
     relax: f64,
 ) -> Result<(), Failure> {
+    // Checked before the fit, which may take minutes.
+    let obj = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+    if !obj {
+        return Err(anyhow!(
+            "--out {}: the fitted mesh is written as Wavefront OBJ: give a path ending in .obj",
+            out.display()
+        )
+        .into());
+    }
     let data = op_scene::pointsets::read_point_set(points)?;
     let params = op_scene::fit::FitParams {
         spacing,

@@ -234,6 +234,16 @@ fn bad_files_exit_2_naming_the_file() {
     let o = opsim(&["fit", "ok.xyz", "--out", "m.obj", "--spacing", "0"], &dir);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("spacing"), "{}", text(&o));
+    // The mesh is OBJ: another extension is refused before the fit, not
+    // written as OBJ text under the wrong name.
+    let o = opsim(&["fit", "ok.xyz", "--out", "m.ply"], &dir);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("m.ply") && text(&o).contains(".obj"),
+        "{}",
+        text(&o)
+    );
+    assert!(!dir.join("m.ply").exists());
 }
 
 /// The same input gives the same mesh, bit for bit.
