@@ -145,9 +145,9 @@ enum Command {
         /// Picture height in pixels (per frame for a contact sheet).
         #[arg(long, default_value_t = 600)]
         height: u32,
-        /// Frames in a contact sheet.
-        #[arg(long, default_value_t = 9)]
-        frames: usize,
+        /// Frames in a contact sheet, >= 1.
+        #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..))]
+        frames: u32,
         /// Direction the camera looks along, `X,Y,Z` in scene coordinates
         /// (z-up), e.g. `0,0,-1` from above. Default: the run's view (the
         /// scene's `outputs.view`, from summary.json), else from the front
@@ -264,6 +264,19 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             view,
             up,
         }) => {
+            // A file is read as OBJ: say so for another kind of frame
+            // rather than find no vertices in it.
+            let obj = input
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
+            if input.is_file() && !obj {
+                return Err(anyhow!(
+                    "cannot render {}: render reads .obj files (a frame written with \
+                     --format obj, the default) or a run directory",
+                    input.display()
+                )
+                .into());
+            }
             // The frames are y-up OBJ files of a z-up scene: directions
             // given in scene coordinates are converted like the frames.
             let view = view.or_else(|| render::run_view_axis(&input));
@@ -276,7 +289,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                 up: up.map(scene_to_obj),
                 ..Default::default()
             };
-            let rendering = render::render_path(&input, &opts, frames)
+            let rendering = render::render_path(&input, &opts, frames as usize)
                 .with_context(|| format!("cannot render {}", input.display()))?;
             for note in &rendering.notes {
                 eprintln!("opsim: note: {note}");

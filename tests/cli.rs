@@ -176,6 +176,7 @@ fn render_is_upright_by_default_and_follows_view_and_up() {
         vec!["--view", "1,2"],
         vec!["--up", "0,0,x"],
         vec!["--view", "0,0,-1", "--up", "0,0,1"],
+        vec!["--frames", "0"],
     ] {
         let mut args = vec!["render", ".", "--out", "bad.png"];
         args.extend_from_slice(&bad);
@@ -183,6 +184,13 @@ fn render_is_upright_by_default_and_follows_view_and_up() {
         assert_eq!(o.status.code(), Some(2), "{bad:?}: {}", text(&o));
         assert!(!out.join("bad.png").exists());
     }
+    // A frame that is not OBJ is refused as such (it used to read as
+    // an OBJ without vertices).
+    std::fs::write(out.join("frame.ply"), "ply\nformat ascii 1.0\nend_header\n").unwrap();
+    let o = opsim(&["render", "frame.ply", "--out", "bad.png"], &out);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains(".obj"), "{}", text(&o));
+    assert!(!out.join("bad.png").exists());
 }
 
 /// `run` writes the frames, metrics and summary; the OBJ frames re-read
