@@ -58,7 +58,9 @@ pub enum Role {
     /// A mover (seed 000 §6: grabs the particles inside it and carries
     /// them): every particle inside the tool when the world is built is
     /// tied to its point in the tool frame by a spring `E = k |x - T(t) x_0|²
-    /// / 2` until `release`.
+    /// / 2` until `release`. It holds them from the start, through a
+    /// scene's settle phase too: the shape settled under its hold is the
+    /// object's rest shape (what the rest shape error is measured from).
     Mover {
         /// Spring stiffness `k`, > 0.
         stiffness: Real,
