@@ -573,7 +573,7 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
             b.rest_spacing
         );
     }
-    outln!("  enabled: {}", built.stages().join(", "));
+    outln!("  enabled: {}", sample.stages.join(", "));
     match w.neighbours() {
         Some(n) => outln!(
             "  neighbours: {:?}, cut-off {:.4}, skin {:.4}",

@@ -460,7 +460,7 @@ impl Scene {
     /// scene time). An obstacle acts on the particles of the unskinned
     /// objects it selects and on the skins of the skinned ones; a tool
     /// left with no particle to act on is not given to the world.
-    fn tool_params(&self) -> (Vec<ToolParams>, Vec<SkinToolParams>, Vec<ToolParams>) {
+    pub(crate) fn tool_params(&self) -> (Vec<ToolParams>, Vec<SkinToolParams>, Vec<ToolParams>) {
         let settle = self.world.settle;
         let mut world_tools = Vec::new();
         let mut skin_tools = Vec::new();

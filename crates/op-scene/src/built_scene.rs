@@ -155,29 +155,22 @@ impl BuiltScene {
         Ok(())
     }
 
-    /// What the scene computes: the world's stages
-    /// ([`World::enabled`]) followed by `skin` (skins are posed) and
-    /// `polygonize` (skins are written in the frames, whatever
-    /// [`Outputs::particles`] is) when some object has a skin, and `contact` when at least two have (implicit contact).
+    /// What the scene computes ([`stage_names`]): the world's stages
+    /// ([`World::enabled`]) with every tool's role (an obstacle that meets
+    /// skins acts in the contact stage, not in the world, and is listed
+    /// all the same), followed by `skin` (skins are posed) and `polygonize`
+    /// (skins are written in the frames, whatever [`Outputs::particles`]
+    /// is) when some object has a skin, and `contact` when at least two
+    /// have or an obstacle meets one (implicit contact).
     pub fn stages(&self) -> Vec<String> {
-        let mut stages = self.world.enabled();
-        if !self.skins.is_empty() {
-            stages.push("skin".into());
-            stages.push("polygonize".into());
-        }
-        if self.has_contact() {
-            stages.push("contact".into());
-        }
-        if let Some(c) = &self.creation {
-            stages.push("creation".into());
-            if c.fit.is_some() {
-                stages.push("fit".into());
-            }
-        }
-        if self.outputs.triangulation {
-            stages.push("triangulation".into());
-        }
-        stages
+        stage_names(
+            self.world.enabled(),
+            self.tools.iter().map(|t| t.params().role.name()),
+            !self.skins.is_empty(),
+            self.has_contact(),
+            self.creation.as_ref().map(|c| c.fit.is_some()),
+            self.outputs.triangulation,
+        )
     }
 
     /// Whether nothing feeds energy into the scene or changes its energy
@@ -260,4 +253,42 @@ impl BuiltScene {
             self.world.time()
         }
     }
+}
+
+/// The stage names of [`BuiltScene::stages`] from their parts: the world's
+/// stages (its own tool roles replaced by `roles`, every tool of the
+/// scene), then `skin` and `polygonize` with `skinned`, `contact`,
+/// `creation` and `fit` (`creation` is `Some(has_fit)` when the scene has
+/// creation rules), `triangulation`. `opsim check` lists a sample's stages
+/// with the full scene's parts this way.
+pub fn stage_names<'a>(
+    world: Vec<String>,
+    roles: impl Iterator<Item = &'a str>,
+    skinned: bool,
+    contact: bool,
+    creation: Option<bool>,
+    triangulation: bool,
+) -> Vec<String> {
+    let mut stages: Vec<String> = world
+        .into_iter()
+        .filter(|s| !s.starts_with("tool:"))
+        .collect();
+    stages.extend(roles.map(|r| format!("tool:{r}")));
+    if skinned {
+        stages.push("skin".into());
+        stages.push("polygonize".into());
+    }
+    if contact {
+        stages.push("contact".into());
+    }
+    if let Some(fit) = creation {
+        stages.push("creation".into());
+        if fit {
+            stages.push("fit".into());
+        }
+    }
+    if triangulation {
+        stages.push("triangulation".into());
+    }
+    stages
 }

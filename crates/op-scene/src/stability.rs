@@ -153,6 +153,10 @@ pub struct Sample {
     pub built: crate::BuiltScene,
     /// The stable-step estimate.
     pub estimate: StepEstimate,
+    /// What the full scene computes ([`crate::BuiltScene::stages`]): the
+    /// sample's world stages with the scene's tools, skins, contact,
+    /// creation and triangulation, which the sample leaves out.
+    pub stages: Vec<String>,
 }
 
 /// Estimates the largest stable step of `scene` (see the module docs).
@@ -214,7 +218,20 @@ pub fn sample(scene: &Scene, base_dir: Option<&Path>) -> Result<Sample, SceneErr
         object,
         dt_max: largest_stable_step(&scene.world.integrator, lambda, damping_rate),
     };
-    Ok(Sample { built, estimate })
+    let skins = scene.objects.iter().filter(|o| o.skin.is_some()).count();
+    let stages = crate::built_scene::stage_names(
+        built.world.enabled(),
+        scene.tools.iter().map(|t| t.role.name()),
+        skins > 0,
+        skins >= 2 || !scene.tool_params().1.is_empty(),
+        scene.creation.as_ref().map(|c| c.fit.is_some()),
+        scene.outputs.triangulation,
+    );
+    Ok(Sample {
+        built,
+        estimate,
+        stages,
+    })
 }
 
 /// The largest eigenvalue (in magnitude) of the mass-weighted Hessian at
