@@ -64,7 +64,10 @@ use crate::math::Real;
 use crate::neighbours::{search, NeighbourBackend, PairList};
 use crate::particles::Particles;
 
-/// The bond rule of a material (see the [module docs](self)).
+/// The bond rule of a material: pairs of one object within `radius` when
+/// the world is built (or a particle is inserted) are bonded and interact
+/// completely; unbonded pairs of a bonded material only repel; a bond
+/// stretched beyond `break_length` breaks for good (seed 000 fig. 12).
 #[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct BondParams {

@@ -121,8 +121,12 @@ use crate::math::Real;
 use crate::neighbours::NeighbourList;
 use crate::particles::Particles;
 
-/// Plasticity of a material's remembered curvature (see the module docs).
-/// Needs the form term (`form > 0`) of the same material.
+/// Plasticity of a material's remembered curvature (Terzopoulos &
+/// Fleischer 1988, cited by seed 000 §8): after each step, a particle whose
+/// current curvature (the sphere through its neighbours' positions)
+/// differs from its remembered one by more than `yield_curvature` moves
+/// the memory towards it at `rate`, so a deformation beyond the yield is
+/// kept. Needs the form term (`form > 0`) of the same material.
 #[derive(Copy, Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Plasticity {

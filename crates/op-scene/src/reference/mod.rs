@@ -270,6 +270,12 @@ fn description(s: &Value) -> Option<String> {
     ] {
         text = text.replace(from, to);
     }
+    // The module docs are the API documentation's, which a scene writer
+    // reads with `cargo doc`.
+    let text = text.replace(
+        "the module docs",
+        "the API documentation (`cargo doc --open`)",
+    );
     let text = relative_doc_links(&text);
     Some(text)
 }
