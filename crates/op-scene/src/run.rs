@@ -567,7 +567,8 @@ fn frame_files(writer: &FrameWriter) -> FrameFiles {
 fn up_direction(scene: &BuiltScene) -> [Real; 3] {
     let g = scene.world.params().external.gravity();
     match (-g).try_normalize(0.0) {
-        Some(u) if u.iter().all(|c| c.is_finite()) => u.into(),
+        // `+ 0.0` turns the `-0.0` of a negated zero into `0`.
+        Some(u) if u.iter().all(|c| c.is_finite()) => u.map(|c| c + 0.0).into(),
         _ => [0.0, 0.0, 1.0],
     }
 }
