@@ -614,6 +614,10 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
             ""
         }
     );
+    // On the sample's particles (at most a bounded number per object).
+    for warning in op_scene::health::started_inside(built) {
+        eprintln!("opsim: warning: {warning}");
+    }
     if let Some(warning) = e.warning(scene.world.dt, &scene.world.integrator) {
         eprintln!("opsim: warning: {warning}");
     }

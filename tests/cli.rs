@@ -704,3 +704,45 @@ fn messages_are_short_and_inputs_bounded() {
     assert_eq!(o.status.code(), Some(2));
     assert!(text(&o).contains("not a regular file"), "{}", text(&o));
 }
+
+/// Particles that start inside an obstacle are named in a warning by
+/// `check` and by `run` (the penalty throws them: a new user's chain inside
+/// a ball was flung 124 scene sizes away, and check only advised a
+/// smaller step).
+#[test]
+fn particles_starting_inside_an_obstacle_are_warned_about() {
+    let out = temp_dir("inside");
+    let scene = out.join("inside.ron");
+    std::fs::write(
+        &scene,
+        r#"(
+            name: "inside",
+            world: (dt: 0.005, duration: 0.5, frame_rate: 2, linear_damping: 0.1),
+            objects: [(name: "rope", material: "cloth", generator: Chain(count: 3, spacing: 1))],
+            tools: [(name: "ball", shape: Ball(radius: 4),
+                     role: Obstacle(stiffness: 200, margin: 0.5, damping: 1))],
+        )"#,
+    )
+    .unwrap();
+    let o = opsim(&["check", "inside.ron"], &out);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("start inside obstacle \"ball\""),
+        "{}",
+        text(&o)
+    );
+    let o = run_scene(&scene, &out.join("run"), &[]);
+    assert!(
+        text(&o).contains("start inside obstacle \"ball\""),
+        "{}",
+        text(&o)
+    );
+    // Outside the ball: no such warning.
+    let clear = std::fs::read_to_string(&scene).unwrap().replace(
+        "Ball(radius: 4)",
+        "Ball(radius: 4), path: [(time: 0, position: (0, 0, 10))]",
+    );
+    std::fs::write(&scene, clear).unwrap();
+    let o = opsim(&["check", "inside.ron"], &out);
+    assert!(!text(&o).contains("start inside"), "{}", text(&o));
+}

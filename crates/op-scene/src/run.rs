@@ -283,6 +283,7 @@ pub fn run(
         .then(|| Metrics::new(opts.out_dir.join("metrics.csv")));
     let mut tally = Tally::new(scene);
     let mut warnings = scene.step_warnings.clone();
+    warnings.extend(crate::health::started_inside(scene));
     if let Err(d) = scene.settle() {
         tally.divergence = Some(format!("while settling: {d}"));
     }
