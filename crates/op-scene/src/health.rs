@@ -401,29 +401,6 @@ pub fn energy_floor(scene: &BuiltScene, size: Real, duration: Real) -> Real {
     0.5 * mass * v * v
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn close_pairs_and_bounds() {
-        let pts: Vec<(u32, Point3)> = [0.0, 0.5, 1.0, 3.0, 3.4]
-            .iter()
-            .enumerate()
-            .map(|(k, &x)| (k as u32, Point3::new(x, 0.0, 0.0)))
-            .collect();
-        let mut found = Vec::new();
-        close_pairs(&pts, 0.6, |a, b, _| found.push((a, b)));
-        found.sort();
-        assert_eq!(found, vec![(0, 1), (1, 2), (3, 4)]);
-        let mut b = Bounds::empty();
-        b.add(&Vec3::zeros());
-        b.add(&Vec3::new(1.0, 1.0, 0.0));
-        assert_eq!(b.distance(&Vec3::new(0.5, 0.5, 0.0)), 0.0);
-        assert!((b.distance(&Vec3::new(4.0, 1.0, 0.0)) - 3.0).abs() < 1e-12);
-    }
-}
-
 /// Warnings for particles that start inside an obstacle that acts on them
 /// (seed 000 §6): its penalty pushes each out with up to `stiffness` times
 /// its depth at once, which can throw it far (a stiff mode `opsim check`
@@ -475,4 +452,27 @@ pub fn started_inside(scene: &BuiltScene) -> Vec<String> {
         }
     }
     warnings
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn close_pairs_and_bounds() {
+        let pts: Vec<(u32, Point3)> = [0.0, 0.5, 1.0, 3.0, 3.4]
+            .iter()
+            .enumerate()
+            .map(|(k, &x)| (k as u32, Point3::new(x, 0.0, 0.0)))
+            .collect();
+        let mut found = Vec::new();
+        close_pairs(&pts, 0.6, |a, b, _| found.push((a, b)));
+        found.sort();
+        assert_eq!(found, vec![(0, 1), (1, 2), (3, 4)]);
+        let mut b = Bounds::empty();
+        b.add(&Vec3::zeros());
+        b.add(&Vec3::new(1.0, 1.0, 0.0));
+        assert_eq!(b.distance(&Vec3::new(0.5, 0.5, 0.0)), 0.0);
+        assert!((b.distance(&Vec3::new(4.0, 1.0, 0.0)) - 3.0).abs() < 1e-12);
+    }
 }

@@ -287,15 +287,12 @@ fn description(s: &Value) -> Option<String> {
 fn strip_links(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     let mut rest = s;
-    loop {
-        let Some(at) = rest.find(['[', '`']) else {
-            break;
-        };
+    while let Some(at) = rest.find(['[', '`']) {
         out.push_str(&rest[..at]);
         let from = &rest[at..];
-        if from.starts_with('`') {
+        if let Some(code) = from.strip_prefix('`') {
             // A code span: copied as it is, brackets and all.
-            match from[1..].find('`') {
+            match code.find('`') {
                 Some(close) => {
                     out.push_str(&from[..close + 2]);
                     rest = &from[close + 2..];
