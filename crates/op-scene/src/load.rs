@@ -142,7 +142,11 @@ pub fn parse_unvalidated(text: &str, format: Format, origin: &str) -> Result<Sce
                 file: origin.to_string(),
                 line: e.position.line,
                 column: e.position.col,
-                message: e.code.to_string(),
+                message: format!(
+                    "{}{}",
+                    e.code,
+                    excerpt(text, e.position.line, e.position.col)
+                ),
             })?,
         Format::Json => serde_json::from_str(text).map_err(|e| {
             let message = e.to_string();
@@ -156,7 +160,7 @@ pub fn parse_unvalidated(text: &str, format: Format, origin: &str) -> Result<Sce
                 file: origin.to_string(),
                 line: e.line(),
                 column: e.column(),
-                message,
+                message: format!("{message}{}", excerpt(text, e.line(), e.column())),
             }
         })?,
     };
@@ -165,9 +169,57 @@ pub fn parse_unvalidated(text: &str, format: Format, origin: &str) -> Result<Sce
     Ok(scene)
 }
 
+/// The source line `line` (1-based) of `text` with a caret under column
+/// `column` (1-based, in characters), as two indented lines starting with
+/// a newline, for a parse error: the parser's message ("Expected float")
+/// names no field, the line shows it. At most [`EXCERPT_WIDTH`] characters
+/// around the column (a minified JSON scene is one long line); empty when
+/// the line does not exist.
+fn excerpt(text: &str, line: usize, column: usize) -> String {
+    let Some(source) = text.lines().nth(line.saturating_sub(1)) else {
+        return String::new();
+    };
+    let chars: Vec<char> = source.chars().collect();
+    let at = column.saturating_sub(1).min(chars.len());
+    let start = at.saturating_sub(EXCERPT_WIDTH / 2);
+    let end = (start + EXCERPT_WIDTH).min(chars.len());
+    let shown: String = chars[start..end].iter().collect();
+    let number = line.to_string();
+    format!(
+        "\n  {number} | {}\n  {} | {}^",
+        shown.trim_end(),
+        " ".repeat(number.len()),
+        " ".repeat(at - start)
+    )
+}
+
+/// Characters of a source line shown by [`excerpt`].
+const EXCERPT_WIDTH: usize = 100;
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn parse_errors_show_the_line_with_a_caret() {
+        let text = "(\n    name: \"x\",\n    world: (dt: \"fast\"),\n)";
+        let e = parse_unvalidated(text, Format::Ron, "x.ron")
+            .unwrap_err()
+            .to_string();
+        let caret = e.lines().last().unwrap();
+        let source = e.lines().nth(e.lines().count() - 2).unwrap();
+        assert!(source.contains("world: (dt: \"fast\")"), "{e}");
+        // The caret stands under the value the parser stopped at.
+        let col = caret.find('^').unwrap();
+        assert!(
+            source[col..].starts_with('"') || source[..col].ends_with(": "),
+            "{e}"
+        );
+        // A long line is cut around the column; a missing line shows nothing.
+        let long = format!("{}x", " ".repeat(10_000));
+        assert!(excerpt(&long, 1, 10_001).len() < 2 * EXCERPT_WIDTH);
+        assert_eq!(excerpt("a", 3, 1), "");
+    }
 
     const BASE: &str = r#"(name: "t", materials: {"m": ()},
         objects: [(name: "a", material: "m", generator: Chain(count: 3, spacing: 1))])"#;
