@@ -427,13 +427,17 @@ pub fn started_inside(scene: &BuiltScene) -> Vec<String> {
             if !tool.acts_on(o) {
                 continue;
             }
-            if let Some((d, _)) = signed_distance(tool.shape(), &frame, &x.coords) {
-                if d < 0.0 {
-                    count += 1;
-                    if -d > deepest {
-                        (deepest, object) = (-d, Some(o));
-                    }
-                }
+            let point = parry3d_f64::math::Vector::new(x.x, x.y, x.z);
+            if !tool.shape().contains_point(&frame, point) {
+                continue;
+            }
+            // The depth, where the projection defines one (not at a ball's
+            // centre, say, where every direction is closest).
+            let depth = signed_distance(tool.shape(), &frame, &x.coords)
+                .map_or(0.0, |(d, _)| (-d).max(0.0));
+            count += 1;
+            if object.is_none() || depth > deepest {
+                (deepest, object) = (depth, Some(o));
             }
         }
         if count > 0 {
