@@ -419,41 +419,39 @@ pub fn started_inside(scene: &BuiltScene) -> Vec<String> {
         let Role::Obstacle { stiffness, .. } = tool.params().role else {
             continue;
         };
+        let inside = tool.inside(t, p);
+        let Some(&first) = inside.first() else {
+            continue;
+        };
         let pose = tool.pose(t);
         let frame = parry_pose(&pose.position, &pose.rotation);
-        let (mut count, mut deepest, mut object) = (0usize, 0.0 as Real, None);
-        for (s, x) in p.positions().iter().enumerate() {
-            let o = p.objects()[s];
-            if !tool.acts_on(o) {
-                continue;
-            }
-            let point = parry3d_f64::math::Vector::new(x.x, x.y, x.z);
-            if !tool.shape().contains_point(&frame, point) {
-                continue;
-            }
-            // The depth, where the projection defines one (not at a ball's
-            // centre, say, where every direction is closest).
-            let depth = signed_distance(tool.shape(), &frame, &x.coords)
-                .map_or(0.0, |(d, _)| (-d).max(0.0));
-            count += 1;
-            if object.is_none() || depth > deepest {
-                (deepest, object) = (depth, Some(o));
+        // The depth, where the projection defines one (not at a ball's
+        // centre, say, where every direction is closest).
+        let depth = |slot: usize| {
+            signed_distance(tool.shape(), &frame, &p.positions()[slot].coords)
+                .map_or(0.0, |(d, _)| (-d).max(0.0))
+        };
+        let (mut deepest, mut slot) = (depth(first), first);
+        for &s in &inside[1..] {
+            let d = depth(s);
+            if d > deepest {
+                (deepest, slot) = (d, s);
             }
         }
-        if count > 0 {
-            let name = object
-                .and_then(|o| scene.objects.get(o as usize))
-                .map_or("?", |o| o.name.as_str());
-            warnings.push(format!(
-                "{count} particle(s) start inside obstacle {:?} (the deepest, of object {name:?}, \
-                 {} inside): its penalty pushes them out with up to stiffness x depth ({}) at \
-                 once and can throw them; place the objects outside the tool, or start its path \
-                 clear of them",
-                tool.params().name,
-                crate::error::short(deepest),
-                crate::error::short(stiffness * deepest),
-            ));
-        }
+        let count = inside.len();
+        let name = scene
+            .objects
+            .get(p.objects()[slot] as usize)
+            .map_or("?", |o| o.name.as_str());
+        warnings.push(format!(
+            "{count} particle(s) start inside obstacle {:?} (the deepest, of object {name:?}, \
+             {} inside): its penalty pushes them out with up to stiffness x depth ({}) at \
+             once and can throw them; place the objects outside the tool, or start its path \
+             clear of them",
+            tool.params().name,
+            crate::error::short(deepest),
+            crate::error::short(stiffness * deepest),
+        ));
     }
     warnings
 }

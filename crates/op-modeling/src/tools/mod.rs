@@ -124,16 +124,10 @@ impl Tool {
         };
         if let Role::Mover { .. } = params.role {
             let pose = params.path.pose(0.0);
-            let frame = parry_pose(&pose.position, &pose.rotation);
-            let objects = particles.objects();
-            for (slot, x) in particles.positions().iter().enumerate() {
-                if !tool.acts_on(objects[slot]) {
-                    continue;
-                }
-                if tool.shape.contains_point(&frame, to_parry(&x.coords)) {
-                    let local = pose.rotation.inverse() * (x.coords - pose.position);
-                    tool.grabbed.push((particles.ids()[slot], local));
-                }
+            for slot in tool.inside(0.0, particles) {
+                let x = particles.positions()[slot].coords;
+                let local = pose.rotation.inverse() * (x - pose.position);
+                tool.grabbed.push((particles.ids()[slot], local));
             }
             tool.grabbed.sort_by_key(|g| g.0);
         }
@@ -235,10 +229,24 @@ impl Tool {
         if self.params.role != Role::Eraser {
             return Vec::new();
         }
+        let mut ids: Vec<u32> = self
+            .inside(t, particles)
+            .into_iter()
+            .map(|slot| particles.ids()[slot])
+            .collect();
+        ids.sort_unstable();
+        ids
+    }
+
+    /// Slots, in increasing order, of the particles (of the objects the
+    /// tool acts on) strictly inside the tool's shape at time `t`, whatever
+    /// its role: the particles a mover grabs at time 0 and an eraser
+    /// removes.
+    pub fn inside(&self, t: Real, particles: &Particles) -> Vec<usize> {
         let pose = self.pose(t);
         let frame = parry_pose(&pose.position, &pose.rotation);
         let objects = particles.objects();
-        let mut ids: Vec<u32> = particles
+        particles
             .positions()
             .iter()
             .enumerate()
@@ -246,10 +254,8 @@ impl Tool {
                 self.acts_on(objects[slot])
                     && self.shape.contains_point(&frame, to_parry(&x.coords))
             })
-            .map(|(slot, _)| particles.ids()[slot])
-            .collect();
-        ids.sort_unstable();
-        ids
+            .map(|(slot, _)| slot)
+            .collect()
     }
 
     /// Adds `dt` times the heating rate this tool gives each particle at
