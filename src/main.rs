@@ -266,10 +266,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
         }) => {
             // A file is read as OBJ: say so for another kind of frame
             // rather than find no vertices in it.
-            let obj = input
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-            if input.is_file() && !obj {
+            if input.is_file() && !is_obj(&input) {
                 return Err(anyhow!(
                     "cannot render {}: render reads .obj files (a frame written with \
                      --format obj, the default) or a run directory",
@@ -345,6 +342,13 @@ fn demo_contact_sheet(out: &Path) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Whether `path` names an OBJ file (extension `.obj`, any case): what
+/// `render` reads and `fit` writes.
+fn is_obj(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+}
+
 /// `opsim fit`: read, fit, write the mesh, print the figures as JSON.
 fn run_fit(
     points: &Path,
@@ -354,10 +358,7 @@ fn run_fit(
     relax: f64,
 ) -> Result<(), Failure> {
     // Checked before the fit, which may take minutes.
-    let obj = out
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
-    if !obj {
+    if !is_obj(out) {
         return Err(anyhow!(
             "--out {}: the fitted mesh is written as Wavefront OBJ: give a path ending in .obj",
             out.display()

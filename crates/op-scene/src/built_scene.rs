@@ -196,7 +196,7 @@ impl BuiltScene {
     /// Whether skins are in contact: implicit contact (two or more skinned
     /// objects) or contact with obstacle tools.
     pub fn has_contact(&self) -> bool {
-        self.skins.len() >= 2 || !self.skin_tools.is_empty()
+        contact(self.skins.len(), !self.skin_tools.is_empty())
     }
 
     /// Advances the world to world time `t_end` through the scene's driver
@@ -291,4 +291,11 @@ pub fn stage_names<'a>(
         stages.push("triangulation".into());
     }
     stages
+}
+
+/// The contact rule of [`BuiltScene::has_contact`], from the number of
+/// skinned objects and whether an obstacle tool meets a skin (`opsim check`
+/// asks it of the scene, whose sample has no skins).
+pub(crate) fn contact(skins: usize, skins_meet_tools: bool) -> bool {
+    skins >= 2 || skins_meet_tools
 }

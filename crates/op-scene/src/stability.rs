@@ -223,7 +223,7 @@ pub fn sample(scene: &Scene, base_dir: Option<&Path>) -> Result<Sample, SceneErr
         built.world.enabled(),
         scene.tools.iter().map(|t| t.role.name()),
         skins > 0,
-        skins >= 2 || !scene.tool_params().1.is_empty(),
+        crate::built_scene::contact(skins, !scene.tool_params().1.is_empty()),
         scene.creation.as_ref().map(|c| c.fit.is_some()),
         scene.outputs.triangulation,
     );
