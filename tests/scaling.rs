@@ -1,7 +1,7 @@
 //! A change of units (`op_experiments::scaling::Scaling::scene`, docs/model.md
 //! §3) reproduces the motion of every kind of scene, not only the spiral's:
 //! tools (paths, shapes, obstacle and knife roles), heat (conduction,
-//! cooling, heating power), bonds that break, plasticity, creation and skins
+//! cooling, heating power), bonds that break, plastic bond memory, creation and skins
 //! in contact. Each scene is run twice, in its own units and with lengths x
 //! 10, masses x 4 and times x 2; at the end every surviving particle is
 //! where the first run put it, times 10, and has its temperature.
@@ -97,7 +97,8 @@ fn a_bonded_sheet_tearing_scales() {
     );
 }
 
-/// A finger dents a plastic shell (plasticity, an obstacle on a path).
+/// A finger dents a plastic shell (a bond memory that flows, an obstacle on
+/// a path).
 #[test]
 fn a_plastic_dent_scales() {
     let s = assert_scales("fig_12_plastic", 20);

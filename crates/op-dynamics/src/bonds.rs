@@ -58,9 +58,10 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::bond_memory;
 use crate::error::{self, ParamError};
 use crate::interactions::PreparedMaterial;
-use crate::math::Real;
+use crate::math::{Real, Vec3};
 use crate::neighbours::{search, NeighbourBackend, PairList};
 use crate::particles::Particles;
 
@@ -141,6 +142,10 @@ pub struct Bonds {
     /// Break length of each live bond (parallel to `pairs`; infinity for
     /// bonds that never break).
     break_lengths: Vec<Real>,
+    /// Rest offsets of each live bond (parallel to `pairs`): the higher id
+    /// seen from the lower id's body frame, and the reverse
+    /// ([`crate::bond_memory`]; read only for memory materials).
+    rest: Vec<[Vec3; 2]>,
     /// Partners of id `k`: `partners[offsets[k]..offsets[k + 1]]`, sorted.
     offsets: Vec<u32>,
     partners: Vec<u32>,
@@ -167,6 +172,7 @@ impl Bonds {
         Bonds {
             pairs: Vec::new(),
             break_lengths: Vec::new(),
+            rest: Vec::new(),
             offsets: vec![0],
             partners: Vec::new(),
             governed: materials.iter().map(|m| m.bonds().is_some()).collect(),
@@ -213,6 +219,8 @@ impl Bonds {
                 if (p[j] - p[i]).norm_squared() <= rule.radius * rule.radius {
                     self.pairs.push((id_i.min(id_j), id_i.max(id_j)));
                     self.break_lengths.push(rule.limit());
+                    let (lo, hi) = if id_i < id_j { (i, j) } else { (j, i) };
+                    self.rest.push(bond_memory::rest_offsets(particles, lo, hi));
                     added += 1;
                 }
             }
@@ -295,6 +303,18 @@ impl Bonds {
         &self.pairs
     }
 
+    /// Rest offsets of the live bonds, parallel to [`Bonds::pairs`]: the
+    /// higher id's offset in the lower id's body frame, and the reverse, as
+    /// remembered ([`crate::bond_memory`]).
+    pub fn rest_offsets(&self) -> &[[Vec3; 2]] {
+        &self.rest
+    }
+
+    /// The live bonds with their remembered offsets, to flow them.
+    pub(crate) fn pairs_and_rest_mut(&mut self) -> (&[(u32, u32)], &mut [[Vec3; 2]]) {
+        (&self.pairs, &mut self.rest)
+    }
+
     /// Bonds broken by over-stretching since the world was built.
     pub fn broken(&self) -> u64 {
         self.broken
@@ -305,6 +325,7 @@ impl Bonds {
         order.sort_unstable_by_key(|&k| self.pairs[k]);
         self.pairs = order.iter().map(|&k| self.pairs[k]).collect();
         self.break_lengths = order.iter().map(|&k| self.break_lengths[k]).collect();
+        self.rest = order.iter().map(|&k| self.rest[k]).collect();
     }
 
     fn retain(&mut self, keep: &[bool]) {
@@ -315,6 +336,11 @@ impl Bonds {
         });
         let mut k = 0;
         self.break_lengths.retain(|_| {
+            k += 1;
+            keep[k - 1]
+        });
+        let mut k = 0;
+        self.rest.retain(|_| {
             k += 1;
             keep[k - 1]
         });

@@ -33,7 +33,9 @@
 //! run time ([`crate::lanes`]), which add up to the scalar loop's bits.
 //! Oriented worlds of one such material (no heat, bonds, friction or spin)
 //! evaluate the full oriented pair in lanes the same way
-//! (`uniform_oriented`).
+//! (`uniform_oriented`). Worlds with a bond memory
+//! ([`crate::bond_memory`]) add it in one pass over the bonds after the
+//! pairs.
 
 use rayon::prelude::*;
 
@@ -370,6 +372,22 @@ impl ForceContext<'_> {
                     }
                 }
             }
+        }
+        // The bond memory of plastic lattices (`crate::bond_memory`): one
+        // pass over the bonds, in bond order, after the pairs.
+        if let Some(b) = self
+            .bonds
+            .filter(|_| crate::bond_memory::used(self.materials))
+        {
+            crate::bond_memory::add_forces(
+                b,
+                self.materials,
+                &self.attributes,
+                s,
+                forces,
+                torques,
+                energies,
+            );
         }
         let input = ContributorInput {
             t,

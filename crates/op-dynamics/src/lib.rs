@@ -19,6 +19,7 @@
 //! on a world through [`ToolSet`] ([`World::set_tools`]).
 #![warn(missing_docs)]
 
+pub mod bond_memory;
 pub mod bonds;
 pub mod contributors;
 pub mod diagnostics;

@@ -167,8 +167,10 @@ struct Config {
     heated: bool,
     has_fixed: bool,
     repulsion: bool,
-    /// Some material in use has plasticity.
+    /// Some material in use has plasticity, or a bond memory that flows.
     plastic: bool,
+    /// Some material in use has a bond memory (it turns the particles).
+    memory: bool,
 }
 
 impl Config {
@@ -221,7 +223,10 @@ impl Config {
                 .iter()
                 .any(|f| f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)),
             repulsion,
-            plastic: used.iter().any(|m| m.plasticity().is_some()),
+            plastic: used.iter().any(|m| {
+                m.plasticity().is_some() || m.bond_memory().is_some_and(|b| b.flow.is_some())
+            }),
+            memory: used.iter().any(|m| m.bond_memory().is_some()),
         }
     }
 
@@ -268,7 +273,8 @@ pub struct World {
     /// The force evaluation's configuration and scratch.
     model: ForceModel,
     repulsion: bool,
-    /// Some material in use has plasticity: the plastic stage runs.
+    /// Some material in use has plasticity or a flowing bond memory: the
+    /// plastic stage runs.
     plastic: bool,
     plastic_scratch: PlasticScratch,
     /// Something may have set particles rotating (initial spin, external
@@ -347,10 +353,11 @@ impl World {
             repulsion: config.repulsion,
             plastic: config.plastic,
             plastic_scratch: PlasticScratch::default(),
-            may_rotate: particles
-                .angular_velocities()
-                .iter()
-                .any(|w| *w != Vec3::zeros()),
+            may_rotate: config.memory
+                || particles
+                    .angular_velocities()
+                    .iter()
+                    .any(|w| *w != Vec3::zeros()),
             integrator: Integrator::new(params.scheme),
             accumulator: ExternalAccumulator::new(particles.id_bound()),
             forces: vec![Vec3::zeros(); n],

@@ -119,6 +119,13 @@ impl Scaling {
             p.yield_curvature /= s;
             p.rate /= self.time;
         }
+        if let Some(b) = &mut out.bond_memory {
+            b.stiffness *= self.mass / (self.time * self.time);
+            if let Some(f) = &mut b.flow {
+                f.yield_offset *= s;
+                f.rate /= self.time;
+            }
+        }
         out
     }
 

@@ -39,6 +39,7 @@ use super::repulsion::{Repulsion, RepulsionParams};
 use super::spacing::{Spacing, SpacingKernel};
 use super::spin::{self, SpinKind};
 use super::weight::{Weight, WeightParams};
+use crate::bond_memory::BondMemory;
 use crate::bonds::BondParams;
 use crate::error::{non_negative, ParamError};
 use crate::heat::HeatResponse;
@@ -96,6 +97,12 @@ pub struct Material {
     /// Plasticity of the remembered curvature (seed 000 fig. 12b, see
     /// [`crate::plasticity`]); needs `form > 0`. Default: none (elastic).
     pub plasticity: Option<Plasticity>,
+    /// Bond memory ([`crate::bond_memory`]): each bonded partner's offset
+    /// in the particle's own frame, held by a spring and, with a `flow`,
+    /// flowing beyond a yield (a plastic lattice, seed 000 fig. 12b);
+    /// needs `bonds`. Default: none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bond_memory: Option<BondMemory>,
 }
 
 impl Default for Material {
@@ -115,6 +122,7 @@ impl Default for Material {
             heat: None,
             bonds: None,
             plasticity: None,
+            bond_memory: None,
         }
     }
 }
@@ -161,6 +169,17 @@ impl Material {
                 return Err(ParamError::Invalid {
                     field: "plasticity".into(),
                     message: "acts on the form term's rest curvature: needs form > 0".into(),
+                });
+            }
+        }
+        if let Some(m) = &self.bond_memory {
+            m.validate().map_err(|e| e.within("bond_memory"))?;
+            if self.bonds.is_none() {
+                return Err(ParamError::Invalid {
+                    field: "bond_memory".into(),
+                    message: "remembers the offsets of bonded partners: needs bonds, \
+                              e.g. bonds: (radius: 1.5)"
+                        .into(),
                 });
             }
         }
@@ -321,7 +340,16 @@ impl PreparedMaterial {
         if self.source.plasticity.is_some() {
             v.push("plasticity");
         }
+        if self.source.bond_memory.is_some() {
+            v.push("bond_memory");
+        }
         v
+    }
+
+    /// The bond memory, if any ([`crate::bond_memory`]).
+    #[inline]
+    pub fn bond_memory(&self) -> Option<&BondMemory> {
+        self.source.bond_memory.as_ref()
     }
 
     /// Plasticity of the remembered curvature, if any.

@@ -6,9 +6,11 @@
 //!    world whose materials weaken with heat then has stale cached forces;
 //! 2. **bonds** ([`crate::bonds`], seed 000 fig. 12c): bonds stretched
 //!    beyond their break length break for good;
-//! 3. **plasticity** ([`crate::plasticity`], seed 000 fig. 12b): the
-//!    remembered curvatures flow toward the current ones beyond the yield
-//!    curvature; changed curvatures make cached forces stale;
+//! 3. **plasticity** (seed 000 fig. 12b): the remembered offsets of bond
+//!    memories flow toward the current ones beyond their yield
+//!    ([`crate::bond_memory`]), then the remembered curvatures toward the
+//!    current ones beyond the yield curvature ([`crate::plasticity`]);
+//!    changed memories make cached forces stale;
 //! 4. **erase** (seed 000 fig. 7 and 14): erasers and trapping shapers
 //!    remove particles.
 //!
@@ -18,6 +20,7 @@
 //! the primitives of erased particles).
 
 use super::{Stage, StepReport, World};
+use crate::bond_memory;
 use crate::driver::Effects;
 use crate::heat;
 use crate::math::Real;
@@ -58,9 +61,20 @@ impl World {
                 }
             }
             Stage::Plasticity => {
-                if let Some(list) = self.model.neighbours.as_mut() {
+                if let Some(bonds) = self.model.bonds.as_mut() {
+                    if bond_memory::flows(&self.model.materials) {
+                        effects.forces_invalid |=
+                            bond_memory::flow(bonds, &self.particles, &self.model.materials, dt);
+                    }
+                }
+                let curvature = self
+                    .model
+                    .materials
+                    .iter()
+                    .any(|m| m.plasticity().is_some());
+                if let (true, Some(list)) = (curvature, self.model.neighbours.as_mut()) {
                     // Cached forces were computed with the old curvatures.
-                    effects.forces_invalid = plasticity::apply(
+                    effects.forces_invalid |= plasticity::apply(
                         &mut self.particles,
                         &self.model.materials,
                         list,

@@ -183,6 +183,7 @@ impl World {
         self.model.has_fixed = config.has_fixed;
         self.repulsion = config.repulsion;
         self.plastic = config.plastic;
+        self.may_rotate |= config.memory;
         self.accumulator.grow(self.particles.id_bound());
         self.forces.clear();
         self.forces.resize(n, Vec3::zeros());
