@@ -86,6 +86,14 @@
 //! dent (the side stays at 2.2), but the pushed particles then sink as a
 //! plug and the pit's walls stretch open (15-29 of 101 frames closed).
 //!
+//! What holds a dent is a memory of positions, not of normals: the form
+//! term holds positions only through `κ r` (a sixteenth of its stiffness
+//! at `κ = 1/4`). [`crate::bond_memory`] remembers each bonded partner's
+//! offset in the particle's frame, metric and bend at once, and lets it
+//! flow; with it and no spacing law (no rest forces to push back) the
+//! shell of `scenes/fig_12_plastic.ron` keeps its whole dent and stays one
+//! closed surface in every frame.
+//!
 //! **Return mapping.** With `e = κ_i - κ̂_i` and the yield curvature
 //! `y >= 0`: within the band `|e| <= y` nothing changes (elastic); beyond
 //! it the excess `x = e - sign(e) y` relaxes at `rate`, integrated exactly

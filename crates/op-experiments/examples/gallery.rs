@@ -70,6 +70,7 @@ const GALLERY: &[Picture] = &[
     shaded("cookbook/skinned_hit"),
     shaded_frames("sphere_shell", 9),
     shaded_frames("fig_12_plastic_memory", 9),
+    shaded_frames("fig_12_plastic", 9),
 ];
 
 /// Width and height of one frame of a contact sheet, pixels.

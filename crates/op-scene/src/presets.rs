@@ -10,10 +10,11 @@
 //! largest stable step of a representative object of particle mass 1 (a
 //! 20 x 20 sheet, a sphere of radius 4, a 10-particle spiral). The
 //! Hessian at rest underestimates the stiffness of a strongly deformed
-//! object, hence the factor 5. A rate process may need a finer step than
-//! stability: `plastic_clay` takes 0.005 (plastic flow rate 5: `rate·dt =
-//! 0.025`), as its final shape at `dt` 0.01 is 7% away from the one at
-//! 1e-3 and at 0.005 0.3%. A test keeps every step between 1/50 and 1/2 of
+//! object, hence the factor 5. A rate process needs its rate resolved too:
+//! `plastic_clay`'s flow (rate 50) is integrated exactly over each step
+//! with the current offsets held, and its dented shell of
+//! `scenes/fig_12_plastic.ron` ends within 0.001 of the same side at `dt`
+//! 1e-3, 2e-3, 5e-3 and 1e-2. A test keeps every step between 1/50 and 1/2 of
 //! the stability bound. For a particle mass `m`, the stable step scales as
 //! `√m`.
 //!
@@ -105,16 +106,16 @@ pub const PRESETS: &[Preset] = &[
     },
     Preset {
         name: "plastic_clay",
-        summary: "a curve or surface that keeps the shape it is bent into beyond a yield \
-                  curvature: the shape-memory material with plasticity (Szeliski & Tonnesen \
-                  fig. 12b)",
-        material_ron: "(spacing: Cohesion((e: 200, r0: 1, alpha: 16, cutoff: 1.5)), \
-                       weight: (k: 1, a: 1, cutoff: 1.5), form: 2, coplanarity: 0.2, \
-                       friction: 1, plasticity: (yield_curvature: 0.05, rate: 5))",
+        summary: "a curve or surface that keeps the shape it is pushed into beyond a yield: \
+                  a bonded lattice whose bonds remember their offsets in the particles' \
+                  frames and flow (Szeliski & Tonnesen fig. 12b, after Terzopoulos & \
+                  Fleischer)",
+        material_ron: "(spacing: None, bonds: (radius: 1.5), \
+                       bond_memory: (stiffness: 100, flow: (yield_offset: 0.01, rate: 50)))",
         scene: "scenes/fig_12_plastic.ron",
-        dt: 0.005,
+        dt: 0.002,
         linear_damping: 1.0,
-        angular_damping: 1.0,
+        angular_damping: 0.1,
     },
 ];
 
@@ -177,7 +178,7 @@ mod tests {
     fn representative(name: &str) -> &'static str {
         match name {
             "cloth" => "HexSheet(nx: 20, ny: 20, spacing: 1)",
-            "elastic_shell" => "SphereShell(radius: 4, spacing: 1)",
+            "elastic_shell" | "plastic_clay" => "SphereShell(radius: 4, spacing: 1)",
             _ => "Spiral(count: 10, spacing: 1, curvature_start: 0.1, curvature_end: 0.9)",
         }
     }
