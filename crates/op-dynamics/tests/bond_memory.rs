@@ -1,7 +1,8 @@
 //! Bond memory (`op_dynamics::bond_memory`, seed 000 fig. 12b): a free
 //! lattice conserves linear and angular momentum (and, elastic, its
 //! energy); a pushed lattice springs back when its memory is elastic and
-//! keeps the dent when it flows, with the same bits at 1 and 2 threads; a
+//! keeps the dent when it flows, with the same bits at 1 and 2 threads;
+//! removal and insertion keep each remembered offset with its bond; a
 //! memory without bonds is refused.
 
 use op_dynamics::bond_memory::{BondMemory, OffsetFlow};
@@ -203,4 +204,53 @@ fn a_memory_needs_bonds() {
     };
     let e = m.validate().unwrap_err().to_string();
     assert!(e.contains("bond_memory.stiffness"), "{e}");
+}
+
+/// Removing particles drops their bonds with their remembered offsets;
+/// an inserted particle bonds with offsets taken where it is inserted, so
+/// a lattice edited at rest stays at rest.
+#[test]
+fn removal_and_insertion_keep_the_offsets_with_their_bonds() {
+    let p = shell();
+    let params = WorldParams {
+        dt: 2e-3,
+        ..Default::default()
+    };
+    let mut w = World::new(p, &[lattice(Some(FLOW))], params).unwrap();
+    let bonds = w.bonds().unwrap().len();
+    // The particle nearest the top, with its state, taken out and put back.
+    let p = w.particles();
+    let slot = (0..p.len())
+        .max_by(|&a, &b| p.positions()[a].z.total_cmp(&p.positions()[b].z))
+        .unwrap();
+    let id = p.ids()[slot];
+    let desc = ParticleDesc {
+        orientation: p.orientations()[slot],
+        ..ParticleDesc::at(p.positions()[slot])
+    };
+    w.remove_particles(&[id]).unwrap();
+    let b = w.bonds().unwrap();
+    assert!(b.len() < bonds && b.len() == b.rest_offsets().len());
+    let new = w.insert_particles(&[desc]).unwrap()[0];
+    let (forces, torques, energy) = w.evaluate_forces();
+    let most = forces
+        .iter()
+        .chain(torques)
+        .map(|f| f.norm())
+        .fold(0.0, Real::max);
+    assert!(energy < 1e-20 && most < 1e-9, "at rest: {energy} {most}");
+    let b = w.bonds().unwrap();
+    assert_eq!(b.len(), bonds, "the same neighbours bond again");
+    assert_eq!(b.len(), b.rest_offsets().len());
+    assert!(b.pairs().iter().any(|&(lo, hi)| lo == new || hi == new));
+    // Each remembered offset is the partner seen from its particle's frame.
+    let p = w.particles();
+    for (&(lo, hi), d) in b.pairs().iter().zip(b.rest_offsets()) {
+        let (i, j) = (p.slot_of(lo).unwrap(), p.slot_of(hi).unwrap());
+        let r = p.positions()[j] - p.positions()[i];
+        let seen = p.orientations()[i].inverse_transform_vector(&r);
+        assert!((seen - d[0]).norm() < 1e-12, "{lo}-{hi}");
+        let seen = p.orientations()[j].inverse_transform_vector(&-r);
+        assert!((seen - d[1]).norm() < 1e-12, "{hi}-{lo}");
+    }
 }
