@@ -79,8 +79,8 @@ pub enum Stage {
     Integrate,
     /// Oscillation measure and divergence check.
     Check,
-    /// Plastic update of the remembered curvatures (only with plastic
-    /// materials).
+    /// Plastic update of the remembered offsets of bond memories and of the
+    /// remembered curvatures (only with plastic materials).
     Plasticity,
     /// Heat conduction, sources and cooling (only with heat).
     Heat,
@@ -556,7 +556,8 @@ impl World {
     /// pending external forces; (4) advance the temperatures
     /// ([`crate::heat`], when the world has heat); (5) break the bonds
     /// stretched beyond their break length ([`crate::bonds`]); (6) with
-    /// plastic materials only, update the remembered curvatures
+    /// plastic materials only, flow the remembered offsets of bond memories
+    /// ([`crate::bond_memory`]) and update the remembered curvatures
     /// ([`crate::plasticity`]; the neighbour list is brought up to date for
     /// the new positions first); (7) erasers remove particles; (8) check
     /// for divergence (the oscillation measure is computed on demand from
