@@ -339,3 +339,24 @@ fn the_readme_scene_example_is_valid() {
     assert_eq!(scene.objects[0].material, "cloth");
     assert!(scene.materials.contains_key("cloth"), "the preset resolves");
 }
+
+/// `clay_press`: the dent of the ball stays after it lifts away, the
+/// sheet in one piece.
+#[test]
+fn clay_sheet_keeps_the_dent_of_the_ball() {
+    println!("claim: {}", claim("clay_press"));
+    let scene = load("clay_press");
+    let (_, frames) = frames(&scene);
+    let lowest = |f: &Frame| f.x.iter().map(|p| p.z).fold(Real::MAX, Real::min);
+    let deepest = frames[0].iter().map(lowest).fold(Real::MAX, Real::min);
+    let last = frames[0].last().unwrap();
+    let end = lowest(last);
+    let pieces = components(&last.x, 1.5).len();
+    println!(
+        "dent {:.3} deep at most, {:.3} at the end; {pieces} piece(s)",
+        -deepest, -end
+    );
+    assert!(deepest < -1.0, "the ball dents the sheet: {deepest}");
+    assert!(end < 0.9 * deepest, "the dent stays: {end} of {deepest}");
+    assert_eq!(pieces, 1, "one piece");
+}
