@@ -67,6 +67,9 @@
 //!
 //! **Cost.** Only worlds with a memory material run it: one pass over the
 //! bonds per force evaluation, and one per step for the flow.
+//!
+//! **Not included.** Heat ([`crate::heat`]) does not weaken the memory,
+//! and a bond that breaks ([`crate::bonds`]) forgets its offsets for good.
 
 use serde::{Deserialize, Serialize};
 
