@@ -616,7 +616,10 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
         }
     );
     // On the sample's particles (at most a bounded number per object).
-    for warning in op_scene::health::started_inside(built) {
+    let health = op_scene::health::started_inside(built)
+        .into_iter()
+        .chain(op_scene::health::unbonded(built));
+    for warning in health {
         eprintln!("opsim: warning: {warning}");
     }
     if let Some(warning) = e.warning(scene.world.dt, &scene.world.integrator) {

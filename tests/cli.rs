@@ -747,3 +747,36 @@ fn particles_starting_inside_an_obstacle_are_warned_about() {
     let o = opsim(&["check", "inside.ron"], &out);
     assert!(!text(&o).contains("start inside"), "{}", text(&o));
 }
+
+/// An object of a bonded material sampled more coarsely than its bond
+/// radius forms no bonds: `check` and `run` say so (a `plastic_clay` sheet
+/// of spacing 2 was a cloud of loose particles, with no word).
+#[test]
+fn particles_without_a_bond_are_warned_about() {
+    let out = temp_dir("unbonded");
+    let scene = out.join("coarse.ron");
+    std::fs::write(
+        &scene,
+        r#"(
+            name: "coarse",
+            world: (dt: 0.002, duration: 0.2, frame_rate: 10, linear_damping: 1),
+            objects: [(name: "sheet", material: "plastic_clay",
+                       generator: HexSheet(nx: 6, ny: 6, spacing: 2))],
+        )"#,
+    )
+    .unwrap();
+    let o = opsim(&["check", "coarse.ron"], &out);
+    assert!(o.status.success(), "{}", text(&o));
+    let needle = "36 of 36 particle(s) of object \"sheet\" have no bond";
+    assert!(text(&o).contains(needle), "{}", text(&o));
+    assert!(text(&o).contains("bond radius 1.5"), "{}", text(&o));
+    let o = run_scene(&scene, &out.join("run"), &[]);
+    assert!(text(&o).contains(needle), "{}", text(&o));
+    // Sampled within the bond radius: every particle is bonded, no warning.
+    let fine = std::fs::read_to_string(&scene)
+        .unwrap()
+        .replace("spacing: 2", "spacing: 1");
+    std::fs::write(&scene, fine).unwrap();
+    let o = opsim(&["check", "coarse.ron"], &out);
+    assert!(!text(&o).contains("no bond"), "{}", text(&o));
+}

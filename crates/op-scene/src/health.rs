@@ -456,6 +456,62 @@ pub fn started_inside(scene: &BuiltScene) -> Vec<String> {
     warnings
 }
 
+/// `x` to three decimals, for messages (`2` for 2.0, `0.89` for 0.8904).
+fn round3(x: Real) -> Real {
+    (x * 1000.0).round() / 1000.0
+}
+
+/// Warnings for objects of a bonded material (`bonds`, op_dynamics::bonds)
+/// whose particles formed no bond: bonds join the pairs within the bond
+/// radius when the world is built, and a particle without one is held by
+/// nothing but the material's spacing law (none at all for a lattice held
+/// by its bonds' memory, such as `plastic_clay`), so it drifts off. One
+/// warning per object, with the count, the bond radius and the object's
+/// rest spacing.
+pub fn unbonded(scene: &BuiltScene) -> Vec<String> {
+    let w = &scene.world;
+    let Some(bonds) = w.bonds() else {
+        return Vec::new();
+    };
+    let p = w.particles();
+    let mut bonded = vec![false; p.id_bound()];
+    for &(a, b) in bonds.pairs() {
+        bonded[a as usize] = true;
+        bonded[b as usize] = true;
+    }
+    let mut warnings = Vec::new();
+    for object in &scene.objects {
+        let radius = object
+            .ids
+            .iter()
+            .filter_map(|&id| p.slot_of(id))
+            .filter_map(|s| w.materials()[p.materials()[s] as usize].bonds())
+            .map(|b| b.radius)
+            .fold(0.0, Real::max);
+        if radius == 0.0 {
+            continue;
+        }
+        let loose = object
+            .ids
+            .iter()
+            .filter(|&&id| p.slot_of(id).is_some() && !bonded[id as usize])
+            .count();
+        if loose > 0 {
+            warnings.push(format!(
+                "{loose} of {} particle(s) of object {:?} have no bond: bonds join particles \
+                 within the bond radius {} when the world is built, and the object's rest \
+                 spacing is {}; such particles are held by nothing but the spacing law \
+                 (raise bonds.radius above the spacing, or sample the object more finely)",
+                object.ids.len(),
+                object.name,
+                round3(radius),
+                round3(object.rest_spacing),
+            ));
+        }
+    }
+    warnings
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

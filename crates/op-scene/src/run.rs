@@ -284,6 +284,7 @@ pub fn run(
     let mut tally = Tally::new(scene);
     let mut warnings = scene.step_warnings.clone();
     warnings.extend(crate::health::started_inside(scene));
+    warnings.extend(crate::health::unbonded(scene));
     if let Err(d) = scene.settle() {
         tally.divergence = Some(format!("while settling: {d}"));
     }
