@@ -190,18 +190,6 @@ fn memory_of<'m>(
     materials[a.materials[i] as usize].bond_memory()
 }
 
-/// True when some material has a bond memory.
-pub(crate) fn used(materials: &[PreparedMaterial]) -> bool {
-    materials.iter().any(|m| m.bond_memory().is_some())
-}
-
-/// True when some material's bond memory flows.
-pub(crate) fn flows(materials: &[PreparedMaterial]) -> bool {
-    materials
-        .iter()
-        .any(|m| m.bond_memory().is_some_and(|b| b.flow.is_some()))
-}
-
 /// The rest offsets of a bond `(lower id, higher id)` formed now: the
 /// higher one seen from the lower one's frame, and the reverse.
 pub(crate) fn rest_offsets(particles: &Particles, lo: usize, hi: usize) -> [Vec3; 2] {

@@ -182,6 +182,8 @@ pub(crate) struct ForceContext<'a> {
     /// Some material in use weakens with heat ([`crate::heat`]): complete
     /// pairs read the temperatures.
     pub heated: bool,
+    /// Some material in use has a bond memory ([`crate::bond_memory`]).
+    pub memory: bool,
     /// Some particle has a fixed position or orientation.
     pub has_fixed: bool,
     pub neighbours: Option<&'a mut NeighbourList>,
@@ -210,6 +212,8 @@ pub(crate) struct ForceModel {
     pub friction: bool,
     /// Some material in use weakens with heat.
     pub heated: bool,
+    /// Some material in use has a bond memory ([`crate::bond_memory`]).
+    pub memory: bool,
     /// Some particle has a fixed position or orientation.
     pub has_fixed: bool,
     pub neighbours: Option<NeighbourList>,
@@ -246,6 +250,7 @@ impl ForceModel {
             materials: &self.materials,
             friction: self.friction,
             heated: self.heated,
+            memory: self.memory,
             has_fixed: self.has_fixed,
             neighbours: self.neighbours.as_mut(),
             bonds: self.bonds.as_ref(),
@@ -375,10 +380,7 @@ impl ForceContext<'_> {
         }
         // The bond memory of plastic lattices (`crate::bond_memory`): one
         // pass over the bonds, in bond order, after the pairs.
-        if let Some(b) = self
-            .bonds
-            .filter(|_| crate::bond_memory::used(self.materials))
-        {
+        if let (true, Some(b)) = (self.memory, self.bonds) {
             crate::bond_memory::add_forces(
                 b,
                 self.materials,

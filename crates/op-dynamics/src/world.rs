@@ -167,10 +167,12 @@ struct Config {
     heated: bool,
     has_fixed: bool,
     repulsion: bool,
-    /// Some material in use has plasticity, or a bond memory that flows.
+    /// Some material in use has plasticity of its remembered curvature.
     plastic: bool,
     /// Some material in use has a bond memory (it turns the particles).
     memory: bool,
+    /// Some material in use has a bond memory that flows.
+    memory_flows: bool,
 }
 
 impl Config {
@@ -223,10 +225,11 @@ impl Config {
                 .iter()
                 .any(|f| f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)),
             repulsion,
-            plastic: used.iter().any(|m| {
-                m.plasticity().is_some() || m.bond_memory().is_some_and(|b| b.flow.is_some())
-            }),
+            plastic: used.iter().any(|m| m.plasticity().is_some()),
             memory: used.iter().any(|m| m.bond_memory().is_some()),
+            memory_flows: used
+                .iter()
+                .any(|m| m.bond_memory().is_some_and(|b| b.flow.is_some())),
         }
     }
 
@@ -273,9 +276,12 @@ pub struct World {
     /// The force evaluation's configuration and scratch.
     model: ForceModel,
     repulsion: bool,
-    /// Some material in use has plasticity or a flowing bond memory: the
-    /// plastic stage runs.
+    /// Some material in use has plasticity of its remembered curvature: the
+    /// plastic stage updates the curvatures.
     plastic: bool,
+    /// Some material in use has a bond memory that flows: the plastic stage
+    /// flows the remembered offsets.
+    memory_flows: bool,
     plastic_scratch: PlasticScratch,
     /// Something may have set particles rotating (initial spin, external
     /// torques, direct state edits): the divergence check reads frames.
@@ -344,6 +350,7 @@ impl World {
                 materials: prepared,
                 friction: config.friction,
                 heated: config.heated,
+                memory: config.memory,
                 has_fixed: config.has_fixed,
                 neighbours,
                 bonds,
@@ -352,6 +359,7 @@ impl World {
             },
             repulsion: config.repulsion,
             plastic: config.plastic,
+            memory_flows: config.memory_flows,
             plastic_scratch: PlasticScratch::default(),
             may_rotate: config.memory
                 || particles

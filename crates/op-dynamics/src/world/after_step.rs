@@ -32,7 +32,7 @@ impl World {
         let uses = [
             (Stage::Heat, self.params.heat.is_some()),
             (Stage::Bonds, self.model.bonds.is_some()),
-            (Stage::Plasticity, self.plastic),
+            (Stage::Plasticity, self.plastic || self.memory_flows),
             (
                 Stage::Erase,
                 self.model
@@ -61,18 +61,11 @@ impl World {
                 }
             }
             Stage::Plasticity => {
-                if let Some(bonds) = self.model.bonds.as_mut() {
-                    if bond_memory::flows(&self.model.materials) {
-                        effects.forces_invalid |=
-                            bond_memory::flow(bonds, &self.particles, &self.model.materials, dt);
-                    }
+                if let (true, Some(bonds)) = (self.memory_flows, self.model.bonds.as_mut()) {
+                    effects.forces_invalid |=
+                        bond_memory::flow(bonds, &self.particles, &self.model.materials, dt);
                 }
-                let curvature = self
-                    .model
-                    .materials
-                    .iter()
-                    .any(|m| m.plasticity().is_some());
-                if let (true, Some(list)) = (curvature, self.model.neighbours.as_mut()) {
+                if let (true, Some(list)) = (self.plastic, self.model.neighbours.as_mut()) {
                     // Cached forces were computed with the old curvatures.
                     effects.forces_invalid |= plasticity::apply(
                         &mut self.particles,
