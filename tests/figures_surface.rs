@@ -563,9 +563,10 @@ fn dent_run(name: &str) -> DentRun {
 /// Measured (ci profile; settled -> finger arrived at t = 2 -> end):
 /// plastic side 3.97 -> 3.02 -> 3.02, error max 0.23, final 0.21 (ratio
 /// 0.90), surface closed in all 101 frames, remembered offsets changed by
-/// up to 0.70 on the pushed side and not at all on the far side; elastic side 3.47 -> 2.47 -> 3.54, error max
-/// 0.32, final 0.079 (ratio 0.24: the surface is back, the particles
-/// around the dent rearranged), surface closed in all 101 frames.
+/// up to 0.70 on the pushed side and not at all on the far side; elastic
+/// side 3.47 -> 2.47 -> 3.54, error max 0.32, final 0.079 (ratio 0.24:
+/// the surface is back, the particles around the dent rearranged), surface
+/// closed in all 101 frames.
 /// The worlds are stepped as `opsim run` steps them (frame by frame), with
 /// no files written.
 #[test]
