@@ -4,6 +4,7 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use op_dynamics::neighbours::{search, PairList};
 use op_dynamics::world::DivergenceParams;
@@ -63,12 +64,16 @@ impl Scene {
         source: Option<PathBuf>,
     ) -> Result<BuiltScene, SceneError> {
         let mut built = self.build_world(base_dir, source)?;
+        let clock = Instant::now();
         if let Ok(estimate) = crate::stability::estimate(self, base_dir) {
             built.step_warnings = estimate
                 .warning(self.world.dt, &self.world.integrator)
                 .into_iter()
                 .collect();
         }
+        built
+            .setup_seconds
+            .push(("estimate".into(), clock.elapsed().as_secs_f64()));
         Ok(built)
     }
 
@@ -79,6 +84,7 @@ impl Scene {
         base_dir: Option<&Path>,
         source: Option<PathBuf>,
     ) -> Result<BuiltScene, SceneError> {
+        let clock = Instant::now();
         let counts = self.validate(base_dir)?;
         let used = self.used_materials()?;
         let placed = self.place_objects(base_dir, &counts, &used)?;
@@ -147,6 +153,7 @@ impl Scene {
             extent_growth: w.divergence.extent_growth,
             step_warnings: Vec::new(),
             creation,
+            setup_seconds: vec![("build".into(), clock.elapsed().as_secs_f64())],
         })
     }
 

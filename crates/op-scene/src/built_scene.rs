@@ -117,6 +117,12 @@ pub struct BuiltScene {
     /// The driver of the scene's stages ([`crate::stages`]): only those
     /// the scene uses.
     pub driver: Driver<SceneState>,
+    /// Wall seconds spent making the scene before its first step, by
+    /// part: `build` (validation, particles, world, skins, tools:
+    /// [`crate::Scene::build`]), then `estimate` (the stable-step estimate
+    /// of [`crate::Scene::build_for_run`]) when it ran. The runner counts
+    /// them in the run's wall time and its stage table.
+    pub setup_seconds: Vec<(String, f64)>,
 }
 
 impl BuiltScene {
@@ -226,10 +232,12 @@ impl BuiltScene {
         result
     }
 
-    /// Seconds spent per stage so far: the world's own stages
+    /// Seconds spent per stage so far: the scene's making
+    /// ([`BuiltScene::setup_seconds`]), the world's own stages
     /// ([`World::stage_seconds`]; those it does not have are left out),
     /// then the scene's ([`crate::stages`]).
     pub fn timings(&self) -> Vec<(String, f64)> {
+        let setup = self.setup_seconds.iter().cloned();
         let world = self
             .world
             .stage_seconds()
@@ -241,7 +249,7 @@ impl BuiltScene {
             .timings()
             .into_iter()
             .filter(|(n, _)| n != "world");
-        world.chain(scene).collect()
+        setup.chain(world).chain(scene).collect()
     }
 
     /// Scene time: the world's time minus the settle phase once it ran

@@ -34,6 +34,7 @@ use crate::built_scene::BuiltObject;
 use crate::outputs::{Outputs, ParticleOutput};
 use crate::skins::{ObjectSkin, SkinTool};
 
+pub mod file_queue;
 pub mod geometry;
 pub mod layout;
 pub mod obj;
@@ -53,6 +54,8 @@ impl Write for SizedWriter<'_> {
     }
 }
 
+pub use file_queue::WriteFailure;
+use file_queue::FileQueue;
 pub use geometry::{FrameMesh, SheetGap};
 pub use layout::{FrameFormat, Sequence, SequenceKind};
 
@@ -137,6 +140,7 @@ pub struct FrameWriter {
     sources: Vec<Source>,
     vtu_files: Vec<(String, Real)>,
     sheet_gap: SheetGap,
+    files: FileQueue,
 }
 
 impl FrameWriter {
@@ -199,6 +203,7 @@ impl FrameWriter {
             sources,
             vtu_files: Vec::new(),
             sheet_gap: SheetGap::default(),
+            files: FileQueue::default(),
         }
     }
 
@@ -246,8 +251,11 @@ impl FrameWriter {
     /// Writes frame `k` at scene time `time`: every sequence's file in each
     /// mesh format (skins polygonized at their current pose, deformed where
     /// they touch another skin and clipped where they press on an obstacle
-    /// tool), then the VTU state and its series file. A failure leaves the
-    /// files already written complete.
+    /// tool), then the VTU state and its series file. The files are
+    /// encoded here and written by the writer's own thread
+    /// ([`file_queue`]) while the run goes on; [`FrameWriter::finish`]
+    /// waits for them. A failure (here, or of an earlier frame's file on
+    /// that thread) leaves the files written before it complete.
     #[allow(clippy::too_many_arguments)]
     pub fn write_frame(
         &mut self,
@@ -259,7 +267,12 @@ impl FrameWriter {
         skin_tools: &[SkinTool],
         tools: &[Tool],
         outputs: &Outputs,
-    ) -> Result<(), (PathBuf, std::io::Error)> {
+    ) -> Result<(), WriteFailure> {
+        let failure = |path: PathBuf, error| WriteFailure {
+            frame: k,
+            path,
+            error,
+        };
         let mesh_formats: Vec<FrameFormat> = self
             .formats
             .iter()
@@ -279,34 +292,50 @@ impl FrameWriter {
                         let skin = &skins[s];
                         let mesh = skin
                             .mesh_in(skins, skin_tools, world.time())
-                            .map_err(|e| (at(mesh_formats[0]), std::io::Error::other(e)))?;
+                            .map_err(|e| failure(at(mesh_formats[0]), std::io::Error::other(e)))?;
                         geometry::mesh_geometry(&skin.name, &mesh)
                     }
                 };
                 for &f in &mesh_formats {
                     let path = at(f);
-                    write_atomically(&path, |w| match f {
-                        FrameFormat::Ply => ply::write(&mesh, w),
-                        _ => obj::write(&mesh, w),
-                    })
-                    .map_err(|e| (path, e))?;
+                    let mut bytes = Vec::new();
+                    match f {
+                        FrameFormat::Ply => ply::write(&mesh, &mut bytes),
+                        _ => obj::write(&mesh, &mut bytes),
+                    }
+                    .map_err(|e| failure(path.clone(), e))?;
+                    self.files.push(k, path, bytes)?;
                 }
             }
         }
         if self.formats.contains(&FrameFormat::Vtu) {
             let path = layout::vtu_path(&self.out, k);
             let title = format!("opsim frame {k}, t = {time}");
-            write_atomically(&path, |w| vtu::write(world, objects, &title, w))
-                .map_err(|e| (path.clone(), e))?;
+            let mut bytes = Vec::new();
+            vtu::write(world, objects, &title, &mut bytes).map_err(|e| failure(path.clone(), e))?;
             let name = path
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
+            self.files.push(k, path, bytes)?;
             self.vtu_files.push((name, time));
             let series = layout::vtu_series_path(&self.out);
-            write_atomically(&series, |w| vtu::write_series(&self.vtu_files, w))
-                .map_err(|e| (series.clone(), e))?;
+            let mut bytes = Vec::new();
+            vtu::write_series(&self.vtu_files, &mut bytes)
+                .map_err(|e| failure(series.clone(), e))?;
+            self.files.push(k, series, bytes)?;
         }
         Ok(())
+    }
+
+    /// Waits until every frame file handed to the writer's thread is on
+    /// disk.
+    ///
+    /// # Errors
+    ///
+    /// The first file that could not be written (the frames before its
+    /// frame are complete).
+    pub fn finish(&mut self) -> Result<(), WriteFailure> {
+        self.files.finish()
     }
 }
