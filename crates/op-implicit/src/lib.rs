@@ -50,7 +50,7 @@ pub use implicit_contact::{
 pub use kernel::{iso_radius, ISO};
 pub use polygonize::{
     is_closed_oriented_manifold, polygonize, polygonize_field, polygonize_region,
-    polygonize_with_stats, Mesh, PolygonizeParams, PolygonizeStats,
+    polygonize_with_stats, surface_points, Mesh, PolygonizeParams, PolygonizeStats,
 };
 pub use primitives::{PosedPrimitive, Primitive, Skeleton};
 pub use skin::Skin;

@@ -26,7 +26,7 @@ use parry3d_f64::shape::Shape;
 use serde::Serialize;
 
 use crate::{
-    collider_reactions, polygonize, polygonize_field, polygonize_region, ClippedField, ContactPair,
+    collider_reactions, polygonize, polygonize_field, surface_points, ClippedField, ContactPair,
     ContactParams, ImplicitContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive, Skin,
     SkinError,
 };
@@ -181,8 +181,9 @@ pub struct ContactStats {
 }
 
 /// An obstacle tool that skinned objects meet through their skins: the
-/// skin is sampled where it may touch the tool (its polygonization
-/// clipped to the tool's bounding box, a cell wider), and every sample
+/// skin is sampled where it may touch the tool (the vertices of its
+/// polygonization clipped to the tool's bounding box, a cell wider:
+/// [`crate::surface_points`]), and every sample
 /// inside the tool gets the reaction `stiffness x depth` along the tool's
 /// outward normal ([`crate::collider_reactions`]; seed 002 §6 with
 /// only the skin compressed).
@@ -225,16 +226,15 @@ impl SkinTool {
         let lo = Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - Vec3::repeat(h);
         let hi = Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + Vec3::repeat(h);
         let params = PolygonizeParams::with_cell_size(h);
-        let samples =
-            polygonize_region(skin.skin.field(), &params, Some((lo, hi))).map_err(|source| {
-                ContactError::Sample {
-                    skin: skin.name.clone(),
-                    source,
-                }
-            })?;
+        let samples = surface_points(skin.skin.field(), &params, (lo, hi)).map_err(|source| {
+            ContactError::Sample {
+                skin: skin.name.clone(),
+                source,
+            }
+        })?;
         let r = collider_reactions(
             skin.skin.field(),
-            samples.positions(),
+            &samples,
             shape,
             &frame,
             &ContactParams {

@@ -282,6 +282,26 @@ impl PosedPrimitive {
         self.weight *= factor;
     }
 
+    /// The map from world points to the primitive's frame, `x -> M (x -
+    /// t)`, as the rotation matrix `M` and the translation `t`: one matrix
+    /// product per point where [`PosedPrimitive::field`] rotates by a
+    /// quaternion, for fields sampled at many points
+    /// ([`PosedPrimitive::field_in_frame`]).
+    #[inline]
+    pub(crate) fn world_to_frame(&self) -> (nalgebra::Matrix3<Real>, Vec3) {
+        let m = self.pose.rotation.inverse().to_rotation_matrix().into_inner();
+        (m, self.pose.translation.vector)
+    }
+
+    /// The field at the point `local` of the primitive's frame
+    /// ([`PosedPrimitive::world_to_frame`]): [`PosedPrimitive::field`]
+    /// without the world transform, to round-off.
+    #[inline]
+    pub(crate) fn field_in_frame(&self, local: &Vec3) -> Real {
+        let (d2, _) = self.shape.distance2_and_gradient(local);
+        self.weight * kernel::value_sq(d2 * self.inv_radius2)
+    }
+
     /// Centre and radius of a sphere holding the field's support.
     #[inline]
     pub fn bounding_sphere(&self) -> (Point3, Real) {

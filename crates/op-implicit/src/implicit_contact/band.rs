@@ -9,13 +9,18 @@
 //! bounding spheres, [`Field::for_each_near`]). The grid is cut into
 //! blocks; a block is sampled only when the cells reached by A's spheres
 //! and those reached by B's (each sphere's cell range padded by one cell)
-//! both touch it. Each sampled block evaluates its nodes and one more layer
-//! (the far ends of its edges), and lists the edges between its nodes
-//! along which `e_A - e_B` changes sign with a positive end: the same
-//! values, bit for bit, and the same test as a scan of every node, so the
-//! list, sorted by node and axis, is the scan's list less edges that
-//! cannot hold a sample. The contact reactions are therefore unchanged,
-//! and a pair whose supports' boxes overlap but whose primitives meet in a
+//! both touch it, and when neither field is below the iso value
+//! everywhere in it (bounded per block as the polygonizer bounds it: a
+//! sample's common excess is positive, so both fields exceed the iso value
+//! there). Each sampled block splats both objects' primitives onto its
+//! nodes and one more layer (the far ends of its edges), as the
+//! polygonizer samples a skin, and lists the edges between its nodes along
+//! which `e_A - e_B` changes sign with a positive end: the test of a scan
+//! of every node, so the list, sorted by node and axis, is the scan's list
+//! less edges that cannot hold a sample. (Splatted and evaluated node
+//! values may differ in their last bits, so an edge whose end lies on the
+//! contact surface to round-off may be listed by one and not the other.)
+//! A pair whose supports' boxes overlap but whose primitives meet in a
 //! small region costs that region.
 
 use op_dynamics::{Point3, Real};
@@ -23,7 +28,7 @@ use rayon::prelude::*;
 
 use crate::field::Field;
 use crate::kernel::ISO;
-use crate::polygonize::blocks::{Grid, BLOCK};
+use crate::polygonize::blocks::{sample_unless_below, BlockLists, Grid, BLOCK};
 
 /// Node `i`'s index along each axis of `grid` (node `i` is
 /// `(i % nx, (i / nx) % ny, i / (nx ny))`).
@@ -88,29 +93,35 @@ fn crossed((ea, eb): (Real, Real), (fa, fb): (Real, Real)) -> bool {
 pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
     let (in_a, in_b) = (reached(grid, a.spheres()), reached(grid, b.spheres()));
     let active: Vec<usize> = (0..in_a.len()).filter(|&k| in_a[k] && in_b[k]).collect();
+    if active.is_empty() {
+        return Vec::new();
+    }
+    let (lists_a, lists_b) = (BlockLists::new(a, grid), BlockLists::new(b, grid));
+    let arch = pulp::Arch::new();
     let mut edges: Vec<(usize, usize)> = active
         .par_iter()
-        .flat_map_iter(|&block| block_edges(grid, a, b, block))
+        .flat_map_iter(|&block| {
+            let Some(va) = sample_unless_below(a, grid, &lists_a, block, ISO, arch) else {
+                return Vec::new();
+            };
+            let Some(vb) = sample_unless_below(b, grid, &lists_b, block, ISO, arch) else {
+                return Vec::new();
+            };
+            block_edges(grid, &va, &vb, block)
+        })
         .collect();
     edges.sort_unstable();
     edges.dedup();
     edges
 }
 
-/// The crossed edges between the nodes of block `block` and its far layer.
-fn block_edges(grid: &Grid, a: &Field, b: &Field, block: usize) -> Vec<(usize, usize)> {
+/// The crossed edges between the nodes of block `block` and its far
+/// layer, from both fields' values there (`fa`, `fb`, x fastest).
+fn block_edges(grid: &Grid, fa: &[Real], fb: &[Real], block: usize) -> Vec<(usize, usize)> {
     let block = grid.block(block);
     let (start, nodes) = (block.start, block.nodes());
     let local = |[x, y, z]: [usize; 3]| x + nodes[0] * (y + nodes[1] * z);
-    let mut excess = Vec::with_capacity(nodes.iter().product());
-    for z in 0..nodes[2] {
-        for y in 0..nodes[1] {
-            for x in 0..nodes[0] {
-                let p = grid.node(start[0] + x, start[1] + y, start[2] + z);
-                excess.push((a.value(&p) - ISO, b.value(&p) - ISO));
-            }
-        }
-    }
+    let excess: Vec<(Real, Real)> = fa.iter().zip(fb).map(|(a, b)| (a - ISO, b - ISO)).collect();
     let mut edges = Vec::new();
     for z in 0..nodes[2] {
         for y in 0..nodes[1] {

@@ -83,7 +83,7 @@ impl Block {
 
 /// Per block, the primitives whose bounding sphere's box reaches one of
 /// its nodes, in increasing index (CSR).
-pub(super) struct BlockLists {
+pub(crate) struct BlockLists {
     starts: Vec<u32>,
     items: Vec<u32>,
 }
@@ -251,7 +251,7 @@ fn can_skip(field: &Field, grid: &Grid, block: &Block, list: &[u32], iso: Real) 
 
 /// Whether block `block` of a field nowhere above `bound` (its primitives
 /// `list`) is entirely below `iso`: no crossing there.
-pub(super) fn below_everywhere(
+pub(crate) fn below_everywhere(
     bound: &Field,
     grid: &Grid,
     block: &Block,
@@ -263,6 +263,27 @@ pub(super) fn below_everywhere(
     }
     let (_, upper) = field_bounds(bound, grid, block, list);
     upper + margin(upper) < iso
+}
+
+/// The node values of block `b` splatted from the primitives of `field`
+/// reaching it, as [`sample_band`] splats them, or `None` when the field
+/// is below `iso` everywhere in the block. Unlike [`sample_band`], a block
+/// entirely inside the skin is sampled: the contact surface of two skins
+/// may run through it (`crate::implicit_contact`).
+pub(crate) fn sample_unless_below(
+    field: &Field,
+    grid: &Grid,
+    lists: &BlockLists,
+    b: usize,
+    iso: Real,
+    arch: pulp::Arch,
+) -> Option<Vec<Real>> {
+    let block = grid.block(b);
+    let list = lists.of(b);
+    if below_everywhere(field, grid, &block, list, iso) {
+        return None;
+    }
+    Some(splat_block(field, grid, &block, list, arch).0)
 }
 
 /// Samples block `b` of the narrow band: skipped, or its node values
@@ -280,6 +301,19 @@ pub(super) fn sample_band(
     if can_skip(field, grid, &block, list, iso) {
         return Sampled::Skipped;
     }
+    let (values, evaluations) = splat_block(field, grid, &block, list, arch);
+    Sampled::Values(values, evaluations)
+}
+
+/// The node values of `block` from the primitives `list` of `field`
+/// ([`Splat`]), and how many primitive fields were evaluated.
+fn splat_block(
+    field: &Field,
+    grid: &Grid,
+    block: &Block,
+    list: &[u32],
+    arch: pulp::Arch,
+) -> (Vec<Real>, usize) {
     let [nx, ny, nz] = block.nodes();
     let mut values = vec![0.0; nx * ny * nz];
     let [s0, s1, s2] = block.start;
@@ -290,12 +324,12 @@ pub(super) fn sample_band(
     let evaluations = arch.dispatch(Splat {
         field,
         grid,
-        block: &block,
+        block,
         list,
         nodes: [&xs, &ys, &zs],
         values: &mut values,
     });
-    Sampled::Values(values, evaluations)
+    (values, evaluations)
 }
 
 /// The primitives of `list` splatted onto a block's node values
@@ -338,7 +372,6 @@ fn splat(s: Splat<'_>) -> usize {
     } = s;
     let [nx, ny, nz] = block.nodes();
     let h = grid.h;
-    let [s0, s1, s2] = block.start;
     let mut evaluations = 0;
     let mut dx2 = vec![0.0; nx];
     for &i in list {
@@ -357,16 +390,28 @@ fn splat(s: Splat<'_>) -> usize {
         let (i1, j1, k1) = (i1 as usize, j1 as usize, k1 as usize);
         let r2 = r * r;
         if !matches!(prim.shape(), Skeleton::Point) {
-            for k in k0..=k1 {
-                for j in j0..=j1 {
-                    let row = (k * ny + j) * nx;
-                    for i in i0..=i1 {
-                        let p = grid.node(s0 + i, s1 + j, s2 + k);
-                        values[row + i] += prim.field(&p);
+            // Other skeletons: the nodes of the bounding box's rows that
+            // meet the bounding sphere, mapped into the primitive's frame
+            // by one matrix product each.
+            let (m, t) = prim.world_to_frame();
+            for (k, z) in zs.iter().enumerate().take(k1 + 1).skip(k0) {
+                let dz = z - c.z;
+                if dz * dz >= r2 {
+                    continue;
+                }
+                for (j, y) in ys.iter().enumerate().take(j1 + 1).skip(j0) {
+                    let dy = y - c.y;
+                    if dy * dy + dz * dz >= r2 {
+                        continue;
                     }
+                    let row = (k * ny + j) * nx;
+                    for (v, x) in values[row + i0..=row + i1].iter_mut().zip(&xs[i0..=i1]) {
+                        let local = m * (Vec3::new(*x, *y, *z) - t);
+                        *v += prim.field_in_frame(&local);
+                    }
+                    evaluations += i1 + 1 - i0;
                 }
             }
-            evaluations += (k1 + 1 - k0) * (j1 + 1 - j0) * (i1 + 1 - i0);
             continue;
         }
         // A point primitive: w f(s), s = |p - c|^2 / r^2, over the nodes of

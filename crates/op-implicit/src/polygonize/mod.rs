@@ -211,6 +211,34 @@ pub fn polygonize_region<F: ScalarField + ?Sized>(
     Ok(mesh)
 }
 
+/// The vertices of [`polygonize_region`]'s mesh of a skin's [`Field`]
+/// inside the box `clip`, without its triangles' use or its normals: the
+/// samples of a skin near a collider ([`crate::collider_reactions`]). The
+/// nodes are sampled in the narrow band by splatting the primitives, as
+/// [`polygonize`] samples a whole skin, instead of evaluating the field at
+/// every node of the box one by one; each vertex is the crossing of its
+/// grid edge, welded across blocks, in block order: the mesh's vertices,
+/// in its order. Measured on `sheet_on_sphere` (a skinned sheet of
+/// squares draped on a ball, 2000 steps, one thread): the contact stage
+/// took 7.7 s with the mesh, 2.6 s with this and the splatting of
+/// non-point skeletons in their own frame (`blocks`), the same frames.
+pub fn surface_points(
+    field: &Field,
+    params: &PolygonizeParams,
+    clip: (Point3, Point3),
+) -> Result<Vec<Point3>, PolygonizeError> {
+    let Some(grid) = grid(field, params, Some(clip))? else {
+        return Ok(Vec::new());
+    };
+    let lists = BlockLists::new(field, &grid);
+    let iso = params.iso;
+    let arch = pulp::Arch::new();
+    let (positions, _, _) = vertices(&grid, iso, |b| {
+        blocks::sample_band(field, &grid, &lists, b, iso, arch)
+    });
+    Ok(positions)
+}
+
 /// The padded node grid over the field's support box (clipped), or `None`
 /// when there is nothing to polygonize.
 fn grid<F: ScalarField + ?Sized>(
@@ -265,6 +293,34 @@ fn extract<F: ScalarField + ?Sized>(
     iso: Real,
     sample: impl Fn(usize) -> Sampled + Sync,
 ) -> (Mesh, PolygonizeStats) {
+    let (positions, triangles, stats) = vertices(grid, iso, sample);
+    let mut normals: Vec<Vec3> = positions
+        .par_iter()
+        .map(|p| {
+            let (_, g) = field.value_and_gradient(p);
+            -g.try_normalize(0.0).unwrap_or_else(Vec3::zeros)
+        })
+        .collect();
+    if normals.contains(&Vec3::zeros()) {
+        normals_where_flat(field, grid.h, &positions, &triangles, &mut normals);
+    }
+    let mesh = Mesh {
+        positions,
+        normals,
+        triangles,
+    };
+    (mesh, stats)
+}
+
+/// Samples and marches every block in parallel and merges the pieces in
+/// block order (stages 2-4 of the module doc): the welded vertices and the
+/// triangles over them.
+#[allow(clippy::type_complexity)]
+fn vertices(
+    grid: &Grid,
+    iso: Real,
+    sample: impl Fn(usize) -> Sampled + Sync,
+) -> (Vec<Point3>, Vec<[u32; 3]>, PolygonizeStats) {
     let n_blocks: usize = grid.blocks().iter().product();
     let pieces: Vec<(Piece, usize, usize)> = (0..n_blocks)
         .into_par_iter()
@@ -304,22 +360,7 @@ fn extract<F: ScalarField + ?Sized>(
         }
         triangles.extend(piece.triangles.iter().map(|t| t.map(|i| local[i as usize])));
     }
-    let mut normals: Vec<Vec3> = positions
-        .par_iter()
-        .map(|p| {
-            let (_, g) = field.value_and_gradient(p);
-            -g.try_normalize(0.0).unwrap_or_else(Vec3::zeros)
-        })
-        .collect();
-    if normals.contains(&Vec3::zeros()) {
-        normals_where_flat(field, grid.h, &positions, &triangles, &mut normals);
-    }
-    let mesh = Mesh {
-        positions,
-        normals,
-        triangles,
-    };
-    (mesh, stats)
+    (positions, triangles, stats)
 }
 
 /// Hashes a grid edge key for welding: the keys are distinct integers
