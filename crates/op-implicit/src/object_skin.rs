@@ -26,9 +26,9 @@ use parry3d_f64::shape::Shape;
 use serde::Serialize;
 
 use crate::{
-    collider_reactions, polygonize, polygonize_field, surface_points, ClippedField, ContactPair,
-    ContactParams, ImplicitContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive, Skin,
-    SkinError,
+    collider_reactions, polygonize, polygonize_deformed, polygonize_field, surface_points,
+    ClippedField, ContactPair, ContactParams, ImplicitContactParams, Mesh, PolygonizeError,
+    PolygonizeParams, Primitive, Skin, SkinError,
 };
 
 /// The skin of one object: the [`Skin`] contact acts on and the one shown.
@@ -144,10 +144,7 @@ impl ObjectSkin {
                 && boxes_overlap(own.support_box(), o.display_field().support_box())
         });
         let mut mesh = match (other, colliders.is_empty()) {
-            (Some(o), true) => polygonize_field(
-                &ContactPair::new(own, o.display_field()).deformed_a(),
-                &params,
-            ),
+            (Some(o), true) => polygonize_deformed(own, o.display_field(), &params),
             (Some(o), false) => {
                 let deformed = ContactPair::new(own, o.display_field()).deformed_a();
                 polygonize_field(&ClippedField::new(&deformed, colliders, slope), &params)

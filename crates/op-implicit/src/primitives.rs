@@ -289,7 +289,12 @@ impl PosedPrimitive {
     /// ([`PosedPrimitive::field_in_frame`]).
     #[inline]
     pub(crate) fn world_to_frame(&self) -> (nalgebra::Matrix3<Real>, Vec3) {
-        let m = self.pose.rotation.inverse().to_rotation_matrix().into_inner();
+        let m = self
+            .pose
+            .rotation
+            .inverse()
+            .to_rotation_matrix()
+            .into_inner();
         (m, self.pose.translation.vector)
     }
 

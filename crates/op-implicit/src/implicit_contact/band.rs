@@ -101,10 +101,10 @@ pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, u
     let mut edges: Vec<(usize, usize)> = active
         .par_iter()
         .flat_map_iter(|&block| {
-            let Some(va) = sample_unless_below(a, grid, &lists_a, block, ISO, arch) else {
+            let Some((va, _)) = sample_unless_below(a, grid, &lists_a, block, ISO, arch) else {
                 return Vec::new();
             };
-            let Some(vb) = sample_unless_below(b, grid, &lists_b, block, ISO, arch) else {
+            let Some((vb, _)) = sample_unless_below(b, grid, &lists_b, block, ISO, arch) else {
                 return Vec::new();
             };
             block_edges(grid, &va, &vb, block)

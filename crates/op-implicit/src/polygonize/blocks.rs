@@ -266,7 +266,8 @@ pub(crate) fn below_everywhere(
 }
 
 /// The node values of block `b` splatted from the primitives of `field`
-/// reaching it, as [`sample_band`] splats them, or `None` when the field
+/// reaching it, as [`sample_band`] splats them, with the number of
+/// primitive fields evaluated, or `None` when the field
 /// is below `iso` everywhere in the block. Unlike [`sample_band`], a block
 /// entirely inside the skin is sampled: the contact surface of two skins
 /// may run through it (`crate::implicit_contact`).
@@ -277,13 +278,13 @@ pub(crate) fn sample_unless_below(
     b: usize,
     iso: Real,
     arch: pulp::Arch,
-) -> Option<Vec<Real>> {
+) -> Option<(Vec<Real>, usize)> {
     let block = grid.block(b);
     let list = lists.of(b);
     if below_everywhere(field, grid, &block, list, iso) {
         return None;
     }
-    Some(splat_block(field, grid, &block, list, arch).0)
+    Some(splat_block(field, grid, &block, list, arch))
 }
 
 /// Samples block `b` of the narrow band: skipped, or its node values

@@ -211,6 +211,50 @@ pub fn polygonize_region<F: ScalarField + ?Sized>(
     Ok(mesh)
 }
 
+/// The skin of `own` deformed by contact with `other` (Gascuel's
+/// deformation without bulge, [`crate::ContactPair::deformed_a`]), as
+/// [`polygonize_field`] of that deformed field gives it but with the nodes
+/// sampled by splatting: both skins' primitives are splatted onto the
+/// blocks where `own` can reach the iso value, and `other`'s excess over
+/// the iso value, where positive, is taken off `own`'s field there
+/// (blocks where `other` is below the iso value everywhere are left as
+/// they are). The normals are the deformed field's gradients. Measured on
+/// two skinned solid balls of 10,185 particles each in contact
+/// (`reports/scenes.md`), the export of one frame's skins took about 4 s
+/// with every node evaluated one by one.
+pub fn polygonize_deformed(
+    own: &Field,
+    other: &Field,
+    params: &PolygonizeParams,
+) -> Result<Mesh, PolygonizeError> {
+    let deformed = crate::ContactPair::new(own, other).deformed_a();
+    let Some(grid) = grid(&deformed, params, None)? else {
+        return Ok(Mesh::default());
+    };
+    let (lists, others) = (BlockLists::new(own, &grid), BlockLists::new(other, &grid));
+    let iso = params.iso;
+    let arch = pulp::Arch::new();
+    let (mesh, _) = extract(&deformed, &grid, iso, |b| {
+        let Some((mut values, mut evaluations)) =
+            blocks::sample_unless_below(own, &grid, &lists, b, iso, arch)
+        else {
+            return Sampled::Skipped;
+        };
+        if let Some((fb, n)) = blocks::sample_unless_below(other, &grid, &others, b, ISO, arch) {
+            evaluations += n;
+            for (fa, fb) in values.iter_mut().zip(fb) {
+                // crate::implicit_contact::deform's value, without bulge.
+                let eb = fb - ISO;
+                if eb > 0.0 {
+                    *fa -= eb;
+                }
+            }
+        }
+        Sampled::Values(values, evaluations)
+    });
+    Ok(mesh)
+}
+
 /// The vertices of [`polygonize_region`]'s mesh of a skin's [`Field`]
 /// inside the box `clip`, without its triangles' use or its normals: the
 /// samples of a skin near a collider ([`crate::collider_reactions`]). The
@@ -256,6 +300,9 @@ fn grid<F: ScalarField + ?Sized>(
     let Some((mut lo, mut hi)) = field.support_box() else {
         return Ok(None);
     };
+    if !(lo.iter().chain(hi.iter()).all(|x| x.is_finite())) {
+        return Err(PolygonizeError::NonFiniteRegion);
+    }
     if let Some((clo, chi)) = clip {
         lo = lo.sup(&clo);
         hi = hi.inf(&chi);
@@ -264,7 +311,11 @@ fn grid<F: ScalarField + ?Sized>(
         }
     }
     let lo = lo - Vec3::repeat(h);
-    let dims = [0, 1, 2].map(|k| (((hi[k] + h - lo[k]) / h).ceil() as usize + 1).max(2));
+    let dims = [0, 1, 2].map(|k| {
+        (((hi[k] + h - lo[k]) / h).ceil() as usize)
+            .saturating_add(1)
+            .max(2)
+    });
     let n = dims.into_iter().max().unwrap_or(2);
     if n > params.max_nodes_per_axis {
         return Err(PolygonizeError::TooManyNodes {
