@@ -49,4 +49,8 @@ pub enum PolygonizeError {
         /// The configured limit.
         max: usize,
     },
+    /// The region to sample is not finite: a primitive sits at a
+    /// non-finite position (a simulation that diverged).
+    #[error("the skin's region is not finite: a particle is at a non-finite position (the simulation diverged)")]
+    NonFiniteRegion,
 }

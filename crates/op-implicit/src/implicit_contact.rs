@@ -333,11 +333,21 @@ impl<'a> ContactPair<'a> {
         else {
             return Ok(None);
         };
+        // Each box on its own: the component-wise max and min of a pair
+        // drop a NaN.
+        if ![lo_a, hi_a, lo_b, hi_b]
+            .iter()
+            .all(|p| p.iter().all(|x| x.is_finite()))
+        {
+            return Err(PolygonizeError::NonFiniteRegion);
+        }
         let (lo, hi) = (lo_a.sup(&lo_b), hi_a.inf(&hi_b));
         if (0..3).any(|k| hi[k] <= lo[k]) {
             return Ok(None);
         }
-        let dims = [0, 1, 2].map(|k| ((hi[k] - lo[k]) / h).ceil() as usize + 1);
+        // Saturating: a box of astronomical size needs more nodes than any
+        // limit, and says so.
+        let dims = [0, 1, 2].map(|k| (((hi[k] - lo[k]) / h).ceil() as usize).saturating_add(1));
         let needed = dims.into_iter().max().unwrap_or(1);
         if needed > max_nodes {
             return Err(PolygonizeError::TooManyNodes {

@@ -530,3 +530,36 @@ fn iterations_of_the_crossing() {
     assert!(worst <= BRACKET, "{worst}");
     assert!(mean <= 12.0, "{mean}");
 }
+
+/// A skin whose particle went to a non-finite position (a run that blew
+/// up) is an error of the pair, not an index past the sampling grid.
+#[test]
+fn a_non_finite_skin_is_an_error() {
+    let a = Field::new(vec![Primitive::point(Vec3::zeros(), 1.0).posed(
+        0,
+        &Point3::new(Real::NAN, 0.0, 0.0),
+        &Quat::identity(),
+    )]);
+    let b = Field::new(vec![Primitive::point(Vec3::zeros(), 1.0).posed(
+        1,
+        &Point3::origin(),
+        &Quat::identity(),
+    )]);
+    let params = ImplicitContactParams::new(100.0, 0.1);
+    assert_eq!(
+        ContactPair::new(&a, &b).reactions(&params).unwrap_err(),
+        PolygonizeError::NonFiniteRegion
+    );
+    let far = Field::new(vec![Primitive::point(Vec3::zeros(), 1.0).posed(
+        0,
+        &Point3::new(1e300, 0.0, 0.0),
+        &Quat::identity(),
+    )]);
+    assert_eq!(
+        crate::polygonize(&far, &crate::PolygonizeParams::with_cell_size(1e-300)).unwrap_err(),
+        PolygonizeError::TooManyNodes {
+            needed: usize::MAX,
+            max: 512
+        }
+    );
+}

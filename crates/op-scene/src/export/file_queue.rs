@@ -6,7 +6,7 @@
 //! skinned scene's run when the runner wrote its files itself. The
 //! [`super::FrameWriter`] now encodes a file's bytes and hands them to a
 //! [`FileQueue`], whose thread writes them in the order they came; the
-//! queue holds at most [`DEPTH`] files, so a slow disk slows the run down
+//! queue holds at most `DEPTH` (64) files, so a slow disk slows the run down
 //! instead of filling the memory. A file that cannot be written stops the
 //! queue: the files before it are complete on disk, none after it is
 //! written, and the failure (with its frame) is returned by the next
@@ -54,7 +54,12 @@ impl FileQueue {
     /// # Errors
     ///
     /// An earlier file's failure (nothing more is written after one).
-    pub fn push(&mut self, frame: usize, path: PathBuf, bytes: Vec<u8>) -> Result<(), WriteFailure> {
+    pub fn push(
+        &mut self,
+        frame: usize,
+        path: PathBuf,
+        bytes: Vec<u8>,
+    ) -> Result<(), WriteFailure> {
         self.check()?;
         let sender = match &self.sender {
             Some(s) => s,
@@ -156,8 +161,12 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let mut q = FileQueue::default();
         for k in 0..200 {
-            q.push(k, dir.join(format!("f{k}")), format!("frame {k}").into_bytes())
-                .unwrap();
+            q.push(
+                k,
+                dir.join(format!("f{k}")),
+                format!("frame {k}").into_bytes(),
+            )
+            .unwrap();
         }
         q.finish().unwrap();
         for k in 0..200 {
@@ -166,13 +175,17 @@ mod tests {
         }
         let mut q = FileQueue::default();
         q.push(0, dir.join("ok"), b"a".to_vec()).unwrap();
-        q.push(1, dir.join("missing").join("f"), b"b".to_vec()).unwrap();
+        q.push(1, dir.join("missing").join("f"), b"b".to_vec())
+            .unwrap();
         let _ = q.push(2, dir.join("after"), b"c".to_vec());
         let failure = q.finish().unwrap_err();
         assert_eq!(failure.frame, 1);
         assert!(failure.path.ends_with("missing/f"), "{:?}", failure.path);
         assert!(dir.join("ok").exists());
-        assert!(!dir.join("after").exists(), "nothing is written after a failure");
+        assert!(
+            !dir.join("after").exists(),
+            "nothing is written after a failure"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -54,8 +54,8 @@ impl Write for SizedWriter<'_> {
     }
 }
 
-pub use file_queue::WriteFailure;
 use file_queue::FileQueue;
+pub use file_queue::WriteFailure;
 pub use geometry::{FrameMesh, SheetGap};
 pub use layout::{FrameFormat, Sequence, SequenceKind};
 
