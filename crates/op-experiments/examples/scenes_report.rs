@@ -1,0 +1,561 @@
+//! The whole-scene benchmark: writes `reports/scenes.md`.
+//!
+//! ```sh
+//! cargo build --release --bin opsim
+//! cargo run --release -p op-experiments --example scenes_report
+//! ```
+//!
+//! Every shipped scene (`scenes/*.ron`, `scenes/cookbook/*.ron`) and a few
+//! scaled-up scenes a production user runs (skinned cloths draped on a
+//! sphere, a skinned solid ball dropped on another, `opsim fit` of torus
+//! samples, at growing sizes) are run by the release `opsim` binary, each
+//! measurement its own process, at 1 and 2 threads, interleaved (every
+//! repetition runs every case at 1 then 2 threads). Figures are medians
+//! [min-max] over the repetitions (`OP_REPS`, default 3); the stage
+//! shares and seconds come from each run's `summary.json` (`stages`, which
+//! add up to `wall_seconds`); peak memory is the child's maximum resident
+//! set from `/usr/bin/time` when it is installed. For each scaled-up
+//! family the report fits the exponent `a` of `t ~ N^a` (least squares on
+//! the logarithms) to the wall time and to its largest stages.
+//! `OP_QUICK=1` runs only the smallest scaled-up size of each family and
+//! one repetition (a check that the generator works, not a report to
+//! keep).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::process::Command;
+use std::time::Instant;
+
+type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+/// Thread counts measured.
+const THREADS: [usize; 2] = [1, 2];
+
+/// One thing to run: a label, the `opsim` arguments before `--threads`
+/// (the output folder is added), its size for the exponent fit, and its
+/// family (scaled-up cases; `None` for a shipped scene).
+struct Case {
+    label: String,
+    args: Vec<String>,
+    size: usize,
+    family: Option<&'static str>,
+}
+
+/// One measurement of a case.
+#[derive(Clone, Debug, Default)]
+struct Sample {
+    wall: f64,
+    stages: BTreeMap<String, f64>,
+    peak_mb: Option<f64>,
+    exit: i32,
+    particles: usize,
+}
+
+fn main() -> Res<()> {
+    let started = Instant::now();
+    let root = op_experiments::workspace_root();
+    let opsim = root.join("target/release/opsim");
+    if !opsim.exists() {
+        return Err(format!(
+            "{} is missing: build it first with `cargo build --release --bin opsim`",
+            opsim.display()
+        )
+        .into());
+    }
+    let quick = std::env::var("OP_QUICK").is_ok_and(|v| v == "1");
+    let reps: usize = match std::env::var("OP_REPS") {
+        Ok(v) => v.parse().map_err(|_| format!("OP_REPS={v}: not a count"))?,
+        Err(_) if quick => 1,
+        Err(_) => 3,
+    };
+    let work = std::env::temp_dir().join(format!("op-scenes-report-{}", std::process::id()));
+    std::fs::create_dir_all(&work)?;
+    let mut cases = shipped(&root)?;
+    cases.extend(scaled(&work, quick)?);
+    let load_before = load_average();
+    let mut results: Vec<[Vec<Sample>; 2]> = cases.iter().map(|_| [vec![], vec![]]).collect();
+    for rep in 0..reps {
+        for (c, case) in cases.iter().enumerate() {
+            for (k, &t) in THREADS.iter().enumerate() {
+                let s = measure(&opsim, case, t, &work)?;
+                eprintln!(
+                    "rep {rep} {} {t} thread(s): {:.3} s (exit {})",
+                    case.label, s.wall, s.exit
+                );
+                results[c][k].push(s);
+            }
+        }
+    }
+    let load_after = load_average();
+    let md = report(&cases, &results, reps, started, (&load_before, &load_after))?;
+    let path = root.join("reports/scenes.md");
+    std::fs::write(&path, md)?;
+    let _ = std::fs::remove_dir_all(&work);
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+/// The shipped scenes, in path order.
+fn shipped(root: &Path) -> Res<Vec<Case>> {
+    let mut paths = Vec::new();
+    for dir in ["scenes", "scenes/cookbook"] {
+        for e in std::fs::read_dir(root.join(dir))? {
+            let p = e?.path();
+            if p.extension().is_some_and(|x| x == "ron" || x == "json") {
+                paths.push(p);
+            }
+        }
+    }
+    paths.sort();
+    Ok(paths
+        .into_iter()
+        .map(|p| {
+            let label = p
+                .strip_prefix(root.join("scenes"))
+                .unwrap_or(&p)
+                .with_extension("")
+                .display()
+                .to_string();
+            Case {
+                label,
+                args: vec!["run".into(), p.display().to_string()],
+                size: 0,
+                family: None,
+            }
+        })
+        .collect())
+}
+
+/// The scaled-up cases, their scene and sample files written into `work`.
+fn scaled(work: &Path, quick: bool) -> Res<Vec<Case>> {
+    let mut cases = Vec::new();
+    let take = |sizes: &[usize]| -> Vec<usize> {
+        if quick {
+            sizes[..1].to_vec()
+        } else {
+            sizes.to_vec()
+        }
+    };
+    for n in take(&[30, 60, 120]) {
+        let path = work.join(format!("cloth_{n}.ron"));
+        std::fs::write(&path, cloth(n))?;
+        cases.push(Case {
+            label: format!("skinned cloth {n}x{n} on a sphere, 50 steps"),
+            args: vec!["run".into(), path.display().to_string()],
+            size: n * n,
+            family: Some("skinned cloth draped on a sphere"),
+        });
+    }
+    for r in take(&[5, 8, 12]) {
+        let path = work.join(format!("balls_{r}.ron"));
+        std::fs::write(&path, balls(r))?;
+        cases.push(Case {
+            label: format!("skinned ball of radius {r} dropped on another, 50 steps"),
+            args: vec!["run".into(), path.display().to_string()],
+            size: 0,
+            family: Some("skinned ball on a skinned ball"),
+        });
+    }
+    for n in take(&[10_000, 40_000, 160_000]) {
+        let path = work.join(format!("torus_{n}.xyz"));
+        std::fs::write(&path, torus_samples(n))?;
+        cases.push(Case {
+            label: format!("opsim fit of {n} torus samples"),
+            args: vec![
+                "fit".into(),
+                path.display().to_string(),
+                "--out".into(),
+                work.join(format!("torus_{n}.obj")).display().to_string(),
+            ],
+            size: n,
+            family: Some("opsim fit (torus samples)"),
+        });
+    }
+    Ok(cases)
+}
+
+/// `sheet_on_sphere`'s cloth at `n x n` particles over a sphere of radius
+/// `n / 5`, dropped from just above it: 50 steps, 3 frames. At most 120
+/// across: the skin's polygonization grid has at most 512 nodes per axis
+/// at its cell size of 0.25.
+fn cloth(n: usize) -> String {
+    let radius = n as f64 / 5.0;
+    format!(
+        r#"(
+    name: "cloth_{n}",
+    world: (integrator: VelocityVerlet, dt: 0.004, duration: 0.2, frame_rate: 10,
+            gravity: (0, 0, -1), linear_damping: 0.3, angular_damping: 0.1),
+    materials: {{
+        "sheet": (
+            spacing: LennardJones((epsilon: 20, r0: 1, cutoff: 1.5)),
+            coplanarity: 1,
+            conormality: 1,
+            bonds: (radius: 1.2),
+        ),
+    }},
+    objects: [
+        (
+            name: "sheet",
+            material: "sheet",
+            generator: HexSheet(nx: {n}, ny: {n}, spacing: 1, center: (0, 0, {z})),
+            skin: Some((primitive: Square(half_side: 0.5), radius: 0.8, cell_size: 0.25, stiffness: 100)),
+        ),
+    ],
+    tools: [
+        (name: "sphere", shape: Ball(radius: {radius}), path: [(time: 0, position: (0, 0, 0))],
+         role: Obstacle(stiffness: 100)),
+    ],
+)
+"#,
+        z = radius + 0.6,
+    )
+}
+
+/// A skinned solid ball of radius `r` (spacing 1, point skins) falling
+/// onto a fixed-size skinned solid ball below it, already touching: 50
+/// steps, 3 frames.
+fn balls(r: usize) -> String {
+    let r = r as f64;
+    format!(
+        r#"(
+    name: "balls_{r}",
+    world: (integrator: VelocityVerlet, dt: 0.004, duration: 0.2, frame_rate: 10,
+            gravity: (0, 0, -1), linear_damping: 0.3, angular_damping: 0.1),
+    materials: {{
+        "solid": (spacing: LennardJones((epsilon: 5, r0: 1, cutoff: 1.3)), bonds: (radius: 1.2)),
+    }},
+    objects: [
+        (
+            name: "ball",
+            material: "solid",
+            generator: SolidBall(radius: {r}, spacing: 1, center: (0, 0, {top})),
+            skin: Some((primitive: Point, radius: 1.6, cell_size: 0.25, stiffness: 100)),
+        ),
+        (
+            name: "base",
+            material: "solid",
+            generator: SolidBall(radius: {r}, spacing: 1, center: (0, 0, 0)),
+            skin: Some((primitive: Point, radius: 1.6, cell_size: 0.25, stiffness: 100)),
+        ),
+    ],
+)
+"#,
+        top = 2.0 * r + 1.2,
+    )
+}
+
+/// `n` samples of a torus (major radius 2, minor 0.8) with their normals,
+/// on a golden-angle lattice of its parameter square.
+fn torus_samples(n: usize) -> String {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let mut s = String::with_capacity(n * 60);
+    for k in 0..n {
+        let u = std::f64::consts::TAU * (k as f64 + 0.5) / n as f64;
+        let v = golden * k as f64;
+        let (big, small) = (2.0, 0.8);
+        let n_ = [u.cos() * v.cos(), u.sin() * v.cos(), v.sin()];
+        let p = [
+            (big + small * v.cos()) * u.cos(),
+            (big + small * v.cos()) * u.sin(),
+            small * v.sin(),
+        ];
+        let _ = writeln!(
+            s,
+            "{:.9} {:.9} {:.9} {:.9} {:.9} {:.9}",
+            p[0], p[1], p[2], n_[0], n_[1], n_[2]
+        );
+    }
+    s
+}
+
+/// Runs `case` at `threads` threads in its own process.
+fn measure(opsim: &Path, case: &Case, threads: usize, work: &Path) -> Res<Sample> {
+    let out = work.join("out");
+    let _ = std::fs::remove_dir_all(&out);
+    let time = Path::new("/usr/bin/time");
+    let mut cmd = if time.exists() {
+        let mut c = Command::new(time);
+        c.args(["-f", "peak-kb %M"]).arg(opsim);
+        c
+    } else {
+        Command::new(opsim)
+    };
+    cmd.args(&case.args);
+    if case.args[0] == "run" {
+        cmd.arg("--threads").arg(threads.to_string());
+        cmd.arg("--out").arg(&out);
+    } else {
+        // `opsim fit` runs on rayon's global pool, sized by this variable.
+        cmd.env("RAYON_NUM_THREADS", threads.to_string());
+    }
+    let clock = Instant::now();
+    let output = cmd.output()?;
+    let elapsed = clock.elapsed().as_secs_f64();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let peak_mb = stderr
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix("peak-kb "))
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .map(|kb| kb / 1024.0);
+    let mut sample = Sample {
+        wall: elapsed,
+        peak_mb,
+        exit: output.status.code().unwrap_or(-1),
+        ..Sample::default()
+    };
+    if case.args[0] == "run" {
+        let Ok(text) = std::fs::read_to_string(out.join("summary.json")) else {
+            // Refused or failed before its summary: reported as such.
+            eprintln!("{}: no summary.json: {stderr}", case.label);
+            sample.wall = f64::NAN;
+            return Ok(sample);
+        };
+        let v: serde_json::Value = serde_json::from_str(&text)?;
+        sample.wall = v["wall_seconds"].as_f64().unwrap_or(elapsed);
+        if let Some(stages) = v["stages"].as_object() {
+            for (k, t) in stages {
+                sample.stages.insert(k.clone(), t.as_f64().unwrap_or(0.0));
+            }
+        }
+        sample.particles = v["objects"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|o| o["particles"].as_u64())
+                    .sum::<u64>() as usize
+            })
+            .unwrap_or(0);
+    } else if output.status.success() {
+        let line = String::from_utf8_lossy(&output.stdout);
+        let v: serde_json::Value = serde_json::from_str(line.trim())?;
+        sample.particles = v["particles"].as_u64().unwrap_or(0) as usize;
+    } else {
+        eprintln!("{} failed: {stderr}", case.label);
+        sample.wall = f64::NAN;
+    }
+    Ok(sample)
+}
+
+/// Median and range of the finite values of `xs` (NaN when none: every
+/// run failed).
+fn stats(xs: Vec<f64>) -> (f64, f64, f64) {
+    let mut xs: Vec<f64> = xs.into_iter().filter(|x| x.is_finite()).collect();
+    if xs.is_empty() {
+        return (f64::NAN, f64::NAN, f64::NAN);
+    }
+    xs.sort_by(f64::total_cmp);
+    let n = xs.len();
+    let median = if n % 2 == 1 {
+        xs[n / 2]
+    } else {
+        0.5 * (xs[n / 2 - 1] + xs[n / 2])
+    };
+    (median, xs[0], xs[n - 1])
+}
+
+/// `median [min-max]` of seconds.
+fn spread(xs: Vec<f64>) -> String {
+    let (m, lo, hi) = stats(xs);
+    format!("{m:.2} [{lo:.2}-{hi:.2}]")
+}
+
+/// The median seconds of stage `name` over `samples`.
+fn stage(samples: &[Sample], name: &str) -> f64 {
+    stats(
+        samples
+            .iter()
+            .map(|s| s.stages.get(name).copied().unwrap_or(0.0))
+            .collect(),
+    )
+    .0
+}
+
+/// The three largest stages of `samples` (medians) as `name share%`.
+fn top_stages(samples: &[Sample]) -> String {
+    let wall = stats(samples.iter().map(|s| s.wall).collect()).0;
+    let mut names: Vec<&String> = samples.iter().flat_map(|s| s.stages.keys()).collect();
+    names.sort();
+    names.dedup();
+    let mut rows: Vec<(f64, &String)> = names.iter().map(|n| (stage(samples, n), *n)).collect();
+    rows.sort_by(|a, b| b.0.total_cmp(&a.0));
+    rows.iter()
+        .take(3)
+        .map(|(t, n)| format!("{n} {:.0}%", 100.0 * t / wall.max(f64::MIN_POSITIVE)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Per-repetition speed-ups `t1 / t2`.
+fn speedup(one: &[Sample], two: &[Sample]) -> (f64, f64, f64) {
+    stats(one.iter().zip(two).map(|(a, b)| a.wall / b.wall).collect())
+}
+
+/// Least-squares slope of `ln y` against `ln x`.
+fn exponent(points: &[(f64, f64)]) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "unknown".into())
+}
+
+/// The Markdown report.
+fn report(
+    cases: &[Case],
+    results: &[[Vec<Sample>; 2]],
+    reps: usize,
+    started: Instant,
+    load: (&str, &str),
+) -> Res<String> {
+    let mut md = String::new();
+    writeln!(
+        md,
+        "# Whole scenes: wall time and stages at 1 and 2 threads\n"
+    )?;
+    writeln!(
+        md,
+        "Generated by `cargo build --release --bin opsim && cargo run --release -p \
+         op-experiments --example scenes_report` ({:.0} s). Every case is its own `opsim` \
+         process at `--threads 1` then `--threads 2`, interleaved over {reps} repetitions; \
+         seconds are medians [min-max], speed-ups are per-repetition ratios. A run's wall \
+         time is its `summary.json` `wall_seconds` (building the scene included), whose \
+         `stages` add up to it; `opsim fit` is timed as a whole process.\n",
+        started.elapsed().as_secs_f64()
+    )?;
+    md.push_str(&op_experiments::machine::table(&[(
+        "load average before / after",
+        format!("{} / {}", load.0, load.1),
+    )]));
+    writeln!(md)?;
+    writeln!(md, "## Shipped scenes\n")?;
+    writeln!(
+        md,
+        "| scene | particles | 1 thread (s) | 2 threads (s) | speed-up | build (s) | largest \
+         stages at 1 thread | exit |"
+    )?;
+    writeln!(md, "|---|---|---|---|---|---|---|---|")?;
+    let mut slower = Vec::new();
+    for (case, [one, two]) in cases.iter().zip(results) {
+        if case.family.is_some() {
+            continue;
+        }
+        let (s, lo, hi) = speedup(one, two);
+        if hi < 1.0 {
+            slower.push(format!("{} ({s:.2} [{lo:.2}-{hi:.2}])", case.label));
+        }
+        writeln!(
+            md,
+            "| {} | {} | {} | {} | {s:.2} [{lo:.2}-{hi:.2}] | {:.3} | {} | {} |",
+            case.label,
+            one[0].particles,
+            spread(one.iter().map(|x| x.wall).collect()),
+            spread(two.iter().map(|x| x.wall).collect()),
+            stage(one, "build"),
+            top_stages(one),
+            one[0].exit,
+        )?;
+    }
+    writeln!(md)?;
+    if slower.is_empty() {
+        writeln!(
+            md,
+            "No shipped scene is slower at 2 threads than at 1 in every repetition.\n"
+        )?;
+    } else {
+        writeln!(
+            md,
+            "Slower at 2 threads than at 1 in every repetition: {}.\n",
+            slower.join(", ")
+        )?;
+    }
+    writeln!(md, "## Scaled-up scenes\n")?;
+    writeln!(
+        md,
+        "| case | particles | 1 thread (s) | 2 threads (s) | speed-up | build | contact | \
+         integrate | export | peak memory 1 / 2 threads (MB) |"
+    )?;
+    writeln!(md, "|---|---|---|---|---|---|---|---|---|---|")?;
+    for (case, [one, two]) in cases.iter().zip(results) {
+        if case.family.is_none() {
+            continue;
+        }
+        let (s, lo, hi) = speedup(one, two);
+        let peak = |xs: &[Sample]| {
+            xs.iter()
+                .filter_map(|x| x.peak_mb)
+                .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))
+                .map_or("n/a".to_string(), |v| format!("{v:.0}"))
+        };
+        writeln!(
+            md,
+            "| {} | {} | {} | {} | {s:.2} [{lo:.2}-{hi:.2}] | {:.2} | {:.2} | {:.2} | {:.2} | {} / {} |",
+            case.label,
+            one[0].particles,
+            spread(one.iter().map(|x| x.wall).collect()),
+            spread(two.iter().map(|x| x.wall).collect()),
+            stage(one, "build"),
+            stage(one, "contact"),
+            stage(one, "integrate"),
+            stage(one, "export"),
+            peak(one),
+            peak(two),
+        )?;
+    }
+    writeln!(md)?;
+    writeln!(
+        md,
+        "Growth with the number of particles N (exponent a of t ~ N^a, least squares over \
+         the sizes above, 1 thread):\n"
+    )?;
+    writeln!(
+        md,
+        "| family | wall | build | contact | integrate | export |"
+    )?;
+    writeln!(md, "|---|---|---|---|---|---|")?;
+    let mut families: Vec<&str> = cases.iter().filter_map(|c| c.family).collect();
+    families.dedup();
+    for family in families {
+        let members: Vec<(&Case, &[Sample])> = cases
+            .iter()
+            .zip(results)
+            .filter(|(c, _)| c.family == Some(family))
+            .map(|(c, r)| (c, r[0].as_slice()))
+            .collect();
+        let fit = |f: &dyn Fn(&[Sample]) -> f64| {
+            let pts: Vec<(f64, f64)> = members
+                .iter()
+                .map(|(c, s)| ((c.size.max(s[0].particles)) as f64, f(s)))
+                .collect();
+            exponent(&pts).map_or("-".to_string(), |a| format!("{a:.2}"))
+        };
+        writeln!(
+            md,
+            "| {family} | {} | {} | {} | {} | {} |",
+            fit(&|s| stats(s.iter().map(|x| x.wall).collect()).0),
+            fit(&|s| stage(s, "build")),
+            fit(&|s| stage(s, "contact")),
+            fit(&|s| stage(s, "integrate")),
+            fit(&|s| stage(s, "export")),
+        )?;
+    }
+    Ok(md)
+}
