@@ -73,7 +73,7 @@ fn main() -> Res<()> {
     std::fs::create_dir_all(&work)?;
     let mut cases = shipped(&root)?;
     cases.extend(scaled(&work, quick)?);
-    let load_before = load_average();
+    let load_before = op_experiments::machine::load_average();
     let mut results: Vec<[Vec<Sample>; 2]> = cases.iter().map(|_| [vec![], vec![]]).collect();
     for rep in 0..reps {
         for (c, case) in cases.iter().enumerate() {
@@ -87,7 +87,7 @@ fn main() -> Res<()> {
             }
         }
     }
-    let load_after = load_average();
+    let load_after = op_experiments::machine::load_average();
     let md = report(&cases, &results, reps, started, (&load_before, &load_after))?;
     let path = root.join("reports/scenes.md");
     std::fs::write(&path, md)?;
@@ -392,32 +392,6 @@ fn speedup(one: &[Sample], two: &[Sample]) -> (f64, f64, f64) {
     stats(one.iter().zip(two).map(|(a, b)| a.wall / b.wall).collect())
 }
 
-/// Least-squares slope of `ln y` against `ln x`.
-fn exponent(points: &[(f64, f64)]) -> Option<f64> {
-    let pts: Vec<(f64, f64)> = points
-        .iter()
-        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-        .map(|(x, y)| (x.ln(), y.ln()))
-        .collect();
-    if pts.len() < 2 {
-        return None;
-    }
-    let n = pts.len() as f64;
-    let (mx, my) = (
-        pts.iter().map(|p| p.0).sum::<f64>() / n,
-        pts.iter().map(|p| p.1).sum::<f64>() / n,
-    );
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    (sxx > 0.0).then(|| sxy / sxx)
-}
-
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|_| "unknown".into())
-}
-
 /// The Markdown report.
 fn report(
     cases: &[Case],
@@ -545,7 +519,8 @@ fn report(
                 .iter()
                 .map(|(c, s)| ((c.size.max(s[0].particles)) as f64, f(s)))
                 .collect();
-            exponent(&pts).map_or("-".to_string(), |a| format!("{a:.2}"))
+            op_experiments::stability::sweep::log_log_slope(&pts)
+                .map_or("-".to_string(), |a| format!("{a:.2}"))
         };
         writeln!(
             md,

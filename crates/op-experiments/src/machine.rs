@@ -30,6 +30,13 @@ pub fn table(extra: &[(&str, String)]) -> String {
     s
 }
 
+/// The 1, 5 and 15 minute load averages (`/proc/loadavg`), or `unknown`.
+pub fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "unknown".into())
+}
+
 /// The trimmed standard output of a command, or `unknown`.
 pub fn command_output(cmd: &str, args: &[&str]) -> String {
     std::process::Command::new(cmd)

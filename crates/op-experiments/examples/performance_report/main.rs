@@ -37,7 +37,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use measure::{interleaved_runs, lammps_initial_state, load_average, peak_gflops, scaling_runs};
+use measure::{interleaved_runs, lammps_initial_state, peak_gflops, scaling_runs};
+use op_experiments::machine::load_average;
 use sections::{
     cpu_table, flops_section, header, memory_section, pairs_paragraph, scaling_section,
     side_by_side, speedup_section, targets, targets_section,

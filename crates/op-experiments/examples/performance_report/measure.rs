@@ -88,12 +88,6 @@ fn lammps(dir: &Path, input: &Path, ranks: usize) -> Res<Measure> {
     Ok(m)
 }
 
-pub(crate) fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|_| "unknown".into())
-}
-
 /// The measured floating-point peak of one core: independent chains of
 /// fused multiply-adds (`S::mul_add_f64s`, 16 accumulator registers, more
 /// than the FMA latency times the issue width) on the instruction set the
