@@ -117,15 +117,26 @@ impl Field {
 
     /// The axis-aligned box `(lo, hi)` holding every primitive's support
     /// (the union of their bounding spheres' boxes), or `None` when there
-    /// are no primitives. The skin lies inside it.
+    /// are no primitives. The skin lies inside it. A primitive at a
+    /// non-finite position (a simulation that diverged) makes the whole box
+    /// non-finite, which the samplers refuse
+    /// ([`crate::PolygonizeError::NonFiniteRegion`]): the component-wise
+    /// min and max would keep the finite side and drop it.
     pub fn support_box(&self) -> Option<(Point3, Point3)> {
         let mut it = self.spheres.iter();
         let (c, r) = it.next()?;
         let mut lo = c - Vec3::repeat(*r);
         let mut hi = c + Vec3::repeat(*r);
+        let mut finite = true;
         for (c, r) in it {
-            lo = lo.inf(&(c - Vec3::repeat(*r)));
-            hi = hi.sup(&(c + Vec3::repeat(*r)));
+            let (clo, chi) = (c - Vec3::repeat(*r), c + Vec3::repeat(*r));
+            finite &= clo.iter().chain(chi.iter()).all(|x| x.is_finite());
+            lo = lo.inf(&clo);
+            hi = hi.sup(&chi);
+        }
+        if !finite {
+            let nan = Point3::from(Vec3::repeat(Real::NAN));
+            return Some((nan, nan));
         }
         Some((lo, hi))
     }

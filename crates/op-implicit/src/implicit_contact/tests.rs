@@ -550,6 +550,21 @@ fn a_non_finite_skin_is_an_error() {
         ContactPair::new(&a, &b).reactions(&params).unwrap_err(),
         PolygonizeError::NonFiniteRegion
     );
+    // Not only the first primitive: the box's min and max would drop a
+    // later one's NaN.
+    let q = Quat::identity();
+    let c = Field::new(vec![
+        Primitive::point(Vec3::zeros(), 1.0).posed(0, &Point3::new(0.5, 0.0, 0.0), &q),
+        Primitive::point(Vec3::zeros(), 1.0).posed(2, &Point3::new(0.0, Real::NAN, 0.0), &q),
+    ]);
+    assert_eq!(
+        ContactPair::new(&b, &c).reactions(&params).unwrap_err(),
+        PolygonizeError::NonFiniteRegion
+    );
+    assert_eq!(
+        crate::polygonize(&c, &crate::PolygonizeParams::with_cell_size(0.1)).unwrap_err(),
+        PolygonizeError::NonFiniteRegion
+    );
     let far = Field::new(vec![Primitive::point(Vec3::zeros(), 1.0).posed(
         0,
         &Point3::new(1e300, 0.0, 0.0),
