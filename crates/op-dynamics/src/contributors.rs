@@ -12,11 +12,14 @@
 //! 2. the uniform field ([`crate::external::UniformField`]: gravity, linear
 //!    and angular damping, the cold drag of heated materials);
 //! 3. pending forces ([`crate::World::add_external_force`], for one step);
-//! 4. the contributors the caller passes for the interval
+//! 4. the contributors registered with the world
+//!    ([`crate::World::add_contributor`]; op-scene's features, such as
+//!    wind), in the order registered;
+//! 5. the contributors the caller passes for the interval
 //!    ([`crate::World::advance_to_with`]; the driver passes its stages',
 //!    e.g. op-scene's skin contact reactions, computed once per interval
 //!    and acting over all of it);
-//! 5. the force windows ([`crate::external::ForceWindows`]);
+//! 6. the force windows ([`crate::external::ForceWindows`]);
 //!
 //! and finally fixed particles get zero force or torque. Each particle's
 //! sum is formed in this order whatever the thread count, so results are
@@ -28,6 +31,15 @@ use crate::integrators::StateRef;
 use crate::interactions::PreparedMaterial;
 use crate::math::{Real, Vec3};
 use crate::particles::{live_slot, Attributes};
+
+/// Names of the contributors every world may have (tools, uniform field,
+/// pending forces, force windows): a registered one may not take them.
+pub const BUILT_IN: [&str; 4] = [
+    "tools",
+    "gravity and damping",
+    "pending forces",
+    "force windows",
+];
 
 /// What a contributor reads: the time, the state being evaluated and the
 /// particles' attributes (by slot).
@@ -81,6 +93,20 @@ pub trait Contributor: Sync {
     /// particles then integrates rotations too.
     fn adds_torque(&self) -> bool {
         false
+    }
+
+    /// Whether it may add energy to the scene (a passive scene, whose
+    /// energy only damping changes, is checked for energy gain). Default:
+    /// true.
+    fn may_add_energy(&self) -> bool {
+        true
+    }
+
+    /// The largest speed it can give a particle on its own (a wind's air
+    /// speed), which explosion checks allow beyond gravity and the initial
+    /// velocities. Default: 0.
+    fn speed_allowance(&self) -> Real {
+        0.0
     }
 
     /// Adds its forces, torques and energies at `input`'s state to `out`.

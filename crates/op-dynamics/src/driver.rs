@@ -7,8 +7,8 @@
 //! [`Driver`] runs an ordered list of them around the world's steps:
 //!
 //! 1. every due [`Phase::Edit`] stage runs (in list order) and returns its
-//!    [`Effects`]: particles inserted or removed, cached forces invalid;
-//!    the driver drops the world's cached forces once if any stage asked,
+//!    [`Effects`]: particles inserted or removed, state changed, forces
+//!    stale; the driver applies them once ([`World::apply_effects`]),
 //!    and tells every stage of the particles inserted and removed
 //!    ([`Stage::notify`]), so a skin gains primitives for created particles
 //!    and drops those of merged ones;
@@ -36,12 +36,18 @@ use crate::contributors::Contributor;
 use crate::world::{Divergence, World};
 use crate::Real;
 
-/// What a stage changed.
+/// What a stage changed; [`World::apply_effects`] gives the one meaning
+/// of each flag, wherever the stage ran.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Effects {
-    /// The world's cached forces are no longer valid (particles were
-    /// inserted, removed or changed).
-    pub forces_invalid: bool,
+    /// The force function changed (a memory flowed, temperatures changed,
+    /// velocities a damping reads were edited): forces cached at the
+    /// current state are stale and are evaluated anew.
+    pub forces_stale: bool,
+    /// The particle set or its state changed (particles inserted, removed
+    /// or moved): everything the integrator cached from the state is
+    /// dropped (forces, velocity Verlet's angular momenta).
+    pub state_changed: bool,
     /// Ids of particles inserted.
     pub inserted: Vec<u32>,
     /// Ids of particles removed (merged or erased).
@@ -51,12 +57,16 @@ pub struct Effects {
 impl Effects {
     /// Whether anything changed.
     pub fn is_empty(&self) -> bool {
-        !self.forces_invalid && self.inserted.is_empty() && self.removed.is_empty()
+        !self.forces_stale
+            && !self.state_changed
+            && self.inserted.is_empty()
+            && self.removed.is_empty()
     }
 
     /// Adds `other`'s effects to these (ids in the order they happened).
     pub fn merge(&mut self, other: Effects) {
-        self.forces_invalid |= other.forces_invalid;
+        self.forces_stale |= other.forces_stale;
+        self.state_changed |= other.state_changed;
         self.inserted.extend(other.inserted);
         self.removed.extend(other.removed);
     }
@@ -247,9 +257,7 @@ impl<C> Driver<C> {
                 effects.merge(e);
             }
             if !effects.is_empty() {
-                if effects.forces_invalid {
-                    world.invalidate_forces();
-                }
+                world.apply_effects(&effects);
                 for k in 0..self.stages.len() {
                     let clock = Instant::now();
                     self.stages[k].notify(world, ctx, &effects)?;
@@ -287,9 +295,7 @@ impl<C> Driver<C> {
                 let clock = Instant::now();
                 let e = self.stages[k].run(world, ctx, target)?;
                 self.seconds[k] += clock.elapsed().as_secs_f64();
-                if e.forces_invalid {
-                    world.invalidate_forces();
-                }
+                world.apply_effects(&e);
             }
             // 4. The world's steps, with the stages' contributors.
             let contributors: Vec<&dyn Contributor> =

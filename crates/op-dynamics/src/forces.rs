@@ -199,6 +199,8 @@ pub(crate) struct ForceContext<'a> {
     /// The caller's contributors for this interval
     /// ([`crate::World::advance_to_with`]).
     pub extra: &'a [&'a dyn Contributor],
+    /// Contributors callers registered with the world, before `extra`.
+    pub registered: &'a [Box<dyn Contributor + Send>],
     /// The world's tools, asked first ([`crate::tooling`]).
     pub tools: Option<&'a dyn ToolSet>,
     pub scratch: &'a mut ForceScratch,
@@ -222,6 +224,8 @@ pub(crate) struct ForceModel {
     /// Tools acting on the particles ([`crate::World::set_tools`]; none:
     /// no tool stage).
     pub tools: Option<Box<dyn ToolSet>>,
+    /// Contributors callers registered ([`crate::World::add_contributor`]).
+    pub contributors: Vec<Box<dyn Contributor + Send>>,
     pub scratch: ForceScratch,
 }
 
@@ -258,6 +262,7 @@ impl ForceModel {
             step_start: None,
             accumulator,
             extra,
+            registered: &self.contributors,
             tools: self.tools.as_deref(),
             scratch: &mut self.scratch,
         }
@@ -275,7 +280,8 @@ impl ForceContext<'_> {
     /// state `s`: updates the neighbour list (rebuilding it when the
     /// particles moved too far), evaluates the pair kernel chosen when the
     /// world was built, then adds the contributors (tools, uniform field,
-    /// accumulated actions, extra contributors, force windows), and
+    /// accumulated actions, registered and extra contributors, force
+    /// windows), and
     /// zeroes what fixed particles hold (the total potential energy is summed
     /// on request, [`ForceScratch::potential`]).
     ///
@@ -408,9 +414,11 @@ impl ForceContext<'_> {
         let windows = ForceWindows(&self.external.forces);
         let built_in: [&dyn Contributor; 2] = [&uniform, self.accumulator];
         let tools = self.tools.map(|t| t as &dyn Contributor);
+        let registered = self.registered.iter().map(|c| &**c as &dyn Contributor);
         for c in tools
             .into_iter()
             .chain(built_in)
+            .chain(registered)
             .chain(self.extra.iter().copied())
             .chain(std::iter::once(&windows as &dyn Contributor))
         {

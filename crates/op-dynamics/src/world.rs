@@ -11,18 +11,18 @@ use crate::error::ParamError;
 use crate::external::ExternalAccumulator;
 use crate::flags::Flags;
 use crate::forces::{ForceModel, ForceScratch, Kernel};
-use crate::heat;
 use crate::integrators::{per_particle, Integrator};
 use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
 use crate::neighbours::{copy_positions, spatial_order, NeighbourList};
 use crate::particles::{ParticleType, Particles};
-use crate::plasticity::PlasticScratch;
 use crate::tooling::ToolSet;
 
 mod after_step;
 mod editing;
 mod params;
+mod pipeline;
+pub use after_step::{AfterStep, AfterStepContext};
 pub use editing::Merge;
 pub use params::{DivergenceParams, NeighbourParams, WorldParams, MAX_SKIN};
 
@@ -33,6 +33,15 @@ pub enum WorldError {
     /// A parameter is out of range.
     #[error("invalid parameter: {0}")]
     Param(#[from] ParamError),
+    /// Two parts of the pipeline (after-step stages, or force
+    /// contributors) have the same name.
+    #[error("{kind} {name:?} is already in the world's pipeline: names must be unique")]
+    DuplicateName {
+        /// What was registered twice.
+        kind: &'static str,
+        /// The name.
+        name: String,
+    },
 }
 
 /// A run that blew up: the step, time and (when one is to blame) particle
@@ -68,55 +77,12 @@ impl std::fmt::Display for Divergence {
     }
 }
 
-/// The stages of [`World::step`], timed in [`StepReport`].
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// Spatial re-sort at neighbour rebuilds.
-    Reorder,
-    /// Neighbour-list updates (inside force evaluations).
-    Neighbours,
-    /// Integration, including force evaluations.
-    Integrate,
-    /// Oscillation measure and divergence check.
-    Check,
-    /// Plastic update of the remembered offsets of bond memories and of the
-    /// remembered curvatures (only with plastic materials).
-    Plasticity,
-    /// Heat conduction, sources and cooling (only with heat).
-    Heat,
-    /// Breaking of stretched bonds (only with bonded materials).
-    Bonds,
-    /// Erasers and trapping shapers (only with such tools).
-    Erase,
-}
-
-impl Stage {
-    /// Every stage, in [`StepReport::seconds`] order.
-    pub const ALL: [Stage; 8] = [
-        Stage::Reorder,
-        Stage::Neighbours,
-        Stage::Integrate,
-        Stage::Check,
-        Stage::Plasticity,
-        Stage::Heat,
-        Stage::Bonds,
-        Stage::Erase,
-    ];
-
-    /// Lower-case name, for timing tables.
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::Reorder => "reorder",
-            Stage::Neighbours => "neighbours",
-            Stage::Integrate => "integrate",
-            Stage::Check => "check",
-            Stage::Plasticity => "plasticity",
-            Stage::Heat => "heat",
-            Stage::Bonds => "bonds",
-            Stage::Erase => "erase",
-        }
-    }
-}
+/// The stages every step has, around the after-step stages
+/// ([`AfterStep`]): `reorder` (spatial re-sort at neighbour rebuilds),
+/// `neighbours` (neighbour-list updates inside force evaluations),
+/// `integrate` (integration with its force evaluations) first, `check`
+/// (the divergence check) last.
+pub const CORE_STAGES: [&str; 4] = ["reorder", "neighbours", "integrate", "check"];
 
 /// What one call of [`World::step`] did.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -129,8 +95,10 @@ pub struct StepReport {
     pub force_evaluations: u32,
     /// Whether particles were re-sorted.
     pub reordered: bool,
-    /// Seconds per stage, indexed like [`Stage`].
-    pub seconds: [f64; 8],
+    /// Seconds per stage of the step, in the order they ran: `reorder`,
+    /// `neighbours`, `integrate`, the after-step stages the world has,
+    /// `check` ([`CORE_STAGES`], [`AfterStep`]).
+    pub seconds: Vec<(&'static str, f64)>,
     /// Stable ids of the particles eraser tools removed at the end of the
     /// step (seed 000 fig. 7), or shaping tools trapped between them (fig.
     /// 14, op-modeling `Role::Shaper`), in increasing order.
@@ -138,6 +106,18 @@ pub struct StepReport {
     /// Bonds that broke at the end of the step, stretched beyond their
     /// break length ([`crate::bonds`]; seed 000 fig. 12c tearing).
     pub bonds_broken: usize,
+}
+
+impl StepReport {
+    /// Seconds the step spent in stage `name` (0 for a stage it does not
+    /// have).
+    pub fn seconds_of(&self, name: &str) -> f64 {
+        self.seconds
+            .iter()
+            .filter(|(n, _)| *n == name)
+            .map(|(_, t)| t)
+            .sum()
+    }
 }
 
 /// True when some pair of particles does not interact completely (several
@@ -282,7 +262,12 @@ pub struct World {
     /// Some material in use has a bond memory that flows: the plastic stage
     /// flows the remembered offsets.
     memory_flows: bool,
-    plastic_scratch: PlasticScratch,
+    /// The world's own after-step stages it uses, in their order
+    /// ([`after_step`]).
+    built_in_stages: Vec<Box<dyn AfterStep>>,
+    /// The after-step stages callers registered
+    /// ([`World::add_after_step`]), after the world's own.
+    registered_stages: Vec<Box<dyn AfterStep>>,
     /// Something may have set particles rotating (initial spin, external
     /// torques, direct state edits): the divergence check reads frames.
     may_rotate: bool,
@@ -297,9 +282,9 @@ pub struct World {
     steps: u64,
     dt_next: Real,
     report: StepReport,
-    /// Seconds per [`Stage`] summed over every step.
-    stage_seconds: [f64; 8],
-    heat_scratch: heat::HeatScratch,
+    /// Seconds per stage (by name, in the order first run) summed over
+    /// every step.
+    stage_seconds: Vec<(&'static str, f64)>,
 }
 
 impl World {
@@ -344,7 +329,7 @@ impl World {
             b
         });
         let n = particles.len();
-        Ok(World {
+        let mut world = World {
             model: ForceModel {
                 kernel: config.kernel,
                 materials: prepared,
@@ -355,12 +340,14 @@ impl World {
                 neighbours,
                 bonds,
                 tools: None,
+                contributors: Vec::new(),
                 scratch: ForceScratch::default(),
             },
             repulsion: config.repulsion,
             plastic: config.plastic,
             memory_flows: config.memory_flows,
-            plastic_scratch: PlasticScratch::default(),
+            built_in_stages: Vec::new(),
+            registered_stages: Vec::new(),
             may_rotate: config.memory
                 || particles
                     .angular_velocities()
@@ -376,11 +363,12 @@ impl World {
             steps: 0,
             dt_next: params.dt,
             report: StepReport::default(),
-            stage_seconds: [0.0; 8],
-            heat_scratch: heat::HeatScratch::default(),
+            stage_seconds: Vec::new(),
             particles,
             params,
-        })
+        };
+        world.sync_built_in_stages();
+        Ok(world)
     }
 
     /// The particles (read-only; slots may be re-sorted between steps, use
@@ -423,51 +411,6 @@ impl World {
         self.model.neighbours.as_ref()
     }
 
-    /// Names of what this world evaluates: the kernel, each enabled
-    /// interaction term of the materials in use, and the external actions.
-    pub fn enabled(&self) -> Vec<String> {
-        let mut out = vec![format!("kernel:{:?}", self.model.kernel).to_lowercase()];
-        let mut terms: Vec<&'static str> = Vec::new();
-        let mut seen = vec![false; self.model.materials.len()];
-        self.particles
-            .materials()
-            .iter()
-            .for_each(|&m| seen[m as usize] = true);
-        for (m, s) in self.model.materials.iter().zip(seen) {
-            if s {
-                for t in m.enabled_terms() {
-                    if (t != "repulsion" || self.repulsion) && !terms.contains(&t) {
-                        terms.push(t);
-                    }
-                }
-            }
-        }
-        out.extend(terms.iter().map(|t| format!("term:{t}")));
-        if self.model.friction {
-            out.push("friction".into());
-        }
-        if self.model.heated {
-            out.push("heat_weakening".into());
-        }
-        if self.params.heat.is_some() {
-            out.push("heat".into());
-        }
-        let e = &self.params.external;
-        if e.gravity() != Vec3::zeros() {
-            out.push("gravity".into());
-        }
-        if e.linear_damping > 0.0 || e.angular_damping > 0.0 {
-            out.push("damping".into());
-        }
-        if !e.forces.is_empty() {
-            out.push("force_windows".into());
-        }
-        if let Some(tools) = &self.model.tools {
-            out.extend(tools.roles().into_iter().map(|r| format!("tool:{r}")));
-        }
-        out
-    }
-
     /// Gives the world its tools (seed 000 §6; op-modeling `tools`), in
     /// place of any it had. Tools that heat need the world's heat settings
     /// ([`WorldParams::heat`]); cached forces are dropped.
@@ -482,6 +425,7 @@ impl World {
             .into());
         }
         self.model.tools = Some(tools);
+        self.sync_built_in_stages();
         self.invalidate_forces();
         Ok(())
     }
@@ -522,13 +466,10 @@ impl World {
     }
 
     /// Seconds spent in each stage of [`World::step`] over every step so
-    /// far, by stage name ([`Stage::name`]; stages a world does not have
-    /// stay at 0).
+    /// far, by stage name ([`CORE_STAGES`] and the after-step stages, in
+    /// the order they first ran; none before the first step).
     pub fn stage_seconds(&self) -> Vec<(&'static str, f64)> {
-        Stage::ALL
-            .iter()
-            .map(|s| (s.name(), self.stage_seconds[*s as usize]))
-            .collect()
+        self.stage_seconds.clone()
     }
 
     /// What the world's own stages did since the last call (particles that
@@ -538,9 +479,24 @@ impl World {
     }
 
     /// Drops the integrator's cached forces: the next step evaluates them
-    /// anew (a stage changed what they depend on; see [`crate::driver`]).
+    /// anew (what they depend on changed: a memory flowed, temperatures
+    /// changed, tools were set; [`Effects::forces_stale`]).
     pub fn invalidate_forces(&mut self) {
-        self.integrator.invalidate();
+        self.integrator.invalidate_forces();
+    }
+
+    /// Applies what stages changed, with one meaning wherever they ran
+    /// (the world's after-step stages, the driver's stages): a changed
+    /// state ([`Effects::state_changed`]: particles inserted, removed or
+    /// edited) drops everything the integrator cached from it (forces and
+    /// velocity Verlet's angular momenta); stale forces
+    /// ([`Effects::forces_stale`]) drop the forces only.
+    pub fn apply_effects(&mut self, effects: &Effects) {
+        if effects.state_changed {
+            self.integrator.invalidate();
+        } else if effects.forces_stale {
+            self.integrator.invalidate_forces();
+        }
     }
 
     /// Adds a force and a torque (world frame, torque about the particle's
@@ -645,7 +601,13 @@ impl World {
         clipped: bool,
         extra: &[&dyn Contributor],
     ) -> Result<&StepReport, Divergence> {
-        let mut report = StepReport::default();
+        // The last report's buffer, to time this step's stages in.
+        let mut seconds = std::mem::take(&mut self.report.seconds);
+        seconds.clear();
+        let mut report = StepReport {
+            seconds,
+            ..StepReport::default()
+        };
         let clock = std::time::Instant::now();
         if let Some(list) = self.model.neighbours.as_mut() {
             if self.params.neighbours.reorder && list.rebuild_due(self.particles.positions()) {
@@ -657,7 +619,9 @@ impl World {
             }
         }
         copy_positions(&mut self.prev_positions, self.particles.positions());
-        report.seconds[Stage::Reorder as usize] = clock.elapsed().as_secs_f64();
+        report
+            .seconds
+            .push(("reorder", clock.elapsed().as_secs_f64()));
 
         let clock = std::time::Instant::now();
         let neighbour_before = self.model.scratch.neighbour_seconds;
@@ -673,9 +637,11 @@ impl World {
             .integrator
             .step(&mut ctx, &bodies, self.time, dt, state);
         let neighbour_seconds = self.model.scratch.neighbour_seconds - neighbour_before;
-        report.seconds[Stage::Neighbours as usize] = neighbour_seconds;
-        report.seconds[Stage::Integrate as usize] =
-            clock.elapsed().as_secs_f64() - neighbour_seconds;
+        report.seconds.push(("neighbours", neighbour_seconds));
+        report.seconds.push((
+            "integrate",
+            clock.elapsed().as_secs_f64() - neighbour_seconds,
+        ));
         report.dt = info.dt_taken;
         report.rejected = info.rejected;
         report.force_evaluations = info.force_evaluations;
@@ -688,25 +654,21 @@ impl World {
             self.accumulator.clear();
             self.integrator.invalidate_forces();
         }
-        // The world's own stages after the step, in order (only those it
-        // uses); their effects are merged, cached forces dropped once.
-        let mut effects = Effects::default();
-        for stage in self.after_step_stages() {
-            let clock = std::time::Instant::now();
-            let e = self.run_after_step(stage, info.dt_taken, &mut report);
-            report.seconds[stage as usize] = clock.elapsed().as_secs_f64();
-            effects.merge(e);
-        }
-        if effects.forces_invalid {
-            self.integrator.invalidate_forces();
-        }
+        // The after-step stages, in order; their effects applied once and
+        // kept for the driver.
+        let effects = self.run_after_step_stages(info.dt_taken, &mut report);
         self.effects.merge(effects);
 
         let clock = std::time::Instant::now();
         let check = self.check_divergence();
-        report.seconds[Stage::Check as usize] = clock.elapsed().as_secs_f64();
-        for (total, s) in self.stage_seconds.iter_mut().zip(report.seconds) {
-            *total += s;
+        report
+            .seconds
+            .push(("check", clock.elapsed().as_secs_f64()));
+        for &(name, s) in &report.seconds {
+            match self.stage_seconds.iter_mut().find(|(n, _)| *n == name) {
+                Some(total) => total.1 += s,
+                None => self.stage_seconds.push((name, s)),
+            }
         }
         self.report = report;
         check?;

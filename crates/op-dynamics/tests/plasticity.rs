@@ -7,7 +7,6 @@
 use op_dynamics::interactions::{CohesionParams, Spacing, WeightParams};
 use op_dynamics::neighbours::NeighbourList;
 use op_dynamics::plasticity::{current_curvature, Plasticity};
-use op_dynamics::world::Stage;
 use op_dynamics::{
     ExternalParams, Flags, ForceWindow, Material, NeighbourBackend, ParticleDesc, Particles,
     Point3, Real, Vec3, World, WorldParams,
@@ -312,7 +311,7 @@ fn insertion_and_removal_keep_plasticity_working() {
     )
     .unwrap();
     c.step().unwrap();
-    assert_eq!(c.last_report().seconds[Stage::Plasticity as usize], 0.0);
+    assert_eq!(c.last_report().seconds_of("plasticity"), 0.0);
     assert!(!c.enabled().contains(&"term:plasticity".to_string()));
     let mut d = ParticleDesc::at(Point3::new(0.0, 0.0, RADIUS + 0.3)).with_normal(Vec3::z());
     d.material = 1;

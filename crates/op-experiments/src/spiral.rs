@@ -477,6 +477,7 @@ impl SpiralRecipe {
             objects: vec![self.object("spiral", "memory", shape, &units)],
             forces: self.end_forces("spiral", shape, &units),
             tools: Vec::new(),
+            features: Vec::new(),
             outputs: Outputs {
                 particles: ParticleOutput::Discs,
                 ..Outputs::default()

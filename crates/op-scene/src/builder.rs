@@ -89,9 +89,22 @@ impl Scene {
         let used = self.used_materials()?;
         let placed = self.place_objects(base_dir, &counts, &used)?;
         let (tools, skin_tool_params, all_tools) = self.tool_params();
-        let world = self.make_world(placed.particles, &used, &counts, &placed.offsets, &tools)?;
+        let mut world =
+            self.make_world(placed.particles, &used, &counts, &placed.offsets, &tools)?;
         let objects = placed.objects;
         let file = self.origin();
+        let install = crate::features::InstallContext {
+            objects: &objects,
+            settle: self.world.settle,
+        };
+        for (k, f) in self.features.iter().enumerate() {
+            f.feature()
+                .install(&mut world, &install)
+                .map_err(|e| SceneError::Build {
+                    file: file.to_string(),
+                    message: format!("features[{k}].{}: {e}", f.name()),
+                })?;
+        }
         let mut skins = Vec::new();
         for (k, o) in self.objects.iter().enumerate() {
             let Some(spec) = &o.skin else { continue };

@@ -182,8 +182,9 @@ impl BuiltScene {
     /// Whether nothing feeds energy into the scene or changes its energy
     /// function: no force window, zero gravity, no tool, no contact, no
     /// heat, no creation, no bonds, no plastic material and no spin term
-    /// (a torque without a potential, seed 000 eq. 14-15). Only such a
-    /// scene is checked for energy gain.
+    /// (a torque without a potential, seed 000 eq. 14-15), and no feature
+    /// that may add energy ([`crate::features`]). Only such a scene is
+    /// checked for energy gain.
     pub fn is_passive(&self) -> bool {
         let w = &self.world;
         let e = &w.params().external;
@@ -194,6 +195,7 @@ impl BuiltScene {
             && w.params().heat.is_none()
             && self.creation.is_none()
             && w.bonds().is_none()
+            && !w.registered_may_add_energy()
             && w.materials()
                 .iter()
                 .all(|m| m.plasticity().is_none() && !m.enabled_terms().contains(&"spin"))

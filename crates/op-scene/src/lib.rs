@@ -9,6 +9,7 @@
 pub mod built_scene;
 pub mod creation;
 pub mod export;
+pub mod features;
 pub mod fit;
 pub mod health;
 pub mod input;

@@ -106,7 +106,8 @@ impl Stage<SceneState> for FitRelease {
         o.ids = new_ids.clone();
         o.rest = rest;
         Ok(Effects {
-            forces_invalid: true,
+            state_changed: true,
+            forces_stale: false,
             inserted: new_ids,
             removed: ids,
         })
@@ -168,7 +169,8 @@ impl Stage<SceneState> for Creation {
             }
         }
         Ok(Effects {
-            forces_invalid: false,
+            state_changed: !created.inserted.is_empty() || !created.removed.is_empty(),
+            forces_stale: false,
             inserted: created.inserted,
             removed: created.removed,
         })

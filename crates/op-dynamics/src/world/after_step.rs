@@ -1,129 +1,300 @@
-//! The world's own stages after every step, in this order, each only in a
-//! world that uses it (pay for what you use):
+//! The world's after-step stages: what acts on the particles once per step,
+//! after the integrator and before the divergence check.
+//!
+//! Every such stage implements [`AfterStep`] and sits in one ordered list
+//! of the world. The world puts its own stages first, in this order, each
+//! only when it uses it (pay for what you use):
 //!
 //! 1. **heat** ([`crate::heat`], seed 000 §6 and §8): heat sources at the
 //!    step's end time, conduction over the interacting pairs, cooling; a
-//!    world whose materials weaken with heat then has stale cached forces;
+//!    world whose materials weaken with heat then has stale forces;
 //! 2. **bonds** ([`crate::bonds`], seed 000 fig. 12c): bonds stretched
 //!    beyond their break length break for good;
 //! 3. **plasticity** (seed 000 fig. 12b): the remembered offsets of bond
 //!    memories flow toward the current ones beyond their yield
 //!    ([`crate::bond_memory`]), then the remembered curvatures toward the
 //!    current ones beyond the yield curvature ([`crate::plasticity`]);
-//!    changed memories make cached forces stale;
+//!    changed memories make the forces stale;
 //! 4. **erase** (seed 000 fig. 7 and 14): erasers and trapping shapers
 //!    remove particles.
 //!
-//! Each returns its [`Effects`]; [`World::step`] merges them, drops cached
-//! forces once if any asked, and keeps the removed particles for the
-//! driver ([`World::take_effects`]), which tells its stages (a skin drops
-//! the primitives of erased particles).
+//! Then come the stages a caller registered with [`World::add_after_step`]
+//! (op-scene's features, such as a speed clamp), in the order registered.
+//! Each stage returns its [`Effects`]; the world merges them, applies them
+//! once ([`World::apply_effects`]), removes the particles they name and
+//! keeps those for the driver ([`World::take_effects`]), which tells its
+//! stages (a skin drops the primitives of erased particles).
 
-use super::{Stage, StepReport, World};
+use super::{StepReport, World, WorldError};
 use crate::bond_memory;
+use crate::bonds::Bonds;
 use crate::driver::Effects;
-use crate::heat;
+use crate::heat::{self, HeatParams, HeatScratch};
+use crate::interactions::PreparedMaterial;
 use crate::math::Real;
-use crate::plasticity;
+use crate::neighbours::NeighbourList;
+use crate::particles::Particles;
+use crate::plasticity::{self, PlasticScratch};
+use crate::tooling::ToolSet;
 
-impl World {
-    /// The after-step stages this world uses, in order.
-    pub(super) fn after_step_stages(&self) -> impl Iterator<Item = Stage> {
-        let uses = [
-            (Stage::Heat, self.params.heat.is_some()),
-            (Stage::Bonds, self.model.bonds.is_some()),
-            (Stage::Plasticity, self.plastic || self.memory_flows),
-            (
-                Stage::Erase,
-                self.model
-                    .tools
-                    .as_ref()
-                    .is_some_and(|t| t.removes_particles()),
-            ),
-        ];
-        uses.into_iter().filter(|u| u.1).map(|u| u.0)
+/// What an after-step stage may read and change: the state at the end of
+/// the step just taken.
+pub struct AfterStepContext<'a> {
+    /// World time at the end of the step.
+    pub time: Real,
+    /// Length of the step just taken.
+    pub dt: Real,
+    /// The particles (positions, velocities, ... by slot).
+    pub particles: &'a mut Particles,
+    /// The prepared materials, indexed by the particles' material index.
+    pub materials: &'a [PreparedMaterial],
+    /// The neighbour list, when the world has an interaction kernel.
+    pub neighbours: Option<&'a mut NeighbourList>,
+    /// The bonds, when some material is bonded.
+    pub bonds: Option<&'a mut Bonds>,
+    /// The tools, when the world has some.
+    pub tools: Option<&'a mut (dyn ToolSet + 'static)>,
+    /// The report of the step, for what a stage did (bonds broken).
+    pub report: &'a mut StepReport,
+}
+
+/// A stage the world runs after every step; see the [module docs](self).
+pub trait AfterStep: Send + Sync {
+    /// Name, unique in the world's pipeline (timings, `enabled`, errors).
+    fn name(&self) -> &'static str;
+
+    /// Whether it may add energy to the scene (a passive scene, whose
+    /// energy only damping changes, is checked for energy gain). Default:
+    /// true.
+    fn may_add_energy(&self) -> bool {
+        true
     }
 
-    /// Runs after-step stage `stage` for the step of length `dt` just taken
-    /// and records what it did in `report`.
-    pub(super) fn run_after_step(
-        &mut self,
-        stage: Stage,
-        dt: Real,
-        report: &mut StepReport,
-    ) -> Effects {
-        let mut effects = Effects::default();
-        match stage {
-            Stage::Heat => effects.forces_invalid = self.advance_heat(dt),
-            Stage::Bonds => {
-                if let Some(bonds) = self.model.bonds.as_mut() {
-                    report.bonds_broken = bonds.break_stretched(&self.particles);
-                }
-            }
-            Stage::Plasticity => {
-                if let (true, Some(bonds)) = (self.memory_flows, self.model.bonds.as_mut()) {
-                    effects.forces_invalid |=
-                        bond_memory::flow(bonds, &self.particles, &self.model.materials, dt);
-                }
-                if let (true, Some(list)) = (self.plastic, self.model.neighbours.as_mut()) {
-                    // Cached forces were computed with the old curvatures.
-                    effects.forces_invalid |= plasticity::apply(
-                        &mut self.particles,
-                        &self.model.materials,
-                        list,
-                        self.model.bonds.as_ref(),
-                        dt,
-                        &mut self.plastic_scratch,
-                    );
-                }
-            }
-            Stage::Erase => {
-                // On the state at the end of the step, before the divergence
-                // check, which then sees only the survivors.
-                let erased = match self.model.tools.as_mut() {
-                    Some(tools) => tools.erase(self.time, &self.particles),
-                    None => Vec::new(),
-                };
-                if !erased.is_empty() {
-                    self.remove_live(&erased);
-                    effects.forces_invalid = true;
-                    effects.removed.clone_from(&erased);
-                }
-                report.erased = erased;
-            }
-            Stage::Reorder | Stage::Neighbours | Stage::Integrate | Stage::Check => {}
-        }
-        effects
+    /// Runs on the state at the end of the step. Particles to remove go
+    /// in the effects' `removed` (the world removes them); changed
+    /// velocities or a changed force function set `forces_stale`.
+    fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects;
+}
+
+/// Names of the world's own stages, in their order.
+pub(super) const BUILT_IN: [&str; 4] = ["heat", "bonds", "plasticity", "erase"];
+
+/// Heat conduction, sources and cooling ([`crate::heat`]).
+struct HeatStage {
+    params: HeatParams,
+    /// Some material weakens with heat: new temperatures make the forces
+    /// stale.
+    weakens: bool,
+    scratch: HeatScratch,
+}
+
+impl AfterStep for HeatStage {
+    fn name(&self) -> &'static str {
+        "heat"
     }
 
-    /// Advances the temperatures over the step just taken (sources at its
-    /// end time, conduction over the pairs within the interaction cut-off,
-    /// cooling; [`crate::heat`]). Returns whether cached forces are stale:
-    /// when some material weakens with heat they were computed at the old
-    /// temperatures.
-    fn advance_heat(&mut self, dt: Real) -> bool {
-        let Some(params) = &self.params.heat else {
-            return false;
-        };
-        let pairs = self.model.neighbours.as_mut().map(|list| {
-            list.update(self.particles.positions());
+    fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects {
+        let pairs = ctx.neighbours.as_deref_mut().map(|list| {
+            list.update(ctx.particles.positions());
             list.build_incoming();
             let cutoff = list.cutoff();
             (&*list, cutoff)
         });
         let pairs = pairs.map(|(l, c)| (l.pairs(), c));
-        let (positions, objects, temperatures) = self.particles.heat_view();
+        let (positions, objects, temperatures) = ctx.particles.heat_view();
         heat::advance(
-            params,
-            self.model.tools.as_deref(),
-            self.time,
-            dt,
+            &self.params,
+            ctx.tools.as_deref(),
+            ctx.time,
+            ctx.dt,
             positions,
             objects,
             pairs,
             temperatures,
-            &mut self.heat_scratch,
+            &mut self.scratch,
         );
-        self.model.heated
+        Effects {
+            forces_stale: self.weakens,
+            ..Effects::default()
+        }
+    }
+}
+
+/// Breaking of bonds stretched beyond their break length
+/// ([`crate::bonds`]).
+struct BondBreaking;
+
+impl AfterStep for BondBreaking {
+    fn name(&self) -> &'static str {
+        "bonds"
+    }
+
+    fn may_add_energy(&self) -> bool {
+        // A broken bond changes the energy function.
+        true
+    }
+
+    fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects {
+        if let Some(bonds) = ctx.bonds.as_deref_mut() {
+            ctx.report.bonds_broken = bonds.break_stretched(ctx.particles);
+        }
+        Effects::default()
+    }
+}
+
+/// Plastic flow of bond memories and of remembered curvatures.
+struct PlasticFlow {
+    /// Some material has a bond memory that flows.
+    memory_flows: bool,
+    /// Some material has plasticity of its remembered curvature.
+    curvature: bool,
+    scratch: PlasticScratch,
+}
+
+impl AfterStep for PlasticFlow {
+    fn name(&self) -> &'static str {
+        "plasticity"
+    }
+
+    fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects {
+        let mut stale = false;
+        if let (true, Some(bonds)) = (self.memory_flows, ctx.bonds.as_deref_mut()) {
+            stale |= bond_memory::flow(bonds, ctx.particles, ctx.materials, ctx.dt);
+        }
+        if let (true, Some(list)) = (self.curvature, ctx.neighbours.as_deref_mut()) {
+            // Cached forces were computed with the old curvatures.
+            stale |= plasticity::apply(
+                ctx.particles,
+                ctx.materials,
+                list,
+                ctx.bonds.as_deref(),
+                ctx.dt,
+                &mut self.scratch,
+            );
+        }
+        Effects {
+            forces_stale: stale,
+            ..Effects::default()
+        }
+    }
+}
+
+/// Erasers and trapping shapers remove particles (seed 000 fig. 7, 14).
+struct Erasers;
+
+impl AfterStep for Erasers {
+    fn name(&self) -> &'static str {
+        "erase"
+    }
+
+    fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects {
+        // On the state at the end of the step, before the divergence check,
+        // which then sees only the survivors.
+        let erased = match ctx.tools.as_deref_mut() {
+            Some(tools) => tools.erase(ctx.time, ctx.particles),
+            None => Vec::new(),
+        };
+        ctx.report.erased.clone_from(&erased);
+        Effects {
+            state_changed: !erased.is_empty(),
+            removed: erased,
+            ..Effects::default()
+        }
+    }
+}
+
+impl World {
+    /// Appends an after-step stage to the world's pipeline: it runs after
+    /// every step, after the world's own stages and those registered
+    /// before it (see [`AfterStep`]).
+    ///
+    /// # Errors
+    ///
+    /// A stage of the same name is already in the pipeline (the world's
+    /// own included: `heat`, `bonds`, `plasticity`, `erase`, and the
+    /// step's `reorder`, `neighbours`, `integrate`, `check`).
+    pub fn add_after_step(&mut self, stage: Box<dyn AfterStep>) -> Result<(), WorldError> {
+        let name = stage.name();
+        if super::CORE_STAGES.contains(&name)
+            || BUILT_IN.contains(&name)
+            || self.registered_stages.iter().any(|s| s.name() == name)
+        {
+            return Err(WorldError::DuplicateName {
+                kind: "after-step stage",
+                name: name.to_string(),
+            });
+        }
+        self.registered_stages.push(stage);
+        Ok(())
+    }
+
+    /// Brings the world's own after-step stages in line with what it uses
+    /// now (after building, editing the particle set, or new tools).
+    pub(super) fn sync_built_in_stages(&mut self) {
+        let heat = self.params.heat.clone().map(|params| HeatStage {
+            params,
+            weakens: self.model.heated,
+            scratch: HeatScratch::default(),
+        });
+        let wanted: [Option<Box<dyn AfterStep>>; 4] = [
+            heat.map(|s| Box::new(s) as Box<dyn AfterStep>),
+            self.model
+                .bonds
+                .is_some()
+                .then(|| Box::new(BondBreaking) as Box<dyn AfterStep>),
+            (self.plastic || self.memory_flows).then(|| {
+                Box::new(PlasticFlow {
+                    memory_flows: self.memory_flows,
+                    curvature: self.plastic,
+                    scratch: PlasticScratch::default(),
+                }) as Box<dyn AfterStep>
+            }),
+            self.model
+                .tools
+                .as_ref()
+                .is_some_and(|t| t.removes_particles())
+                .then(|| Box::new(Erasers) as Box<dyn AfterStep>),
+        ];
+        self.built_in_stages = wanted.into_iter().flatten().collect();
+    }
+
+    /// Runs every after-step stage for the step of length `dt` just taken,
+    /// timing each in `report`, and applies their merged effects: the
+    /// particles they name are removed, cached forces dropped once.
+    pub(super) fn run_after_step_stages(&mut self, dt: Real, report: &mut StepReport) -> Effects {
+        let mut effects = Effects::default();
+        let mut built_in = std::mem::take(&mut self.built_in_stages);
+        let mut registered = std::mem::take(&mut self.registered_stages);
+        let mut edited = false;
+        for stage in built_in.iter_mut().chain(registered.iter_mut()) {
+            let clock = std::time::Instant::now();
+            let mut ctx = AfterStepContext {
+                time: self.time,
+                dt,
+                particles: &mut self.particles,
+                materials: &self.model.materials,
+                neighbours: self.model.neighbours.as_mut(),
+                bonds: self.model.bonds.as_mut(),
+                tools: self.model.tools.as_deref_mut(),
+                report,
+            };
+            let e = stage.run(&mut ctx);
+            if !e.removed.is_empty() {
+                self.remove_live(&e.removed);
+                edited = true;
+            }
+            report
+                .seconds
+                .push((stage.name(), clock.elapsed().as_secs_f64()));
+            effects.merge(e);
+        }
+        self.registered_stages = registered;
+        self.built_in_stages = built_in;
+        if edited {
+            // What the world uses may have changed with its particles.
+            self.sync_built_in_stages();
+        }
+        self.apply_effects(&effects);
+        effects
     }
 }

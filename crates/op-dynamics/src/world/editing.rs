@@ -192,6 +192,7 @@ impl World {
         self.torques.clear();
         self.torques.resize(n, Vec3::zeros());
         self.integrator.invalidate();
+        self.sync_built_in_stages();
     }
 }
 

@@ -219,7 +219,7 @@ pub(crate) fn child(args: &[String]) -> Res<()> {
     let cpu0 = cpu_seconds();
     let clock = Instant::now();
     for _ in 0..steps {
-        neighbour_s += w.step()?.seconds[1];
+        neighbour_s += w.step()?.seconds_of("neighbours");
     }
     let secs = clock.elapsed().as_secs_f64();
     let cpu = cpu_seconds() - cpu0;

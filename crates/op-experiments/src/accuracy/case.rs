@@ -252,6 +252,7 @@ pub fn triangle_scene(p: Real) -> Scene {
         }],
         forces: Vec::new(),
         tools: Vec::new(),
+        features: Vec::new(),
         creation: None,
         outputs: Default::default(),
         origin: "<triangle>".into(),

@@ -482,7 +482,9 @@ mod tests {
         let names: BTreeSet<&str> = all.iter().map(|(p, _)| p.as_str()).collect();
         let stale: Vec<&str> = units::UNITS
             .iter()
-            .map(|(p, _)| *p)
+            .copied()
+            .chain(crate::features::units())
+            .map(|(p, _)| p)
             .filter(|p| !names.contains(p))
             .collect();
         assert!(

@@ -171,7 +171,13 @@ pub const UNITS: &[(&str, &str)] = &[
     ("WorldSettings.settle", "T"),
 ];
 
-/// The unit of a field (`Section.field` or `Section.Variant.field`).
+/// The unit of a field (`Section.field` or `Section.Variant.field`), the
+/// features' ([`crate::features::units`]) included.
 pub fn unit(path: &str) -> Option<&'static str> {
-    UNITS.iter().find(|(p, _)| *p == path).map(|(_, u)| *u)
+    UNITS
+        .iter()
+        .copied()
+        .chain(crate::features::units())
+        .find(|(p, _)| *p == path)
+        .map(|(_, u)| u)
 }

@@ -101,6 +101,10 @@ pub struct Scene {
     /// tools through their skins (seed 002 §6). Default: none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tools: Vec<ToolSpec>,
+    /// Optional features ([`crate::features`], [`crate::features::FeatureSpec`]
+    /// lists them), each at most once. Default: none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub features: Vec<crate::features::FeatureSpec>,
     /// What the runner writes. Default: [`Outputs::default`].
     #[serde(default)]
     pub outputs: Outputs,

@@ -126,6 +126,21 @@ impl Scene {
         for (k, t) in self.tools.iter().enumerate() {
             self.validate_tool(k, t)?;
         }
+        for (k, f) in self.features.iter().enumerate() {
+            let path = format!("features[{k}].{}", f.name());
+            if let Some(first) = self.features[..k].iter().position(|g| g.name() == f.name()) {
+                return Err(SceneError::invalid(
+                    file,
+                    path,
+                    format!(
+                        "{} is listed twice (features[{first}] has it too); each feature at most \
+                         once: name all the objects it acts on in one entry",
+                        f.name()
+                    ),
+                ));
+            }
+            f.feature().validate(self, &path)?;
+        }
         if let Some(c) = &self.creation {
             c.validate(file)?;
             if let Some(fit) = &c.fit {

@@ -1,0 +1,130 @@
+//! Features: optional actions a scene lists in [`crate::Scene::features`],
+//! each one file of this module behind the [`Feature`] trait and one line
+//! of the registry below.
+//!
+//! A feature's settings deserialize straight into its own type (the scene
+//! schema, the JSON schema and `docs/scenes.md` come from it), are checked
+//! once by [`Feature::validate`] and put into the world by
+//! [`Feature::install`]: a force as an op-dynamics
+//! [`Contributor`](op_dynamics::contributors::Contributor)
+//! ([`World::add_contributor`]), an action after every step as an
+//! [`AfterStep`](op_dynamics::world::AfterStep) stage
+//! ([`World::add_after_step`]). The world then lists it in
+//! [`World::enabled`], times it and asks it whether it may add energy
+//! (passive scenes are checked for energy gain) and how fast it can move
+//! particles (the explosion check's allowance). A scene that lists no
+//! feature pays for none.
+//!
+//! Adding a feature: write `features/<name>.rs` with its settings type
+//! (serde, schemars, a doc comment on every field), its `UNITS` (the unit
+//! of each numeric field, for the scene reference) and its [`Feature`]
+//! impl, then add one line `Name => module::Type,` to the `features!`
+//! list below.
+
+use op_dynamics::{Real, World};
+
+use crate::built_scene::BuiltObject;
+use crate::error::SceneError;
+use crate::schema::Scene;
+
+/// What [`Feature::install`] gets besides the world.
+pub struct InstallContext<'a> {
+    /// The scene's objects, in scene order (object `k` has object id `k`).
+    pub objects: &'a [BuiltObject],
+    /// World time at which scene time 0 falls (the settle phase's length):
+    /// times in a feature's settings count from there.
+    pub settle: Real,
+}
+
+/// A feature of [`crate::Scene::features`]; see the module docs.
+pub trait Feature {
+    /// Checks the settings against the scene, once, before building; `path`
+    /// is the field path for messages (`features[2].Wind`).
+    ///
+    /// # Errors
+    ///
+    /// What is wrong and what would be valid, naming `path`.
+    fn validate(&self, scene: &Scene, path: &str) -> Result<(), SceneError>;
+
+    /// Puts the feature into the world.
+    ///
+    /// # Errors
+    ///
+    /// What the world refused (a name already registered).
+    fn install(
+        &self,
+        world: &mut World,
+        ctx: &InstallContext<'_>,
+    ) -> Result<(), op_dynamics::WorldError>;
+}
+
+/// Declares the registered features: each line `Variant => module::Type`
+/// adds a variant of [`FeatureSpec`] read from the scene file as
+/// `Variant((...))` (RON) or `{"Variant": {...}}` (JSON).
+macro_rules! features {
+    ($($(#[$doc:meta])* $variant:ident => $module:ident :: $ty:ident,)*) => {
+        $(mod $module; pub use $module::$ty;)*
+
+        /// One entry of [`crate::Scene::features`].
+        #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+        #[serde(deny_unknown_fields)]
+        pub enum FeatureSpec {
+            $($(#[$doc])* $variant($ty),)*
+        }
+
+        impl FeatureSpec {
+            /// The feature's variant name (as written in the scene file).
+            pub fn name(&self) -> &'static str {
+                match *self {
+                    $(FeatureSpec::$variant(_) => stringify!($variant),)*
+                }
+            }
+
+            /// The feature behind the entry.
+            pub fn feature(&self) -> &dyn Feature {
+                match *self {
+                    $(FeatureSpec::$variant(ref f) => f,)*
+                }
+            }
+        }
+
+        /// The unit of every numeric field of the registered features, as
+        /// [`crate::reference::units::UNITS`] gives those of the rest of
+        /// the scene.
+        pub fn units() -> impl Iterator<Item = (&'static str, &'static str)> {
+            std::iter::empty()$(.chain($module::UNITS.iter().copied()))*
+        }
+    };
+}
+
+features! {}
+
+/// The object ids a feature acts on: those named in `names` (every
+/// object when `None`), as a mask by object id. Names are checked by
+/// [`check_objects`] first; unknown ones are left out.
+pub fn object_mask(objects: &[BuiltObject], names: Option<&[String]>) -> Vec<bool> {
+    objects
+        .iter()
+        .map(|o| names.is_none_or(|n| n.contains(&o.name)))
+        .collect()
+}
+
+/// Checks that every name in `names` is an object of `scene`
+/// (`path.objects[i]` in messages).
+pub fn check_objects(
+    scene: &Scene,
+    path: &str,
+    names: Option<&[String]>,
+) -> Result<(), SceneError> {
+    for (i, name) in names.into_iter().flatten().enumerate() {
+        if !scene.objects.iter().any(|o| &o.name == name) {
+            let known: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
+            return Err(SceneError::invalid(
+                scene.origin(),
+                format!("{path}.objects[{i}]"),
+                format!("= {name:?}: no such object (the scene's objects: {known:?})"),
+            ));
+        }
+    }
+    Ok(())
+}
