@@ -62,14 +62,17 @@ pub trait Feature {
 /// adds a variant of [`FeatureSpec`] read from the scene file as
 /// `Variant((...))` (RON) or `{"Variant": {...}}` (JSON).
 macro_rules! features {
-    ($($(#[$doc:meta])* $variant:ident => $module:ident :: $ty:ident,)*) => {
+    ($($variant:ident => $module:ident :: $ty:ident,)*) => {
         $(mod $module; pub use $module::$ty;)*
 
         /// One entry of [`crate::Scene::features`].
         #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
         #[serde(deny_unknown_fields)]
         pub enum FeatureSpec {
-            $($(#[$doc])* $variant($ty),)*
+            $(
+                #[doc = concat!("The `", stringify!($variant), "` feature: [`", stringify!($ty), "`].")]
+                $variant($ty),
+            )*
         }
 
         impl FeatureSpec {
