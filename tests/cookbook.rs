@@ -360,3 +360,69 @@ fn clay_sheet_keeps_the_dent_of_the_ball() {
     assert!(end < 0.9 * deepest, "the dent stays: {end} of {deepest}");
     assert_eq!(pieces, 1, "one piece");
 }
+
+/// `flag_in_wind`: streams downwind of the pole, droops without the wind,
+/// the gust lifts its free edge, one piece.
+#[test]
+fn flag_streams_in_the_wind_and_the_gust_lifts_it() {
+    println!("claim: {}", claim("flag_in_wind"));
+    let scene = load("flag_in_wind");
+    let (built, runs) = frames(&scene);
+    assert!(built.world.enabled().contains(&"wind".to_string()));
+    let flag = &runs[0];
+    let first = &flag[0];
+    // The free edge: the particles farthest from the pole at the start.
+    let far = first.x.iter().map(|p| p.x).fold(Real::MIN, Real::max);
+    let edge: Vec<usize> = (0..first.x.len())
+        .filter(|&i| first.x[i].x > far - 0.5)
+        .collect();
+    let edge_mean =
+        |f: &Frame| edge.iter().map(|&i| f.x[i].coords).sum::<Vec3>() / edge.len() as Real;
+    let at = |t: Real| &flag[(t * built.frame_rate).round() as usize];
+    let calm = edge_mean(at(19.0));
+    let lifted = (40..=60)
+        .map(|k| edge_mean(&flag[k]).z)
+        .fold(Real::MIN, Real::max);
+    let end = edge_mean(flag.last().unwrap());
+    println!(
+        "free edge (x, z): before the gust ({:.2}, {:.2}), highest in it z {lifted:.2}, \
+         at the end ({:.2}, {:.2}); starts at x {far:.2}",
+        calm.x, calm.z, end.x, end.z
+    );
+    // Streams: the free edge stays downwind, within 17 degrees of level
+    // (the drag on a particle at rest is four times its weight: 14).
+    let near = first.x.iter().map(|p| p.x).fold(Real::MAX, Real::min);
+    let length = far - near;
+    assert!(
+        calm.x > far - 0.1 * length && calm.z > -0.3 * length,
+        "streams: {calm}"
+    );
+    assert!(
+        lifted > calm.z + 1.0,
+        "the gust lifts the edge: {lifted} vs {}",
+        calm.z
+    );
+    assert_eq!(
+        components(&flag.last().unwrap().x, 1.5).len(),
+        1,
+        "one piece"
+    );
+
+    // The same flag without the wind hangs from the pole.
+    let mut still = scene.clone();
+    still.features.clear();
+    let (_, runs) = frames(&still);
+    let hang = edge_mean(&runs[0][(19.0 * built.frame_rate).round() as usize]);
+    println!(
+        "without wind, the free edge at t = 19: ({:.2}, {:.2})",
+        hang.x, hang.z
+    );
+    assert!(
+        hang.z < calm.z - 4.0,
+        "without wind it hangs: {hang} vs {calm}"
+    );
+    assert!(
+        end.x > hang.x + 3.0,
+        "downwind of the hanging flag: {end} vs {hang}"
+    );
+}

@@ -100,7 +100,9 @@ macro_rules! features {
     };
 }
 
-features! {}
+features! {
+    Wind => wind::Wind,
+}
 
 /// The object ids a feature acts on: those named in `names` (every
 /// object when `None`), as a mask by object id. Names are checked by
