@@ -2,7 +2,9 @@
 //! say, are listed and timed by the world, and bad settings are refused
 //! with the field path.
 
-use op_dynamics::Real;
+use op_dynamics::driver::Effects;
+use op_dynamics::world::{AfterStep, AfterStepContext};
+use op_dynamics::{Real, WorldError};
 use op_scene::{parse_scene, Format, SceneError};
 
 /// A scene of one free particle (no interaction) and of a second one
@@ -81,6 +83,61 @@ fn gusts_blow_only_when_their_keyframes_say() {
     );
 }
 
+/// A particle thrown faster than the clamp is slowed to it after the
+/// first step and keeps its direction; the unclamped one keeps its speed.
+#[test]
+fn the_speed_clamp_limits_the_chosen_objects() {
+    let text = two_particles(r#"SpeedClamp((max_speed: 2, objects: ["a"]))"#)
+        .replace(r#"mass: 2,"#, r#"mass: 2, velocity: (6, 8, 0),"#)
+        .replace(
+            r#"(name: "b", material: "inert","#,
+            r#"(name: "b", material: "inert", velocity: (0, 0, 20),"#,
+        );
+    let mut s = parse_scene(&text, Format::Ron, "<test>")
+        .and_then(|s| s.build(None, None))
+        .unwrap();
+    assert!(s.is_passive(), "a clamp only removes energy");
+    s.world.step().unwrap();
+    let v = velocity(&s, 0);
+    assert!((v.norm() - 2.0).abs() < 1e-12, "clamped: {v}");
+    assert!((v.x / v.y - 0.75).abs() < 1e-12, "direction kept: {v}");
+    assert_eq!(velocity(&s, 1).z, 20.0, "b is not clamped");
+    let timed: Vec<&str> = s.world.stage_seconds().iter().map(|(n, _)| *n).collect();
+    assert!(timed.contains(&"speed_clamp"), "timed: {timed:?}");
+    assert_eq!(
+        s.world.stage_names(),
+        ["reorder", "neighbours", "integrate", "speed_clamp", "check"]
+    );
+}
+
+struct Named(&'static str);
+
+impl AfterStep for Named {
+    fn name(&self) -> &'static str {
+        self.0
+    }
+
+    fn run(&mut self, _: &mut AfterStepContext<'_>) -> Effects {
+        Effects::default()
+    }
+}
+
+/// Names in the world's pipeline are unique: a second stage of a name,
+/// or one named like a stage of the step, is refused.
+#[test]
+fn a_stage_name_is_registered_once() {
+    let mut s = built(r#"SpeedClamp((max_speed: 2))"#);
+    for name in ["speed_clamp", "check", "heat"] {
+        let e = s.world.add_after_step(Box::new(Named(name))).unwrap_err();
+        assert!(
+            matches!(&e, WorldError::DuplicateName { name: n, .. } if n == name),
+            "{e}"
+        );
+    }
+    s.world.add_after_step(Box::new(Named("mine"))).unwrap();
+    assert!(s.world.enabled().contains(&"mine".to_string()));
+}
+
 fn refused(features: &str) -> String {
     match parse_scene(&two_particles(features), Format::Ron, "<test>")
         .and_then(|s| s.build(None, None))
@@ -101,9 +158,11 @@ fn bad_feature_settings_are_refused_with_their_path() {
             "features[0].Wind.gusts[1].time",
         ),
         (r#"Wind((drag: 1, objects: ["c"]))"#, "features[0].Wind.objects[0]"),
+        ("Wind((drag: 1)), Wind((drag: 2))", "features[1].Wind"),
+        ("SpeedClamp((max_speed: -1))", "features[0].SpeedClamp.max_speed"),
         (
-            "Wind((drag: 1)), Wind((drag: 2))",
-            "features[1].Wind",
+            "SpeedClamp((max_speed: 1)), SpeedClamp((max_speed: 2))",
+            "features[1].SpeedClamp",
         ),
     ] {
         let message = refused(features);

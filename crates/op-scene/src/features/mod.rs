@@ -102,6 +102,7 @@ macro_rules! features {
 
 features! {
     Wind => wind::Wind,
+    SpeedClamp => speed_clamp::SpeedClamp,
 }
 
 /// The object ids a feature acts on: those named in `names` (every

@@ -1,0 +1,86 @@
+//! A speed clamp: after every step, a particle of the chosen objects
+//! moving faster than the limit is slowed to it along its direction of
+//! motion. An animator's safety net against a stray fast particle (a
+//! tool's sharp kick, a stiff contact); it only removes kinetic energy,
+//! so a passive scene stays passive. Fixed particles are left alone.
+
+use op_dynamics::driver::Effects;
+use op_dynamics::world::{AfterStep, AfterStepContext};
+use op_dynamics::{Flags, Real, World, WorldError};
+use serde::{Deserialize, Serialize};
+
+use super::{check_objects, object_mask, Feature, InstallContext};
+use crate::error::SceneError;
+use crate::schema::Scene;
+
+/// A speed limit: RON `SpeedClamp((max_speed: 5, objects: Some(["ball"])))`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SpeedClamp {
+    /// The largest speed a particle keeps after a step, > 0 and finite.
+    /// Required.
+    pub max_speed: Real,
+    /// Names of the objects it limits. Default: all.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub objects: Option<Vec<String>>,
+}
+
+/// Units of the numeric fields (the scene reference).
+pub(super) const UNITS: &[(&str, &str)] = &[("SpeedClamp.max_speed", "L/T")];
+
+impl Feature for SpeedClamp {
+    fn validate(&self, scene: &Scene, path: &str) -> Result<(), SceneError> {
+        if !(self.max_speed.is_finite() && self.max_speed > 0.0) {
+            return Err(SceneError::value(
+                scene.origin(),
+                format!("{path}.max_speed"),
+                self.max_speed,
+                "must be > 0 and finite",
+            ));
+        }
+        check_objects(scene, path, self.objects.as_deref())
+    }
+
+    fn install(&self, world: &mut World, ctx: &InstallContext<'_>) -> Result<(), WorldError> {
+        world.add_after_step(Box::new(ClampStage {
+            max_speed: self.max_speed,
+            objects: object_mask(ctx.objects, self.objects.as_deref()),
+        }))
+    }
+}
+
+/// The clamp as an after-step stage.
+struct ClampStage {
+    max_speed: Real,
+    /// Limited objects, by object id.
+    objects: Vec<bool>,
+}
+
+impl AfterStep for ClampStage {
+    fn name(&self) -> &'static str {
+        "speed_clamp"
+    }
+
+    fn may_add_energy(&self) -> bool {
+        false
+    }
+
+    fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects {
+        let (state, _, attributes) = ctx.particles.split();
+        let mut clamped = false;
+        for (i, v) in state.velocities.iter_mut().enumerate() {
+            let limited = self.objects.get(attributes.objects[i] as usize) == Some(&true);
+            let speed = v.norm();
+            if limited && speed > self.max_speed && !attributes.flags[i].contains(Flags::FIXED_POSITION) {
+                *v *= self.max_speed / speed;
+                clamped = true;
+            }
+        }
+        // Velocity-dependent forces (damping, wind) cached at the end of
+        // the step read the old velocities.
+        Effects {
+            forces_stale: clamped,
+            ..Effects::default()
+        }
+    }
+}
