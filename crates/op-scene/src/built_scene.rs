@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use op_dynamics::driver::{DriveError, Driver};
-use op_dynamics::{Divergence, Point3, Real, World};
+use op_dynamics::{Point3, Real, World};
 use op_modeling::Tool;
 
 use crate::creation::CreationState;
@@ -127,20 +127,22 @@ pub struct BuiltScene {
 
 impl BuiltScene {
     /// Runs the settle phase once (the runner calls this before frame 0):
-    /// advances the world to time [`BuiltScene::settle`] (no force window
-    /// acts before it), then takes the settled positions as each object's
+    /// advances the scene to world time [`BuiltScene::settle`] through its
+    /// driver, as [`BuiltScene::advance_to`] does, so every stage acts
+    /// while settling (tools, skin contact, creation; no force window acts
+    /// before its end), then takes the settled positions as each object's
     /// rest shape and recomputes its rest spacing. Does nothing when there
     /// is no settle phase or it already ran.
     ///
     /// # Errors
     ///
-    /// The divergence, if the world blew up while settling (the rest shapes
+    /// The divergence or a stage's failure while settling (the rest shapes
     /// are then left as built).
-    pub fn settle(&mut self) -> Result<(), Divergence> {
+    pub fn settle(&mut self) -> Result<(), DriveError> {
         if self.settled {
             return Ok(());
         }
-        self.world.advance_to(self.settle)?;
+        self.advance_to(self.settle)?;
         self.settled = true;
         let p = self.world.particles();
         for o in &mut self.objects {

@@ -167,3 +167,35 @@ fn generated_shells_triangulate_with_their_euler_characteristic() {
         assert_eq!(t.euler_characteristic(), chi, "{generator}");
     }
 }
+
+/// The settle phase runs the scene's stages: a skinned sheet falling onto
+/// an obstacle while settling meets it through its skin (the contact
+/// stage) and rests on it at frame 0 instead of falling through.
+#[test]
+fn obstacles_meet_skins_while_settling() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sheet_on_box.ron");
+    let mut scene = load_scene(&path).unwrap();
+    scene.world.settle = 4.0;
+    let mut built = scene.build(path.parent(), None).unwrap();
+    built.settle().unwrap();
+    assert!(
+        built.contact.total_impulse > 0.0,
+        "contact acted while settling"
+    );
+    // The lowest particle above the box's top (|x| < 3, |y| < 5 at z 0):
+    // the part of the sheet beyond its edge drapes down.
+    let lowest = built
+        .world
+        .particles()
+        .positions()
+        .iter()
+        .filter(|p| p.x.abs() < 2.5 && p.y.abs() < 4.5)
+        .map(|p| p.z)
+        .fold(f64::MAX, f64::min);
+    // Free fall for 4 would reach z = -6.5.
+    println!("lowest particle over the box after settling: z = {lowest}");
+    assert!(
+        lowest > -0.5,
+        "the sheet fell through the box: z = {lowest}"
+    );
+}

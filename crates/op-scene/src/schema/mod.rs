@@ -172,8 +172,9 @@ pub struct WorldSettings {
     /// Simulated duration, > 0 (after the settle phase). Default: 1.
     #[serde(default = "one")]
     pub duration: Real,
-    /// Settle phase, >= 0: the runner advances the world by this duration
-    /// before frame 0, with no force window acting (every force window's
+    /// Settle phase, >= 0: the runner advances the scene by this duration
+    /// before frame 0, every stage acting (tools, skin contact, creation)
+    /// but no force window (every force window's
     /// `start` and `end` count from the end of the settle phase), and takes
     /// the settled positions as the rest shape (the reference of the rest
     /// shape error and its rest spacing). Generated shapes are close to, not
