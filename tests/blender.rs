@@ -1,4 +1,4 @@
-//! Frames land in Blender complete and upright (issue 16): runs every
+//! Frames land in Blender complete and upright: runs every
 //! shipped scene with `--format obj,ply` (two frames, or the whole scene
 //! when its schedule needs it), imports every object's OBJ file of its
 //! first and last frame headless with Blender's OBJ importer (and the

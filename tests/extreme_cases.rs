@@ -1,4 +1,4 @@
-//! The extreme cases of issue 6 (`scenes/extreme/`, docs/model.md §6),
+//! The extreme cases (`scenes/extreme/`, docs/model.md §6),
 //! each run short through the op-scene runner into a temporary directory:
 //! it must end converged or with a clean report (the runner's divergence,
 //! exit 3, or an object that broke apart), never write a NaN or infinity

@@ -1,4 +1,4 @@
-//! The figures of seed 000 (Szeliski & Tonnesen 1992; issue 7)
+//! The figures of seed 000 (Szeliski & Tonnesen 1992)
 //! as scenes (`scenes/fig_*.ron`) run the way `opsim run` runs them, each
 //! with a check of what the figure claims rather than only that it ran.
 //! Durations are the scenes' own unless said otherwise.

@@ -1,5 +1,5 @@
-//! The heat figures of seed 000 (Szeliski & Tonnesen 1992, §6 and §8;
-//! issue 7): cutting with a hot knife (fig. 7) and forming a handle by
+//! The heat figures of seed 000 (Szeliski & Tonnesen 1992, §6 and §8):
+//! cutting with a hot knife (fig. 7) and forming a handle by
 //! heating the surface near the tool (fig. 13), as scenes
 //! (`scenes/fig_07_knife.ron`, `scenes/fig_13_handle.ron`) run the way
 //! `opsim run` runs them, each checked against what the figure claims.
@@ -102,7 +102,7 @@ fn fig_07_hot_knife_cuts_the_sheet_in_two() {
 /// without boundary of Euler characteristic 2, a sphere still) with its tip
 /// where the tool took it.
 ///
-/// Not reproduced (see the closing note of issue 7): the paper's contrast,
+/// Not reproduced: the paper's contrast,
 /// "without this modification, the extruded part of the surface has a
 /// tendency to pinch off": the same pull without heat (stretching
 /// everywhere, no weakening) also extrudes a stem in one piece here. The
@@ -217,7 +217,7 @@ fn frames_surface(
 /// Measured (`cargo test --profile ci --test figures_heat -- --nocapture`):
 /// 363 -> 809 particles; at t = 28 the triangulation (radius 1.8 rest
 /// spacings, the scene's) is closed: chi 0, no boundary, manifold, one
-/// piece, the issue's Euler characteristic change 2 -> 0. With radius 1.7
+/// piece, the Euler characteristic changed 2 -> 0. With radius 1.7
 /// two holes of 4 and 5 vertices stay (chi -2, still genus 1). Frames
 /// every second from t = 22: 3 vertices of the neck not manifold (two
 /// fans) at t = 22 and 1 at t = 25 while the neck settles after the hand
@@ -227,10 +227,9 @@ fn frames_surface(
 /// segment is open in all): dt 1.9e-3 genus 1 with 2 holes, dt 2.1e-3
 /// genus 1 with 3, linear damping 1.1 genus 1 with 2, damping 0.9 has two
 /// non-manifold vertices at the neck. The test asserts the genus, which
-/// tolerates small holes, rather than chi 0. Before this scene: the cap
-/// squeezed against the wall with no tools inside opened one wall at a
-/// time, stretching mended each opening, and the rims stayed 1.6 to 4.9
-/// apart (see the closing note of issue 7).
+/// tolerates small holes, rather than chi 0. With the cap only squeezed
+/// against the wall (no tools inside), one wall opened at a time,
+/// stretching mended each opening, and the rims stayed 1.6 to 4.9 apart.
 #[test]
 fn fig_13_stem_looped_onto_the_body_makes_a_handle() {
     println!("claim: {}", claim("fig_13_handle"));

@@ -1,4 +1,4 @@
-//! The surface figures of seed 000 (Szeliski & Tonnesen 1992; issue 7,
+//! The surface figures of seed 000 (Szeliski & Tonnesen 1992;
 //! seed 000 §6-8): welding (fig. 6), cloth draping, plastic deformation and
 //! tearing (fig. 12) as scenes (`scenes/fig_06_*.ron`, `scenes/fig_12_*.ron`)
 //! run the way `opsim run` runs them, each with a check of what the figure
@@ -596,8 +596,7 @@ fn fig_12b_plastic_shell_keeps_its_dent_elastic_shell_springs_back() {
     // of the error is recovered.
     let left = memory.settled.side - memory.end.side;
     assert!(left < 0.1 * dm, "elastic dent left {left} of {dm}");
-    // Issue 15: both shells' exported surfaces are one closed sphere in
-    // every frame.
+    // Both shells' exported surfaces are one closed sphere in every frame.
     for (name, run) in [("plastic", &plastic), ("elastic", &memory)] {
         assert!(
             run.open_frames.is_empty(),

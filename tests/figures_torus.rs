@@ -1,4 +1,4 @@
-//! Seed 000 §8, fig. 14 (issue 7): a sphere pushed in at both poles by two
+//! Seed 000 §8, fig. 14: a sphere pushed in at both poles by two
 //! spherical shaping tools becomes a torus; "new particles are created
 //! inside the torus due to stretching during the formation process, and
 //! some old sphere particles are deleted when trapped between the two

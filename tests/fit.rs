@@ -2,9 +2,9 @@
 //! spheres and tori give closed meshes of the right Euler characteristic
 //! close to the true surface; an open patch keeps a hole wider than the
 //! search range and closes one narrower; bad files exit with code 2, and
-//! so do degenerate samples (issue 13): collinear, coincident, too few, no
+//! so do degenerate samples: collinear, coincident, too few, no
 //! surface, a spacing out of range; any finite scale fits like the unit
-//! scale; only regular files are read. Issue 17: uniformly random samples
+//! scale; only regular files are read. Uniformly random samples
 //! (seed 17) of an ellipsoid, a torus, a double torus (genus 0, 1, 2) and
 //! an open saddle with a hole, at 500 and 5,000 points, fit at the default
 //! spacing with the right Euler characteristic and boundary loops.
@@ -298,8 +298,8 @@ fn filled_sphere_is_closed_with_the_triangulation_radius_at_d_min() {
         assert!(f.particles > 1000, "h = {h}: {} particles", f.particles);
         assert_eq!(f.mesh.boundary_loops, 0, "h = {h}: {f:?}");
         assert_eq!(f.mesh.euler_characteristic, 2, "h = {h}");
-        // The 1.7 of sheets left holes (2-6) before the final hole pass
-        // (issue 17), which now closes them too.
+        // At the radius of sheets, 1.7, the final hole pass closes the 2-6
+        // holes of the triangulation (see above) too.
         let at_sheet_radius = fit_at(&data, h, 1.7);
         assert_eq!(at_sheet_radius.mesh.boundary_loops, 0, "h = {h}");
     }
@@ -549,7 +549,7 @@ fn os_errors_are_printed_once() {
     }
 }
 
-/// Issue 17: uniformly random samples (fixed seed) of `shape` at `n`
+/// Uniformly random samples (fixed seed) of `shape` at `n`
 /// points, fitted at the default spacing with estimated normals: the
 /// surface's Euler characteristic and boundary loops, a manifold mesh
 /// (no edge in more than two triangles), vertices within 0.1 spacing

@@ -1,4 +1,4 @@
-//! Issue 17: a scan-like sample with a feature thinner than the spacing
+//! A scan-like sample with a feature thinner than the spacing
 //! (the ears of a scanned armadillo are 0.6-0.8 spacings thick) closes,
 //! or is named among the fit's thin features.
 //!

@@ -176,7 +176,7 @@ fn shipped_scenes_run_without_unexpected_warnings() {
                         ));
                     }
                 }
-                // Every frame of every skin is a closed manifold (issue 19).
+                // Every frame of every skin is a closed manifold.
                 for bad in open_skin_frames(&out) {
                     fail(format!("skin not closed and manifold: {bad}"));
                 }

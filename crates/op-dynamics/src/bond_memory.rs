@@ -1,6 +1,5 @@
 //! Bond memory: a bonded lattice that remembers where each partner sits in
-//! each particle's own frame, and its plastic flow (seed 000 §8, fig. 12b;
-//! issue 15).
+//! each particle's own frame, and its plastic flow (seed 000 §8, fig. 12b).
 //!
 //! Seed 000 §8 shows a plastic surface (fig. 12b) and cites Terzopoulos &
 //! Fleischer 1988 ("Modeling inelastic deformations: viscoelasticity,

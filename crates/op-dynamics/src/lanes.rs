@@ -1,4 +1,4 @@
-//! Pairs in SIMD lanes with runtime CPU-feature dispatch (issue 18).
+//! Pairs in SIMD lanes with runtime CPU-feature dispatch.
 //!
 //! A neighbour row `i: j0 j1 ...` is evaluated `LANES` pairs at a time:
 //! the positions of the `j` are gathered into lane arrays, the potential is

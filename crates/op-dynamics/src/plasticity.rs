@@ -1,4 +1,4 @@
-//! Plasticity of the remembered shape (seed 000 §8, fig. 12b; issue 7).
+//! Plasticity of the remembered shape (seed 000 §8, fig. 12b).
 //!
 //! A shape-memory object (seed 002 §4) remembers its shape as each
 //! particle's rest curvature `κ_i`, the curvature the form term
@@ -47,7 +47,7 @@
 //! reduce the noise on the settled shell, and the plastic shell of that
 //! scene flew apart with it (not investigated further): not used.
 //!
-//! **Known limit (issue 15).** The target and the form term disagree
+//! **Known limit.** The target and the form term disagree
 //! wherever the normals do not follow the positions, and under a push
 //! they do not: the form term ties only normal differences to positions,
 //! so the pushed cap of `scenes/fig_12_plastic.ron` keeps the sphere's
@@ -71,8 +71,8 @@
 //! missing piece as future work: a form interaction whose curvature
 //! depends on the direction to the neighbour.
 //!
-//! A per-bond form of it was built and measured on that scene (issue
-//! 15, not merged): each bond remembers, in each emitter's body frame, an
+//! A per-bond form of it, measured on that scene, is not used: each bond
+//! remembers, in each emitter's body frame, an
 //! offset of the form residual `κ r + n_i - n_j`, and a shift of its rest
 //! length, both flowing beyond a yield (forces and torques from the
 //! energy `ψ |κ r + n_i - n_j - m|²` and `U(|r| - δ)`, checked against

@@ -1,4 +1,4 @@
-//! Issue 13, item 7: engine defects pinned at the world level (neighbour
+//! Engine edge cases pinned at the world level (neighbour
 //! radius errors instead of panics, exact angular momentum of velocity
 //! Verlet, force windows at the end of a settle phase).
 

@@ -1,4 +1,4 @@
-//! Writes `reports/fitting.md` (issue 17): `opsim fit` side by side with
+//! Writes `reports/fitting.md`: `opsim fit` side by side with
 //! Open3D's Poisson reconstruction and ball pivoting on uniformly random
 //! samples of analytic shapes (`op_scene::fit::shapes`: genus 0, 1, 2
 //! and an open saddle with a hole) and on the Stanford bunny (npm's
@@ -376,8 +376,8 @@ fn oni(dir: &Path) -> Option<PointSet> {
     })
 }
 
-/// The vertices of CGAL's `armadillo.off` (26,002, the scanned mesh of
-/// issue 17) from the same package, as a point set without normals.
+/// The vertices of CGAL's `armadillo.off` (26,002, a scanned mesh) from
+/// the same package, as a point set without normals.
 fn armadillo(dir: &Path) -> Option<PointSet> {
     let tar = find(&dir.join("x"), "data.tar.gz")?;
     Command::new("tar")

@@ -3,7 +3,7 @@
 //! near rest converged, kept oscillating or diverged; the largest stable
 //! step per integrator against the effective stiffness (log-log, with the
 //! `sqrt(m/k)` reference); and the extreme cases of `scenes/extreme/`
-//! (issue 6; docs/model.md §6).
+//! (docs/model.md §6).
 //!
 //! ```text
 //! cargo run --release -p op-experiments --example stability_report

@@ -1,5 +1,5 @@
-//! Field evaluation and polygonization of skins of 1k and 10k particles
-//! (issue 5): a hexagonal sheet of oriented particles, each carrying a
+//! Field evaluation and polygonization of skins of 1k and 10k particles:
+//! a hexagonal sheet of oriented particles, each carrying a
 //! square skeleton in the sheet plane (the ribbon/slab skin of seed 002
 //! fig. 6), kernel radius 0.8 r0, polygonized at 0.25 r0.
 //!

@@ -1,5 +1,5 @@
 //! Writes `reports/skins.md`: the project's skin polygonization side by
-//! side with splashsurf 0.14.1 on the same particles (issue 19).
+//! side with splashsurf 0.14.1 on the same particles.
 //!
 //! Run: `cargo run -p op-implicit --profile ci --example skins_report`
 //! (`SKINS_REPS=n` sets the interleaved repetitions, default 5; 3 at the

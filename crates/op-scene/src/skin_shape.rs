@@ -1,7 +1,7 @@
 //! The amplitudes of an object's skins, chosen on the object: the contact
 //! skin at its thickness, the displayed (blended) skin matched to the
 //! contact skin; and the measured shape of default skins: round clumps,
-//! flat and thin sheets, ribbons without bumps (issue 19).
+//! flat and thin sheets, ribbons without bumps.
 //!
 //! **Thickness.** A primitive's field adds to its neighbours', so with the
 //! amplitude of an isolated primitive (whose skin is `radius / 2` from it)

@@ -506,8 +506,8 @@ mod tests {
     }
 
     /// The fused kernel against the term-by-term reference
-    /// ([`PreparedMaterial::orientation`] of each direction, as the kernel
-    /// was before issue 18): same energy, forces and torques to round-off,
+    /// ([`PreparedMaterial::orientation`] of each direction, each term
+    /// evaluated on its own): same energy, forces and torques to round-off,
     /// for every term, both normalizations and weight shapes, spin, heat.
     #[test]
     fn fused_kernel_matches_the_term_by_term_reference() {

@@ -1,4 +1,4 @@
-//! The full oriented pair in SIMD lanes (issue 18): both directions of a
+//! The full oriented pair in SIMD lanes: both directions of a
 //! pair of one material from one shared geometry (seed 000 eq. 11, App. B;
 //! seed 002 §4-5), `LANES` pairs of a neighbour row at a time.
 //!

@@ -1,4 +1,4 @@
-//! Writes `reports/performance.md` (issue 18): the engine against LAMMPS on
+//! Writes `reports/performance.md`: the engine against LAMMPS on
 //! the same 32,000-particle fcc block (LAMMPS' LJ melt benchmark, `in.lj`),
 //! interleaved, at 1 and 2 threads / MPI ranks.
 //!

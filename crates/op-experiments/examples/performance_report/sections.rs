@@ -1,7 +1,7 @@
 //! The report's sections, from the measurements: the side-by-side tables
 //! (wall and CPU time per step and per pair), the pair counts, the
-//! speed-up from 1 to 2 threads, peak memory, scaling with N, the targets
-//! of issue 18 and the achieved floating-point rate.
+//! speed-up from 1 to 2 threads, peak memory, scaling with N, the
+//! performance targets and the achieved floating-point rate.
 
 use op_dynamics::lanes;
 use op_experiments::machine;
@@ -358,8 +358,9 @@ pub(crate) fn scaling_section(scaling: &[ScalingRun]) -> Res<String> {
     Ok(md)
 }
 
-/// The targets of issue 18 with the figures measured for each (medians)
-/// and whether it is met.
+/// The performance targets (time against LAMMPS at 1 and 2 threads,
+/// speed-up, peak memory, step time) with the figures measured for each
+/// (medians) and whether it is met.
 pub(crate) fn targets(
     results: &[[Runs; 2]],
     scaling: &[ScalingRun],
@@ -461,7 +462,7 @@ pub(crate) fn targets_section(targets: &[(String, String, bool)]) -> Res<String>
 
 /// What bounds the targets not met, from the profiles and measurements
 /// quoted (spacing child and oriented child of this report, 32,000
-/// particles, `perf record -e cpu-clock`, issue 18's follow-up).
+/// particles, `perf record -e cpu-clock`).
 fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
     let unmet = |prefix: &str| {
         targets

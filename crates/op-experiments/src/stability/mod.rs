@@ -1,4 +1,4 @@
-//! Stability (docs/model.md §6, issue 6): for stiffness x time step x integrator,
+//! Stability (docs/model.md §6): for stiffness x time step x integrator,
 //! whether a small system released near rest converged, kept oscillating
 //! or diverged; the largest stable step of each integrator against the
 //! stiffness; and the extreme cases (compressions, coincident particles,

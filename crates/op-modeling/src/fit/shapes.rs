@@ -1,6 +1,6 @@
 //! Analytic test shapes for point-set fitting, sampled uniformly at random
 //! with a fixed seed, with their distance to the true surface and the
-//! topology a fit must reproduce (issue 17: genus 0, 1, 2 and an open
+//! topology a fit must reproduce (genus 0, 1, 2 and an open
 //! patch with a hole). Shared by `tests/fit.rs` and
 //! `crates/op-experiments/examples/fitting_report.rs`.
 
