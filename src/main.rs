@@ -209,7 +209,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             )?;
             let built = scene.build_for_run(None, None)?;
             let out = Path::new("opsim-out").join(&built.name);
-            run_built(built, Some(out.clone()), None, &[FrameFormat::Obj], false)?;
+            run_built(built, Some(out.clone()), None, &[FrameFormat::OBJ], false)?;
             demo_contact_sheet(&out)
         }
         Some(Command::Run {
@@ -444,9 +444,7 @@ fn parse_direction(text: &str) -> Result<[f64; 3], String> {
 
 /// `--format`'s parser: one format name.
 fn parse_format(name: &str) -> Result<FrameFormat, String> {
-    FrameFormat::from_name(name).ok_or_else(|| {
-        format!("unknown frame format {name:?}: use obj, ply or vtu (comma-separated for several)")
-    })
+    FrameFormat::named(name)
 }
 
 /// The work limits the flags ask for.

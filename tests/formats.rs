@@ -1,4 +1,4 @@
-//! `opsim run --format obj,ply,vtu` (issue 16): binary PLY frame sequences
+//! `opsim run --format obj,ply,vtu`: binary PLY frame sequences
 //! and VTU particle state parse back with the crates that wrote them, with
 //! the counts of the OBJ frames and every per-particle attribute.
 
@@ -220,7 +220,7 @@ fn vtu_alone_writes_no_mesh_frames_and_an_unknown_format_is_refused() {
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("stl") && err.contains("obj, ply or vtu"),
+        err.contains("stl") && err.contains("the formats are obj, ply, vtu"),
         "{err}"
     );
     let _ = std::fs::remove_dir_all(&out);

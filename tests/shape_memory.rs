@@ -69,7 +69,7 @@ fn run_scene(mut scene: Scene) -> Summary {
     let opts = RunOptions {
         out_dir: out.clone(),
         frames: None,
-        formats: vec![op_scene::export::FrameFormat::Obj],
+        formats: vec![op_scene::export::FrameFormat::OBJ],
     };
     let summary = single_threaded(|| op_scene::run(&mut built, &opts, &mut |_, _| {}))
         .unwrap_or_else(|e| panic!("{}: {e}", scene.name));

@@ -40,7 +40,7 @@ fn run_tagged(
     let opts = RunOptions {
         out_dir: out.clone(),
         frames: None,
-        formats: vec![op_scene::export::FrameFormat::Obj],
+        formats: vec![op_scene::export::FrameFormat::OBJ],
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     let positions = built.world.particles().positions().to_vec();

@@ -34,7 +34,7 @@ pub fn run(scene: &Scene, tag: &str) -> (BuiltScene, Summary) {
     let opts = RunOptions {
         out_dir: out.clone(),
         frames: None,
-        formats: vec![op_scene::export::FrameFormat::Obj],
+        formats: vec![op_scene::export::FrameFormat::OBJ],
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     assert!(!summary.diverged);

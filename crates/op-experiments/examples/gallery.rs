@@ -104,7 +104,7 @@ fn draw(root: &Path, picture: &Picture) -> anyhow::Result<PathBuf> {
     let opts = RunOptions {
         out_dir: out.clone(),
         frames: None,
-        formats: vec![FrameFormat::Obj],
+        formats: vec![FrameFormat::OBJ],
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {})?;
     anyhow::ensure!(!summary.diverged, "{} diverged", picture.name);

@@ -599,15 +599,15 @@ fn frame_files(writer: &FrameWriter) -> FrameFiles {
             .iter()
             .map(|f| (f.extension().to_string(), f.axes().to_string()))
             .collect(),
-        sequences: if writer.formats().iter().any(|f| *f != FrameFormat::Vtu) {
+        sequences: if writer.writes_sequences() {
             writer.sequences().to_vec()
         } else {
             Vec::new()
         },
         vtu_series: writer
-            .formats()
-            .contains(&FrameFormat::Vtu)
-            .then(|| "vtu/state.vtu.series".to_string()),
+            .series_files()
+            .first()
+            .map(|p| p.to_string_lossy().replace('\\', "/")),
     }
 }
 
@@ -655,7 +655,7 @@ mod tests {
         let opts = RunOptions {
             out_dir: dir.clone(),
             frames: Some(17),
-            formats: vec![crate::export::FrameFormat::Obj],
+            formats: vec![crate::export::FrameFormat::OBJ],
         };
         let result = run(&mut built, &opts, &mut |_, _| {});
         let _ = std::fs::remove_dir_all(&dir);

@@ -208,7 +208,7 @@ fn overrides_and_selections_apply() {
     }
 }
 
-/// Per-particle initial velocities (issue 18): drawn at a temperature
+/// Per-particle initial velocities: drawn at a temperature
 /// (net momentum removed, kinetic temperature exact, added to the uniform
 /// `velocity`, deterministic) or read from a points file (one per particle,
 /// the count checked).
@@ -375,7 +375,7 @@ fn settle_phase_shifts_forces_and_sets_the_rest_shape() {
         &op_scene::RunOptions {
             out_dir: dir.clone(),
             frames: None,
-            formats: vec![op_scene::export::FrameFormat::Obj],
+            formats: vec![op_scene::export::FrameFormat::OBJ],
         },
         &mut |_, _| {},
     )
@@ -394,10 +394,9 @@ fn settle_phase_shifts_forces_and_sets_the_rest_shape() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// Issue 13: "forces of a window starting at 0 already act in the last
-/// settle step". A step load starting at scene time 0 (world time
-/// `settle`) leaves the settled state unchanged, bit for bit, whatever the
-/// scheme, and acts in the first step after it.
+/// A step load starting at scene time 0 (world time `settle`) does not
+/// act in the last settle step: it leaves the settled state unchanged,
+/// bit for bit, whatever the scheme, and acts in the first step after it.
 #[test]
 fn window_starting_at_scene_time_zero_does_not_act_in_the_settle_phase() {
     let text = |scheme: &str, settle: &str, forces: &str| {

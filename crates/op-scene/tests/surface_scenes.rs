@@ -15,7 +15,7 @@ fn run_scene(scene: &Scene, out: &Path, frames: usize) -> Summary {
     let opts = RunOptions {
         out_dir: out.to_path_buf(),
         frames: Some(frames),
-        formats: vec![op_scene::export::FrameFormat::Obj],
+        formats: vec![op_scene::export::FrameFormat::OBJ],
     };
     run(&mut built, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"))
 }

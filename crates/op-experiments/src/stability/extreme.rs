@@ -1,5 +1,5 @@
-//! The extreme cases of issue 6: each either converges or ends in a clean
-//! divergence report, with no NaN in any output and no panic.
+//! The extreme cases of docs/model.md §6: each either converges or ends in
+//! a clean divergence report, with no NaN in any output and no panic.
 //!
 //! The scenes live in `scenes/extreme/` (so `opsim run` exercises the exit-3
 //! path on them); [`ExtremeCase::scene`] gives each one's file and what it
@@ -207,7 +207,7 @@ pub fn run_scene(path: &Path, out_dir: &Path, overrides: Overrides) -> Result<Ex
     let opts = RunOptions {
         out_dir: out_dir.to_path_buf(),
         frames: length.map(|l| l.frames),
-        formats: vec![op_scene::export::FrameFormat::Obj],
+        formats: vec![op_scene::export::FrameFormat::OBJ],
     };
     let result = run(&mut built, &opts, &mut |_, _| {});
     let (summary, diverged) = match result {

@@ -1,5 +1,6 @@
 //! Frame files (README "Running scenes"): what a run writes per frame, in the formats
-//! asked for ([`FrameFormat`]: OBJ by default, binary PLY, VTU).
+//! asked for ([`FrameFormat`]: OBJ by default, binary PLY, VTU; each a
+//! [`FileFormat`] of the [`format::REGISTRY`]).
 //!
 //! Layout under the output directory (see [`layout`]):
 //!
@@ -35,6 +36,7 @@ use crate::outputs::{Outputs, ParticleOutput};
 use crate::skins::{ObjectSkin, SkinTool};
 
 pub mod file_queue;
+pub mod format;
 pub mod geometry;
 pub mod layout;
 pub mod obj;
@@ -56,8 +58,9 @@ impl Write for SizedWriter<'_> {
 
 use file_queue::FileQueue;
 pub use file_queue::WriteFailure;
+pub use format::{FileFormat, Files, FrameFormat};
 pub use geometry::{FrameMesh, SheetGap};
-pub use layout::{FrameFormat, Sequence, SequenceKind};
+pub use layout::{Sequence, SequenceKind};
 
 /// Writes `bytes_fn`'s output to `path` atomically: a temporary file in the
 /// same directory, flushed and synced, then renamed over `path`. The
@@ -138,7 +141,9 @@ pub struct FrameWriter {
     formats: Vec<FrameFormat>,
     sequences: Vec<Sequence>,
     sources: Vec<Source>,
-    vtu_files: Vec<(String, Real)>,
+    /// The state files written so far, per state format (in `formats`
+    /// order): name and scene time, for the series files.
+    state_files: Vec<Vec<(String, Real)>>,
     sheet_gap: SheetGap,
     files: FileQueue,
 }
@@ -198,10 +203,10 @@ impl FrameWriter {
         formats.dedup();
         FrameWriter {
             out: out.to_path_buf(),
+            state_files: vec![Vec::new(); formats.len()],
             formats,
             sequences,
             sources,
-            vtu_files: Vec::new(),
             sheet_gap: SheetGap::default(),
             files: FileQueue::default(),
         }
@@ -225,26 +230,44 @@ impl FrameWriter {
         &self.formats
     }
 
+    /// The formats of one layout, in order.
+    fn formats_of(&self, files: Files) -> impl Iterator<Item = FrameFormat> + '_ {
+        self.formats
+            .iter()
+            .copied()
+            .filter(move |f| f.files() == files)
+    }
+
     /// Whether a frame writes any file.
     pub fn writes_anything(&self) -> bool {
-        self.formats.contains(&FrameFormat::Vtu)
-            || (!self.sequences.is_empty() && !self.formats.is_empty())
+        self.formats_of(Files::State).next().is_some()
+            || (!self.sequences.is_empty() && self.formats_of(Files::PerSequence).next().is_some())
+    }
+
+    /// Whether sequence files are written (some per-sequence format).
+    pub fn writes_sequences(&self) -> bool {
+        self.formats_of(Files::PerSequence).next().is_some()
+    }
+
+    /// The series files of the state formats, relative to the output
+    /// directory (`vtu/state.vtu.series`).
+    pub fn series_files(&self) -> Vec<PathBuf> {
+        self.formats_of(Files::State)
+            .map(|f| layout::series_path(Path::new(""), f))
+            .collect()
     }
 
     /// The folders the frames go to (created by the runner).
     pub fn folders(&self) -> Vec<PathBuf> {
-        let mut dirs: Vec<PathBuf> = if self
-            .formats
-            .iter()
-            .any(|f| matches!(f, FrameFormat::Obj | FrameFormat::Ply))
-        {
+        let mut dirs: Vec<PathBuf> = if self.writes_sequences() {
             self.sequences.iter().map(|s| s.folder(&self.out)).collect()
         } else {
             Vec::new()
         };
-        if self.formats.contains(&FrameFormat::Vtu) {
-            dirs.push(self.out.join("vtu"));
-        }
+        dirs.extend(
+            self.formats_of(Files::State)
+                .map(|f| layout::state_folder(&self.out, f)),
+        );
         dirs
     }
 
@@ -273,12 +296,7 @@ impl FrameWriter {
             path,
             error,
         };
-        let mesh_formats: Vec<FrameFormat> = self
-            .formats
-            .iter()
-            .copied()
-            .filter(|f| *f != FrameFormat::Vtu)
-            .collect();
+        let mesh_formats: Vec<FrameFormat> = self.formats_of(Files::PerSequence).collect();
         if !mesh_formats.is_empty() {
             for (seq, source) in self.sequences.iter().zip(&self.sources) {
                 let at = |f| seq.path(&self.out, k, f);
@@ -299,29 +317,33 @@ impl FrameWriter {
                 for &f in &mesh_formats {
                     let path = at(f);
                     let mut bytes = Vec::new();
-                    match f {
-                        FrameFormat::Ply => ply::write(&mesh, &mut bytes),
-                        _ => obj::write(&mesh, &mut bytes),
-                    }
-                    .map_err(|e| failure(path.clone(), e))?;
+                    f.format()
+                        .encode_mesh(&mesh, &mut bytes)
+                        .map_err(|e| failure(path.clone(), e))?;
                     self.files.push(k, path, bytes)?;
                 }
             }
         }
-        if self.formats.contains(&FrameFormat::Vtu) {
-            let path = layout::vtu_path(&self.out, k);
+        for (n, f) in self.formats.iter().enumerate() {
+            if f.files() != Files::State {
+                continue;
+            }
+            let path = layout::state_path(&self.out, k, *f);
             let title = format!("opsim frame {k}, t = {time}");
             let mut bytes = Vec::new();
-            vtu::write(world, objects, &title, &mut bytes).map_err(|e| failure(path.clone(), e))?;
+            f.format()
+                .encode_state(world, objects, &title, &mut bytes)
+                .map_err(|e| failure(path.clone(), e))?;
             let name = path
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
             self.files.push(k, path, bytes)?;
-            self.vtu_files.push((name, time));
-            let series = layout::vtu_series_path(&self.out);
+            self.state_files[n].push((name, time));
+            let series = layout::series_path(&self.out, *f);
             let mut bytes = Vec::new();
-            vtu::write_series(&self.vtu_files, &mut bytes)
+            f.format()
+                .encode_series(&self.state_files[n], &mut bytes)
                 .map_err(|e| failure(series.clone(), e))?;
             self.files.push(k, series, bytes)?;
         }

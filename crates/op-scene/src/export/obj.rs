@@ -82,6 +82,30 @@ pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
     obj_exporter::export(&set, &mut super::SizedWriter(w))
 }
 
+/// Wavefront OBJ, one file per sequence and frame, y-up (scene `z` written
+/// as OBJ `y`, scene `y` as OBJ `-z`): what Blender's OBJ importer
+/// (forward `-Z`, up `Y`) and other OBJ readers expect.
+#[derive(Debug)]
+pub struct ObjFormat;
+
+impl super::format::FileFormat for ObjFormat {
+    fn name(&self) -> &'static str {
+        "obj"
+    }
+
+    fn axes(&self) -> &'static str {
+        "y_up"
+    }
+
+    fn files(&self) -> super::format::Files {
+        super::format::Files::PerSequence
+    }
+
+    fn encode_mesh(&self, mesh: &FrameMesh, out: &mut dyn Write) -> std::io::Result<()> {
+        write(mesh, out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

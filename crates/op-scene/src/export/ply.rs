@@ -137,6 +137,31 @@ pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
         .map(|_| ())
 }
 
+/// Binary little-endian PLY, one file per sequence and frame, in scene
+/// coordinates (z-up, as Blender's PLY importer takes them): vertices with
+/// normals (`x y z nx ny nz`, float), `face` (`vertex_indices`) and `edge`
+/// (`vertex1 vertex2`) elements.
+#[derive(Debug)]
+pub struct PlyFormat;
+
+impl super::format::FileFormat for PlyFormat {
+    fn name(&self) -> &'static str {
+        "ply"
+    }
+
+    fn axes(&self) -> &'static str {
+        "z_up"
+    }
+
+    fn files(&self) -> super::format::Files {
+        super::format::Files::PerSequence
+    }
+
+    fn encode_mesh(&self, mesh: &FrameMesh, out: &mut dyn Write) -> std::io::Result<()> {
+        write(mesh, out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

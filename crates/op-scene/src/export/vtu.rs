@@ -135,3 +135,38 @@ pub fn write_series(files: &[(String, f64)], w: &mut dyn Write) -> std::io::Resu
     serde_json::to_writer_pretty(&mut *w, &series).map_err(std::io::Error::other)?;
     writeln!(w)
 }
+
+/// VTK XML unstructured grid of every particle (one vertex cell each) with
+/// per-particle attributes, one file per frame, in scene coordinates,
+/// listed with their times in `vtu/state.vtu.series` (ParaView opens the
+/// series as a time series).
+#[derive(Debug)]
+pub struct VtuFormat;
+
+impl super::format::FileFormat for VtuFormat {
+    fn name(&self) -> &'static str {
+        "vtu"
+    }
+
+    fn axes(&self) -> &'static str {
+        "z_up"
+    }
+
+    fn files(&self) -> super::format::Files {
+        super::format::Files::State
+    }
+
+    fn encode_state(
+        &self,
+        world: &World,
+        objects: &[BuiltObject],
+        title: &str,
+        out: &mut dyn Write,
+    ) -> std::io::Result<()> {
+        write(world, objects, title, out)
+    }
+
+    fn encode_series(&self, files: &[(String, f64)], out: &mut dyn Write) -> std::io::Result<()> {
+        write_series(files, out)
+    }
+}

@@ -4,7 +4,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use super::{io, RunError};
-use crate::export::layout::{is_sequence_file, is_vtu_file};
+use crate::export::{layout, Files, FrameFormat};
 
 /// Makes `out_dir` ready for a run: creates it and `folders` (the frame
 /// folders, [`crate::export::FrameWriter::folders`]), refuses symbolic links where opsim
@@ -17,7 +17,10 @@ use crate::export::layout::{is_sequence_file, is_vtu_file};
 pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunError> {
     fs::create_dir_all(out_dir).map_err(io(out_dir))?;
     let frames_dir = out_dir.join("frames");
-    let vtu_dir = out_dir.join("vtu");
+    let state_dirs: Vec<(FrameFormat, PathBuf)> = FrameFormat::all()
+        .filter(|f| f.files() == Files::State)
+        .map(|f| (f, layout::state_folder(out_dir, f)))
+        .collect();
     let link = |p: &Path| {
         fs::symlink_metadata(p)
             .map(|m| m.file_type().is_symlink())
@@ -25,11 +28,11 @@ pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunErro
     };
     for p in [
         frames_dir.clone(),
-        vtu_dir.clone(),
         out_dir.join("metrics.csv"),
         out_dir.join("summary.json"),
     ]
     .iter()
+    .chain(state_dirs.iter().map(|(_, d)| d))
     .chain(folders)
     {
         if link(p) {
@@ -60,7 +63,9 @@ pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunErro
     clean(out_dir, &|name| {
         name == "summary.json" || name == "metrics.csv"
     })?;
-    clean(&vtu_dir, &is_vtu_file)?;
+    for (f, dir) in &state_dirs {
+        clean(dir, &|name| f.format().owns(name, ""))?;
+    }
     if let Ok(entries) = fs::read_dir(&frames_dir) {
         for e in entries {
             let e = e.map_err(io(&frames_dir))?;
@@ -69,7 +74,10 @@ pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunErro
                 continue;
             }
             let stem = e.file_name().to_string_lossy().into_owned();
-            let left = clean(&path, &|name| is_sequence_file(name, &stem))?;
+            let left = clean(&path, &|name| {
+                FrameFormat::all()
+                    .any(|f| f.files() == Files::PerSequence && f.format().owns(name, &stem))
+            })?;
             if !left {
                 fs::remove_dir(&path).map_err(io(&path))?;
             }

@@ -1,0 +1,240 @@
+//! Frame file formats: one module per format (`obj.rs`, `ply.rs`,
+//! `vtu.rs`) behind the [`FileFormat`] trait, and one registry of them
+//! ([`REGISTRY`]). `opsim run --format NAME` and [`FrameFormat::named`] look
+//! a format up there by name; the frame writer asks it for its file
+//! layout ([`Files`]) and its bytes; the output directory's clean-up asks
+//! it which files are its own ([`FileFormat::owns`]).
+//!
+//! Adding a format: write `export/<name>.rs` with a unit struct
+//! implementing [`FileFormat`] and add it to [`REGISTRY`].
+
+use std::io::Write;
+
+use op_dynamics::{Real, World};
+
+use super::geometry::FrameMesh;
+use crate::built_scene::BuiltObject;
+
+/// How a format lays out its files under the output directory.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Files {
+    /// One file per sequence (each object's particles, skin, surface, each
+    /// tool) and frame: `frames/<stem>/<stem>_<k:05>.<name>`, encoded by
+    /// [`FileFormat::encode_mesh`].
+    PerSequence,
+    /// One file per frame holding every particle with its attributes,
+    /// `<name>/state_<k:05>.<name>` (encoded by
+    /// [`FileFormat::encode_state`]), listed with their times in the
+    /// series file `<name>/state.<name>.series` (ParaView's time series,
+    /// [`FileFormat::encode_series`]).
+    State,
+}
+
+/// A frame file format; see the [module docs](self).
+pub trait FileFormat: Sync + std::fmt::Debug {
+    /// Its name on the command line and in `summary.json`, also its file
+    /// extension (lower case).
+    fn name(&self) -> &'static str;
+
+    /// The axis convention of its files: `y_up` or `z_up` (scenes are
+    /// z-up).
+    fn axes(&self) -> &'static str;
+
+    /// Its file layout.
+    fn files(&self) -> Files;
+
+    /// Encodes one sequence's frame ([`Files::PerSequence`] formats).
+    fn encode_mesh(&self, _mesh: &FrameMesh, _out: &mut dyn Write) -> std::io::Result<()> {
+        Err(std::io::Error::other(format!(
+            "{} writes no per-sequence files",
+            self.name()
+        )))
+    }
+
+    /// Encodes the particle state of a frame ([`Files::State`] formats).
+    fn encode_state(
+        &self,
+        _world: &World,
+        _objects: &[BuiltObject],
+        _title: &str,
+        _out: &mut dyn Write,
+    ) -> std::io::Result<()> {
+        Err(std::io::Error::other(format!(
+            "{} writes no state files",
+            self.name()
+        )))
+    }
+
+    /// Encodes the series file of the state files written so far (file
+    /// name relative to the series file, scene time; [`Files::State`]
+    /// formats).
+    fn encode_series(
+        &self,
+        _files: &[(String, Real)],
+        _out: &mut dyn Write,
+    ) -> std::io::Result<()> {
+        Ok(())
+    }
+
+    /// Whether `file_name`, found in the folder of its files (a sequence
+    /// folder of stem `stem`, or its state folder), is one it writes: the
+    /// run removes those before it starts, and leaves every other file
+    /// alone.
+    fn owns(&self, file_name: &str, stem: &str) -> bool {
+        let numbered = |rest: &str| {
+            rest.strip_suffix(self.name())
+                .and_then(|r| r.strip_suffix('.'))
+                .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        };
+        match self.files() {
+            Files::PerSequence => file_name
+                .strip_prefix(stem)
+                .and_then(|r| r.strip_prefix('_'))
+                .is_some_and(numbered),
+            Files::State => {
+                file_name == format!("state.{}.series", self.name())
+                    || file_name.strip_prefix("state_").is_some_and(numbered)
+            }
+        }
+    }
+}
+
+/// Every format, in the order a frame's files are written.
+pub static REGISTRY: &[&dyn FileFormat] = &[
+    &super::obj::ObjFormat,
+    &super::ply::PlyFormat,
+    &super::vtu::VtuFormat,
+];
+
+/// A registered format, as chosen for a run: compared, ordered and
+/// serialized by its place and name in the [`REGISTRY`].
+#[derive(Copy, Clone, Debug)]
+pub struct FrameFormat(&'static dyn FileFormat);
+
+impl FrameFormat {
+    /// Wavefront OBJ ([`super::obj`]).
+    pub const OBJ: FrameFormat = FrameFormat(&super::obj::ObjFormat);
+    /// Binary PLY ([`super::ply`]).
+    pub const PLY: FrameFormat = FrameFormat(&super::ply::PlyFormat);
+    /// VTK XML unstructured grids of the particles ([`super::vtu`]).
+    pub const VTU: FrameFormat = FrameFormat(&super::vtu::VtuFormat);
+
+    /// Every registered format, in the order files are written.
+    pub fn all() -> impl Iterator<Item = FrameFormat> {
+        REGISTRY.iter().map(|f| FrameFormat(*f))
+    }
+
+    /// The format registered as `name` (any case, surrounding blanks
+    /// ignored).
+    ///
+    /// # Errors
+    ///
+    /// An unknown name, with the registered ones.
+    pub fn named(name: &str) -> Result<FrameFormat, String> {
+        Self::all()
+            .find(|f| f.name().eq_ignore_ascii_case(name.trim()))
+            .ok_or_else(|| {
+                let known: Vec<&str> = Self::all().map(|f| f.name()).collect();
+                format!(
+                    "unknown frame format {name:?}: the formats are {} (comma-separated for several)",
+                    known.join(", ")
+                )
+            })
+    }
+
+    /// The format's implementation.
+    pub fn format(self) -> &'static dyn FileFormat {
+        self.0
+    }
+
+    /// Its name (also its file extension).
+    pub fn name(self) -> &'static str {
+        self.0.name()
+    }
+
+    /// Its file extension.
+    pub fn extension(self) -> &'static str {
+        self.0.name()
+    }
+
+    /// The axis convention of its files.
+    pub fn axes(self) -> &'static str {
+        self.0.axes()
+    }
+
+    /// Its file layout.
+    pub fn files(self) -> Files {
+        self.0.files()
+    }
+
+    /// Place in the registry.
+    fn rank(self) -> usize {
+        REGISTRY
+            .iter()
+            .position(|f| f.name() == self.name())
+            .unwrap_or(usize::MAX)
+    }
+}
+
+impl PartialEq for FrameFormat {
+    fn eq(&self, other: &Self) -> bool {
+        self.name() == other.name()
+    }
+}
+
+impl Eq for FrameFormat {}
+
+impl PartialOrd for FrameFormat {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for FrameFormat {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.rank().cmp(&other.rank())
+    }
+}
+
+impl std::hash::Hash for FrameFormat {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.name().hash(state);
+    }
+}
+
+impl serde::Serialize for FrameFormat {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_are_found_by_name_and_own_their_files() {
+        assert_eq!(FrameFormat::named(" PLY"), Ok(FrameFormat::PLY));
+        let e = FrameFormat::named("stl").unwrap_err();
+        assert!(e.contains("obj, ply, vtu"), "{e}");
+        let names: Vec<&str> = FrameFormat::all().map(|f| f.name()).collect();
+        let mut sorted = names.clone();
+        sorted.dedup();
+        assert_eq!(names, sorted, "names are unique");
+        let (obj, ply, vtu) = (
+            super::super::obj::ObjFormat,
+            super::super::ply::PlyFormat,
+            super::super::vtu::VtuFormat,
+        );
+        assert!(obj.owns("sheet_00012.obj", "sheet"));
+        assert!(!obj.owns("sheet_00012.ply", "sheet"));
+        assert!(ply.owns("sheet_00012.ply", "sheet"));
+        assert!(!obj.owns("sheet_skin_00012.obj", "sheet"));
+        assert!(!obj.owns("sheet_.obj", "sheet"));
+        assert!(!obj.owns("notes.txt", "sheet"));
+        assert!(vtu.owns("state_00003.vtu", ""));
+        assert!(vtu.owns("state.vtu.series", ""));
+        assert!(!vtu.owns("state_x.vtu", ""));
+        assert!(FrameFormat::OBJ < FrameFormat::VTU);
+    }
+}
