@@ -58,7 +58,8 @@ pub struct AfterStepContext<'a> {
     pub report: &'a mut StepReport,
 }
 
-/// A stage the world runs after every step; see the [module docs](self).
+/// A stage the world runs after every step, after the integrator and
+/// before the divergence check ([`World::add_after_step`] registers one).
 pub trait AfterStep: Send + Sync {
     /// Name, unique in the world's pipeline (timings, `enabled`, errors).
     fn name(&self) -> &'static str;

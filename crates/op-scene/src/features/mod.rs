@@ -63,7 +63,7 @@ pub trait Feature {
 /// `Variant((...))` (RON) or `{"Variant": {...}}` (JSON).
 macro_rules! features {
     ($($variant:ident => $module:ident :: $ty:ident,)*) => {
-        $(mod $module; pub use $module::$ty;)*
+        $(pub mod $module; pub use $module::$ty;)*
 
         /// One entry of [`crate::Scene::features`].
         #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
@@ -74,6 +74,14 @@ macro_rules! features {
                 $variant($ty),
             )*
         }
+
+        $(
+            impl From<$ty> for FeatureSpec {
+                fn from(feature: $ty) -> FeatureSpec {
+                    FeatureSpec::$variant(feature)
+                }
+            }
+        )*
 
         impl FeatureSpec {
             /// The feature's variant name (as written in the scene file).

@@ -53,6 +53,7 @@
 pub(crate) mod checks;
 pub mod fit;
 pub mod limits;
+mod typed;
 pub(crate) mod validate;
 pub(crate) mod work;
 
