@@ -205,9 +205,23 @@ impl<C> Driver<C> {
     }
 
     /// Appends a stage (stages of one phase run in the order added).
-    pub fn push(&mut self, stage: Box<dyn Stage<C>>) {
+    ///
+    /// # Errors
+    ///
+    /// A stage of the same name is already there, or the name is `world`
+    /// (the world's steps in [`Driver::timings`]): names are unique, so
+    /// timings keyed by name never merge two stages.
+    pub fn push(&mut self, stage: Box<dyn Stage<C>>) -> Result<(), StageError> {
+        let name = stage.name();
+        if name == "world" || self.stages.iter().any(|s| s.name() == name) {
+            return Err(StageError::new(
+                name,
+                "a stage of this name is already in the driver: names must be unique",
+            ));
+        }
         self.stages.push(stage);
         self.seconds.push(0.0);
+        Ok(())
     }
 
     /// The stages' names, in order.
@@ -321,5 +335,32 @@ impl<C> Driver<C> {
             self.seconds[k] += clock.elapsed().as_secs_f64();
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Named(&'static str);
+
+    impl Stage<()> for Named {
+        fn name(&self) -> &str {
+            self.0
+        }
+
+        fn phase(&self) -> Phase {
+            Phase::Edit
+        }
+    }
+
+    #[test]
+    fn stage_names_are_unique() {
+        let mut driver = Driver::<()>::new();
+        driver.push(Box::new(Named("creation"))).unwrap();
+        assert!(driver.push(Box::new(Named("creation"))).is_err());
+        assert!(driver.push(Box::new(Named("world"))).is_err());
+        driver.push(Box::new(Named("contact"))).unwrap();
+        assert_eq!(driver.names(), ["creation", "contact"]);
     }
 }

@@ -144,7 +144,11 @@ impl Scene {
             })
             .collect::<Result<Vec<_>, SceneError>>()?;
         let creation = self.creation_state(&objects, placed.fitted, placed.seeds.as_ref());
-        let driver = stage_driver(creation.as_ref(), &skins, &skin_tools);
+        let driver = stage_driver(creation.as_ref(), &skins, &skin_tools, &world.stage_names())
+            .map_err(|message| SceneError::Build {
+                file: file.to_string(),
+                message,
+            })?;
         let w = &self.world;
         Ok(BuiltScene {
             driver,
@@ -411,26 +415,43 @@ struct Placed {
 }
 
 /// The driver with only the stages the scene uses ([`crate::stages`], in
-/// their order).
+/// their order). Its stage names must differ from the world's
+/// (`world_stages`) and the runner's timing names, as every stage's time is
+/// reported by name.
 fn stage_driver(
     creation: Option<&CreationState>,
     skins: &[ObjectSkin],
     skin_tools: &[SkinTool],
-) -> op_dynamics::driver::Driver<crate::stages::SceneState> {
-    let mut driver = op_dynamics::driver::Driver::new();
+    world_stages: &[&str],
+) -> Result<op_dynamics::driver::Driver<crate::stages::SceneState>, String> {
+    use crate::stages::{ContactStage, Creation, FitRelease, SceneState, SkinStage};
+    type Boxed = Box<dyn op_dynamics::driver::Stage<SceneState>>;
+    let mut stages: Vec<Boxed> = Vec::new();
     if let Some(c) = creation {
         if c.fit.is_some() {
-            driver.push(Box::new(crate::stages::FitRelease));
+            stages.push(Box::new(FitRelease));
         }
-        driver.push(Box::new(crate::stages::Creation));
+        stages.push(Box::new(Creation));
     }
     if skins.len() >= 2 || !skin_tools.is_empty() {
-        driver.push(Box::new(crate::stages::ContactStage::default()));
+        stages.push(Box::new(ContactStage::default()));
     }
     if !skins.is_empty() {
-        driver.push(Box::new(crate::stages::SkinStage));
+        stages.push(Box::new(SkinStage));
     }
-    driver
+    let mut driver = op_dynamics::driver::Driver::new();
+    for stage in stages {
+        let name = stage.name().to_string();
+        if world_stages.contains(&name.as_str())
+            || crate::run::RUNNER_STAGES.contains(&name.as_str())
+        {
+            return Err(format!(
+                "stage {name:?} is named like a stage of the world or the runner"
+            ));
+        }
+        driver.push(stage).map_err(|e| e.to_string())?;
+    }
+    Ok(driver)
 }
 
 impl Scene {

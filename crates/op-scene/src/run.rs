@@ -35,6 +35,12 @@ pub struct RunOptions {
     pub formats: Vec<FrameFormat>,
 }
 
+/// The runner's own timing names in `summary.json` `stages` (besides the
+/// scene's setup, `build` and `estimate`, and the pipeline's stages): no
+/// stage of a scene may take them.
+/// The runner's own first (`prepare`, `measure`, `export`).
+pub const RUNNER_STAGES: [&str; 5] = ["prepare", "measure", "export", "build", "estimate"];
+
 /// Per-object figures of a run.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct ObjectSummary {
@@ -542,11 +548,14 @@ impl Tally {
             stages: scene
                 .timings()
                 .into_iter()
-                .chain([
-                    ("prepare".to_string(), self.prepare_seconds),
-                    ("measure".to_string(), self.measure_seconds),
-                    ("export".to_string(), self.export_seconds),
-                ])
+                .chain(
+                    // `build` and `estimate` come with the scene's timings.
+                    RUNNER_STAGES[..3].iter().map(|s| s.to_string()).zip([
+                        self.prepare_seconds,
+                        self.measure_seconds,
+                        self.export_seconds,
+                    ]),
+                )
                 .collect(),
             frames: self.written,
             frame_rate: scene.frame_rate,
