@@ -374,7 +374,10 @@ fn run_fit(
     };
     let fit = op_scene::fit::fit(&data, &params).map_err(|e| Failure {
         // A relaxation that diverged is a simulation failure (exit 3).
-        code: if matches!(e, op_scene::fit::FitError::World(_)) {
+        code: if matches!(
+            e,
+            op_scene::fit::FitError::World(_) | op_scene::fit::FitError::Diverged(_)
+        ) {
             3
         } else {
             2

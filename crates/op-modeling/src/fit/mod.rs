@@ -266,9 +266,13 @@ pub enum FitError {
     /// The particle world rejected a parameter.
     #[error(transparent)]
     Param(#[from] ParamError),
-    /// The particle world failed (for example the relaxation diverged).
+    /// The particle world failed (a particle the fit made is missing).
     #[error("the relaxation failed: {0}")]
     World(String),
+    /// The relaxation diverged (the world's report: step, time, particle,
+    /// what was wrong).
+    #[error("the relaxation failed: {0}")]
+    Diverged(#[from] op_dynamics::Divergence),
 }
 
 impl From<WorldError> for FitError {
@@ -785,9 +789,7 @@ pub(crate) fn at_rest(p: &Particles, slot: usize) -> ParticleDesc {
 /// Advances `world` by `t` (a divergence is an error).
 fn advance(world: &mut World, t: Real) -> Result<(), FitError> {
     let end = world.time() + t;
-    world
-        .advance_to(end)
-        .map_err(|d| FitError::World(d.to_string()))
+    Ok(world.advance_to(end)?)
 }
 
 #[cfg(test)]

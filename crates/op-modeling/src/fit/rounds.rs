@@ -141,9 +141,7 @@ pub(super) fn relax_new(
         }
         let mut local = World::new(sub, std::slice::from_ref(material), params.clone())?;
         let end = local.time() + t;
-        local
-            .advance_to(end)
-            .map_err(|d| FitError::World(d.to_string()))?;
+        local.advance_to(end)?;
         let lp = local.particles();
         let mut updates = Vec::with_capacity(members.len());
         let mut moved: Real = 0.0;
