@@ -421,19 +421,11 @@ impl SpiralRecipe {
         units: &Units,
     ) -> ObjectSpec {
         ObjectSpec {
-            name: name.into(),
-            material: material.into(),
-            generator: shape.generator(),
             mass: units.mass,
             inertia: [self.inertia * units.mass * units.length * units.length; 3],
             // In the plane of the spiral: see `SpiralRecipe::object`.
             normal_axis: [1.0, 0.0, 0.0],
-            kind: Default::default(),
-            velocity: [0.0; 3],
-            angular_velocity: [0.0; 3],
-            velocities: None,
-            overrides: Vec::new(),
-            skin: None,
+            ..ObjectSpec::new(name, material, shape.generator())
         }
     }
 
