@@ -7,11 +7,8 @@
 use std::path::PathBuf;
 
 use oriented_particles::op_modeling::tools::{Keyframe, Role, ToolPath, ToolShape};
-use oriented_particles::op_scene::export::FrameFormat;
-use oriented_particles::op_scene::features::wind::{Gust, Wind};
-use oriented_particles::op_scene::{
-    run, Generator, ObjectSpec, Outputs, ParticleOutput, RunOptions, Scene, ToolSpec,
-};
+use oriented_particles::op_scene::features::wind::Gust;
+use oriented_particles::prelude::*;
 
 fn flag() -> Scene {
     let pole = ToolSpec {
@@ -98,7 +95,7 @@ fn flag_to(out: PathBuf) -> Result<(), Box<dyn std::error::Error>> {
             .filter(|id| x(id) > end - 0.5)
             .collect::<Vec<u32>>()
     };
-    let edge = |b: &oriented_particles::op_scene::BuiltScene| {
+    let edge = |b: &BuiltScene| {
         let p = b.world.particles();
         let slots: Vec<usize> = far.iter().filter_map(|&id| p.slot_of(id)).collect();
         let mean = |f: &dyn Fn(usize) -> f64| {

@@ -4,11 +4,8 @@
 //!
 //! Run it with `cargo run --release --example skinned_drop`.
 
-use oriented_particles::op_dynamics::interactions::{CohesionParams, Spacing};
-use oriented_particles::op_dynamics::Material;
 use oriented_particles::op_modeling::tools::{Role, ToolPath, ToolShape};
-use oriented_particles::op_scene::skins::{SkinPrimitive, SkinSpec};
-use oriented_particles::op_scene::{BuiltScene, Generator, ObjectSpec, Scene, ToolSpec};
+use oriented_particles::prelude::*;
 
 fn scene() -> Scene {
     let ground = ToolSpec {

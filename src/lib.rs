@@ -6,3 +6,10 @@ pub use op_dynamics;
 pub use op_modeling;
 pub use op_render;
 pub use op_scene;
+
+/// The engine's and the scene layer's preludes in one import:
+/// `use oriented_particles::prelude::*;`.
+pub mod prelude {
+    pub use op_dynamics::prelude::*;
+    pub use op_scene::prelude::*;
+}

@@ -36,6 +36,7 @@ pub mod math;
 pub mod neighbours;
 pub mod particles;
 pub mod plasticity;
+pub mod prelude;
 pub mod tooling;
 pub mod world;
 

@@ -16,6 +16,7 @@ pub mod input;
 pub mod modes;
 pub mod outputs;
 pub mod pointsets;
+pub mod prelude;
 pub mod presets;
 pub mod reference;
 pub mod run;
