@@ -130,11 +130,6 @@ impl AfterStep for BondBreaking {
         "bonds"
     }
 
-    fn may_add_energy(&self) -> bool {
-        // A broken bond changes the energy function.
-        true
-    }
-
     fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects {
         if let Some(bonds) = ctx.bonds.as_deref_mut() {
             ctx.report.bonds_broken = bonds.break_stretched(ctx.particles);

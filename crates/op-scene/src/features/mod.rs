@@ -124,21 +124,11 @@ pub fn object_mask(objects: &[BuiltObject], names: Option<&[String]>) -> Vec<boo
 }
 
 /// Checks that every name in `names` is an object of `scene`
-/// (`path.objects[i]` in messages).
+/// (`path.objects[i]` in messages), as a tool's `objects` are checked.
 pub fn check_objects(
     scene: &Scene,
     path: &str,
     names: Option<&[String]>,
 ) -> Result<(), SceneError> {
-    for (i, name) in names.into_iter().flatten().enumerate() {
-        if !scene.objects.iter().any(|o| &o.name == name) {
-            let known: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
-            return Err(SceneError::invalid(
-                scene.origin(),
-                format!("{path}.objects[{i}]"),
-                format!("= {name:?}: no such object (the scene's objects: {known:?})"),
-            ));
-        }
-    }
-    Ok(())
+    scene.check_object_names(path, names)
 }

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{check_objects, object_mask, Feature, InstallContext};
 use crate::error::SceneError;
+use crate::schema::checks::positive;
 use crate::schema::Scene;
 
 /// A speed limit: RON `SpeedClamp((max_speed: 5, objects: Some(["ball"])))`.
@@ -30,14 +31,11 @@ pub(super) const UNITS: &[(&str, &str)] = &[("SpeedClamp.max_speed", "L/T")];
 
 impl Feature for SpeedClamp {
     fn validate(&self, scene: &Scene, path: &str) -> Result<(), SceneError> {
-        if !(self.max_speed.is_finite() && self.max_speed > 0.0) {
-            return Err(SceneError::value(
-                scene.origin(),
-                format!("{path}.max_speed"),
-                self.max_speed,
-                "must be > 0 and finite",
-            ));
-        }
+        positive(
+            scene.origin(),
+            &format!("{path}.max_speed"),
+            self.max_speed,
+        )?;
         check_objects(scene, path, self.objects.as_deref())
     }
 

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{check_objects, object_mask, Feature, InstallContext};
 use crate::error::SceneError;
+use crate::schema::checks::{finite, finite3, positive};
 use crate::schema::Scene;
 
 /// A wind on some objects: RON `Wind((velocity: (2, 0, 0), drag: 0.1))`.
@@ -56,27 +57,11 @@ pub(super) const UNITS: &[(&str, &str)] = &[
 impl Feature for Wind {
     fn validate(&self, scene: &Scene, path: &str) -> Result<(), SceneError> {
         let file = scene.origin();
-        if !self.velocity.iter().all(|v| v.is_finite()) {
-            return Err(SceneError::value(
-                file,
-                format!("{path}.velocity"),
-                format!("{:?}", self.velocity),
-                "every component must be finite",
-            ));
-        }
-        if !(self.drag.is_finite() && self.drag > 0.0) {
-            return Err(SceneError::value(
-                file,
-                format!("{path}.drag"),
-                self.drag,
-                "must be > 0 and finite",
-            ));
-        }
+        finite3(file, &format!("{path}.velocity"), &self.velocity)?;
+        positive(file, &format!("{path}.drag"), self.drag)?;
         for (k, g) in self.gusts.iter().enumerate() {
             let at = format!("{path}.gusts[{k}]");
-            if !g.time.is_finite() {
-                return Err(SceneError::value(file, format!("{at}.time"), g.time, "must be finite"));
-            }
+            finite(file, &format!("{at}.time"), g.time)?;
             if k > 0 && g.time <= self.gusts[k - 1].time {
                 return Err(SceneError::value(
                     file,
@@ -85,14 +70,7 @@ impl Feature for Wind {
                     "keyframe times must increase strictly",
                 ));
             }
-            if !g.velocity.iter().all(|v| v.is_finite()) {
-                return Err(SceneError::value(
-                    file,
-                    format!("{at}.velocity"),
-                    format!("{:?}", g.velocity),
-                    "every component must be finite",
-                ));
-            }
+            finite3(file, &format!("{at}.velocity"), &g.velocity)?;
         }
         check_objects(scene, path, self.objects.as_deref())
     }

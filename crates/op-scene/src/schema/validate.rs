@@ -171,10 +171,20 @@ impl Scene {
                  cooling: 0.1, ambient: 0))` to `world`",
             ));
         }
-        for (j, name) in t.objects.iter().flatten().enumerate() {
+        self.check_object_names(&path, t.objects.as_deref())
+    }
+
+    /// Checks that every name in `names` is an object of the scene
+    /// (`path.objects[j]` in messages): a tool's or a feature's `objects`.
+    pub(crate) fn check_object_names(
+        &self,
+        path: &str,
+        names: Option<&[String]>,
+    ) -> Result<(), SceneError> {
+        for (j, name) in names.into_iter().flatten().enumerate() {
             if !self.objects.iter().any(|o| &o.name == name) {
                 return Err(SceneError::value(
-                    file,
+                    self.origin(),
                     format!("{path}.objects[{j}]"),
                     format!("{name:?}"),
                     &format!(
