@@ -33,18 +33,24 @@ impl ParamError {
     /// Prefixes the field path with `prefix.` (used when a parameter struct
     /// is nested in another, e.g. `material.cohesion.alpha`).
     pub fn within(self, prefix: &str) -> Self {
+        self.renamed(|field| format!("{prefix}.{field}"))
+    }
+
+    /// Renames the field path with `rename` (used when a type's fields are
+    /// set from a differently named description, e.g. a scene file's).
+    pub fn renamed(self, rename: impl FnOnce(&str) -> String) -> Self {
         match self {
             ParamError::OutOfRange {
                 field,
                 value,
                 allowed,
             } => ParamError::OutOfRange {
-                field: format!("{prefix}.{field}"),
+                field: rename(&field),
                 value,
                 allowed,
             },
             ParamError::Invalid { field, message } => ParamError::Invalid {
-                field: format!("{prefix}.{field}"),
+                field: rename(&field),
                 message,
             },
         }

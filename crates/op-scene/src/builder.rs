@@ -7,10 +7,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use op_dynamics::neighbours::{search, PairList};
-use op_dynamics::world::DivergenceParams;
 use op_dynamics::{
-    ExternalParams, Flags, ForceWindow, Material, NeighbourBackend, ParticleDesc, Particles,
-    Point3, Real, Vec3, World, WorldParams,
+    Flags, ForceWindow, Material, NeighbourBackend, ParticleDesc, Particles, Point3, Real, Vec3,
+    World,
 };
 use op_modeling::{Role, Tool, ToolParams};
 
@@ -36,7 +35,7 @@ impl Scene {
     /// 4. maps forces to [`ForceWindow`]s over global particle ids (objects
     ///    are numbered consecutively in scene order), their times shifted by
     ///    the settle phase (`world.settle`) so they count from its end;
-    /// 5. builds [`WorldParams`] and the [`World`].
+    /// 5. builds [`op_dynamics::WorldParams`] and the [`World`].
     ///
     /// Each [`BuiltObject`] records its ids, rest positions and rest
     /// spacing (mean nearest-neighbour distance within the object; the
@@ -341,21 +340,7 @@ impl Scene {
     ) -> Result<World, SceneError> {
         let w = &self.world;
         let materials: Vec<Material> = used.iter().map(|name| self.materials[*name]).collect();
-        let params = WorldParams {
-            scheme: w.integrator,
-            dt: w.dt,
-            neighbours: w.neighbours.clone(),
-            external: ExternalParams {
-                gravity: w.gravity,
-                linear_damping: w.linear_damping,
-                angular_damping: w.angular_damping,
-                forces: self.force_windows(counts, offsets),
-            },
-            divergence: DivergenceParams {
-                max_speed: w.divergence.max_speed,
-            },
-            heat: w.heat.clone(),
-        };
+        let params = w.params(self.force_windows(counts, offsets));
         op_modeling::Tools::world(particles, &materials, params, tools).map_err(|e| {
             let mut message = format!("building the world: {e}");
             for (k, name) in used.iter().enumerate() {
@@ -513,27 +498,21 @@ impl Scene {
                     .filter(|&o| names.contains(&self.objects[o].name))
                     .collect(),
             };
-            let mut path = t.path.clone();
-            for f in &mut path.keyframes {
+            let mut params: ToolParams = t.acting_on(None);
+            for f in &mut params.path.keyframes {
                 f.time += settle;
             }
-            let mut role = t.role.clone();
-            if let Role::Mover { release, .. } = &mut role {
+            if let Role::Mover { release, .. } = &mut params.role {
                 *release += settle;
             }
-            let (skinned, bare): (Vec<usize>, Vec<usize>) = match role {
+            let (skinned, bare): (Vec<usize>, Vec<usize>) = match params.role {
                 Role::Obstacle { .. } => selected
                     .into_iter()
                     .partition(|&o| self.objects[o].skin.is_some()),
                 _ => (Vec::new(), selected),
             };
-            let params = ToolParams {
-                name: t.name.clone(),
-                shape: t.shape.clone(),
-                path,
-                role,
-                objects: Some(bare.iter().map(|&o| o as u32).collect()),
-            };
+            all.push(params.clone());
+            params.objects = Some(bare.iter().map(|&o| o as u32).collect());
             if let (
                 false,
                 Role::Obstacle {
@@ -551,10 +530,6 @@ impl Scene {
                     (*stiffness, *friction, *damping),
                 ));
             }
-            all.push(ToolParams {
-                objects: None,
-                ..params.clone()
-            });
             if !bare.is_empty() {
                 world_tools.push(params);
             }

@@ -115,9 +115,7 @@ impl WorldParams {
             self.divergence.max_speed > 0.0,
             "must be > 0 (infinity disables the check)",
         )?;
-        if let Scheme::Adaptive(a) = &self.scheme {
-            a.validate().map_err(|e| e.within("scheme"))?;
-        }
+        self.scheme.validate().map_err(|e| e.within("scheme"))?;
         self.external
             .validate(particle_count)
             .map_err(|e| e.within("external"))?;

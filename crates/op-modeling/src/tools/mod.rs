@@ -37,30 +37,60 @@ pub use path::{Keyframe, ToolPath, ToolPose};
 pub use roles::Role;
 pub use shape::{parry_pose, ToolShape};
 
-/// A tool's description.
+/// A tool (seed 000 §6): a parry shape with scripted motion and a role.
+/// In a scene file a tool names the objects it acts on, and its keyframe
+/// times and a mover's `release` count from the end of the settle phase,
+/// like force windows; a world's tools (`ToolParams<u32>`, the default)
+/// hold object ids and world times instead. In a scene an obstacle acts on
+/// the particles of the objects without a skin, and on the skins of
+/// skinned objects (their skin samples inside the shape get a reaction
+/// `stiffness x depth` along its normal, seed 002 §6); attractors and
+/// movers act on particles.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct ToolParams {
-    /// Name (for messages and outputs). Default: empty.
+#[schemars(rename = "ToolSpec")]
+pub struct ToolParams<O = u32> {
+    /// Name, for messages and outputs. Default: empty.
     #[serde(default)]
     pub name: String,
-    /// Shape in the tool frame.
+    /// Shape in the tool frame (`Plane`, `Ball`, `Cuboid`, `Cylinder`,
+    /// `ConvexHull`, `TriMesh`).
     pub shape: ToolShape,
-    /// Motion of the tool frame. Default: still at the origin.
+    /// Keyframes `(time, position, rotation)`, rotation as a rotation
+    /// vector. Default: still at the origin.
     #[serde(default)]
     pub path: ToolPath,
-    /// What the tool does.
+    /// `Obstacle(stiffness, margin, damping, friction)`, `Attractor(strength, reach)`
+    /// or `Mover(stiffness, damping, release)`.
     pub role: Role,
-    /// Object ids the tool acts on. Default (`None`): every object.
+    /// The objects it acts on (ids in a world, names in a scene). Default
+    /// (`None`): every object.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub objects: Option<Vec<u32>>,
+    pub objects: Option<Vec<O>>,
 }
 
-impl ToolParams {
-    /// Checks the path and role (the shape is checked when built).
+impl<O> ToolParams<O> {
+    /// Checks the shape, the path and the role; errors name the field.
     pub fn validate(&self) -> Result<(), ParamError> {
+        self.shape.build().map_err(|e| e.within("shape"))?;
+        self.validate_motion()
+    }
+
+    /// Checks the path and the role.
+    fn validate_motion(&self) -> Result<(), ParamError> {
         self.path.validate().map_err(|e| e.within("path"))?;
         self.role.validate().map_err(|e| e.within("role"))
+    }
+
+    /// The same tool acting on the objects `objects` instead.
+    pub fn acting_on<P>(&self, objects: Option<Vec<P>>) -> ToolParams<P> {
+        ToolParams {
+            name: self.name.clone(),
+            shape: self.shape.clone(),
+            path: self.path.clone(),
+            role: self.role.clone(),
+            objects,
+        }
     }
 }
 
@@ -115,7 +145,7 @@ pub fn signed_distance(
 impl Tool {
     /// Builds the tool; a mover grabs the particles inside it at time 0.
     pub fn new(params: &ToolParams, particles: &Particles) -> Result<Tool, ParamError> {
-        params.validate()?;
+        params.validate_motion()?;
         let shape = params.shape.build().map_err(|e| e.within("shape"))?;
         let mut tool = Tool {
             params: params.clone(),

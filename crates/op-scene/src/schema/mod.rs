@@ -66,7 +66,6 @@ use std::collections::BTreeMap;
 
 use op_dynamics::world::NeighbourParams;
 use op_dynamics::{Material, ParticleType, Real, Scheme};
-use op_modeling::tools::{Role, ToolPath, ToolShape};
 use serde::{Deserialize, Serialize};
 
 use crate::creation::CreationSettings;
@@ -230,6 +229,38 @@ impl Default for WorldSettings {
             angular_damping: 0.0,
             divergence: DivergenceSettings::default(),
             heat: None,
+        }
+    }
+}
+
+impl WorldSettings {
+    /// The world's parameters (op-dynamics [`op_dynamics::WorldParams`]):
+    /// these settings with the force windows `forces`.
+    pub fn params(&self, forces: Vec<op_dynamics::ForceWindow>) -> op_dynamics::WorldParams {
+        op_dynamics::WorldParams {
+            scheme: self.integrator,
+            dt: self.dt,
+            neighbours: self.neighbours.clone(),
+            external: op_dynamics::ExternalParams {
+                gravity: self.gravity,
+                linear_damping: self.linear_damping,
+                angular_damping: self.angular_damping,
+                forces,
+            },
+            divergence: op_dynamics::world::DivergenceParams {
+                max_speed: self.divergence.max_speed,
+            },
+            heat: self.heat.clone(),
+        }
+    }
+
+    /// The field of these settings (`world.<field>`) that the field
+    /// `field` of [`WorldSettings::params`] comes from.
+    pub(crate) fn field_of_param(field: &str) -> String {
+        let field = field.strip_prefix("external.").unwrap_or(field);
+        match field.strip_prefix("scheme") {
+            Some(rest) => format!("world.integrator{rest}"),
+            None => format!("world.{field}"),
         }
     }
 }
@@ -514,29 +545,7 @@ pub struct ForceSpec {
     pub ramp: Real,
 }
 
-/// A tool (seed 000 §6): a parry shape with scripted motion and a role.
-/// Keyframe times and a mover's `release` count from the end of the settle
-/// phase, like force windows. An obstacle acts on the particles of the
-/// objects without a skin, and on the skins of skinned objects (their skin
-/// samples inside the shape get a reaction `stiffness x depth` along its
-/// normal, seed 002 §6); attractors and movers act on particles.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct ToolSpec {
-    /// Name, for messages. Default: empty.
-    #[serde(default)]
-    pub name: String,
-    /// Shape in the tool frame (`Plane`, `Ball`, `Cuboid`, `Cylinder`,
-    /// `ConvexHull`, `TriMesh`).
-    pub shape: ToolShape,
-    /// Keyframes `(time, position, rotation)`, rotation as a rotation
-    /// vector. Default: still at the origin.
-    #[serde(default)]
-    pub path: ToolPath,
-    /// `Obstacle(stiffness, margin, damping, friction)`, `Attractor(strength, reach)`
-    /// or `Mover(stiffness, damping, release)`.
-    pub role: Role,
-    /// Names of the objects it acts on. Default: all.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub objects: Option<Vec<String>>,
-}
+/// A tool in a scene: op-modeling's [`op_modeling::ToolParams`] naming
+/// the objects it acts on. Keyframe times and a mover's `release` count
+/// from the end of the settle phase, like force windows.
+pub type ToolSpec = op_modeling::ToolParams<String>;

@@ -9,7 +9,7 @@ use op_dynamics::interactions::Spacing;
 use op_dynamics::{Material, Real};
 
 use super::checks::{self, direction, finite, finite3, non_negative, positive, positive3};
-use super::{ForceSpec, ObjectSpec, Scene, ToolSpec};
+use super::{ForceSpec, ObjectSpec, Scene, ToolSpec, WorldSettings};
 use crate::error::SceneError;
 use crate::generators::MAX_PARTICLES;
 
@@ -153,15 +153,8 @@ impl Scene {
     fn validate_tool(&self, k: usize, t: &ToolSpec) -> Result<(), SceneError> {
         let file = self.origin();
         let path = format!("tools[{k}]");
-        t.shape
-            .build()
-            .map_err(|e| SceneError::param(file, &format!("{path}.shape"), e))?;
-        t.path
-            .validate()
-            .map_err(|e| SceneError::param(file, &format!("{path}.path"), e))?;
-        t.role
-            .validate()
-            .map_err(|e| SceneError::param(file, &format!("{path}.role"), e))?;
+        t.validate()
+            .map_err(|e| SceneError::param(file, &path, e))?;
         if t.role.heating().is_some() && self.world.heat.is_none() {
             return Err(SceneError::value(
                 file,
@@ -212,20 +205,13 @@ impl Scene {
             ));
         }
         let w = &self.world;
-        self.world
-            .integrator
-            .validate()
-            .map_err(|e| SceneError::param(file, "world.integrator", e))?;
-        positive(file, "world.dt", w.dt)?;
+        w.params(Vec::new())
+            .validate(0)
+            .map_err(|e| SceneError::param(file, "", e.renamed(WorldSettings::field_of_param)))?;
         positive(file, "world.duration", w.duration)?;
         non_negative(file, "world.settle", w.settle)?;
         positive(file, "world.frame_rate", w.frame_rate)?;
-        positive(file, "world.neighbours.skin", w.neighbours.skin)?;
-        finite3(file, "world.gravity", &w.gravity)?;
-        non_negative(file, "world.linear_damping", w.linear_damping)?;
-        non_negative(file, "world.angular_damping", w.angular_damping)?;
         for (field, v) in [
-            ("world.divergence.max_speed", w.divergence.max_speed),
             ("world.divergence.energy_growth", w.divergence.energy_growth),
             ("world.divergence.energy_gain", w.divergence.energy_gain),
             ("world.divergence.extent_growth", w.divergence.extent_growth),
@@ -238,10 +224,6 @@ impl Scene {
                     "must be > 0 (infinity disables the check)",
                 ));
             }
-        }
-        if let Some(h) = &w.heat {
-            h.validate()
-                .map_err(|e| SceneError::param(file, "world.heat", e))?;
         }
         positive(file, "outputs.glyph_size", self.outputs.glyph_size)?;
         positive(
