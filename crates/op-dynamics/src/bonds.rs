@@ -43,7 +43,7 @@
 //! repulsion, both near zero at the break length of a cut-off potential).
 //!
 //! **Cost.** Worlds without bonded materials run the pair kernels with a
-//! constant lookup (see [`crate::forces`]): criterion `world_step/
+//! constant lookup (see the world's force pass, `forces.rs`): criterion `world_step/
 //! spacing_only/10000` at one thread, medians of three alternated runs
 //! each, 2.91 ms before bonds existed (runs 2.34-2.95) and 2.78 ms after
 //! (2.39-2.96), on a 2-core machine at load 9 (other builds): no

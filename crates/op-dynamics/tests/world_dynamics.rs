@@ -78,7 +78,7 @@ fn same_bits_at_any_thread_count_and_backend() {
 
 /// Worlds of several accumulation blocks (2048 particles each: pairs that
 /// cross a block boundary are summed in a second pass, see
-/// `op_dynamics::forces`): the same bits at 1, 2 and 3 threads, for both
+/// the world's force pass): the same bits at 1, 2 and 3 threads, for both
 /// kernels (the spacing one both scalar, with cohesion, and in SIMD lanes,
 /// with 12-6 Lennard-Jones), and the internal forces still sum to zero.
 #[test]

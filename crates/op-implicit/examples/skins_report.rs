@@ -604,7 +604,7 @@ fn machine_section(peer: Option<&Path>) -> String {
     let _ = writeln!(
         md,
         "| our splat's instruction set (runtime dispatch) | {} |",
-        op_dynamics::lanes::isa()
+        op_dynamics::simd_isa()
     );
     let _ = writeln!(
         md,

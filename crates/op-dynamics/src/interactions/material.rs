@@ -482,7 +482,7 @@ impl PreparedMaterial {
         }
     }
 
-    /// The constants of the oriented SIMD lanes ([`crate::lanes`]), which
+    /// The constants of the oriented SIMD lanes (`lanes.rs`), which
     /// evaluate [`Self::direction`] of both directions of a pair of this
     /// material with 12-6 Lennard-Jones spacing; `None` when the material
     /// has another spacing (or none), no orientation term, or spin (the

@@ -141,7 +141,7 @@ impl Weight {
         !self.anisotropic
     }
 
-    /// The constants the oriented SIMD lanes ([`crate::lanes`]) evaluate
+    /// The constants the oriented SIMD lanes (`lanes.rs`) evaluate
     /// [`Self::eval_scalar`] with.
     pub(crate) fn lane_constants(&self) -> crate::lanes::WeightLaneConstants {
         crate::lanes::WeightLaneConstants {

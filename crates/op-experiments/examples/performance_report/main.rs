@@ -32,7 +32,6 @@ mod child;
 mod measure;
 mod sections;
 
-use op_dynamics::lanes;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
@@ -115,7 +114,7 @@ fn report() -> Res<()> {
     let quick = std::env::var("OP_QUICK").is_ok_and(|v| v == "1");
     let reps = if quick { 1 } else { REPS };
     let peak = peak_gflops();
-    eprintln!("peak {peak:.1} GFLOP/s ({})", lanes::isa());
+    eprintln!("peak {peak:.1} GFLOP/s ({})", op_dynamics::simd_isa());
     let results = interleaved_runs(&dir, &peers, &xv, reps)?;
     let scaling = scaling_runs(quick)?;
     let load_after = load_average();

@@ -91,7 +91,7 @@ fn lammps(dir: &Path, input: &Path, ranks: usize) -> Res<Measure> {
 /// The measured floating-point peak of one core: independent chains of
 /// fused multiply-adds (`S::mul_add_f64s`, 16 accumulator registers, more
 /// than the FMA latency times the issue width) on the instruction set the
-/// engine's SIMD lanes dispatch to (`op_dynamics::lanes::isa`), best of 5
+/// engine's SIMD lanes dispatch to (`op_dynamics::simd_isa`), best of 5
 /// repetitions, timed by this thread's CPU time. GFLOP/s, two flops per lane per fused multiply-add.
 pub(crate) fn peak_gflops() -> f64 {
     struct Chains(usize);

@@ -3,7 +3,6 @@
 //! speed-up from 1 to 2 threads, peak memory, scaling with N, the
 //! performance targets and the achieved floating-point rate.
 
-use op_dynamics::lanes;
 use op_experiments::machine;
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -58,7 +57,10 @@ pub(crate) fn header(started: Instant, reps: usize, load: (&str, &str), peak: f6
             "load average before / after",
             format!("{load_before} / {load_after}"),
         ),
-        ("SIMD lanes (runtime dispatch)", lanes::isa().to_string()),
+        (
+            "SIMD lanes (runtime dispatch)",
+            op_dynamics::simd_isa().to_string(),
+        ),
         (
             "measured peak, 1 core",
             format!("{peak:.1} GFLOP/s (chains of fused multiply-adds on that instruction set)"),
@@ -493,7 +495,7 @@ fn bounds_paragraph(targets: &[(String, String, bool)]) -> String {
              band's classification and gather-back costing more than the roots saved, \
              and so were 16 pairs per gather batch (two independent lane registers: \
              1.45 against 1.38 s, medians of 6)",
-            isa = lanes::isa()
+            isa = op_dynamics::simd_isa()
         ));
     }
     if unmet("spacing only, per step: at most 1x LAMMPS at 2 threads") {
@@ -575,7 +577,7 @@ pub(crate) fn flops_section(results: &[[Runs; 2]], peak: f64) -> Res<String> {
          bounds of the kernel's rate. The peak is the one measured above ({peak:.1} \
          GFLOP/s per core, fused multiply-adds on {isa}); both kernels' pairs run on \
          that instruction set without fusing (same bits as scalar code).\n",
-        isa = lanes::isa()
+        isa = op_dynamics::simd_isa()
     )?;
     writeln!(
         md,
