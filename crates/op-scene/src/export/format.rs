@@ -19,22 +19,26 @@ use crate::built_scene::BuiltObject;
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum Files {
     /// One file per sequence (each object's particles, skin, surface, each
-    /// tool) and frame: `frames/<stem>/<stem>_<k:05>.<name>`, encoded by
+    /// tool) and frame: `frames/<stem>/<stem>_<k:05>.<extension>`, encoded by
     /// [`FileFormat::encode_mesh`].
     PerSequence,
     /// One file per frame holding every particle with its attributes,
-    /// `<name>/state_<k:05>.<name>` (encoded by
+    /// `<name>/state_<k:05>.<extension>` (encoded by
     /// [`FileFormat::encode_state`]), listed with their times in the
-    /// series file `<name>/state.<name>.series` (ParaView's time series,
+    /// series file `<name>/state.<extension>.series` (ParaView's time series,
     /// [`FileFormat::encode_series`]).
     State,
 }
 
 /// A frame file format; see the [module docs](self).
 pub trait FileFormat: Sync + std::fmt::Debug {
-    /// Its name on the command line and in `summary.json`, also its file
-    /// extension (lower case).
+    /// Its name on the command line and in `summary.json` (lower case).
     fn name(&self) -> &'static str;
+
+    /// The extension of its files. Default: its name.
+    fn extension(&self) -> &'static str {
+        self.name()
+    }
 
     /// The axis convention of its files: `y_up` or `z_up` (scenes are
     /// z-up).
@@ -82,7 +86,7 @@ pub trait FileFormat: Sync + std::fmt::Debug {
     /// alone.
     fn owns(&self, file_name: &str, stem: &str) -> bool {
         let numbered = |rest: &str| {
-            rest.strip_suffix(self.name())
+            rest.strip_suffix(self.extension())
                 .and_then(|r| r.strip_suffix('.'))
                 .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
         };
@@ -92,7 +96,7 @@ pub trait FileFormat: Sync + std::fmt::Debug {
                 .and_then(|r| r.strip_prefix('_'))
                 .is_some_and(numbered),
             Files::State => {
-                file_name == format!("state.{}.series", self.name())
+                file_name == format!("state.{}.series", self.extension())
                     || file_name.strip_prefix("state_").is_some_and(numbered)
             }
         }
@@ -147,14 +151,14 @@ impl FrameFormat {
         self.0
     }
 
-    /// Its name (also its file extension).
+    /// Its name.
     pub fn name(self) -> &'static str {
         self.0.name()
     }
 
     /// Its file extension.
     pub fn extension(self) -> &'static str {
-        self.0.name()
+        self.0.extension()
     }
 
     /// The axis convention of its files.
