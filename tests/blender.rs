@@ -186,6 +186,22 @@ fn shipped_scenes_import_into_blender_complete_and_upright() {
             (out, vec![0, frames - 1])
         })
         .collect();
+    let results = blender_check(&runs);
+    let mut failures = Vec::new();
+    let mut table = Vec::new();
+    for ((out, frames), seen) in runs.iter().zip(&results) {
+        check_run(out, frames, seen, &mut failures, &mut table);
+    }
+    let _ = std::fs::remove_dir_all(&root);
+    for row in &table {
+        println!("{row}");
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Runs `tools/blender/check_run.py` in one Blender process over the runs
+/// (`(folder, frames)`): what it saw of each, in order.
+fn blender_check(runs: &[(PathBuf, Vec<usize>)]) -> Vec<Value> {
     let o = Command::new("blender")
         .args(["-b", "--factory-startup", "--python"])
         .arg(repo().join("tools/blender/check_run.py"))
@@ -211,82 +227,103 @@ fn shipped_scenes_import_into_blender_complete_and_upright() {
         o.status.code(),
         String::from_utf8_lossy(&o.stderr)
     );
-    let mut failures = Vec::new();
-    let mut table = Vec::new();
-    for ((out, frames), seen) in runs.iter().zip(&results) {
-        let scene = out.file_name().unwrap().to_string_lossy().into_owned();
-        let summary: Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
-        let sequences = summary["files"]["sequences"].as_array().unwrap();
-        let names: Vec<&str> = sequences
-            .iter()
-            .map(|s| s["name"].as_str().unwrap())
-            .collect();
-        let rate = summary["frame_rate"].as_f64().unwrap();
-        let last = frames[frames.len() - 1];
-        for key in ["addon_scene", "addon_ply_scene"] {
-            let scene_info = &seen[key];
-            if (scene_info["fps"].as_f64().unwrap() - rate).abs() > 1e-6 * rate {
-                failures.push(format!(
-                    "{scene}: {key} fps {}, run {rate}",
-                    scene_info["fps"]
-                ));
-            }
-            if scene_info["frame_end"] != last || scene_info["frame_start"] != 0 {
-                failures.push(format!("{scene}: {key} frame range {scene_info}"));
-            }
-            let created: Vec<&str> = scene_info["objects"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|n| n.as_str().unwrap())
-                .collect();
-            if created != names {
-                failures.push(format!("{scene}: {key} objects {created:?}, run {names:?}"));
-            }
-        }
-        // Every importer, the PLY ones included, must show the OBJ file's
-        // counts and bounds.
-        let importers: Vec<&String> = seen
-            .as_object()
-            .unwrap()
-            .keys()
-            .filter(|k| !k.ends_with("_scene") && *k != "run")
-            .collect();
-        for want in ["obj_import", "ply", "addon", "addon_ply"] {
-            assert!(
-                importers.iter().any(|k| *k == want),
-                "{want}: {importers:?}"
-            );
-        }
-        for &k in frames {
-            for s in sequences {
-                let (name, stem) = (s["name"].as_str().unwrap(), s["stem"].as_str().unwrap());
-                let file = out.join(format!("frames/{stem}/{stem}_{k:05}.obj"));
-                let want = expected(&file);
-                for importer in &importers {
-                    let got = &seen[importer.as_str()][k.to_string()][name];
-                    check_object(
-                        &format!("{scene} frame {k} {name} ({importer})"),
-                        got,
-                        &want,
-                        &mut failures,
-                    );
-                    if k == last && importer.as_str() == "addon" {
-                        table.push(format!(
-                            "{scene} frame {k} {name}: file {} vertices {} faces, Blender {} \
-                             vertices {} faces",
-                            want.vertices, want.faces, got[0]["vertices"], got[0]["faces"]
-                        ));
-                    }
+    results
+}
+
+/// Checks what Blender saw of the run in `out` (its `frames`): the
+/// add-on's scenes, then every importer's objects against the OBJ files;
+/// adds the add-on's last frame to `table`.
+fn check_run(
+    out: &Path,
+    frames: &[usize],
+    seen: &Value,
+    failures: &mut Vec<String>,
+    table: &mut Vec<String>,
+) {
+    let scene = out.file_name().unwrap().to_string_lossy().into_owned();
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let sequences = summary["files"]["sequences"].as_array().unwrap();
+    let last = frames[frames.len() - 1];
+    check_addon_scenes(&scene, &summary, seen, last, failures);
+    let importers = importers(seen);
+    for &k in frames {
+        for s in sequences {
+            let (name, stem) = (s["name"].as_str().unwrap(), s["stem"].as_str().unwrap());
+            let file = out.join(format!("frames/{stem}/{stem}_{k:05}.obj"));
+            let want = expected(&file);
+            for importer in &importers {
+                let got = &seen[importer.as_str()][k.to_string()][name];
+                check_object(
+                    &format!("{scene} frame {k} {name} ({importer})"),
+                    got,
+                    &want,
+                    failures,
+                );
+                if k == last && importer.as_str() == "addon" {
+                    table.push(format!(
+                        "{scene} frame {k} {name}: file {} vertices {} faces, Blender {} \
+                         vertices {} faces",
+                        want.vertices, want.faces, got[0]["vertices"], got[0]["faces"]
+                    ));
                 }
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&root);
-    for row in &table {
-        println!("{row}");
+}
+
+/// The add-on's scenes (from the OBJ and from the PLY frames) against the
+/// run's `summary`: frame rate, frame range `0..=last`, objects.
+fn check_addon_scenes(
+    scene: &str,
+    summary: &Value,
+    seen: &Value,
+    last: usize,
+    failures: &mut Vec<String>,
+) {
+    let sequences = summary["files"]["sequences"].as_array().unwrap();
+    let names: Vec<&str> = sequences
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    let rate = summary["frame_rate"].as_f64().unwrap();
+    for key in ["addon_scene", "addon_ply_scene"] {
+        let scene_info = &seen[key];
+        if (scene_info["fps"].as_f64().unwrap() - rate).abs() > 1e-6 * rate {
+            failures.push(format!(
+                "{scene}: {key} fps {}, run {rate}",
+                scene_info["fps"]
+            ));
+        }
+        if scene_info["frame_end"] != last || scene_info["frame_start"] != 0 {
+            failures.push(format!("{scene}: {key} frame range {scene_info}"));
+        }
+        let created: Vec<&str> = scene_info["objects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_str().unwrap())
+            .collect();
+        if created != names {
+            failures.push(format!("{scene}: {key} objects {created:?}, run {names:?}"));
+        }
     }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The importers Blender ran: every one, the PLY ones included, must show
+/// the OBJ file's counts and bounds; the four expected must be there.
+fn importers(seen: &Value) -> Vec<&String> {
+    let importers: Vec<&String> = seen
+        .as_object()
+        .unwrap()
+        .keys()
+        .filter(|k| !k.ends_with("_scene") && *k != "run")
+        .collect();
+    for want in ["obj_import", "ply", "addon", "addon_ply"] {
+        assert!(
+            importers.iter().any(|k| *k == want),
+            "{want}: {importers:?}"
+        );
+    }
+    importers
 }

@@ -92,85 +92,100 @@ fn ply_and_vtu_frames_parse_back_with_counts_and_attributes() {
     assert_eq!(summary["files"]["axes"]["ply"], "z_up");
     let particles = summary["objects"][0]["particles"].as_u64().unwrap() as usize;
     for k in 0..3 {
-        // PLY: the OBJ frame's counts, in scene coordinates (OBJ is y-up).
-        let obj = out.join(format!("frames/spiral/spiral_{k:05}.obj"));
-        let (v, f, l) = obj_counts(&obj);
-        let path = out.join(format!("frames/spiral/spiral_{k:05}.ply"));
-        let bytes = std::fs::read(&path).unwrap();
-        assert!(bytes.starts_with(b"ply\nformat binary_little_endian 1.0\n"));
-        let p = ply(&path);
-        assert_eq!(p.payload["vertex"].len(), v, "{}", path.display());
-        assert_eq!(p.payload["face"].len(), f);
-        assert_eq!(p.payload["edge"].len(), l);
-        assert_eq!(v, 7 * particles, "discs: 7 vertices per particle");
-        let first_obj: Vec<f64> = std::fs::read_to_string(&obj)
-            .unwrap()
-            .lines()
-            .find_map(|l| l.strip_prefix("v "))
-            .unwrap()
-            .split_whitespace()
-            .map(|x| x.parse().unwrap())
-            .collect();
-        let e = &p.payload["vertex"][0];
-        let scene = [float(e, "x"), float(e, "y"), float(e, "z")];
-        let expected = [first_obj[0], -first_obj[2], first_obj[1]];
-        for c in 0..3 {
-            assert!(
-                (scene[c] - expected[c]).abs() < 2e-6,
-                "{scene:?} {expected:?}"
-            );
-        }
-        let n = [float(e, "nx"), float(e, "ny"), float(e, "nz")];
-        assert!(((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() - 1.0).abs() < 1e-5);
-        match &p.payload["face"][0]["vertex_indices"] {
-            Property::ListInt(t) => assert_eq!(t.len(), 3),
-            other => panic!("{other:?}"),
-        }
-
-        // VTU: every particle with its attributes.
-        let path = out.join(format!("vtu/state_{k:05}.vtu"));
-        let vtk = vtkio::Vtk::import(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
-            panic!("not an unstructured grid");
-        };
-        let Piece::Inline(piece) = &pieces[0] else {
-            panic!("not inline");
-        };
-        assert_eq!(piece.num_points(), particles);
-        assert_eq!(piece.cells.types.len(), particles);
-        let attrs = &piece.data.point;
-        for (name, comps) in [
-            ("orientation", 4),
-            ("normal", 3),
-            ("velocity", 3),
-            ("rest_curvature", 1),
-            ("temperature", 1),
-        ] {
-            let (b, c) = array(attrs, name);
-            assert_eq!(c, comps, "{name}");
-            let v = floats(b);
-            assert_eq!(v.len(), comps as usize * particles, "{name}");
-            assert!(v.iter().all(|x| x.is_finite()), "{name}");
-        }
-        let q = floats(array(attrs, "orientation").0);
-        for c in q.chunks(4) {
-            let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
-            assert!((norm - 1.0).abs() < 1e-9, "{c:?}");
-        }
-        // The spiral's rest curvature runs from 0.25 to 0.7.
-        let kappa = floats(array(attrs, "rest_curvature").0);
-        assert!(
-            kappa.iter().all(|&x| (0.2..=0.75).contains(&x)),
-            "{kappa:?}"
-        );
-        // Standard(1) x6, the hinge (-1), Standard(2) x6 (seed 002 §5).
-        let kinds = ints(array(attrs, "type").0);
-        assert_eq!(kinds.iter().filter(|&&t| t == -1).count(), 1, "{kinds:?}");
-        assert_eq!(kinds.iter().filter(|&&t| t == 1).count(), 6, "{kinds:?}");
-        assert_eq!(kinds.iter().filter(|&&t| t == 2).count(), 6, "{kinds:?}");
-        assert!(ints(array(attrs, "object").0).iter().all(|&o| o == 0));
-        assert_eq!(ints(array(attrs, "id").0).len(), particles);
+        check_ply_frame(&out, k, particles);
+        check_vtu_frame(&out, k, particles);
     }
+    check_vtu_series(&out, &summary);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// Frame `k` of the spiral as binary PLY: the OBJ frame's counts, in scene
+/// coordinates (OBJ is y-up), unit normals, triangles.
+fn check_ply_frame(out: &Path, k: usize, particles: usize) {
+    let obj = out.join(format!("frames/spiral/spiral_{k:05}.obj"));
+    let (v, f, l) = obj_counts(&obj);
+    let path = out.join(format!("frames/spiral/spiral_{k:05}.ply"));
+    let bytes = std::fs::read(&path).unwrap();
+    assert!(bytes.starts_with(b"ply\nformat binary_little_endian 1.0\n"));
+    let p = ply(&path);
+    assert_eq!(p.payload["vertex"].len(), v, "{}", path.display());
+    assert_eq!(p.payload["face"].len(), f);
+    assert_eq!(p.payload["edge"].len(), l);
+    assert_eq!(v, 7 * particles, "discs: 7 vertices per particle");
+    let first_obj: Vec<f64> = std::fs::read_to_string(&obj)
+        .unwrap()
+        .lines()
+        .find_map(|l| l.strip_prefix("v "))
+        .unwrap()
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let e = &p.payload["vertex"][0];
+    let scene = [float(e, "x"), float(e, "y"), float(e, "z")];
+    let expected = [first_obj[0], -first_obj[2], first_obj[1]];
+    for c in 0..3 {
+        assert!(
+            (scene[c] - expected[c]).abs() < 2e-6,
+            "{scene:?} {expected:?}"
+        );
+    }
+    let n = [float(e, "nx"), float(e, "ny"), float(e, "nz")];
+    assert!(((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() - 1.0).abs() < 1e-5);
+    match &p.payload["face"][0]["vertex_indices"] {
+        Property::ListInt(t) => assert_eq!(t.len(), 3),
+        other => panic!("{other:?}"),
+    }
+}
+
+/// Frame `k` as VTU: every particle with its attributes.
+fn check_vtu_frame(out: &Path, k: usize, particles: usize) {
+    let path = out.join(format!("vtu/state_{k:05}.vtu"));
+    let vtk = vtkio::Vtk::import(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        panic!("not an unstructured grid");
+    };
+    let Piece::Inline(piece) = &pieces[0] else {
+        panic!("not inline");
+    };
+    assert_eq!(piece.num_points(), particles);
+    assert_eq!(piece.cells.types.len(), particles);
+    let attrs = &piece.data.point;
+    for (name, comps) in [
+        ("orientation", 4),
+        ("normal", 3),
+        ("velocity", 3),
+        ("rest_curvature", 1),
+        ("temperature", 1),
+    ] {
+        let (b, c) = array(attrs, name);
+        assert_eq!(c, comps, "{name}");
+        let v = floats(b);
+        assert_eq!(v.len(), comps as usize * particles, "{name}");
+        assert!(v.iter().all(|x| x.is_finite()), "{name}");
+    }
+    let q = floats(array(attrs, "orientation").0);
+    for c in q.chunks(4) {
+        let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-9, "{c:?}");
+    }
+    // The spiral's rest curvature runs from 0.25 to 0.7.
+    let kappa = floats(array(attrs, "rest_curvature").0);
+    assert!(
+        kappa.iter().all(|&x| (0.2..=0.75).contains(&x)),
+        "{kappa:?}"
+    );
+    // Standard(1) x6, the hinge (-1), Standard(2) x6 (seed 002 §5).
+    let kinds = ints(array(attrs, "type").0);
+    assert_eq!(kinds.iter().filter(|&&t| t == -1).count(), 1, "{kinds:?}");
+    assert_eq!(kinds.iter().filter(|&&t| t == 1).count(), 6, "{kinds:?}");
+    assert_eq!(kinds.iter().filter(|&&t| t == 2).count(), 6, "{kinds:?}");
+    assert!(ints(array(attrs, "object").0).iter().all(|&o| o == 0));
+    assert_eq!(ints(array(attrs, "id").0).len(), particles);
+}
+
+/// The VTU series file: the three frames with their times at the run's
+/// frame rate.
+fn check_vtu_series(out: &Path, summary: &serde_json::Value) {
     let series: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("vtu/state.vtu.series")).unwrap())
             .unwrap();
@@ -181,7 +196,6 @@ fn ply_and_vtu_frames_parse_back_with_counts_and_attributes() {
         assert_eq!(f["name"], format!("state_{k:05}.vtu"));
         assert!((f["time"].as_f64().unwrap() - k as f64 / rate).abs() < 1e-9);
     }
-    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]

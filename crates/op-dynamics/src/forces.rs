@@ -49,7 +49,6 @@ use crate::particles::Attributes;
 use crate::tooling::ToolSet;
 
 mod pair_kernels;
-pub use pair_kernels::friction_force;
 use pair_kernels::{frames, oriented_pair, spacing_pair};
 
 /// Which pair kernel a world runs, fixed when the world is built.
@@ -211,93 +210,9 @@ impl ForceContext<'_> {
         torques: &mut [Vec3],
     ) {
         let n = s.positions.len();
-        let ForceScratch {
-            blocks,
-            normals,
-            tangents,
-            energies,
-            evaluations,
-            neighbour_seconds,
-        } = &mut *self.scratch;
-        *evaluations += 1;
-        energies.resize(n, 0.0);
-        match (self.kernel, self.neighbours.as_deref_mut()) {
-            (Kernel::None, _) | (_, None) => {
-                forces.iter_mut().for_each(|f| *f = Vec3::zeros());
-                torques.iter_mut().for_each(|t| *t = Vec3::zeros());
-                energies.iter_mut().for_each(|e| *e = 0.0);
-            }
-            (kernel, Some(list)) => {
-                let clock = std::time::Instant::now();
-                list.update(s.positions);
-                *neighbour_seconds += clock.elapsed().as_secs_f64();
-                let a = &self.attributes;
-                let m = self.materials;
-                let cutoff2 = list.cutoff() * list.cutoff();
-                let out = Sums {
-                    forces,
-                    torques,
-                    energies,
-                };
-                let heated = self.heated;
-                let bonds = self.bonds;
-                let list = &*list;
-                if let (Kernel::Spacing, Some(b)) = (kernel, bonds) {
-                    let pair = |i: usize, j: usize| spacing_pair(a, m, b, heated, cutoff2, s, i, j);
-                    accumulate::<false, _>(list, blocks, Scalar(pair), out);
-                } else if kernel == Kernel::Spacing {
-                    if uniform_spacing(a) && !heated {
-                        // One material, every pair complete: a dedicated
-                        // loop per spacing potential (monomorphized, no
-                        // per-pair dispatch).
-                        uniform_spacing_pass(&m[0], cutoff2, s.positions, list, blocks, out, true);
-                    } else {
-                        let pair = |i: usize, j: usize| {
-                            spacing_pair(a, m, &Unbonded, heated, cutoff2, s, i, j)
-                        };
-                        accumulate::<false, _>(list, blocks, Scalar(pair), out);
-                    }
-                } else {
-                    frames(normals, tangents, a, s);
-                    let (normals, tangents) = (&*normals, &*tangents);
-                    let (friction, nv, tv) = (self.friction, normals, tangents);
-                    if let Some(b) = bonds {
-                        let pair = |i: usize, j: usize| {
-                            oriented_pair::<false>(
-                                a, m, b, friction, heated, cutoff2, nv, tv, s, i, j,
-                            )
-                        };
-                        accumulate::<true, _>(list, blocks, Scalar(pair), out);
-                    } else if let Some(c) = (!heated && !friction && uniform_oriented(a))
-                        .then(|| m[0].oriented_lane_constants())
-                        .flatten()
-                    {
-                        let input = crate::lanes::OrientedInput {
-                            c: &c,
-                            cutoff2,
-                            p: s.positions,
-                            normals: nv,
-                            curvatures: a.curvatures,
-                        };
-                        uniform_oriented_pass(input, list, blocks, out);
-                    } else if !heated && uniform_oriented(a) {
-                        let pair = |i: usize, j: usize| {
-                            oriented_pair::<true>(
-                                a, m, &Unbonded, friction, false, cutoff2, nv, tv, s, i, j,
-                            )
-                        };
-                        accumulate::<true, _>(list, blocks, Scalar(pair), out);
-                    } else {
-                        let pair = |i: usize, j: usize| {
-                            oriented_pair::<false>(
-                                a, m, &Unbonded, friction, heated, cutoff2, nv, tv, s, i, j,
-                            )
-                        };
-                        accumulate::<true, _>(list, blocks, Scalar(pair), out);
-                    }
-                }
-            }
-        }
+        self.scratch.evaluations += 1;
+        self.scratch.energies.resize(n, 0.0);
+        self.pair_pass(s, forces, torques);
         // The bond memory of plastic lattices (`crate::bond_memory`): one
         // pass over the bonds, in bond order, after the pairs.
         if let (true, Some(b)) = (self.memory, self.bonds) {
@@ -308,9 +223,70 @@ impl ForceContext<'_> {
                 s,
                 forces,
                 torques,
-                energies,
+                &mut self.scratch.energies,
             );
         }
+        self.add_contributors(t, s, forces, torques);
+        if self.has_fixed {
+            fix(&self.attributes, forces, torques);
+        }
+    }
+
+    /// The pair pass: updates the neighbour list and sets the sums to the
+    /// chosen kernel's pairs (zero without a kernel or a list).
+    fn pair_pass(&mut self, s: StateRef<'_>, forces: &mut [Vec3], torques: &mut [Vec3]) {
+        let ForceScratch {
+            blocks,
+            normals,
+            tangents,
+            energies,
+            neighbour_seconds,
+            ..
+        } = &mut *self.scratch;
+        let list = match (self.kernel, self.neighbours.as_deref_mut()) {
+            (Kernel::None, _) | (_, None) => {
+                forces.iter_mut().for_each(|f| *f = Vec3::zeros());
+                torques.iter_mut().for_each(|t| *t = Vec3::zeros());
+                energies.iter_mut().for_each(|e| *e = 0.0);
+                return;
+            }
+            (_, Some(list)) => list,
+        };
+        let clock = std::time::Instant::now();
+        list.update(s.positions);
+        *neighbour_seconds += clock.elapsed().as_secs_f64();
+        let pass = PairPass {
+            a: &self.attributes,
+            m: self.materials,
+            cutoff2: list.cutoff() * list.cutoff(),
+            heated: self.heated,
+            friction: self.friction,
+            bonds: self.bonds,
+            s,
+            list: &*list,
+        };
+        let out = Sums {
+            forces,
+            torques,
+            energies,
+        };
+        if self.kernel == Kernel::Spacing {
+            pass.spacing(blocks, out);
+        } else {
+            pass.oriented(blocks, normals, tangents, out);
+        }
+    }
+
+    /// Adds the contributors in the order of the module docs of
+    /// `crate::contributors`: tools, uniform field, accumulated actions,
+    /// registered and extra contributors, force windows.
+    fn add_contributors(
+        &mut self,
+        t: Real,
+        s: StateRef<'_>,
+        forces: &mut [Vec3],
+        torques: &mut [Vec3],
+    ) {
         let input = ContributorInput {
             t,
             step_start: self.step_start,
@@ -319,9 +295,9 @@ impl ForceContext<'_> {
             materials: self.materials,
         };
         let mut out = Contribution {
-            forces: &mut *forces,
-            torques: &mut *torques,
-            energies: &mut energies[..],
+            forces,
+            torques,
+            energies: &mut self.scratch.energies[..],
         };
         // The order of the module docs of `crate::contributors`.
         let uniform = UniformField::new(self.external, self.materials, self.heated);
@@ -340,8 +316,101 @@ impl ForceContext<'_> {
                 c.contribute(&input, &mut out);
             }
         }
-        if self.has_fixed {
-            fix(&self.attributes, forces, torques);
+    }
+}
+
+/// What one pair pass reads: the attributes, materials and flags of the
+/// force context, the state and the updated neighbour list.
+#[derive(Clone, Copy)]
+struct PairPass<'p> {
+    a: &'p Attributes<'p>,
+    m: &'p [PreparedMaterial],
+    cutoff2: Real,
+    heated: bool,
+    friction: bool,
+    bonds: Option<&'p Bonds>,
+    s: StateRef<'p>,
+    list: &'p NeighbourList,
+}
+
+impl PairPass<'_> {
+    /// The spacing kernel: bonded pairs, one uniform material's dedicated
+    /// loop, or the general spacing pair.
+    fn spacing(self, blocks: &mut Vec<BlockScratch>, out: Sums<'_>) {
+        let PairPass {
+            a,
+            m,
+            cutoff2,
+            heated,
+            bonds,
+            s,
+            list,
+            ..
+        } = self;
+        if let Some(b) = bonds {
+            let pair = |i: usize, j: usize| spacing_pair(a, m, b, heated, cutoff2, s, i, j);
+            accumulate::<false, _>(list, blocks, Scalar(pair), out);
+        } else if uniform_spacing(a) && !heated {
+            // One material, every pair complete: a dedicated
+            // loop per spacing potential (monomorphized, no
+            // per-pair dispatch).
+            uniform_spacing_pass(&m[0], cutoff2, s.positions, list, blocks, out, true);
+        } else {
+            let pair = |i: usize, j: usize| spacing_pair(a, m, &Unbonded, heated, cutoff2, s, i, j);
+            accumulate::<false, _>(list, blocks, Scalar(pair), out);
+        }
+    }
+
+    /// The oriented kernel: the particle frames, then bonded pairs, one
+    /// uniform material's SIMD lanes or scalar loop, or the general
+    /// oriented pair.
+    fn oriented(
+        self,
+        blocks: &mut Vec<BlockScratch>,
+        normals: &mut Vec<Vec3>,
+        tangents: &mut Vec<Vec3>,
+        out: Sums<'_>,
+    ) {
+        let PairPass {
+            a,
+            m,
+            cutoff2,
+            heated,
+            friction,
+            bonds,
+            s,
+            list,
+        } = self;
+        frames(normals, tangents, a, s);
+        let (normals, tangents) = (&*normals, &*tangents);
+        let (nv, tv) = (normals, tangents);
+        if let Some(b) = bonds {
+            let pair = |i: usize, j: usize| {
+                oriented_pair::<false>(a, m, b, friction, heated, cutoff2, nv, tv, s, i, j)
+            };
+            accumulate::<true, _>(list, blocks, Scalar(pair), out);
+        } else if let Some(c) = (!heated && !friction && uniform_oriented(a))
+            .then(|| m[0].oriented_lane_constants())
+            .flatten()
+        {
+            let input = crate::lanes::OrientedInput {
+                c: &c,
+                cutoff2,
+                p: s.positions,
+                normals: nv,
+                curvatures: a.curvatures,
+            };
+            uniform_oriented_pass(input, list, blocks, out);
+        } else if !heated && uniform_oriented(a) {
+            let pair = |i: usize, j: usize| {
+                oriented_pair::<true>(a, m, &Unbonded, friction, false, cutoff2, nv, tv, s, i, j)
+            };
+            accumulate::<true, _>(list, blocks, Scalar(pair), out);
+        } else {
+            let pair = |i: usize, j: usize| {
+                oriented_pair::<false>(a, m, &Unbonded, friction, heated, cutoff2, nv, tv, s, i, j)
+            };
+            accumulate::<true, _>(list, blocks, Scalar(pair), out);
         }
     }
 }

@@ -488,7 +488,31 @@ fn findings(sweeps: &[CaseSweep]) -> String {
 
 ",
     );
-    // Explicit Euler: wrong answers that are not detected as divergence.
+    euler_wrong_answers(&mut s, sweeps);
+    s.push_str(
+        "- **Velocity Verlet is first order on the damped scenes.** Its order is 2 on the \
+         conservative cases and 1 on `spiral` (linear and angular damping and \
+         inter-particle friction depend on velocity; the half-step velocities enter the \
+         forces), as the integrator docs state: there it is no more accurate than \
+         symplectic Euler at the same step, and costs more per step.\n",
+    );
+    if let Some(c) = sweeps.iter().find(|c| c.name == "spiral") {
+        verlet_cost(&mut s, c);
+    }
+    if let Some(c) = sweeps.iter().find(|c| c.name == "ball_vs_spiral") {
+        contact_order(&mut s, c);
+    }
+    s.push_str(
+        "- **Round-off floor.** On the spiral RK4 and the adaptive scheme level off near \
+         1e-11 r0: the accumulated round-off of hundreds of thousands of steps (the \
+         reference check difference is of the same size).\n",
+    );
+    s
+}
+
+/// The finding on explicit Euler: runs with a large error that the
+/// divergence check did not stop.
+fn euler_wrong_answers(s: &mut String, sweeps: &[CaseSweep]) {
     let mut wrong = Vec::new();
     for c in sweeps {
         for m in c.rows_of("explicit_euler") {
@@ -514,77 +538,70 @@ fn findings(sweeps: &[CaseSweep]) -> String {
             wrong.join(", ")
         );
     }
-    s.push_str(
-        "- **Velocity Verlet is first order on the damped scenes.** Its order is 2 on the \
-         conservative cases and 1 on `spiral` (linear and angular damping and \
-         inter-particle friction depend on velocity; the half-step velocities enter the \
-         forces), as the integrator docs state: there it is no more accurate than \
-         symplectic Euler at the same step, and costs more per step.\n",
-    );
-    if let Some(c) = sweeps.iter().find(|c| c.name == "spiral") {
-        let ratios: Vec<Real> = c
-            .rows_of("velocity_verlet")
-            .filter_map(|v| {
-                let e = c
-                    .rows_of("symplectic_euler")
-                    .find(|m| m.method.dt == v.method.dt)?;
-                Some(v.timing.median() / e.timing.median())
-            })
-            .collect();
-        if !ratios.is_empty() {
-            let mut sorted = ratios.clone();
-            sorted.sort_by(Real::total_cmp);
-            let _ = writeln!(
-                s,
-                "- **Velocity Verlet costs more per step than symplectic Euler on oriented \
-                 worlds.** Both evaluate the forces once per step, yet on `spiral` the median \
-                 wall time of velocity Verlet is {:.1} to {:.1} times that of symplectic Euler \
-                 at the same step (median ratio {:.1}). The force evaluation counts are equal, \
-                 so the difference is in the integrator's own update; the likely cost is the \
-                 iterated implicit-midpoint rotation (`midpoint_drift` in \
-                 `integrators/velocity_verlet.rs`). Worth profiling.\n",
-                sorted[0],
-                sorted[sorted.len() - 1],
-                sorted[sorted.len() / 2]
-            );
-        }
-    }
-    if let Some(c) = sweeps.iter().find(|c| c.name == "ball_vs_spiral") {
-        let fixed = error_at(c, "rk4", 0.005);
-        let adaptive = c
-            .rows_of("adaptive")
-            .next()
-            .and_then(|m| m.outcome.as_ref().ok().map(|e| (m.method, e.position)));
+}
+
+/// The finding on velocity Verlet's cost per step against symplectic
+/// Euler's on the `spiral` case `c`.
+fn verlet_cost(s: &mut String, c: &CaseSweep) {
+    let ratios: Vec<Real> = c
+        .rows_of("velocity_verlet")
+        .filter_map(|v| {
+            let e = c
+                .rows_of("symplectic_euler")
+                .find(|m| m.method.dt == v.method.dt)?;
+            Some(v.timing.median() / e.timing.median())
+        })
+        .collect();
+    if !ratios.is_empty() {
+        let mut sorted = ratios.clone();
+        sorted.sort_by(Real::total_cmp);
         let _ = writeln!(
             s,
-            "- **Contact limits every scheme to first order.** The op-scene runner computes \
-             the implicit contact reactions once per step of `dt` and holds them constant \
-             during the step (`BuiltScene::advance_to` → `skins::contact_step`, then \
-             `World::advance_to`). This operator splitting is first order in `dt` whatever \
-             the integrator: on `ball_vs_spiral` RK4 is no more accurate than symplectic \
-             Euler at the same step, and the reference itself moves by {:.1e} r0 between `dt` and `dt/2` \
-             (table above), so errors below about that are not measurable there. A \
-             higher-order coupling would evaluate the contact inside the force field (at \
-             every stage).\n",
-            c.reference_check.position
+            "- **Velocity Verlet costs more per step than symplectic Euler on oriented \
+             worlds.** Both evaluate the forces once per step, yet on `spiral` the median \
+             wall time of velocity Verlet is {:.1} to {:.1} times that of symplectic Euler \
+             at the same step (median ratio {:.1}). The force evaluation counts are equal, \
+             so the difference is in the integrator's own update; the likely cost is the \
+             iterated implicit-midpoint rotation (`midpoint_drift` in \
+             `integrators/velocity_verlet.rs`). Worth profiling.\n",
+            sorted[0],
+            sorted[sorted.len() - 1],
+            sorted[sorted.len() / 2]
         );
-        if let Some((m, e)) = adaptive {
-            let _ = writeln!(
-                s,
-                "- **Contact with the adaptive scheme.** The reactions computed at the start \
-                 of an interval of `dt` are held over every step the adaptive scheme takes in \
-                 it (`World::hold_external_forces_until`). Measured: {} has an RMS position \
-                 error of {e:.2e} r0 on `ball_vs_spiral`, against {} for RK4 at dt=0.005: \
-                 with contact, the interval `dt`, not the tolerance, sets the accuracy.\n",
-                m.label(),
-                fmt_opt(fixed)
-            );
-        }
     }
-    s.push_str(
-        "- **Round-off floor.** On the spiral RK4 and the adaptive scheme level off near \
-         1e-11 r0: the accumulated round-off of hundreds of thousands of steps (the \
-         reference check difference is of the same size).\n",
+}
+
+/// The findings on contact, which limits every scheme to first order, on
+/// the `ball_vs_spiral` case `c`.
+fn contact_order(s: &mut String, c: &CaseSweep) {
+    let fixed = error_at(c, "rk4", 0.005);
+    let adaptive = c
+        .rows_of("adaptive")
+        .next()
+        .and_then(|m| m.outcome.as_ref().ok().map(|e| (m.method, e.position)));
+    let _ = writeln!(
+        s,
+        "- **Contact limits every scheme to first order.** The op-scene runner computes \
+         the implicit contact reactions once per step of `dt` and holds them constant \
+         during the step (`BuiltScene::advance_to` → `skins::contact_step`, then \
+         `World::advance_to`). This operator splitting is first order in `dt` whatever \
+         the integrator: on `ball_vs_spiral` RK4 is no more accurate than symplectic \
+         Euler at the same step, and the reference itself moves by {:.1e} r0 between `dt` and `dt/2` \
+         (table above), so errors below about that are not measurable there. A \
+         higher-order coupling would evaluate the contact inside the force field (at \
+         every stage).\n",
+        c.reference_check.position
     );
-    s
+    if let Some((m, e)) = adaptive {
+        let _ = writeln!(
+            s,
+            "- **Contact with the adaptive scheme.** The reactions computed at the start \
+             of an interval of `dt` are held over every step the adaptive scheme takes in \
+             it (`World::hold_external_forces_until`). Measured: {} has an RMS position \
+             error of {e:.2e} r0 on `ball_vs_spiral`, against {} for RK4 at dt=0.005: \
+             with contact, the interval `dt`, not the tolerance, sets the accuracy.\n",
+            m.label(),
+            fmt_opt(fixed)
+        );
+    }
 }

@@ -429,100 +429,129 @@ fn main() {
     let sizes: Vec<usize> = std::env::args().nth(1).map_or(vec![500, 5000], |s| {
         s.split(',').filter_map(|x| x.parse().ok()).collect()
     });
-    // The machine's load when the run starts (Linux), for the header:
-    // the times are wall-clock.
-    let load = std::fs::read_to_string("/proc/loadavg")
-        .ok()
-        .and_then(|l| l.split_whitespace().next().map(str::to_owned))
-        .unwrap_or_else(|| "unknown".into());
+    let load = load_average();
     let tmp = std::env::temp_dir().join(format!("fitting_report_{}", std::process::id()));
     std::fs::create_dir_all(&tmp).expect("temp dir");
     let python = dirs_home().join(".cache/op-peers/venv/bin/python");
-    let python = python.exists().then_some(python);
-    let mut rows = Vec::new();
-    let run =
-        |data: String, set: &PointSet, open: bool, shape: Option<Shape>, rows: &mut Vec<Row>| {
-            eprintln!("{data}");
-            rows.push(ours(&data, set, open, shape));
-            if let Some(py) = &python {
-                for m in ["poisson", "bpa"] {
-                    if let Some(r) = open3d(py, &tmp, &data, set, m, shape) {
-                        rows.push(r);
-                    }
-                }
-            }
-        };
+    let mut runs = Runs {
+        python: python.exists().then_some(python),
+        tmp,
+        rows: Vec::new(),
+    };
     for shape in Shape::ALL {
         for &n in &sizes {
             let set = shape.sample(n, 17);
-            run(
+            runs.run(
                 format!("{} {n} (random, seed 17)", shape.name()),
                 &set,
                 shape.is_open(),
                 Some(shape),
-                &mut rows,
             );
         }
     }
-    let mut missing = Vec::new();
-    let bdir = tmp.join("bunny");
-    std::fs::create_dir_all(&bdir).ok();
-    match bunny(&bdir) {
-        Some(set) => run(
-            format!("bunny (npm, {} vertices)", set.positions.len()),
-            &set,
-            false,
-            None,
-            &mut rows,
-        ),
-        None => missing.push("the bunny (npm pack bunny failed)"),
-    }
-    let odir = tmp.join("oni");
-    std::fs::create_dir_all(&odir).ok();
-    if std::env::var_os("FITTING_REPORT_NO_ONI").is_none() {
-        match oni(&odir) {
-            Some(set) => run(
-                format!("oni.pwn (CGAL, {} points, normals)", set.positions.len()),
-                &set,
-                false,
-                None,
-                &mut rows,
-            ),
-            None => missing.push("oni.pwn (apt-get download libcgal-demo failed)"),
-        }
-        match armadillo(&odir) {
-            Some(set) => run(
-                format!(
-                    "armadillo.off vertices (CGAL, {} points)",
-                    set.positions.len()
-                ),
-                &set,
-                false,
-                None,
-                &mut rows,
-            ),
-            None => missing.push("armadillo.off (from libcgal-demo)"),
-        }
-    } else {
-        missing.push("oni.pwn (skipped: FITTING_REPORT_NO_ONI)");
-    }
-    let _ = std::fs::remove_dir_all(&tmp);
+    let missing = runs.fetched();
+    let _ = std::fs::remove_dir_all(&runs.tmp);
+    let md = markdown(&sizes, &load, runs.python.is_some(), &missing, &runs.rows);
+    std::fs::create_dir_all("reports").expect("reports dir");
+    std::fs::write("reports/fitting.md", md).expect("write reports/fitting.md");
+    eprintln!("wrote reports/fitting.md");
+}
 
+/// The machine's load when the run starts (Linux), for the header: the
+/// times are wall-clock.
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|l| l.split_whitespace().next().map(str::to_owned))
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The report's runs so far: our fit and, when Open3D's Python is
+/// installed, its two methods, on each data set.
+struct Runs {
+    python: Option<PathBuf>,
+    tmp: PathBuf,
+    rows: Vec<Row>,
+}
+
+impl Runs {
+    /// Fits `set` (named `data`) with every method.
+    fn run(&mut self, data: String, set: &PointSet, open: bool, shape: Option<Shape>) {
+        eprintln!("{data}");
+        self.rows.push(ours(&data, set, open, shape));
+        if let Some(py) = &self.python {
+            for m in ["poisson", "bpa"] {
+                if let Some(r) = open3d(py, &self.tmp, &data, set, m, shape) {
+                    self.rows.push(r);
+                }
+            }
+        }
+    }
+
+    /// Fits the data fetched at run time (the bunny, CGAL's oni and
+    /// armadillo); returns what could not be fetched or was skipped.
+    fn fetched(&mut self) -> Vec<&'static str> {
+        let mut missing = Vec::new();
+        let bdir = self.tmp.join("bunny");
+        std::fs::create_dir_all(&bdir).ok();
+        match bunny(&bdir) {
+            Some(set) => self.run(
+                format!("bunny (npm, {} vertices)", set.positions.len()),
+                &set,
+                false,
+                None,
+            ),
+            None => missing.push("the bunny (npm pack bunny failed)"),
+        }
+        let odir = self.tmp.join("oni");
+        std::fs::create_dir_all(&odir).ok();
+        if std::env::var_os("FITTING_REPORT_NO_ONI").is_none() {
+            match oni(&odir) {
+                Some(set) => self.run(
+                    format!("oni.pwn (CGAL, {} points, normals)", set.positions.len()),
+                    &set,
+                    false,
+                    None,
+                ),
+                None => missing.push("oni.pwn (apt-get download libcgal-demo failed)"),
+            }
+            match armadillo(&odir) {
+                Some(set) => self.run(
+                    format!(
+                        "armadillo.off vertices (CGAL, {} points)",
+                        set.positions.len()
+                    ),
+                    &set,
+                    false,
+                    None,
+                ),
+                None => missing.push("armadillo.off (from libcgal-demo)"),
+            }
+        } else {
+            missing.push("oni.pwn (skipped: FITTING_REPORT_NO_ONI)");
+        }
+        missing
+    }
+}
+
+/// The Markdown report: how it was made, what is missing, one table row
+/// per run.
+fn markdown(sizes: &[usize], load: &str, open3d: bool, missing: &[&str], rows: &[Row]) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "# Point-set fitting side by side (issue 17)\n");
     let _ = writeln!(md, "Generated by `cargo run --profile ci -p op-experiments --example fitting_report {}` on this machine (2 cores shared with other builds, load average {load} at the start: times drift by 10-30% and more under load). Data fetched at run time, not committed. Analytic shapes: `op_scene::fit::shapes`, uniformly random samples, seed 17; expected topology: ellipsoid χ 2, torus χ 0, double torus χ -2 (all 0 loops), saddle with hole χ 0 with 2 loops (fitted with `--open`). Ours at the default spacing (and release time 0: the surface interpolates the samples) with estimated normals (k = 12 nearest, Hoppe et al. 1992); Open3D 0.20: normals by 12 nearest, oriented by `orient_normals_consistent_tangent_plane(12)` (files' normals when given), Poisson depth 8, ball pivoting radii 1, 2, 4 times the mean nearest distance. Our notes also give the mesh's pieces and the thin features the fit names (`Fit::thin_features`: two sides of the samples facing each other within the triangulation radius; thickness in spacings).\n", sizes.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(","), load = load);
-    if python.is_none() {
+    if !open3d {
         let _ = writeln!(
             md,
             "Open3D is not installed (`../shared/peers/install.sh open3d`): our figures alone.\n"
         );
     }
-    for m in &missing {
+    for m in missing {
         let _ = writeln!(md, "Missing: {m}.\n");
     }
     let _ = writeln!(md, "| data | method | time s | χ | loops | sample→mesh RMS | max | median min angle ° | min angle < 20° | vertex→surface RMS | note |");
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
-    for r in &rows {
+    for r in rows {
         let _ = writeln!(
             md,
             "| {} | {} | {:.2} | {} | {} | {:.2e} | {:.2e} | {:.1} | {:.1}% | {} | {} |",
@@ -539,9 +568,7 @@ fn main() {
             r.note
         );
     }
-    std::fs::create_dir_all("reports").expect("reports dir");
-    std::fs::write("reports/fitting.md", md).expect("write reports/fitting.md");
-    eprintln!("wrote reports/fitting.md");
+    md
 }
 
 fn dirs_home() -> PathBuf {

@@ -401,6 +401,15 @@ fn report(
     load: (&str, &str),
 ) -> Res<String> {
     let mut md = String::new();
+    intro(&mut md, reps, started, load)?;
+    shipped_table(&mut md, cases, results)?;
+    scaled_table(&mut md, cases, results)?;
+    growth_table(&mut md, cases, results)?;
+    Ok(md)
+}
+
+/// The report's title, how it was made, and the machine's load.
+fn intro(md: &mut String, reps: usize, started: Instant, load: (&str, &str)) -> std::fmt::Result {
     writeln!(
         md,
         "# Whole scenes: wall time and stages at 1 and 2 threads\n"
@@ -420,6 +429,15 @@ fn report(
         format!("{} / {}", load.0, load.1),
     )]));
     writeln!(md)?;
+    Ok(())
+}
+
+/// The table of the shipped scenes, and which are slower at 2 threads.
+fn shipped_table(
+    md: &mut String,
+    cases: &[Case],
+    results: &[[Vec<Sample>; 2]],
+) -> std::fmt::Result {
     writeln!(md, "## Shipped scenes\n")?;
     writeln!(
         md,
@@ -461,6 +479,11 @@ fn report(
             slower.join(", ")
         )?;
     }
+    Ok(())
+}
+
+/// The table of the scaled-up cases: times, stages, peak memory.
+fn scaled_table(md: &mut String, cases: &[Case], results: &[[Vec<Sample>; 2]]) -> std::fmt::Result {
     writeln!(md, "## Scaled-up scenes\n")?;
     writeln!(
         md,
@@ -494,6 +517,12 @@ fn report(
             peak(two),
         )?;
     }
+    Ok(())
+}
+
+/// The exponent of `t ~ N^a` per scaled-up family, for the wall time and
+/// the largest stages.
+fn growth_table(md: &mut String, cases: &[Case], results: &[[Vec<Sample>; 2]]) -> std::fmt::Result {
     writeln!(md)?;
     writeln!(
         md,
@@ -532,5 +561,5 @@ fn report(
             fit(&|s| stage(s, "export")),
         )?;
     }
-    Ok(md)
+    Ok(())
 }

@@ -517,13 +517,37 @@ pub fn shapes_svg(
         cell * per_row.min(panels.len()).max(1) as Real,
         40.0 + cell * rows as Real,
     );
-    let centred = |pts: &[Point3]| -> Vec<(Real, Real)> {
-        let n = pts.len().max(1) as Real;
-        let (cx, cy) = pts
-            .iter()
-            .fold((0.0, 0.0), |a, p| (a.0 + p.x / n, a.1 + p.y / n));
-        pts.iter().map(|p| (p.x - cx, p.y - cy)).collect()
-    };
+    let scale = (cell / 2.0 - pad - 12.0) / shapes_extent(panels, reference);
+    let mut s = header(w, h);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="22" text-anchor="middle" font-size="15">{}</text>"#,
+        w / 2.0,
+        esc(title)
+    );
+    for (k, p) in panels.iter().enumerate() {
+        let origin = (
+            cell * (k % per_row) as Real + cell / 2.0,
+            40.0 + cell * (k / per_row) as Real + cell / 2.0 - 10.0,
+        );
+        shape_panel(&mut s, p, reference, origin, cell, scale);
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+/// The x-y coordinates of `pts` about their mean.
+fn centred(pts: &[Point3]) -> Vec<(Real, Real)> {
+    let n = pts.len().max(1) as Real;
+    let (cx, cy) = pts
+        .iter()
+        .fold((0.0, 0.0), |a, p| (a.0 + p.x / n, a.1 + p.y / n));
+    pts.iter().map(|p| (p.x - cx, p.y - cy)).collect()
+}
+
+/// The largest centred x or y coordinate of the panels' shapes and the
+/// reference (at least `1e-9`): the common scale's half width.
+fn shapes_extent(panels: &[ShapePanel], reference: Option<&[Point3]>) -> Real {
     let mut extent: Real = 1e-9;
     for p in panels {
         for (x, y) in centred(&p.positions) {
@@ -535,76 +559,74 @@ pub fn shapes_svg(
             extent = extent.max(x.abs()).max(y.abs());
         }
     }
-    let scale = (cell / 2.0 - pad - 12.0) / extent;
-    let mut s = header(w, h);
+    extent
+}
+
+/// One panel of [`shapes_svg`] centred on `(ox, oy)`, `cell` wide, at
+/// `scale` pixels per unit: its border, the reference, the chain, its
+/// normals and particles (the first in green), the caption.
+fn shape_panel(
+    s: &mut String,
+    p: &ShapePanel,
+    reference: Option<&[Point3]>,
+    (ox, oy): (Real, Real),
+    cell: Real,
+    scale: Real,
+) {
+    let tx = |(x, y): (Real, Real)| (ox + x * scale, oy - y * scale);
     let _ = writeln!(
         s,
-        r#"<text x="{}" y="22" text-anchor="middle" font-size="15">{}</text>"#,
-        w / 2.0,
-        esc(title)
+        r##"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="#ccc"/>"##,
+        ox - cell / 2.0 + 4.0,
+        oy - cell / 2.0 + 14.0,
+        cell - 8.0,
+        cell - 8.0
     );
-    for (k, p) in panels.iter().enumerate() {
-        let (ox, oy) = (
-            cell * (k % per_row) as Real + cell / 2.0,
-            40.0 + cell * (k / per_row) as Real + cell / 2.0 - 10.0,
-        );
-        let tx = |(x, y): (Real, Real)| (ox + x * scale, oy - y * scale);
-        let _ = writeln!(
-            s,
-            r##"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="#ccc"/>"##,
-            ox - cell / 2.0 + 4.0,
-            oy - cell / 2.0 + 14.0,
-            cell - 8.0,
-            cell - 8.0
-        );
-        if let Some(r) = reference {
-            let d: Vec<String> = centred(r)
-                .into_iter()
-                .map(tx)
-                .map(|(x, y)| format!("{x:.1},{y:.1}"))
-                .collect();
-            let _ = writeln!(
-                s,
-                r##"<polyline points="{}" fill="none" stroke="#bbb" stroke-width="1.2"/>"##,
-                d.join(" ")
-            );
-        }
-        let c = centred(&p.positions);
-        let d: Vec<String> = c
-            .iter()
-            .copied()
+    if let Some(r) = reference {
+        let d: Vec<String> = centred(r)
+            .into_iter()
             .map(tx)
             .map(|(x, y)| format!("{x:.1},{y:.1}"))
             .collect();
         let _ = writeln!(
             s,
-            r##"<polyline points="{}" fill="none" stroke="#1f5fa8" stroke-width="1.6"/>"##,
+            r##"<polyline points="{}" fill="none" stroke="#bbb" stroke-width="1.2"/>"##,
             d.join(" ")
         );
-        for (i, &q) in c.iter().enumerate() {
-            let (x, y) = tx(q);
-            if let Some(n) = p.normals.get(i) {
-                let (nx, ny) = (x + n.x * 12.0, y - n.y * 12.0);
-                let _ = writeln!(
-                    s,
-                    r##"<line x1="{x:.1}" y1="{y:.1}" x2="{nx:.1}" y2="{ny:.1}" stroke="#c0392b" stroke-width="1.2"/>"##
-                );
-            }
-            let fill = if i == 0 { "#2c7a2c" } else { "#1f5fa8" };
+    }
+    let c = centred(&p.positions);
+    let d: Vec<String> = c
+        .iter()
+        .copied()
+        .map(tx)
+        .map(|(x, y)| format!("{x:.1},{y:.1}"))
+        .collect();
+    let _ = writeln!(
+        s,
+        r##"<polyline points="{}" fill="none" stroke="#1f5fa8" stroke-width="1.6"/>"##,
+        d.join(" ")
+    );
+    for (i, &q) in c.iter().enumerate() {
+        let (x, y) = tx(q);
+        if let Some(n) = p.normals.get(i) {
+            let (nx, ny) = (x + n.x * 12.0, y - n.y * 12.0);
             let _ = writeln!(
                 s,
-                r#"<circle cx="{x:.1}" cy="{y:.1}" r="3.2" fill="{fill}"/>"#
+                r##"<line x1="{x:.1}" y1="{y:.1}" x2="{nx:.1}" y2="{ny:.1}" stroke="#c0392b" stroke-width="1.2"/>"##
             );
         }
+        let fill = if i == 0 { "#2c7a2c" } else { "#1f5fa8" };
         let _ = writeln!(
             s,
-            r#"<text x="{ox}" y="{}" text-anchor="middle" font-size="12">{}</text>"#,
-            oy + cell / 2.0 - 2.0,
-            esc(&p.caption)
+            r#"<circle cx="{x:.1}" cy="{y:.1}" r="3.2" fill="{fill}"/>"#
         );
     }
-    s.push_str("</svg>\n");
-    s
+    let _ = writeln!(
+        s,
+        r#"<text x="{ox}" y="{}" text-anchor="middle" font-size="12">{}</text>"#,
+        oy + cell / 2.0 - 2.0,
+        esc(&p.caption)
+    );
 }
 
 #[cfg(test)]

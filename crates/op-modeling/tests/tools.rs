@@ -83,6 +83,45 @@ fn tool_forces_are_the_gradient_of_the_tool_energies() {
         Point3::new(3.05, 0.0, 0.0), // grabbed by the mover
         Point3::new(5.0, 5.0, 5.0),  // far from everything
     ];
+    let tools = gradient_test_tools();
+    let params = WorldParams::default();
+    let mut w = Tools::world(
+        particles(&points, |_| 0),
+        &[spacing_material()],
+        params,
+        &tools,
+    )
+    .unwrap();
+    let grabbed = |w: &World| {
+        Tools::of(w).unwrap().tools()[2]
+            .grabbed()
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(grabbed(&w), vec![3]);
+    // Advance the clock (the mover has moved), then put the particles back
+    // where the test wants them.
+    w.advance_to(0.37).unwrap();
+    for (id, x) in points.iter().enumerate() {
+        let slot = w.particles().slot_of(id as u32).unwrap();
+        w.particles_mut().set_position(slot, *x);
+    }
+    let (forces, _, energy) = w.evaluate_forces();
+    let forces = forces.to_vec();
+    assert!(energy != 0.0);
+    let slots: Vec<usize> = (0..points.len() as u32)
+        .map(|id| w.particles().slot_of(id).unwrap())
+        .collect();
+    assert_forces_are_energy_gradient(&mut w, &slots, &forces);
+    // Every particle near a tool feels it.
+    for &i in &slots[..4] {
+        assert!(forces[i].norm() > 1e-3, "slot {i}: {}", forces[i]);
+    }
+}
+
+/// The tools of [`tool_forces_are_the_gradient_of_the_tool_energies`]: an
+/// obstacle ball with a margin at the origin, an attractor at `(0, 2, 0)`
+/// and a cuboid mover moving from `(3, 0, 0)`.
+fn gradient_test_tools() -> Vec<ToolParams> {
     let mover_path = ToolPath {
         keyframes: vec![
             Keyframe {
@@ -97,7 +136,7 @@ fn tool_forces_are_the_gradient_of_the_tool_energies() {
             },
         ],
     };
-    let tools = vec![
+    vec![
         ball(
             [0.0, 0.0, 0.0],
             1.0,
@@ -129,36 +168,14 @@ fn tool_forces_are_the_gradient_of_the_tool_energies() {
             },
             objects: None,
         },
-    ];
-    let params = WorldParams::default();
-    let mut w = Tools::world(
-        particles(&points, |_| 0),
-        &[spacing_material()],
-        params,
-        &tools,
-    )
-    .unwrap();
-    let grabbed = |w: &World| {
-        Tools::of(w).unwrap().tools()[2]
-            .grabbed()
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(grabbed(&w), vec![3]);
-    // Advance the clock (the mover has moved), then put the particles back
-    // where the test wants them.
-    w.advance_to(0.37).unwrap();
-    for (id, x) in points.iter().enumerate() {
-        let slot = w.particles().slot_of(id as u32).unwrap();
-        w.particles_mut().set_position(slot, *x);
-    }
-    let (forces, _, energy) = w.evaluate_forces();
-    let forces = forces.to_vec();
-    assert!(energy != 0.0);
+    ]
+}
+
+/// Asserts that each of the `slots`' `forces` is the negative gradient
+/// of the world's potential energy (central differences, step `1e-6`).
+fn assert_forces_are_energy_gradient(w: &mut World, slots: &[usize], forces: &[Vec3]) {
     let h = 1e-6;
-    let slots: Vec<usize> = (0..points.len() as u32)
-        .map(|id| w.particles().slot_of(id).unwrap())
-        .collect();
-    for &i in &slots {
+    for &i in slots {
         for axis in 0..3 {
             let p0 = w.particles().positions()[i];
             let shifted = |w: &mut World, d: Real| {
@@ -169,17 +186,13 @@ fn tool_forces_are_the_gradient_of_the_tool_energies() {
                 w.particles_mut().set_position(i, p0);
                 e
             };
-            let fd = -(shifted(&mut w, h) - shifted(&mut w, -h)) / (2.0 * h);
+            let fd = -(shifted(w, h) - shifted(w, -h)) / (2.0 * h);
             let f = forces[i][axis];
             assert!(
                 (fd - f).abs() <= 1e-5 * (1.0 + f.abs()),
                 "particle {i} axis {axis}: fd {fd} vs force {f}"
             );
         }
-    }
-    // Every particle near a tool feels it.
-    for &i in &slots[..4] {
-        assert!(forces[i].norm() > 1e-3, "slot {i}: {}", forces[i]);
     }
 }
 

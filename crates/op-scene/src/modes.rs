@@ -61,116 +61,167 @@ impl PlanarModes {
 pub fn planar_modes(world: &mut World) -> PlanarModes {
     let n = world.particles().len();
     let dof = 3 * n;
-    let base_p: Vec<Point3> = world.particles().positions().to_vec();
-    let base_q: Vec<Quat> = world.particles().orientations().to_vec();
-    // 1/sqrt(mass) per degree of freedom; the rotation about z has the
-    // body moment of inertia about the world z axis.
-    let weights: Vec<Real> = {
-        let p = world.particles();
-        (0..dof)
-            .map(|k| {
-                let s = k / 3;
-                let f = p.flags()[s];
-                let free =
-                    !f.contains(Flags::FIXED_POSITION) && !f.contains(Flags::FIXED_ORIENTATION);
-                let w = if !free {
-                    0.0
-                } else if k % 3 < 2 {
-                    p.inv_masses()[s].sqrt()
-                } else {
-                    let z = base_q[s].inverse_transform_vector(&Vec3::z());
-                    let i = p.inertias()[s];
-                    let iz = i[0] * z.x * z.x + i[1] * z.y * z.y + i[2] * z.z * z.z;
-                    1.0 / iz.sqrt()
-                };
-                if w.is_finite() {
-                    w
-                } else {
-                    0.0
-                }
-            })
-            .collect()
+    let base = Base {
+        p: world.particles().positions().to_vec(),
+        q: world.particles().orientations().to_vec(),
     };
-    let length = base_p
-        .windows(2)
-        .map(|w| (w[1] - w[0]).norm())
-        .fold(Real::INFINITY, Real::min);
-    let h = 1e-6
-        * if length.is_finite() && length > 0.0 {
-            length.min(1.0)
-        } else {
-            1.0
-        };
-    // Gradient of the energy over (x, y, θ) at a displacement of slot s's
-    // coordinate c by `step`.
-    let gradient = |world: &mut World, k: usize, step: Real| -> Vec<Real> {
-        let (s, c) = (k / 3, k % 3);
-        {
-            let p = world.particles_mut();
-            if c < 2 {
-                let mut d = Vec3::zeros();
-                d[c] = step;
-                p.set_position(s, base_p[s] + d);
-            } else {
-                p.set_orientation(s, Quat::from_scaled_axis(Vec3::z() * step) * base_q[s]);
-            }
-        }
-        let (f, t, _) = world.evaluate_forces();
-        let g = (0..dof)
-            .map(|j| {
-                let (sj, cj) = (j / 3, j % 3);
-                if cj < 2 {
-                    -f[sj][cj]
-                } else {
-                    -t[sj].z
-                }
-            })
-            .collect();
-        let p = world.particles_mut();
-        p.set_position(s, base_p[s]);
-        p.set_orientation(s, base_q[s]);
-        g
-    };
-    let mut hess = nalgebra::DMatrix::<Real>::zeros(dof, dof);
-    for k in 0..dof {
-        if weights[k] == 0.0 {
-            continue;
-        }
-        let plus = gradient(world, k, h);
-        let minus = gradient(world, k, -h);
-        for j in 0..dof {
-            hess[(j, k)] = weights[j] * (plus[j] - minus[j]) / (2.0 * h) * weights[k];
-        }
-    }
+    let weights = mass_weights(world, &base.q);
+    let h = difference_step(&base.p);
+    let hess = weighted_hessian(world, &base, &weights, h);
     let mut sym = (&hess + hess.transpose()) * 0.5;
     // The rigid motions of the plane (two translations, the rotation about
     // the centre of mass), in mass-weighted coordinates, when every
     // particle is free: projected out, so that they are exactly the zero
     // modes and every other mode is orthogonal to them.
     let rigid = if weights.iter().all(|w| *w > 0.0) && n > 1 {
-        let sqrt_m = |k: usize| 1.0 / weights[k];
-        let mass: Vec<Real> = (0..n).map(|s| sqrt_m(3 * s).powi(2)).collect();
-        let total: Real = mass.iter().sum();
-        let centre = (0..n).fold(Vec3::zeros(), |c, s| c + base_p[s].coords * mass[s]) / total;
-        let mut q = nalgebra::DMatrix::<Real>::zeros(dof, 3);
-        for s in 0..n {
-            let d = base_p[s].coords - centre;
-            q[(3 * s, 0)] = sqrt_m(3 * s);
-            q[(3 * s + 1, 1)] = sqrt_m(3 * s + 1);
-            q[(3 * s, 2)] = -d.y * sqrt_m(3 * s);
-            q[(3 * s + 1, 2)] = d.x * sqrt_m(3 * s + 1);
-            q[(3 * s + 2, 2)] = sqrt_m(3 * s + 2);
-        }
-        let q = q.qr().q();
+        let q = rigid_basis(&weights, &base.p);
         let p = nalgebra::DMatrix::<Real>::identity(dof, dof) - &q * q.transpose();
         sym = &p * sym * &p;
         Some(q)
     } else {
         None
     };
-    let eig = nalgebra::SymmetricEigen::new(sym);
+    sorted_modes(nalgebra::SymmetricEigen::new(sym), rigid.as_ref(), &weights)
+}
+
+/// The rest state the differences are taken around: positions and
+/// orientations by slot.
+struct Base {
+    p: Vec<Point3>,
+    q: Vec<Quat>,
+}
+
+/// `1/sqrt(mass)` per degree of freedom (0 for held or massless ones); the
+/// rotation about z has the body moment of inertia about the world z axis.
+fn mass_weights(world: &World, base_q: &[Quat]) -> Vec<Real> {
+    let p = world.particles();
+    (0..3 * p.len())
+        .map(|k| {
+            let s = k / 3;
+            let f = p.flags()[s];
+            let free = !f.contains(Flags::FIXED_POSITION) && !f.contains(Flags::FIXED_ORIENTATION);
+            let w = if !free {
+                0.0
+            } else if k % 3 < 2 {
+                p.inv_masses()[s].sqrt()
+            } else {
+                let z = base_q[s].inverse_transform_vector(&Vec3::z());
+                let i = p.inertias()[s];
+                let iz = i[0] * z.x * z.x + i[1] * z.y * z.y + i[2] * z.z * z.z;
+                1.0 / iz.sqrt()
+            };
+            if w.is_finite() {
+                w
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// The central-difference step: `1e-6` of the shortest distance between
+/// consecutive slots (at most 1).
+fn difference_step(base_p: &[Point3]) -> Real {
+    let length = base_p
+        .windows(2)
+        .map(|w| (w[1] - w[0]).norm())
+        .fold(Real::INFINITY, Real::min);
+    1e-6 * if length.is_finite() && length > 0.0 {
+        length.min(1.0)
+    } else {
+        1.0
+    }
+}
+
+/// Gradient of the energy over (x, y, θ) at a displacement of degree of
+/// freedom `k` (slot `k / 3`, coordinate `k % 3`) by `step`; the slot is
+/// put back afterwards.
+fn planar_gradient(world: &mut World, base: &Base, k: usize, step: Real) -> Vec<Real> {
+    let dof = 3 * base.p.len();
+    let (s, c) = (k / 3, k % 3);
+    {
+        let p = world.particles_mut();
+        if c < 2 {
+            let mut d = Vec3::zeros();
+            d[c] = step;
+            p.set_position(s, base.p[s] + d);
+        } else {
+            p.set_orientation(s, Quat::from_scaled_axis(Vec3::z() * step) * base.q[s]);
+        }
+    }
+    let (f, t, _) = world.evaluate_forces();
+    let g = (0..dof)
+        .map(|j| {
+            let (sj, cj) = (j / 3, j % 3);
+            if cj < 2 {
+                -f[sj][cj]
+            } else {
+                -t[sj].z
+            }
+        })
+        .collect();
+    let p = world.particles_mut();
+    p.set_position(s, base.p[s]);
+    p.set_orientation(s, base.q[s]);
+    g
+}
+
+/// The mass-weighted Hessian `M^-1/2 H M^-1/2`, column by column from
+/// central differences of the gradient (columns of held degrees of
+/// freedom stay zero); not yet symmetrized.
+fn weighted_hessian(
+    world: &mut World,
+    base: &Base,
+    weights: &[Real],
+    h: Real,
+) -> nalgebra::DMatrix<Real> {
+    let dof = weights.len();
+    let mut hess = nalgebra::DMatrix::<Real>::zeros(dof, dof);
+    for k in 0..dof {
+        if weights[k] == 0.0 {
+            continue;
+        }
+        let plus = planar_gradient(world, base, k, h);
+        let minus = planar_gradient(world, base, k, -h);
+        for j in 0..dof {
+            hess[(j, k)] = weights[j] * (plus[j] - minus[j]) / (2.0 * h) * weights[k];
+        }
+    }
+    hess
+}
+
+/// An orthonormal basis of the rigid motions of the plane (two
+/// translations, the rotation about the centre of mass) in mass-weighted
+/// coordinates; every weight must be positive.
+fn rigid_basis(weights: &[Real], base_p: &[Point3]) -> nalgebra::DMatrix<Real> {
+    let (n, dof) = (base_p.len(), weights.len());
+    let sqrt_m = |k: usize| 1.0 / weights[k];
+    let mass: Vec<Real> = (0..n).map(|s| sqrt_m(3 * s).powi(2)).collect();
+    let total: Real = mass.iter().sum();
+    let centre = (0..n).fold(Vec3::zeros(), |c, s| c + base_p[s].coords * mass[s]) / total;
+    let mut q = nalgebra::DMatrix::<Real>::zeros(dof, 3);
+    for s in 0..n {
+        let d = base_p[s].coords - centre;
+        q[(3 * s, 0)] = sqrt_m(3 * s);
+        q[(3 * s + 1, 1)] = sqrt_m(3 * s + 1);
+        q[(3 * s, 2)] = -d.y * sqrt_m(3 * s);
+        q[(3 * s + 1, 2)] = d.x * sqrt_m(3 * s + 1);
+        q[(3 * s + 2, 2)] = sqrt_m(3 * s + 2);
+    }
+    q.qr().q()
+}
+
+/// The modes by ascending `ω²`, without the three eigenvectors lying most
+/// in the `rigid` subspace when there is one, shapes scaled back by the
+/// weights (`M^-1/2 v`).
+fn sorted_modes(
+    eig: nalgebra::SymmetricEigen<Real, nalgebra::Dyn>,
+    rigid: Option<&nalgebra::DMatrix<Real>>,
+    weights: &[Real],
+) -> PlanarModes {
+    let dof = weights.len();
     let mut order: Vec<usize> = (0..dof).collect();
-    if let Some(q) = &rigid {
+    if let Some(q) = rigid {
         // Drop the three eigenvectors lying most in the rigid subspace.
         let mut by_rigidity: Vec<(Real, usize)> = (0..dof)
             .map(|k| ((q.transpose() * eig.eigenvectors.column(k)).norm(), k))

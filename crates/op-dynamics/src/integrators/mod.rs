@@ -438,21 +438,7 @@ impl Integrator {
         dt: Real,
         state: StateMut<'_>,
     ) -> StepInfo {
-        assert!(
-            dt.is_finite() && dt > 0.0,
-            "time step must be finite and > 0, got {dt}"
-        );
-        let n = state.len();
-        state.view().assert_consistent();
-        assert!(
-            bodies.inv_mass.len() == n && bodies.inertia.len() == n,
-            "bodies and state have different lengths"
-        );
-        if self.forces.len() != n {
-            self.forces.resize(n, Vec3::zeros());
-            self.torques.resize(n, Vec3::zeros());
-            self.cache_valid = false;
-        }
+        self.prepare_step(bodies, dt, &state);
         let fixed = |evals| StepInfo {
             dt_taken: dt,
             dt_next: dt,
@@ -462,20 +448,7 @@ impl Integrator {
         };
         match self.scheme {
             Scheme::ExplicitEuler | Scheme::SymplecticEuler => {
-                let mut state = state;
-                field.forces(t, state.view(), &mut self.forces, &mut self.torques);
-                let kernel = if self.scheme == Scheme::ExplicitEuler {
-                    explicit_euler::step
-                } else {
-                    symplectic_euler::step
-                };
-                for i in 0..n {
-                    let s = state.view().particle(i);
-                    let (f, tau) = (&self.forces[i], &self.torques[i]);
-                    let new = kernel(&s, f, tau, bodies.inv_mass[i], &bodies.inertia[i], dt);
-                    state.set(i, new);
-                }
-                self.cache_valid = false;
+                self.euler_step(field, bodies, t, dt, state);
                 fixed(1)
             }
             Scheme::VelocityVerlet => {
@@ -531,6 +504,53 @@ impl Integrator {
                 info
             }
         }
+    }
+
+    /// Checks the arguments of [`Integrator::step`] and sizes the force
+    /// and torque buffers to the particles (forgetting the cache when they
+    /// change size).
+    fn prepare_step(&mut self, bodies: &Bodies<'_>, dt: Real, state: &StateMut<'_>) {
+        assert!(
+            dt.is_finite() && dt > 0.0,
+            "time step must be finite and > 0, got {dt}"
+        );
+        let n = state.len();
+        state.view().assert_consistent();
+        assert!(
+            bodies.inv_mass.len() == n && bodies.inertia.len() == n,
+            "bodies and state have different lengths"
+        );
+        if self.forces.len() != n {
+            self.forces.resize(n, Vec3::zeros());
+            self.torques.resize(n, Vec3::zeros());
+            self.cache_valid = false;
+        }
+    }
+
+    /// One explicit or symplectic Euler step: the forces at the old state,
+    /// then each particle updated by the scheme's kernel.
+    fn euler_step<F: ForceField>(
+        &mut self,
+        field: &mut F,
+        bodies: &Bodies<'_>,
+        t: Real,
+        dt: Real,
+        mut state: StateMut<'_>,
+    ) {
+        let n = state.len();
+        field.forces(t, state.view(), &mut self.forces, &mut self.torques);
+        let kernel = if self.scheme == Scheme::ExplicitEuler {
+            explicit_euler::step
+        } else {
+            symplectic_euler::step
+        };
+        for i in 0..n {
+            let s = state.view().particle(i);
+            let (f, tau) = (&self.forces[i], &self.torques[i]);
+            let new = kernel(&s, f, tau, bodies.inv_mass[i], &bodies.inertia[i], dt);
+            state.set(i, new);
+        }
+        self.cache_valid = false;
     }
 
     /// Advances the state by exactly `duration` with repeated calls of

@@ -315,22 +315,7 @@ fn stage_2<S: pulp::Simd>(
     let (kj, _) = S::as_simd_f64s(&g.kappa);
     let (p0, _) = S::as_simd_f64s(&psi0[0]);
     let (p1, _) = S::as_simd_f64s(&psi0[1]);
-    let range = k0..k0 + LANES;
-    let [fx, fy, fz] = &mut out.f;
-    let (fx, _) = S::as_mut_simd_f64s(&mut fx[range.clone()]);
-    let (fy, _) = S::as_mut_simd_f64s(&mut fy[range.clone()]);
-    let (fz, _) = S::as_mut_simd_f64s(&mut fz[range.clone()]);
-    let [tix, tiy, tiz] = &mut out.ti;
-    let (tix, _) = S::as_mut_simd_f64s(&mut tix[range.clone()]);
-    let (tiy, _) = S::as_mut_simd_f64s(&mut tiy[range.clone()]);
-    let (tiz, _) = S::as_mut_simd_f64s(&mut tiz[range.clone()]);
-    let [tjx, tjy, tjz] = &mut out.tj;
-    let (tjx, _) = S::as_mut_simd_f64s(&mut tjx[range.clone()]);
-    let (tjy, _) = S::as_mut_simd_f64s(&mut tjy[range.clone()]);
-    let (tjz, _) = S::as_mut_simd_f64s(&mut tjz[range.clone()]);
-    let (en, _) = S::as_mut_simd_f64s(&mut out.energy[range.clone()]);
-    let (sq, _) = S::as_mut_simd_f64s(&mut out.d2[range]);
-    let zero = l.k(0.0);
+    let mut o = OutLanes::<S>::new(out, k0);
     let one = l.k(1.0);
     for v in 0..rx.len() {
         let r = V3 {
@@ -344,7 +329,7 @@ fn stage_2<S: pulp::Simd>(
             z: nz[v],
         };
         let d2 = l.dot(r, r);
-        sq[v] = d2;
+        o.sq[v] = d2;
         let valid = l.in_range(d2, input.cutoff2);
         let d2 = l.sel(valid, d2, one);
         let inv_d2 = l.div(one, d2);
@@ -373,24 +358,7 @@ fn stage_2<S: pulp::Simd>(
         } else {
             wi
         };
-        // The fade of the normalized direction terms near coincidence.
-        let (fs, fds) = if near_any {
-            let close = simd.less_than_f64s(dist, l.k(c.near));
-            let x = l.div(dist, l.k(c.near));
-            let y = l.sub(one, x);
-            let s = l.mul(
-                l.mul(l.mul(x, x), x),
-                l.add(
-                    l.sub(l.k(10.0), l.mul(l.k(15.0), x)),
-                    l.mul(l.mul(l.k(6.0), x), x),
-                ),
-            );
-            let ds = l.mul(l.mul(l.mul(l.mul(l.k(30.0), x), x), y), y);
-            let ds = l.div(ds, l.k(c.near));
-            (l.sel(close, s, one), l.sel(close, ds, zero))
-        } else {
-            (one, zero)
-        };
+        let (fs, fds) = fade(l, c, dist, near_any);
         let geo = Geometry {
             dist,
             inv_d2,
@@ -400,31 +368,127 @@ fn stage_2<S: pulp::Simd>(
         };
         let di = direction(l, c, &geo, zi, zj, r, d, l.k(kappa_i), wi);
         let dj = direction(l, c, &geo, l.neg(zj), l.neg(zi), r, d, kj[v], wj);
-        let rxi = l.cross(r, niv);
-        let rxj = l.cross(r, nj);
-        let nxn = l.cross(niv, nj);
-        let bt = l.add(di.b, dj.b);
-        let energy = l.add(u, l.add(di.energy, dj.energy));
-        let f_or = l.add3(
-            l.add3(
-                l.scale(r, l.sub(l.neg(di.g_r), dj.g_r)),
-                l.scale(niv, l.sub(dj.g_n, di.g_e)),
+        let p = combine(l, r, niv, nj, u, f_sp, &di, &dj);
+        o.store(l, v, valid, &p);
+    }
+}
+
+/// The fade `(S, S')` of the normalized direction terms near coincidence:
+/// computed only when some pair of the batch may be that close
+/// (`near_any`), `(1, 0)` at and beyond `r_near`.
+#[inline(always)]
+fn fade<S: pulp::Simd>(
+    l: L<S>,
+    c: &OrientedLaneConstants,
+    dist: S::f64s,
+    near_any: bool,
+) -> (S::f64s, S::f64s) {
+    let simd = l.0;
+    let zero = l.k(0.0);
+    let one = l.k(1.0);
+    if near_any {
+        let close = simd.less_than_f64s(dist, l.k(c.near));
+        let x = l.div(dist, l.k(c.near));
+        let y = l.sub(one, x);
+        let s = l.mul(
+            l.mul(l.mul(x, x), x),
+            l.add(
+                l.sub(l.k(10.0), l.mul(l.k(15.0), x)),
+                l.mul(l.mul(l.k(6.0), x), x),
             ),
-            l.scale(nj, l.sub(dj.g_e, di.g_n)),
         );
-        let f = l.add3(f_sp, f_or);
-        let ti = l.add3(l.scale(rxi, l.sub(di.g_e, dj.g_n)), l.scale(nxn, bt));
-        let tj = l.sub3(l.scale(rxj, l.sub(di.g_n, dj.g_e)), l.scale(nxn, bt));
-        fx[v] = l.sel(valid, f.x, zero);
-        fy[v] = l.sel(valid, f.y, zero);
-        fz[v] = l.sel(valid, f.z, zero);
-        tix[v] = l.sel(valid, ti.x, zero);
-        tiy[v] = l.sel(valid, ti.y, zero);
-        tiz[v] = l.sel(valid, ti.z, zero);
-        tjx[v] = l.sel(valid, tj.x, zero);
-        tjy[v] = l.sel(valid, tj.y, zero);
-        tjz[v] = l.sel(valid, tj.z, zero);
-        en[v] = l.sel(valid, energy, zero);
+        let ds = l.mul(l.mul(l.mul(l.mul(l.k(30.0), x), x), y), y);
+        let ds = l.div(ds, l.k(c.near));
+        (l.sel(close, s, one), l.sel(close, ds, zero))
+    } else {
+        (one, zero)
+    }
+}
+
+/// One pair's results in the lanes, before the cut-off selection.
+struct PairLanes<T> {
+    f: V3<T>,
+    ti: V3<T>,
+    tj: V3<T>,
+    energy: T,
+}
+
+/// The pair's force on `j`, torques on `i` and `j` and energy from the
+/// spacing and both directions' gradient scalars.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn combine<S: pulp::Simd>(
+    l: L<S>,
+    r: V3<S::f64s>,
+    niv: V3<S::f64s>,
+    nj: V3<S::f64s>,
+    u: S::f64s,
+    f_sp: V3<S::f64s>,
+    di: &Dir<S::f64s>,
+    dj: &Dir<S::f64s>,
+) -> PairLanes<S::f64s> {
+    let rxi = l.cross(r, niv);
+    let rxj = l.cross(r, nj);
+    let nxn = l.cross(niv, nj);
+    let bt = l.add(di.b, dj.b);
+    let energy = l.add(u, l.add(di.energy, dj.energy));
+    let f_or = l.add3(
+        l.add3(
+            l.scale(r, l.sub(l.neg(di.g_r), dj.g_r)),
+            l.scale(niv, l.sub(dj.g_n, di.g_e)),
+        ),
+        l.scale(nj, l.sub(dj.g_e, di.g_n)),
+    );
+    let f = l.add3(f_sp, f_or);
+    let ti = l.add3(l.scale(rxi, l.sub(di.g_e, dj.g_n)), l.scale(nxn, bt));
+    let tj = l.sub3(l.scale(rxj, l.sub(di.g_n, dj.g_e)), l.scale(nxn, bt));
+    PairLanes { f, ti, tj, energy }
+}
+
+/// The row's result slices of one batch, `k0 .. k0 + LANES`, as lanes.
+struct OutLanes<'o, S: pulp::Simd> {
+    f: [&'o mut [S::f64s]; 3],
+    ti: [&'o mut [S::f64s]; 3],
+    tj: [&'o mut [S::f64s]; 3],
+    en: &'o mut [S::f64s],
+    sq: &'o mut [S::f64s],
+}
+
+impl<'o, S: pulp::Simd> OutLanes<'o, S> {
+    /// The batch's slices of `out`.
+    #[inline(always)]
+    fn new(out: &'o mut OrientedRow, k0: usize) -> Self {
+        let range = k0..k0 + LANES;
+        let lanes = |a: &'o mut [Vec<Real>; 3]| {
+            let [x, y, z] = a;
+            let (x, _) = S::as_mut_simd_f64s(&mut x[range.clone()]);
+            let (y, _) = S::as_mut_simd_f64s(&mut y[range.clone()]);
+            let (z, _) = S::as_mut_simd_f64s(&mut z[range.clone()]);
+            [x, y, z]
+        };
+        let f = lanes(&mut out.f);
+        let ti = lanes(&mut out.ti);
+        let tj = lanes(&mut out.tj);
+        let (en, _) = S::as_mut_simd_f64s(&mut out.energy[range.clone()]);
+        let (sq, _) = S::as_mut_simd_f64s(&mut out.d2[range]);
+        OutLanes { f, ti, tj, en, sq }
+    }
+
+    /// Stores lane `v` of the pair's results, zeros where it is not
+    /// `valid` (the squared distance is stored before, as read).
+    #[inline(always)]
+    fn store(&mut self, l: L<S>, v: usize, valid: S::m64s, p: &PairLanes<S::f64s>) {
+        let zero = l.k(0.0);
+        self.f[0][v] = l.sel(valid, p.f.x, zero);
+        self.f[1][v] = l.sel(valid, p.f.y, zero);
+        self.f[2][v] = l.sel(valid, p.f.z, zero);
+        self.ti[0][v] = l.sel(valid, p.ti.x, zero);
+        self.ti[1][v] = l.sel(valid, p.ti.y, zero);
+        self.ti[2][v] = l.sel(valid, p.ti.z, zero);
+        self.tj[0][v] = l.sel(valid, p.tj.x, zero);
+        self.tj[1][v] = l.sel(valid, p.tj.y, zero);
+        self.tj[2][v] = l.sel(valid, p.tj.z, zero);
+        self.en[v] = l.sel(valid, p.energy, zero);
     }
 }
 

@@ -183,6 +183,24 @@ pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) 
         out.set_empty(n);
         return;
     }
+    let (grid, reach) = choose_grid(min, max, radius, n);
+    let mut s = std::mem::take(&mut out.scratch.grid);
+    s.assign_cells(positions, &grid);
+    s.sort_into_cells(positions, &grid, finite);
+    let search = RowSearch {
+        positions,
+        r2,
+        grid,
+        reach,
+        scratch: &s,
+    };
+    out.build_parallel(n, |i, row| search.row(i, row));
+    out.scratch.grid = s;
+}
+
+/// The grid of the search and how many cells around its own each particle
+/// scans.
+fn choose_grid(min: [Real; 3], max: [Real; 3], radius: Real, n: usize) -> (Grid, usize) {
     let max_cells = n
         .saturating_mul(MAX_CELLS_PER_PARTICLE)
         .saturating_add(1024)
@@ -192,56 +210,83 @@ pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) 
     // candidates of 27 cells of h^3. When the cap would coarsen them,
     // whole cells scanned one around.
     let half = Grid::new(min, max, 0.5 * radius, max_cells);
-    let (grid, reach) = if half.h <= 0.5 * radius * (1.0 + 2.0 * MARGIN) {
+    if half.h <= 0.5 * radius * (1.0 + 2.0 * MARGIN) {
         (half, 2)
     } else {
         (Grid::new(min, max, radius, max_cells), 1)
-    };
-    let mut s = std::mem::take(&mut out.scratch.grid);
+    }
+}
 
-    // Cell of every particle.
-    s.cell_of.resize(n, 0);
-    s.cell_of
-        .par_iter_mut()
-        .zip(positions.par_iter())
-        .with_min_len(4096)
-        .for_each(|(c, p)| {
-            *c = if is_finite(p) {
-                let a = arr(p);
-                grid.cell_id([0, 1, 2].map(|k| grid.coord(a[k], k))) as u32
-            } else {
-                NO_CELL
-            };
-        });
+impl GridScratch {
+    /// Cell of every particle (`NO_CELL` for non-finite positions).
+    fn assign_cells(&mut self, positions: &[Point3], grid: &Grid) {
+        self.cell_of.resize(positions.len(), 0);
+        self.cell_of
+            .par_iter_mut()
+            .zip(positions.par_iter())
+            .with_min_len(4096)
+            .for_each(|(c, p)| {
+                *c = if is_finite(p) {
+                    let a = arr(p);
+                    grid.cell_id([0, 1, 2].map(|k| grid.coord(a[k], k))) as u32
+                } else {
+                    NO_CELL
+                };
+            });
+    }
 
-    // Counting sort into cells (stable: ascending index within a cell).
-    let ncells = grid.num_cells();
-    s.cell_start.clear();
-    s.cell_start.resize(ncells + 1, 0);
-    for &c in &s.cell_of {
-        if c != NO_CELL {
-            s.cell_start[c as usize + 1] += 1;
+    /// Counting sort of the `finite` particles into cells (stable:
+    /// ascending index within a cell).
+    fn sort_into_cells(&mut self, positions: &[Point3], grid: &Grid, finite: usize) {
+        let ncells = grid.num_cells();
+        self.cell_start.clear();
+        self.cell_start.resize(ncells + 1, 0);
+        for &c in &self.cell_of {
+            if c != NO_CELL {
+                self.cell_start[c as usize + 1] += 1;
+            }
         }
-    }
-    for c in 0..ncells {
-        s.cell_start[c + 1] += s.cell_start[c];
-    }
-    s.sorted_pos.resize(finite, [0.0; 3]);
-    s.sorted_idx.resize(finite, 0);
-    for (i, &c) in s.cell_of.iter().enumerate() {
-        if c != NO_CELL {
-            let slot = s.cell_start[c as usize] as usize;
-            s.cell_start[c as usize] += 1;
-            s.sorted_pos[slot] = arr(&positions[i]);
-            s.sorted_idx[slot] = i as u32;
+        for c in 0..ncells {
+            self.cell_start[c + 1] += self.cell_start[c];
         }
+        self.sorted_pos.resize(finite, [0.0; 3]);
+        self.sorted_idx.resize(finite, 0);
+        for (i, &c) in self.cell_of.iter().enumerate() {
+            if c != NO_CELL {
+                let slot = self.cell_start[c as usize] as usize;
+                self.cell_start[c as usize] += 1;
+                self.sorted_pos[slot] = arr(&positions[i]);
+                self.sorted_idx[slot] = i as u32;
+            }
+        }
+        // Each start was advanced to the next cell's start: shift back.
+        self.cell_start.copy_within(0..ncells, 1);
+        self.cell_start[0] = 0;
     }
-    // Each start was advanced to the next cell's start: shift back.
-    s.cell_start.copy_within(0..ncells, 1);
-    s.cell_start[0] = 0;
+}
 
-    let scratch = &s;
-    out.build_parallel(n, |i, row| {
+/// What the search of one row reads: the positions, the squared radius,
+/// the grid, the reach in cells and the particles sorted into cells.
+struct RowSearch<'a> {
+    positions: &'a [Point3],
+    r2: Real,
+    grid: Grid,
+    reach: usize,
+    scratch: &'a GridScratch,
+}
+
+impl RowSearch<'_> {
+    /// Appends to `row` the particles `j > i` within the radius of `i`,
+    /// scanning the cells within `reach` of its own.
+    #[inline(always)]
+    fn row(&self, i: usize, row: &mut Vec<u32>) {
+        let RowSearch {
+            positions,
+            r2,
+            grid,
+            reach,
+            scratch,
+        } = *self;
         let c = scratch.cell_of[i];
         if c == NO_CELL {
             return;
@@ -285,8 +330,7 @@ pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) 
             }
         }
         row.truncate(len);
-    });
-    out.scratch.grid = s;
+    }
 }
 
 #[cfg(test)]

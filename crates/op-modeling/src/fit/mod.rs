@@ -143,6 +143,7 @@ mod rounds;
 pub mod shapes;
 mod spacing;
 mod thin;
+mod unit_coordinates;
 mod winding;
 
 use std::time::Instant;
@@ -156,14 +157,15 @@ use op_dynamics::{
 };
 
 use input::median_of;
-use input::{collinear_within, Input};
+use input::Input;
 pub use mesh::{point_triangle_distance, sample_distances, SurfaceMesh};
 pub use neighbourhood::DataNeighbourhood;
 pub use normals::estimate_normals;
 use normals::{curve_like_share, knn_normals};
 pub use spacing::median_nearest_distance;
-use spacing::{first_ring_mean, merge_close, nearest_distances, Knn};
+use spacing::{first_ring_mean, nearest_distances, Knn};
 pub use thin::ThinFeature;
+use unit_coordinates::{to_data, unit_samples, UnitSamples};
 
 /// Samples of a surface, with normals when they are known (the input of
 /// [`fit`]; op-scene reads them from `.xyz`, `.ply` and `.obj` files).
@@ -406,26 +408,12 @@ pub fn fit_with_stages(
         Some(value) => value,
         None => frame.length_to_data(h),
     };
-    // Unit-spacing coordinates about the samples' centroid.
-    let centroid = local.iter().fold(Vec3::zeros(), |s, p| s + p.coords) / n as Real;
-    let unit: Vec<Point3> = local
-        .iter()
-        .map(|p| Point3::from((p.coords - centroid) / h))
-        .collect();
-    if let Some(off) = collinear_within(&unit, MERGE) {
-        return Err(FitError::Input(format!(
-            "the samples lie on a line (all within {:.3e} of it, less than a quarter of the spacing {spacing:.3e}): a surface needs samples spread in two directions",
-            frame.length_to_data(off * h)
-        )));
-    }
-    let kept = merge_close(&unit, MERGE);
-    if kept.len() < 3 {
-        return Err(FitError::Input(format!(
-            "{} samples are left after merging those within a quarter of the spacing {spacing:.3e}: at least 3 are needed (give a smaller spacing)",
-            kept.len()
-        )));
-    }
-    let seeds: Vec<Point3> = kept.iter().map(|&k| unit[k]).collect();
+    let UnitSamples {
+        centroid,
+        unit,
+        kept,
+        seeds,
+    } = unit_samples(&local, n, &frame, h, spacing)?;
     let seed_normals = seed_normals(data, params, &kept, &seeds)?;
     let rest = first_ring_mean(&seeds, 1.5);
     let thin = thin::thin_features(&seeds, &seed_normals, params.triangulation_radius * rest);
@@ -477,29 +465,7 @@ pub fn fit_with_stages(
     close_holes(&mut mesh, params, &seeds, &seed_normals, rest);
     mesh.measure(&unit);
     stages.lap("holes and distances");
-    let to_data = |q: &Point3| frame.to_data(&Point3::from(q.coords * h + centroid));
-    mesh.vertices.iter_mut().for_each(|v| *v = to_data(v));
-    mesh.rms_distance = frame.length_to_data(mesh.rms_distance * h);
-    mesh.max_distance = frame.length_to_data(mesh.max_distance * h);
-    if !(mesh
-        .vertices
-        .iter()
-        .all(|v| v.iter().all(|c| c.is_finite()))
-        && mesh.max_distance.is_finite())
-    {
-        return Err(FitError::Input(format!(
-            "the mesh cannot be represented in 64-bit floating point at the samples' scale (bounding box diagonal {:.3e})",
-            frame.length_to_data(diagonal)
-        )));
-    }
-    let thin_features = thin
-        .into_iter()
-        .map(|t| ThinFeature {
-            centre: to_data(&t.centre),
-            thickness: frame.length_to_data(t.thickness * h),
-            ..t
-        })
-        .collect();
+    let thin_features = to_data(&mut mesh, thin, &frame, h, centroid, diagonal)?;
     Ok((
         Fit {
             spacing,

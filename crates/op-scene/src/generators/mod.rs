@@ -287,7 +287,6 @@ impl Generator {
         path: &str,
     ) -> Result<(), SceneError> {
         let at = |field: &str| format!("{path}.{}.{field}", self.name());
-        let max = MAX_PARTICLES;
         match self {
             Generator::Spiral {
                 count,
@@ -322,40 +321,12 @@ impl Generator {
                 start,
                 direction,
                 normal,
-            } => {
-                if *count < 1 || *count > max {
-                    return Err(SceneError::value(
-                        file,
-                        at("count"),
-                        count,
-                        &format!("must be in 1..={max}"),
-                    ));
-                }
-                checks::positive(file, &at("spacing"), *spacing)?;
-                checks::finite3(file, &at("start"), start)?;
-                checks::direction(file, &at("direction"), direction)?;
-                checks::direction(file, &at("normal"), normal)
-            }
+            } => check_chain(file, &at, *count, *spacing, start, direction, normal),
             Generator::SphereShell {
                 radius,
                 spacing,
                 center,
-            } => {
-                let n = shapes::sphere_count(*radius, *spacing);
-                check_ball(file, &at, *radius, *spacing, center, n)?;
-                if n < 1.0 {
-                    return Err(SceneError::value(
-                        file,
-                        at("spacing"),
-                        spacing,
-                        &format!(
-                            "gives no particle on a sphere of radius {radius}; must be below {:.4}",
-                            radius * (16.0 * std::f64::consts::PI / 3f64.sqrt()).sqrt()
-                        ),
-                    ));
-                }
-                Ok(())
-            }
+            } => check_sphere_shell(file, &at, *radius, *spacing, center),
             Generator::SolidBall {
                 radius,
                 spacing,
@@ -523,6 +494,58 @@ impl Generator {
             Generator::List { particles } => points::list(particles),
         })
     }
+}
+
+/// Checks a [`Generator::Chain`]: count within [`MAX_PARTICLES`],
+/// positive spacing, finite start, direction and normal usable as
+/// directions ([`checks::direction`]).
+fn check_chain(
+    file: &str,
+    at: &dyn Fn(&str) -> String,
+    count: usize,
+    spacing: Real,
+    start: &[Real; 3],
+    direction: &[Real; 3],
+    normal: &[Real; 3],
+) -> Result<(), SceneError> {
+    let max = MAX_PARTICLES;
+    if count < 1 || count > max {
+        return Err(SceneError::value(
+            file,
+            at("count"),
+            count,
+            &format!("must be in 1..={max}"),
+        ));
+    }
+    checks::positive(file, &at("spacing"), spacing)?;
+    checks::finite3(file, &at("start"), start)?;
+    checks::direction(file, &at("direction"), direction)?;
+    checks::direction(file, &at("normal"), normal)
+}
+
+/// Checks a [`Generator::SphereShell`]: as [`check_ball`], and a spacing
+/// that puts at least one particle on the sphere.
+fn check_sphere_shell(
+    file: &str,
+    at: &dyn Fn(&str) -> String,
+    radius: Real,
+    spacing: Real,
+    center: &[Real; 3],
+) -> Result<(), SceneError> {
+    let n = shapes::sphere_count(radius, spacing);
+    check_ball(file, at, radius, spacing, center, n)?;
+    if n < 1.0 {
+        return Err(SceneError::value(
+            file,
+            at("spacing"),
+            spacing,
+            &format!(
+                "gives no particle on a sphere of radius {radius}; must be below {:.4}",
+                radius * (16.0 * std::f64::consts::PI / 3f64.sqrt()).sqrt()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Checks a [`Generator::List`] (`at` gives a field's path).

@@ -10,9 +10,10 @@ use super::limits::{
     MAX_CONDUCTION_STEP, MAX_EXTENT_OVER_SPACING, MAX_ROTATION, MAX_SKIN_NODES_PER_AXIS,
 };
 use super::validate::object_path;
-use super::Scene;
+use super::{ObjectSpec, Scene, ToolSpec};
 use crate::error::{short, SceneError};
 use crate::generators::Generator;
+use crate::skins::SkinSpec;
 
 /// Smallest stretching `d_min` and growing `radius` of the creation rules,
 /// in rest spacings: closer candidates would overlap their neighbours, and
@@ -284,101 +285,144 @@ impl Scene {
             short(MAX_EXTENT_OVER_SPACING),
             short(scale)
         );
-        let check = |path: String, v: &[Real; 3]| -> Result<(), SceneError> {
-            let norm = v.iter().map(|c| c * c).sum::<Real>().sqrt();
-            if norm <= max {
-                Ok(())
-            } else {
-                Err(SceneError::value(
-                    file,
-                    path,
-                    format!("[{}, {}, {}]", short(v[0]), short(v[1]), short(v[2])),
-                    &allowed,
-                ))
-            }
-        };
+        let bound = LengthBound { file, max, allowed };
         for (k, o) in self.objects.iter().enumerate() {
-            let path = object_path(k, &o.name);
-            let at = |f: &str| format!("{path}.generator.{}.{f}", o.generator.name());
-            match &o.generator {
-                Generator::Spiral { center, .. }
-                | Generator::HexSheet { center, .. }
-                | Generator::SphereShell { center, .. }
-                | Generator::SolidBall { center, .. }
-                | Generator::TorusShell { center, .. } => check(at("center"), center)?,
-                Generator::Chain { start, .. } => check(at("start"), start)?,
-                Generator::List { particles } => {
-                    for (j, p) in particles.iter().enumerate() {
-                        check(at(&format!("particles[{j}].position")), &p.position)?;
-                    }
+            bound.object(k, o, base_dir)?;
+        }
+        for (k, t) in self.tools.iter().enumerate() {
+            bound.tool(k, t)?;
+        }
+        Ok(())
+    }
+}
+
+/// The bound of [`Scene::validate_lengths`]: lengths at most `max`, and
+/// what a coordinate beyond it is told (`allowed`), in scene `file`.
+struct LengthBound<'a> {
+    file: &'a str,
+    max: Real,
+    allowed: String,
+}
+
+impl LengthBound<'_> {
+    /// Refuses a point `v` (at `path`) farther than `max` from the origin.
+    fn check(&self, path: String, v: &[Real; 3]) -> Result<(), SceneError> {
+        let norm = v.iter().map(|c| c * c).sum::<Real>().sqrt();
+        if norm <= self.max {
+            Ok(())
+        } else {
+            Err(SceneError::value(
+                self.file,
+                path,
+                format!("[{}, {}, {}]", short(v[0]), short(v[1]), short(v[2])),
+                &self.allowed,
+            ))
+        }
+    }
+
+    /// Object `k`: its generator's positions, its extent and its skin's
+    /// grid.
+    fn object(&self, k: usize, o: &ObjectSpec, base_dir: Option<&Path>) -> Result<(), SceneError> {
+        let (file, max) = (self.file, self.max);
+        let path = object_path(k, &o.name);
+        self.generator_positions(&path, &o.generator)?;
+        let extent = object_extent(&o.generator, base_dir, file, &format!("{path}.generator"))?;
+        if extent > max {
+            return Err(SceneError::value(
+                file,
+                format!("{path}.generator"),
+                format!("an object {} across", short(extent)),
+                &format!(
+                    "objects must be at most {} across ({} times the scene's length scale)",
+                    short(max),
+                    short(MAX_EXTENT_OVER_SPACING)
+                ),
+            ));
+        }
+        if let Some(skin) = &o.skin {
+            self.skin_grid(&path, skin, extent)?;
+        }
+        Ok(())
+    }
+
+    /// The positions a generator places its object at (centre, start or
+    /// listed particles) of the object at `path`.
+    fn generator_positions(&self, path: &str, g: &Generator) -> Result<(), SceneError> {
+        let at = |f: &str| format!("{path}.generator.{}.{f}", g.name());
+        match g {
+            Generator::Spiral { center, .. }
+            | Generator::HexSheet { center, .. }
+            | Generator::SphereShell { center, .. }
+            | Generator::SolidBall { center, .. }
+            | Generator::TorusShell { center, .. } => self.check(at("center"), center)?,
+            Generator::Chain { start, .. } => self.check(at("start"), start)?,
+            Generator::List { particles } => {
+                for (j, p) in particles.iter().enumerate() {
+                    self.check(at(&format!("particles[{j}].position")), &p.position)?;
                 }
-                Generator::Points { .. } => {}
             }
-            let extent = object_extent(&o.generator, base_dir, file, &format!("{path}.generator"))?;
-            if extent > max {
+            Generator::Points { .. } => {}
+        }
+        Ok(())
+    }
+
+    /// The skin of the object at `path`, `extent` across: within
+    /// [`MAX_SKIN_NODES_PER_AXIS`] grid nodes per axis.
+    fn skin_grid(&self, path: &str, skin: &SkinSpec, extent: Real) -> Result<(), SceneError> {
+        let nodes = (extent + 2.0 * skin.reach()) / skin.cell_size + 3.0;
+        if nodes.is_nan() || nodes > MAX_SKIN_NODES_PER_AXIS {
+            return Err(SceneError::value(
+                self.file,
+                format!("{path}.skin.cell_size"),
+                short(skin.cell_size),
+                &format!(
+                    "the skin of an object {} across with support {} needs about {} grid \
+                     nodes per axis at this cell size, more than the polygonizer's {}: \
+                     use a cell size of at least {}",
+                    short(extent),
+                    short(skin.reach()),
+                    short(nodes.ceil()),
+                    MAX_SKIN_NODES_PER_AXIS,
+                    short((extent + 2.0 * skin.reach()) / (MAX_SKIN_NODES_PER_AXIS - 3.0))
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Tool `k`: its size (unless unbounded), its keyframes' positions and
+    /// rotation angles.
+    fn tool(&self, k: usize, t: &ToolSpec) -> Result<(), SceneError> {
+        let (file, max) = (self.file, self.max);
+        if let Ok(shape) = t.shape.build() {
+            let aabb = shape.compute_local_aabb();
+            let size = (aabb.maxs - aabb.mins).length() as Real;
+            if !t.shape.is_unbounded() && (size.is_nan() || size > max) {
                 return Err(SceneError::value(
                     file,
-                    format!("{path}.generator"),
-                    format!("an object {} across", short(extent)),
+                    format!("tools[{k}].shape"),
+                    format!("a shape {} across", short(size)),
                     &format!(
-                        "objects must be at most {} across ({} times the scene's length scale)",
+                        "tools must be at most {} across ({} times the scene's length scale)",
                         short(max),
                         short(MAX_EXTENT_OVER_SPACING)
                     ),
                 ));
             }
-            if let Some(skin) = &o.skin {
-                let nodes = (extent + 2.0 * skin.reach()) / skin.cell_size + 3.0;
-                if nodes.is_nan() || nodes > MAX_SKIN_NODES_PER_AXIS {
-                    return Err(SceneError::value(
-                        file,
-                        format!("{path}.skin.cell_size"),
-                        short(skin.cell_size),
-                        &format!(
-                            "the skin of an object {} across with support {} needs about {} grid \
-                             nodes per axis at this cell size, more than the polygonizer's {}: \
-                             use a cell size of at least {}",
-                            short(extent),
-                            short(skin.reach()),
-                            short(nodes.ceil()),
-                            MAX_SKIN_NODES_PER_AXIS,
-                            short((extent + 2.0 * skin.reach()) / (MAX_SKIN_NODES_PER_AXIS - 3.0))
-                        ),
-                    ));
-                }
-            }
         }
-        for (k, t) in self.tools.iter().enumerate() {
-            if let Ok(shape) = t.shape.build() {
-                let aabb = shape.compute_local_aabb();
-                let size = (aabb.maxs - aabb.mins).length() as Real;
-                if !t.shape.is_unbounded() && (size.is_nan() || size > max) {
-                    return Err(SceneError::value(
-                        file,
-                        format!("tools[{k}].shape"),
-                        format!("a shape {} across", short(size)),
-                        &format!(
-                            "tools must be at most {} across ({} times the scene's length scale)",
-                            short(max),
-                            short(MAX_EXTENT_OVER_SPACING)
-                        ),
-                    ));
-                }
-            }
-            for (j, f) in t.path.keyframes.iter().enumerate() {
-                check(format!("tools[{k}].path[{j}].position"), &f.position)?;
-                let angle = f.rotation.iter().map(|c| c * c).sum::<Real>().sqrt();
-                if angle.is_nan() || angle > MAX_ROTATION {
-                    return Err(SceneError::value(
-                        file,
-                        format!("tools[{k}].path[{j}].rotation"),
-                        short(angle),
-                        &format!(
-                            "rotation angles must be at most {} rad (a thousand turns)",
-                            short(MAX_ROTATION)
-                        ),
-                    ));
-                }
+        for (j, f) in t.path.keyframes.iter().enumerate() {
+            self.check(format!("tools[{k}].path[{j}].position"), &f.position)?;
+            let angle = f.rotation.iter().map(|c| c * c).sum::<Real>().sqrt();
+            if angle.is_nan() || angle > MAX_ROTATION {
+                return Err(SceneError::value(
+                    file,
+                    format!("tools[{k}].path[{j}].rotation"),
+                    short(angle),
+                    &format!(
+                        "rotation angles must be at most {} rad (a thousand turns)",
+                        short(MAX_ROTATION)
+                    ),
+                ));
             }
         }
         Ok(())
