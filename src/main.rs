@@ -74,6 +74,12 @@ enum Command {
         /// Print the seconds spent in each stage of the step at the end.
         #[arg(long)]
         profile: bool,
+        /// Accept objects breaking into pieces: a warning instead of a
+        /// divergence (exit 3). A scene that tears on purpose says so in
+        /// its header instead (`// expect-warning: object "NAME" broke
+        /// into N pieces (why)`).
+        #[arg(long)]
+        allow_breakup: bool,
         /// Frame file formats, comma-separated: obj (one y-up OBJ file per
         /// object and frame, for Blender and other OBJ readers), ply
         /// (binary PLY, z-up), vtu (particle state with attributes, for
@@ -199,19 +205,23 @@ fn main() -> ExitCode {
     }
 }
 
+/// `opsim` alone: runs the demo scene (`scenes/spiral.ron`) into
+/// `opsim-out/spiral` and draws its contact sheet.
+fn demo() -> Result<(), Failure> {
+    let scene = op_scene::parse_scene(
+        DEMO_SCENE,
+        op_scene::Format::Ron,
+        "<demo: scenes/spiral.ron>",
+    )?;
+    let built = scene.build_for_run(None, None)?;
+    let out = Path::new("opsim-out").join(&built.name);
+    run_built(built, Some(out.clone()), None, &[FrameFormat::OBJ], false)?;
+    demo_contact_sheet(&out)
+}
+
 fn dispatch(cli: Cli) -> Result<(), Failure> {
     match cli.command {
-        None => {
-            let scene = op_scene::parse_scene(
-                DEMO_SCENE,
-                op_scene::Format::Ron,
-                "<demo: scenes/spiral.ron>",
-            )?;
-            let built = scene.build_for_run(None, None)?;
-            let out = Path::new("opsim-out").join(&built.name);
-            run_built(built, Some(out.clone()), None, &[FrameFormat::OBJ], false)?;
-            demo_contact_sheet(&out)
-        }
+        None => demo(),
         Some(Command::Run {
             scene,
             out,
@@ -221,6 +231,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             max_particle_steps,
             profile,
             format,
+            allow_breakup,
         }) => {
             if let Some(k) = threads {
                 rayon::ThreadPoolBuilder::new()
@@ -230,7 +241,10 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             }
             let frames = frames.map(|f| usize::try_from(f).unwrap_or(usize::MAX));
             let limits = limits(no_work_limits, max_particle_steps)?;
-            let built = load(&scene, limits, frames)?;
+            let mut built = load(&scene, limits, frames)?;
+            if allow_breakup {
+                built.accept_breakup();
+            }
             run_built(built, out, frames, &format, profile)
         }
         Some(Command::Check {

@@ -600,8 +600,9 @@ fn a_step_above_the_stable_step_is_reported() {
     assert!(text(&o).contains("stable step: at most"), "{}", text(&o));
 }
 
-/// An object pulled apart is not a silent success: the summary names its
-/// pieces and the warning is printed.
+/// An object pulled apart is not a silent success: the run ends with exit
+/// 3 after writing every frame, the summary names its pieces and says how
+/// to accept it; `--allow-breakup` makes it a printed warning.
 #[test]
 fn break_up_is_reported() {
     let dir = temp_dir("breakup");
@@ -612,6 +613,16 @@ fn break_up_is_reported() {
     assert_ne!(doubled, spiral);
     let path = scene_file(&dir, "spiral.ron", &doubled);
     let o = run_scene(&path, &dir.join("out"), &[]);
+    assert_eq!(o.status.code(), Some(3), "{}", text(&o));
+    assert!(
+        text(&o).contains("error: object \"spiral\" broke into 2 pieces"),
+        "{}",
+        text(&o)
+    );
+    let s = summary(&dir.join("out"));
+    assert_eq!(s["diverged"], true);
+    assert_eq!(s["objects"][0]["pieces"], 2);
+    let o = run_scene(&path, &dir.join("out"), &["--allow-breakup"]);
     assert!(o.status.success(), "{}", text(&o));
     assert!(
         text(&o).contains("warning: object \"spiral\" broke into 2 pieces"),

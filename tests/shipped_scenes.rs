@@ -116,10 +116,7 @@ fn golden_path() -> PathBuf {
 
 /// The expected warnings of a scene: the TEXT of its `expect-warning` lines.
 fn expected(text: &str) -> Vec<String> {
-    text.lines()
-        .filter_map(|l| l.trim().strip_prefix("// expect-warning: "))
-        .map(|t| t.split(" (").next().unwrap_or(t).trim().to_string())
-        .collect()
+    op_scene::schema::expected_warnings(text)
 }
 
 #[test]

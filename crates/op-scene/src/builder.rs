@@ -170,6 +170,8 @@ impl Scene {
             step_warnings: Vec::new(),
             creation,
             setup_seconds: vec![("build".into(), clock.elapsed().as_secs_f64())],
+            expected_warnings: self.expected_warnings.clone(),
+            breakup_accepted: false,
         })
     }
 

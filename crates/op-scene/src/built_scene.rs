@@ -33,6 +33,24 @@ pub struct BuiltObject {
 }
 
 impl BuiltScene {
+    /// Accepts that objects break into pieces in this run (`opsim run
+    /// --allow-breakup`): a breakup is then a warning in the summary, not
+    /// a divergence.
+    pub fn accept_breakup(&mut self) {
+        self.breakup_accepted = true;
+    }
+
+    /// Whether the run accepts the breakup warning `warning`: every
+    /// breakup is accepted ([`BuiltScene::accept_breakup`]), or the scene
+    /// expects a warning its message begins with.
+    pub fn accepts_breakup(&self, warning: &str) -> bool {
+        self.breakup_accepted
+            || self
+                .expected_warnings
+                .iter()
+                .any(|e| warning.starts_with(e))
+    }
+
     /// The gaps the exported surfaces span between particles that no
     /// longer attract: those the stretching rule leaves as sheet (seed 000
     /// §7; its `d_min` and `d_max` times its `r0`) when the scene creates
@@ -123,6 +141,10 @@ pub struct BuiltScene {
     /// of [`crate::Scene::build_for_run`]) when it ran. The runner counts
     /// them in the run's wall time and its stage table.
     pub setup_seconds: Vec<(String, f64)>,
+    /// The scene's expected warnings ([`crate::Scene::expected_warnings`]).
+    pub(crate) expected_warnings: Vec<String>,
+    /// Every breakup is accepted ([`BuiltScene::accept_breakup`]).
+    pub(crate) breakup_accepted: bool,
 }
 
 impl BuiltScene {

@@ -7,9 +7,12 @@
 //! - **pieces**: the connected components of each object's particles, two
 //!   particles joined when they are closer than the object material's
 //!   interaction range ([`op_dynamics::interactions::PreparedMaterial::cutoff`]), at
-//!   frame 0 and at the last frame. An object that ends in more pieces than
-//!   it started with broke (intended for tearing scenes, which say so in
-//!   their header; a warning either way, with the count).
+//!   the start (before the settle phase) and at the last frame. An object
+//!   that ends in more pieces than it started with broke: the run ends as
+//!   diverged (exit 3) unless the scene expects it (tearing and cutting
+//!   scenes say so in their header, [`crate::Scene::expected_warnings`])
+//!   or the run accepts it (`opsim run --allow-breakup`); then it is a
+//!   warning, with the count.
 //! - **bond stretch**: the largest ratio of current to rest distance over
 //!   the object's rest neighbour pairs (pairs of original particles at most
 //!   [`NEIGHBOUR_PAIR_FACTOR`] rest spacings apart in the rest shape) over
@@ -91,7 +94,7 @@ struct ObjectHealth {
     range: Real,
     /// Rest neighbour pairs: ids and rest distance.
     pairs: Vec<(u32, u32, Real)>,
-    /// Pieces at frame 0.
+    /// Pieces when the watch started (before the settle phase).
     pieces_start: Option<usize>,
     /// Largest bond stretch seen.
     stretch_max: Real,
@@ -119,7 +122,7 @@ pub struct Health {
     /// Acceleration allowance: gravity plus the largest force window per
     /// unit mass.
     accel: Real,
-    /// Scene time of frame 0 (world time).
+    /// World time the watch started at.
     t0: Real,
     explode_at: Real,
     objects: Vec<ObjectHealth>,
@@ -128,9 +131,11 @@ pub struct Health {
 }
 
 impl Health {
-    /// Starts watching `scene` at its frame 0 (after the settle phase),
-    /// for a run lasting `duration`; `extent_growth` is the explosion
-    /// threshold in scene sizes.
+    /// Starts watching `scene` in its current state, for a run lasting
+    /// `duration` from now; `extent_growth` is the explosion threshold in
+    /// scene sizes. The runner starts before the settle phase, so the
+    /// scene's bounds and pieces are those of its inputs and an explosion
+    /// while settling is measured against them.
     pub fn new(scene: &BuiltScene, duration: Real, extent_growth: Real) -> Health {
         let w = &scene.world;
         let p = w.particles();
@@ -253,9 +258,12 @@ impl Health {
         })
     }
 
-    /// The findings per object and the warnings, at the end of the run.
-    pub fn finish(&self, scene: &BuiltScene) -> (Vec<ObjectFindings>, Vec<String>) {
+    /// The findings per object, the warnings and the breakups (an object
+    /// in more pieces than when the watch started: `object "NAME" broke
+    /// into N pieces (M at the start) ...`), at the end of the run.
+    pub fn finish(&self, scene: &BuiltScene) -> (Vec<ObjectFindings>, Vec<String>, Vec<String>) {
         let mut warnings = Vec::new();
+        let mut breakups = Vec::new();
         let findings = scene
             .objects
             .iter()
@@ -264,8 +272,8 @@ impl Health {
                 let now = (h.range > 0.0).then(|| pieces(scene, o, h.range));
                 if let (Some(start), Some(end)) = (h.pieces_start, now) {
                     if end > start {
-                        warnings.push(format!(
-                            "object {:?} broke into {end} pieces ({start} at frame 0): parts of \
+                        breakups.push(format!(
+                            "object {:?} broke into {end} pieces ({start} at the start): parts of \
                              it are farther apart than its material's interaction range ({})",
                             o.name,
                             crate::error::short(h.range)
@@ -290,7 +298,7 @@ impl Health {
                 crate::error::short(self.size)
             ));
         }
-        (findings, warnings)
+        (findings, warnings, breakups)
     }
 }
 

@@ -165,6 +165,9 @@ pub fn parse_unvalidated(text: &str, format: Format, origin: &str) -> Result<Sce
         })?,
     };
     scene.origin = origin.to_string();
+    if format == Format::Ron {
+        scene.expected_warnings = crate::schema::expected_warnings(text);
+    }
     crate::presets::resolve(&mut scene);
     Ok(scene)
 }

@@ -14,7 +14,7 @@ use serde::Serialize;
 use crate::built_scene::{BuiltObject, BuiltScene};
 use crate::error::short;
 use crate::export::{write_atomically, FrameFormat, FrameWriter, Sequence};
-use crate::health::{energy_floor, Health, ENERGY_GAIN_WARNING};
+use crate::health::{energy_floor, Health, ObjectFindings, ENERGY_GAIN_WARNING};
 use crate::skins::ContactStats;
 
 mod energy_watch;
@@ -315,13 +315,17 @@ fn run_here(
     warnings.extend(crate::health::started_inside(scene));
     warnings.extend(crate::health::unbonded(scene));
     tally.prepare_seconds = clock.elapsed().as_secs_f64();
+    // The scales of the checks come from the scene's inputs, before the
+    // settle phase: an explosion while settling is measured against them.
+    let measuring = Instant::now();
+    let before = if scene.settled { 0.0 } else { scene.settle };
+    let mut health = Health::new(scene, before + duration, scene.extent_growth);
+    let floor = energy_floor(scene, health.size(), duration);
+    let mut watch = EnergyWatch::new(scene, floor, before > 0.0);
+    tally.measure_seconds += measuring.elapsed().as_secs_f64();
     if let Err(d) = scene.settle() {
         tally.divergence = Some(format!("while settling: {d}"));
     }
-    let measuring = Instant::now();
-    let mut health = Health::new(scene, duration, scene.extent_growth);
-    let mut watch = EnergyWatch::new(scene, energy_floor(scene, health.size(), duration));
-    tally.measure_seconds += measuring.elapsed().as_secs_f64();
     let t0 = scene.world.time();
     for k in 0..total {
         if tally.divergence.is_some() {
@@ -351,21 +355,8 @@ fn run_here(
             tally.failure.get_or_insert(e);
         }
     }
-    if watch.gain_seen > ENERGY_GAIN_WARNING {
-        warnings.push(format!(
-            "the scene gained energy without input: the total energy rose {} times its energy \
-             scale above the lowest earlier frame (a step too large for the stiffness, or \
-             particles started on top of each other)",
-            short(watch.gain_seen)
-        ));
-    }
-    let (findings, health_warnings) = health.finish(scene);
+    let findings = tally.conclude(scene, &health, &watch, &mut warnings);
     tally.measure_seconds += measuring.elapsed().as_secs_f64();
-    // After a divergence the state is the blown-up one: its pieces and
-    // escape say nothing the divergence does not.
-    if tally.divergence.is_none() {
-        warnings.extend(health_warnings);
-    }
     let summary = tally.summary(scene, &writer, findings, warnings, clock.elapsed());
     let path = opts.out_dir.join("summary.json");
     let saved = write_atomically(&path, |w| {
@@ -454,12 +445,19 @@ impl Tally {
         }
         let measuring = Instant::now();
         let d = scene.world.diagnostics();
-        if let Err(d) = watch.check(scene, &d) {
-            self.divergence = Some(d.to_string());
-            return false;
-        }
-        if let Some(d) = health.observe(scene) {
-            self.divergence = Some(d.to_string());
+        // Frame 0 is the end of the settle phase: what went wrong there
+        // went wrong while settling.
+        let when = if frame.k == 0 && scene.settle > 0.0 {
+            "while settling: "
+        } else {
+            ""
+        };
+        if let Some(d) = watch
+            .check(scene, &d)
+            .err()
+            .or_else(|| health.observe(scene))
+        {
+            self.divergence = Some(format!("{when}{d}"));
             return false;
         }
         self.measure(scene);
@@ -501,6 +499,45 @@ impl Tally {
         true
     }
 
+    /// The health findings at the end of the run: its warnings (energy
+    /// gained without input, the health report's, accepted breakups) go
+    /// into `warnings`, and a breakup the scene does not expect ends the
+    /// run as a divergence. After a divergence the state is the blown-up
+    /// one: its pieces and escape say nothing the divergence does not.
+    fn conclude(
+        &mut self,
+        scene: &BuiltScene,
+        health: &Health,
+        watch: &EnergyWatch,
+        warnings: &mut Vec<String>,
+    ) -> Vec<ObjectFindings> {
+        if watch.gain_seen > ENERGY_GAIN_WARNING {
+            warnings.push(format!(
+                "the scene gained energy without input: the total energy rose {} times its \
+                 energy scale above the lowest earlier frame (a step too large for the \
+                 stiffness, or particles started on top of each other)",
+                short(watch.gain_seen)
+            ));
+        }
+        let (findings, health_warnings, breakups) = health.finish(scene);
+        if self.divergence.is_some() {
+            return findings;
+        }
+        warnings.extend(health_warnings);
+        let (accepted, unexpected): (Vec<String>, Vec<String>) =
+            breakups.into_iter().partition(|b| scene.accepts_breakup(b));
+        warnings.extend(accepted);
+        if let Some(first) = unexpected.first() {
+            self.divergence = Some(format!(
+                "{first}; the scene does not expect it (a scene that tears on purpose says so \
+                 in its header, `// expect-warning: {}`; `opsim run --allow-breakup` accepts \
+                 any breakup)",
+                first.split(" (").next().unwrap_or(first)
+            ));
+        }
+        findings
+    }
+
     /// Each object's rest-shape error and hottest particle at this frame.
     fn measure(&mut self, scene: &BuiltScene) {
         for (o, obj) in scene.objects.iter().enumerate() {
@@ -530,7 +567,7 @@ impl Tally {
         &self,
         scene: &BuiltScene,
         writer: &FrameWriter,
-        findings: Vec<crate::health::ObjectFindings>,
+        findings: Vec<ObjectFindings>,
         warnings: Vec<String>,
         wall: std::time::Duration,
     ) -> Summary {
@@ -571,11 +608,7 @@ impl Tally {
     }
 
     /// The per-object figures of the summary.
-    fn objects(
-        &self,
-        scene: &BuiltScene,
-        findings: Vec<crate::health::ObjectFindings>,
-    ) -> Vec<ObjectSummary> {
+    fn objects(&self, scene: &BuiltScene, findings: Vec<ObjectFindings>) -> Vec<ObjectSummary> {
         scene
             .objects
             .iter()
@@ -691,8 +724,16 @@ mod tests {
             }
             other => panic!("expected an energy-gain divergence, got {other:?}"),
         }
+        // Off by default: the run goes on to its end, where the chain the
+        // gain tore apart is caught as an unexpected breakup instead.
         scene.world.divergence.energy_gain = Real::INFINITY;
-        let summary = run_into(&scene, "off").expect("off by default: not checked");
-        assert!(!summary.diverged);
+        match run_into(&scene, "off") {
+            Err(RunError::Diverged { message, summary }) => {
+                assert!(!message.contains("energy gain"), "{message}");
+                assert!(message.contains("broke into"), "{message}");
+                assert_eq!(summary.frames, 17, "every frame written");
+            }
+            other => panic!("expected a breakup at the end, got {other:?}"),
+        }
     }
 }

@@ -11,10 +11,11 @@
 //! **Outcome** ([`ExtremeOutcome`]) after a run through the op-scene runner:
 //! *diverged* when the runner reports it (NaN or infinity, a speed above
 //! the limit, runaway energy, or, in the passive extreme scenes that opt
-//! in with `divergence.energy_gain`, a gain of total energy: exit code 3,
-//! `summary.json` with `diverged: true`); else *broke apart* when some particle has no other
-//! within the spacing cut-off (the object exploded: seed 002 footnote 4;
-//! the runner does not flag it, tearing being physics); else *converged*
+//! in with `divergence.energy_gain`, a gain of total energy, or an object
+//! broken into pieces the scene does not expect: exit code 3,
+//! `summary.json` with `diverged: true`); else *broke apart* when some
+//! particle has no other within the spacing cut-off (seed 002 footnote 4)
+//! although no object ended in more pieces than it started in; else *converged*
 //! when the last step's oscillation measure is below `1e-6 √N` and every
 //! particle's nearest neighbour is within 1% of `r0` (the rest spacing);
 //! *settled* when it is at rest in another shape; *oscillating* otherwise.

@@ -10,8 +10,12 @@ use crate::error::short;
 /// kinetic energy against the energy scale, and the gain of a passive
 /// scene over its lowest earlier total.
 pub(super) struct EnergyWatch {
-    /// The energy the scene's own inputs can give it ([`energy_floor`]).
+    /// The energy the scene's own inputs can give it
+    /// ([`crate::health::energy_floor`]), at least its kinetic energy when
+    /// the watch started.
     floor: Real,
+    /// The watch started before a settle phase.
+    settles: bool,
     /// The energy scale and the particle count it was taken at.
     scale: Option<(Real, usize)>,
     /// A damped, unforced scene (its energy may not rise).
@@ -23,9 +27,19 @@ pub(super) struct EnergyWatch {
 }
 
 impl EnergyWatch {
-    pub(super) fn new(scene: &BuiltScene, floor: Real) -> Self {
+    /// Starts watching `scene` in its current state, before its settle
+    /// phase when `settles` (the runner starts there): the runaway scale
+    /// is taken at the first check, never below `floor` nor below the
+    /// kinetic energy now; after a settle phase the first check adds only
+    /// its potential energy, not the kinetic energy a blow-up while
+    /// settling would have put there. (The kinetic energy is read from the
+    /// velocities: a force evaluation now would be one the run does not
+    /// otherwise make, and tools and contact keep state across them.)
+    pub(super) fn new(scene: &BuiltScene, floor: Real, settles: bool) -> Self {
+        let d = op_dynamics::diagnostics::kinematic(scene.world.particles());
         EnergyWatch {
-            floor,
+            floor: floor.max(d.kinetic_translational + d.kinetic_rotational),
+            settles,
             scale: None,
             passive: scene.is_passive(),
             lowest_total: Real::INFINITY,
@@ -37,27 +51,14 @@ impl EnergyWatch {
     /// Checks the frame with diagnostics `d`; the divergence message when
     /// it fails.
     pub(super) fn check(&mut self, scene: &BuiltScene, d: &Diagnostics) -> Result<(), Divergence> {
+        self.check_runaway(scene, d)?;
         let count = scene.world.particles().len();
         let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
-        // The scale is taken at frame 0, never below the energy the scene's
-        // own inputs can give it (`energy_floor`), and again (keeping the
-        // larger) whenever the creation rules changed the particle count:
-        // new particles bring energy the first frame did not hold.
-        let scale = match self.scale {
-            Some((s, c)) if c == count => s,
-            Some((s, _)) => Real::max(s, here),
-            None => here.max(self.floor),
-        };
-        self.scale = Some((scale, count));
         // The gain of a passive scene is measured against its own energy at
         // frame 0 (a damped scene at rest holds only potential energy).
         let own_scale = *self
             .gain_scale
             .get_or_insert(here.max(1e-12 * count as Real));
-        let kinetic = d.kinetic_translational + d.kinetic_rotational;
-        if !d.total.is_finite() || kinetic > scene.energy_growth * scale {
-            return Err(runaway(scene, kinetic, scale));
-        }
         if self.passive && self.lowest_total.is_finite() {
             let gain = (d.total - self.lowest_total) / own_scale.max(Real::MIN_POSITIVE);
             if gain > scene.energy_gain {
@@ -76,6 +77,34 @@ impl EnergyWatch {
             self.gain_seen = self.gain_seen.max(gain);
         }
         self.lowest_total = self.lowest_total.min(d.total);
+        Ok(())
+    }
+}
+
+impl EnergyWatch {
+    /// The runaway check alone: non-finite energy, or kinetic energy above
+    /// `energy_growth` times the scale. The scale is taken at the first
+    /// check (see [`EnergyWatch::new`]), and again (keeping the larger)
+    /// whenever the creation rules changed the particle count: new
+    /// particles bring energy the first check did not hold.
+    pub(super) fn check_runaway(
+        &mut self,
+        scene: &BuiltScene,
+        d: &Diagnostics,
+    ) -> Result<(), Divergence> {
+        let count = scene.world.particles().len();
+        let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
+        let scale = match self.scale {
+            Some((s, c)) if c == count => s,
+            Some((s, _)) => Real::max(s, here),
+            None if self.settles => d.potential.abs().max(self.floor),
+            None => here.max(self.floor),
+        };
+        self.scale = Some((scale, count));
+        let kinetic = d.kinetic_translational + d.kinetic_rotational;
+        if !d.total.is_finite() || kinetic > scene.energy_growth * scale {
+            return Err(runaway(scene, kinetic, scale));
+        }
         Ok(())
     }
 }

@@ -123,6 +123,25 @@ pub struct Scene {
     /// [`WorkLimits::default`].
     #[serde(skip)]
     pub limits: WorkLimits,
+    /// The warnings the scene expects, from its file's header lines
+    /// `// expect-warning: TEXT (why)` (the TEXT of each). A run whose
+    /// object breaks into pieces is a divergence (exit 3) unless an
+    /// expected warning begins its message (`object "sheet" broke into 2
+    /// pieces`): tearing and cutting scenes declare their pieces so.
+    /// Not part of the file's data: set by [`crate::load_scene`] /
+    /// [`crate::parse_scene`]. Default: none.
+    #[serde(skip)]
+    pub expected_warnings: Vec<String>,
+}
+
+/// The TEXT of each `// expect-warning: TEXT (why)` line of a scene file
+/// (see [`Scene::expected_warnings`]).
+pub fn expected_warnings(text: &str) -> Vec<String> {
+    text.lines()
+        .filter_map(|l| l.trim().strip_prefix("// expect-warning: "))
+        .map(|t| t.split(" (").next().unwrap_or(t).trim().to_string())
+        .filter(|t| !t.is_empty())
+        .collect()
 }
 
 impl Scene {

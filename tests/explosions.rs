@@ -1,0 +1,123 @@
+//! Runs that blow up end with exit 3, wherever the blow-up happens: a
+//! shipped scene run at a step above its stable step breaks into pieces,
+//! during its settle phase or after it, and `opsim run` must not report
+//! that as success. A scene that tears on purpose says so in its header,
+//! and `--allow-breakup` accepts any breakup.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A shipped scene with its `dt` line replaced by `dt`, written into a
+/// fresh folder `tag` (the scene file and the run's output go there).
+fn scene_with_step(scene: &str, old_dt: &str, dt: f64, tag: &str) -> PathBuf {
+    let text = std::fs::read_to_string(repo().join("scenes").join(scene)).unwrap();
+    let line = format!("        dt: {old_dt},");
+    assert!(text.contains(&line), "{scene} has no line {line:?}");
+    let dir = std::env::temp_dir().join(format!("opsim-explosions-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(scene);
+    std::fs::write(&path, text.replace(&line, &format!("        dt: {dt:e},"))).unwrap();
+    path
+}
+
+fn run(scene: &Path, extra: &[&str]) -> (Output, serde_json::Value) {
+    let out = scene.parent().unwrap().join("out");
+    let output = Command::new(env!("CARGO_BIN_EXE_opsim"))
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(&out)
+        .args(extra)
+        .output()
+        .unwrap();
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap_or_default();
+    let summary = serde_json::from_str(&summary).unwrap_or(serde_json::Value::Null);
+    (output, summary)
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// `fig_12_plastic` at twice its estimated stable step (1.929e-2): the
+/// shell shatters, already while settling (178 pieces at frame 0). Before,
+/// the energy scale was taken after the settle phase, from the shattered
+/// state, and the run exited 0 with a warning.
+#[test]
+fn a_blow_up_while_settling_exits_3() {
+    let scene = scene_with_step("fig_12_plastic.ron", "2e-3", 2.0 * 1.929e-2, "settle");
+    let (o, summary) = run(&scene, &["--frames", "20"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert_eq!(summary["diverged"], true, "{summary}");
+    let why = summary["divergence"].as_str().unwrap_or_default();
+    assert!(
+        why.contains("runaway energy") || why.contains("object \"shell\" broke into"),
+        "{why}"
+    );
+    let _ = std::fs::remove_dir_all(scene.parent().unwrap());
+}
+
+/// `ball_vs_spiral` at 0.6 of its printed stable step: skin contact, which
+/// the estimate leaves out, breaks both objects apart without a runaway
+/// energy; `--allow-breakup` turns that into a warning.
+#[test]
+fn a_skinned_scene_breaking_apart_exits_3() {
+    let scene = scene_with_step("ball_vs_spiral.ron", "0.005", 0.6 * 0.1422, "contact");
+    let (o, summary) = run(&scene, &["--frames", "20"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert_eq!(summary["diverged"], true, "{summary}");
+    let why = summary["divergence"].as_str().unwrap_or_default();
+    assert!(why.contains("broke into"), "{why}");
+    assert!(
+        why.contains("--allow-breakup"),
+        "the message says how to accept it: {why}"
+    );
+
+    let (o, summary) = run(&scene, &["--frames", "20", "--allow-breakup"]);
+    assert_eq!(o.status.code(), Some(0), "accepted: {}", stderr(&o));
+    assert_eq!(summary["diverged"], false, "{summary}");
+    let warnings = summary["warnings"].to_string();
+    assert!(
+        warnings.contains("broke into"),
+        "still a warning: {warnings}"
+    );
+    let _ = std::fs::remove_dir_all(scene.parent().unwrap());
+}
+
+/// A scene that declares its breakup runs to exit 0 with the warning; the
+/// declaration accepts only the object it names.
+#[test]
+fn a_declared_breakup_is_a_warning_and_only_for_its_object() {
+    let text = std::fs::read_to_string(repo().join("scenes/fig_12_tearing.ron")).unwrap();
+    assert!(text.starts_with("// expect-warning: object \"sheet\" broke into 2 pieces"));
+    let dir = std::env::temp_dir().join(format!("opsim-explosions-tear-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let declared = dir.join("declared.ron");
+    std::fs::write(&declared, &text).unwrap();
+    let (o, summary) = run(&declared, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(summary["warnings"]
+        .to_string()
+        .contains("broke into 2 pieces"));
+
+    let other = dir.join("other.ron");
+    std::fs::write(
+        &other,
+        text.replacen(
+            "expect-warning: object \"sheet\"",
+            "expect-warning: object \"cloth\"",
+            1,
+        ),
+    )
+    .unwrap();
+    let (o, summary) = run(&other, &[]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert_eq!(summary["diverged"], true);
+    let _ = std::fs::remove_dir_all(&dir);
+}
