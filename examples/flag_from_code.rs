@@ -84,10 +84,10 @@ fn flag_to(out: PathBuf) -> Result<(), Box<dyn std::error::Error>> {
 
     // Step it by hand and read the particles: the free edge drifts downwind.
     let mut built = scene.build(None, None)?;
-    let ids = built.objects[0].ids.clone();
+    let ids = built.objects()[0].ids.clone();
     // The free edge: the particles farthest from the pole.
     let far = {
-        let p = built.world.particles();
+        let p = built.world().particles();
         let x = |id: &u32| p.slot_of(*id).map_or(f64::MIN, |s| p.positions()[s].x);
         let end = ids.iter().map(x).fold(f64::MIN, f64::max);
         ids.iter()
@@ -96,7 +96,7 @@ fn flag_to(out: PathBuf) -> Result<(), Box<dyn std::error::Error>> {
             .collect::<Vec<u32>>()
     };
     let edge = |b: &BuiltScene| {
-        let p = b.world.particles();
+        let p = b.world().particles();
         let slots: Vec<usize> = far.iter().filter_map(|&id| p.slot_of(id)).collect();
         let mean = |f: &dyn Fn(usize) -> f64| {
             slots.iter().map(|&s| f(s)).sum::<f64>() / slots.len() as f64

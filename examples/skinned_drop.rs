@@ -61,8 +61,8 @@ fn scene() -> Scene {
 
 /// The lowest vertex of the ball's skin at the scene's current time.
 fn skin_bottom(built: &BuiltScene) -> Result<f64, Box<dyn std::error::Error>> {
-    let skin = &built.skins[0];
-    let mesh = skin.mesh_in(&built.skins, &built.skin_tools, built.world.time())?;
+    let skin = &built.skins()[0];
+    let mesh = skin.mesh_in(built.skins(), built.skin_tools(), built.world().time())?;
     Ok(mesh
         .positions()
         .iter()
@@ -76,7 +76,7 @@ fn drop_ball() -> Result<f64, Box<dyn std::error::Error>> {
     for t in [0.0, 2.0, 4.0, 6.0] {
         built.advance_to(t)?;
         let lowest_particle = built
-            .world
+            .world()
             .particles()
             .positions()
             .iter()

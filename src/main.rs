@@ -214,7 +214,7 @@ fn demo() -> Result<(), Failure> {
         "<demo: scenes/spiral.ron>",
     )?;
     let built = scene.build_for_run(None, None)?;
-    let out = Path::new("opsim-out").join(&built.name);
+    let out = Path::new("opsim-out").join(built.name());
     run_built(built, Some(out.clone()), None, &[FrameFormat::OBJ], false)?;
     demo_contact_sheet(&out)
 }
@@ -493,7 +493,7 @@ fn run_built(
     formats: &[FrameFormat],
     profile: bool,
 ) -> Result<(), Failure> {
-    let out_dir = out.unwrap_or_else(|| Path::new("opsim-out").join(&built.name));
+    let out_dir = out.unwrap_or_else(|| Path::new("opsim-out").join(built.name()));
     let opts = RunOptions {
         out_dir: out_dir.clone(),
         frames,
@@ -580,9 +580,9 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
     let counts = scene.validate(path.parent())?;
     let sample = op_scene::stability::sample(&scene, path.parent())?;
     let built = &sample.built;
-    let w = &built.world;
+    let w = &built.world();
     outln!("scene {:?} ({}): valid", scene.name, path.display());
-    for ((o, n), b) in scene.objects.iter().zip(&counts).zip(&built.objects) {
+    for ((o, n), b) in scene.objects.iter().zip(&counts).zip(built.objects()) {
         outln!(
             "  object {:?}: {n} particles, rest spacing {:.4}",
             o.name,
@@ -623,8 +623,8 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
     }
     outln!(
         "  outputs: particles as {:?}{}",
-        built.outputs.particles,
-        if built.outputs.metrics {
+        built.outputs().particles,
+        if built.outputs().metrics {
             ", metrics.csv"
         } else {
             ""

@@ -16,15 +16,15 @@ fn scene(name: &str) -> Scene {
 #[test]
 fn stages_include_skins_and_contact_only_when_used() {
     let plain = scene("spiral").build(None, None).expect("builds");
-    assert!(plain.skins.is_empty());
+    assert!(plain.skins().is_empty());
     let stages = plain.stages();
     for s in ["skin", "polygonize", "contact"] {
         assert!(!stages.iter().any(|x| x == s), "{s} in {stages:?}");
     }
-    assert_eq!(stages, plain.world.enabled());
+    assert_eq!(stages, plain.world().enabled());
 
     let skinned = scene("ball_vs_spiral").build(None, None).expect("builds");
-    assert_eq!(skinned.skins.len(), 2);
+    assert_eq!(skinned.skins().len(), 2);
     let stages = skinned.stages();
     for s in ["skin", "polygonize", "contact"] {
         assert!(stages.iter().any(|x| x == s), "{s} not in {stages:?}");
@@ -90,8 +90,8 @@ fn skins_are_validated() {
     let ok = text("(primitive: Square(half_side: 0.5), radius: 1, cell_size: 0.2)");
     let s = parse_scene(&ok, Format::Ron, "<ok>").expect("parses");
     let built = s.build(None, None).expect("builds");
-    assert_eq!(built.skins.len(), 1);
-    assert_eq!(built.skins[0].name, "o_skin");
+    assert_eq!(built.skins().len(), 1);
+    assert_eq!(built.skins()[0].name, "o_skin");
     assert!(!built.has_contact());
 
     let bad = text("(primitive: Point, radius: -1, cell_size: 0.2)");

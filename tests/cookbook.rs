@@ -30,15 +30,15 @@ struct Frame {
 fn frames(scene: &Scene) -> (BuiltScene, Vec<Vec<Frame>>) {
     let mut built = build(scene);
     built.settle().expect("settles");
-    let t0 = built.settle;
-    let n = (built.duration * built.frame_rate).round() as usize;
-    let mut out: Vec<Vec<Frame>> = (0..built.objects.len()).map(|_| Vec::new()).collect();
+    let t0 = built.settle_duration();
+    let n = (built.duration() * built.frame_rate()).round() as usize;
+    let mut out: Vec<Vec<Frame>> = (0..built.objects().len()).map(|_| Vec::new()).collect();
     for k in 0..=n {
         built
-            .advance_to(t0 + k as Real / built.frame_rate)
+            .advance_to(t0 + k as Real / built.frame_rate())
             .unwrap_or_else(|e| panic!("{}: {e}", scene.name));
-        let p = built.world.particles();
-        for (o, obj) in built.objects.iter().enumerate() {
+        let p = built.world().particles();
+        for (o, obj) in built.objects().iter().enumerate() {
             let slots: Vec<usize> = obj.all_ids().filter_map(|id| p.slot_of(id)).collect();
             out[o].push(Frame {
                 x: slots.iter().map(|&s| p.positions()[s]).collect(),
@@ -245,8 +245,8 @@ fn notched_sheet_tears_into_two_pieces_one_per_hand() {
     let scene = load("sheet_tear");
     let (built, frames) = frames(&scene);
     let last = frames[0].last().unwrap();
-    let t = built.world.time();
-    let hands: Vec<Point3> = built.tools[1..]
+    let t = built.world().time();
+    let hands: Vec<Point3> = built.tools()[1..]
         .iter()
         .map(|tool| Point3::from(tool.pose(t).position))
         .collect();
@@ -368,7 +368,7 @@ fn flag_streams_in_the_wind_and_the_gust_lifts_it() {
     println!("claim: {}", claim("flag_in_wind"));
     let scene = load("flag_in_wind");
     let (built, runs) = frames(&scene);
-    assert!(built.world.enabled().contains(&"wind".to_string()));
+    assert!(built.world().enabled().contains(&"wind".to_string()));
     let flag = &runs[0];
     let first = &flag[0];
     // The free edge: the particles farthest from the pole at the start.
@@ -378,7 +378,7 @@ fn flag_streams_in_the_wind_and_the_gust_lifts_it() {
         .collect();
     let edge_mean =
         |f: &Frame| edge.iter().map(|&i| f.x[i].coords).sum::<Vec3>() / edge.len() as Real;
-    let at = |t: Real| &flag[(t * built.frame_rate).round() as usize];
+    let at = |t: Real| &flag[(t * built.frame_rate()).round() as usize];
     let calm = edge_mean(at(19.0));
     let lifted = (40..=60)
         .map(|k| edge_mean(&flag[k]).z)
@@ -412,7 +412,7 @@ fn flag_streams_in_the_wind_and_the_gust_lifts_it() {
     let mut still = scene.clone();
     still.features.clear();
     let (_, runs) = frames(&still);
-    let hang = edge_mean(&runs[0][(19.0 * built.frame_rate).round() as usize]);
+    let hang = edge_mean(&runs[0][(19.0 * built.frame_rate()).round() as usize]);
     println!(
         "without wind, the free edge at t = 19: ({:.2}, {:.2})",
         hang.x, hang.z

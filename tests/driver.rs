@@ -61,9 +61,9 @@ fn a_skinned_sheet_with_creation_heat_eraser_and_obstacle_runs_with_its_skin() {
     }
     // The skin follows the particle set: one primitive per live particle of
     // the object, created ones included, erased ones gone.
-    let skin = &built.skins[0].skin;
+    let skin = &built.skins()[0].skin;
     assert_eq!(skin.attachments().len(), o.particles);
-    let p = built.world.particles();
+    let p = built.world().particles();
     assert!(skin
         .attachments()
         .iter()

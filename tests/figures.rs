@@ -25,7 +25,7 @@ fn fig_08_unoriented_row_makes_a_sharp_crease() {
     assert_eq!(plain.objects[0].overrides.len(), 1);
     let measure = |scene: &Scene, tag: &str| {
         let (built, _) = run(scene, tag);
-        let ids = &built.objects[0].ids;
+        let ids = &built.objects()[0].ids;
         // Rows 0-3 and 5-8 of the 10 x 9 sheet; row 4 is the crease.
         let (a_normal, a_rms) = plane_fit(&positions(&built, &ids[..40]));
         let (b_normal, b_rms) = plane_fit(&positions(&built, &ids[50..]));
@@ -96,7 +96,7 @@ fn fig_09_ball_stretches_the_sheet_and_particles_are_created() {
     println!(
         "every frame a disc; last frame {t:?} over {} particles; longest surface edge \
          {worst:.3} r0",
-        end.world.particles().len()
+        end.world().particles().len()
     );
     let stretching = scene
         .creation
@@ -104,9 +104,9 @@ fn fig_09_ball_stretches_the_sheet_and_particles_are_created() {
         .and_then(|c| c.stretching.clone())
         .expect("the stretching rule is on");
     let (built, summary) = run(&scene, "stretch");
-    let initial = built.objects[0].ids.len();
-    let created = built.objects[0].created.len();
-    let p = built.world.particles();
+    let initial = built.objects()[0].ids.len();
+    let created = built.objects()[0].created.len();
+    let p = built.world().particles();
     let points = p.positions();
     let nearest = nearest_distances(points);
     let (lo, hi) = nearest
@@ -141,7 +141,7 @@ fn spin_alignment(name: &str, axis: Vec3, keep_within: Real) -> (Real, Real) {
     let scene = load(name);
     let axis = axis.normalize();
     let angles = |built: &BuiltScene| {
-        let p = built.world.particles();
+        let p = built.world().particles();
         let a = p.attributes();
         (0..p.len())
             .filter(|&s| p.positions()[s].coords.dot(&axis).abs() < keep_within)
@@ -197,7 +197,7 @@ fn fig_07_eraser_cuts_the_sheet_in_two() {
     let half_width = 0.9;
     let in_path = {
         let built = build(&scene);
-        let p = built.world.particles();
+        let p = built.world().particles();
         let mut ids: Vec<u32> = (0..p.len())
             .filter(|&s| p.positions()[s].x.abs() < half_width)
             .map(|s| p.ids()[s])
@@ -206,8 +206,8 @@ fn fig_07_eraser_cuts_the_sheet_in_two() {
         ids
     };
     let (built, summary) = run(&scene, "cut");
-    let p = built.world.particles();
-    let n0 = built.objects[0].ids.len();
+    let p = built.world().particles();
+    let n0 = built.objects()[0].ids.len();
     let points = p.positions().to_vec();
     let sizes = components(&points, 1.5);
     let left = points.iter().filter(|x| x.x < 0.0).count();
@@ -218,9 +218,9 @@ fn fig_07_eraser_cuts_the_sheet_in_two() {
         n0 - p.len()
     );
     assert_eq!(summary.objects[0].particles, p.len());
-    assert!(built.world.enabled().contains(&"tool:eraser".to_string()));
+    assert!(built.world().enabled().contains(&"tool:eraser".to_string()));
     // Exactly the particles that started on the slab's path are gone.
-    let mut erased: Vec<u32> = built.objects[0]
+    let mut erased: Vec<u32> = built.objects()[0]
         .ids
         .iter()
         .copied()
@@ -240,14 +240,14 @@ fn fig_05_two_swinging_chains_link_into_one() {
     println!("claim: {}", claim("fig_05_chain_linking"));
     let scene = load("fig_05_chain_linking");
     let start = build(&scene);
-    let x0 = positions(&start, &start.objects[0].ids);
+    let x0 = positions(&start, &start.objects()[0].ids);
     assert_eq!(
         components(&x0, 1.5).len(),
         2,
         "two separate chains at first"
     );
     let (built, _) = run(&scene, "chains");
-    let ids = &built.objects[0].ids;
+    let ids = &built.objects()[0].ids;
     let x = positions(&built, ids);
     // Free ends: the last particle of each chain.
     let ends = (x[7] - x[15]).norm();

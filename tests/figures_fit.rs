@@ -31,12 +31,12 @@ fn samples(name: &str) -> Vec<Point3> {
 /// `outputs.triangulation_radius` rest spacings), measured against
 /// `data`; and the rest spacing.
 fn mesh(built: &BuiltScene, data: &[Point3]) -> (SurfaceMesh, Real) {
-    let p = built.world.particles();
-    let o = &built.objects[0];
+    let p = built.world().particles();
+    let o = &built.objects()[0];
     let slots: Vec<usize> = o.all_ids().filter_map(|id| p.slot_of(id)).collect();
     let positions: Vec<Point3> = slots.iter().map(|&s| p.positions()[s]).collect();
     let normals: Vec<Vec3> = slots.iter().map(|&s| p.normal(s)).collect();
-    let radius = built.outputs.triangulation_radius * o.rest_spacing;
+    let radius = built.outputs().triangulation_radius * o.rest_spacing;
     let m = SurfaceMesh::new(&positions, &normals, radius, data).expect("valid radius");
     (m, o.rest_spacing)
 }
@@ -60,11 +60,11 @@ fn fig_10_closed_interpolation_grows_a_closed_surface_through_the_samples() {
     let data = samples("fig_10_sphere.xyz");
 
     let mut growing = build(&scene);
-    let fit = growing.creation.as_ref().and_then(|c| c.fit.clone());
+    let fit = growing.creation().as_ref().and_then(|c| c.fit.clone());
     let release = fit.expect("the scene has creation.fit").release_time;
     growing.advance_to(0.5 * release).expect("no divergence");
-    let p = growing.world.particles();
-    let o = &growing.objects[0];
+    let p = growing.world().particles();
+    let o = &growing.objects()[0];
     assert_eq!(o.ids.len(), data.len());
     for (k, &id) in o.ids.iter().enumerate() {
         let s = p.slot_of(id).expect("seeds live");
@@ -133,14 +133,14 @@ fn fig_11_open_interpolation_keeps_the_hole_and_covers_the_rest() {
     assert!(m.max_distance < 0.25 * r0, "largest {}", m.max_distance);
     // The hole: radius 3.5 about (3, 1) in x-y; particles are created at
     // most d_max / 2 = 1.25 r0 from a sample.
-    let p = built.world.particles();
+    let p = built.world().particles();
     let nearest = p
         .positions()
         .iter()
         .map(|x| (x.x - 3.0).hypot(x.y - 1.0))
         .fold(Real::INFINITY, Real::min);
     assert!(nearest > 2.0, "a particle {nearest} from the hole's centre");
-    assert!(built.objects[0].created.len() > 2 * data.len());
+    assert!(built.objects()[0].created.len() > 2 * data.len());
 }
 
 /// The fig. 11 scene through `opsim run` gives the same frames, byte for
@@ -251,7 +251,7 @@ fn bad_fit_sections_are_rejected_naming_the_field() {
     )
     .unwrap();
     let built = scene.build(None, None).unwrap();
-    let p = built.world.particles();
+    let p = built.world().particles();
     assert!(p
         .flags()
         .iter()

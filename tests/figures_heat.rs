@@ -47,7 +47,7 @@ fn cold_knife(scene: &Scene) -> Scene {
 fn fig_07_hot_knife_cuts_the_sheet_in_two() {
     let scene = load("fig_07_knife");
     let (built, summary) = run(&scene, "hot");
-    let p = built.world.particles();
+    let p = built.world().particles();
     let points = p.positions().to_vec();
     let sizes = components(&points, 1.5);
     let below = points.iter().filter(|x| x.y < 0.0).count();
@@ -57,7 +57,7 @@ fn fig_07_hot_knife_cuts_the_sheet_in_two() {
         "hot knife: components {sizes:?} ({below} on the y < 0 side), hottest {hottest:.2}, \
          lowest z {lowest:.2}"
     );
-    assert!(built.world.enabled().contains(&"tool:knife".to_string()));
+    assert!(built.world().enabled().contains(&"tool:knife".to_string()));
     assert_eq!(summary.objects[0].particles, p.len());
     assert_eq!(sizes.len(), 2, "{sizes:?}");
     assert_eq!(sizes, vec![below, p.len() - below]);
@@ -80,7 +80,7 @@ fn fig_07_hot_knife_cuts_the_sheet_in_two() {
     assert_eq!(across, 0);
 
     let (built, _) = run(&cold_knife(&scene), "cold");
-    let points = built.world.particles().positions().to_vec();
+    let points = built.world().particles().positions().to_vec();
     let sizes = components(&points, 1.5);
     let lowest = points.iter().map(|x| x.z).fold(Real::INFINITY, Real::min);
     let t = surface_topology(&built, "sheet");
@@ -113,12 +113,12 @@ fn fig_13_hot_tool_extrudes_a_stem() {
     use oriented_particles::op_modeling::triangulation::{triangulate, TriangulationParams};
     let scene = load("fig_13_stem");
     let (built, summary) = run(&scene, "stem");
-    let p = built.world.particles();
+    let p = built.world().particles();
     let points = p.positions().to_vec();
     let sizes = components(&points, 1.5);
     let t = triangulate(p, &TriangulationParams::from_spacing(1.0, 1.7)).unwrap();
     let top = points.iter().map(|x| x.z).fold(Real::MIN, Real::max);
-    let created: Vec<usize> = built.objects[0]
+    let created: Vec<usize> = built.objects()[0]
         .created
         .iter()
         .filter_map(|&id| p.slot_of(id))
@@ -135,7 +135,7 @@ fn fig_13_hot_tool_extrudes_a_stem() {
         "stem: particles {} -> {} ({} created, lowest at z {lowest_created:.2}), components \
          {sizes:?}, chi {}, boundary loops {}, tip z {top:.2}, body below the equator at most \
          {body_hottest:.3} hot, hottest {:?}",
-        built.objects[0].ids.len(),
+        built.objects()[0].ids.len(),
         p.len(),
         created.len(),
         t.euler_characteristic(),
@@ -160,7 +160,7 @@ fn crossings(
     a: oriented_particles::op_dynamics::Point3,
     b: oriented_particles::op_dynamics::Point3,
 ) -> usize {
-    let p = built.world.particles();
+    let p = built.world().particles();
     let at = |id: u32| p.positions()[p.slot_of(id).expect("live")];
     let d = b - a;
     t.triangles
@@ -188,9 +188,9 @@ fn frames_surface(
     built: &oriented_particles::op_scene::BuiltScene,
 ) -> oriented_particles::op_modeling::triangulation::Triangulation {
     use oriented_particles::op_modeling::triangulation::{triangulate, TriangulationParams};
-    let radius = built.outputs.triangulation_radius * built.objects[0].rest_spacing;
+    let radius = built.outputs().triangulation_radius * built.objects()[0].rest_spacing;
     triangulate(
-        built.world.particles(),
+        built.world().particles(),
         &TriangulationParams::with_radius(radius),
     )
     .unwrap()
@@ -240,13 +240,13 @@ fn fig_13_stem_looped_onto_the_body_makes_a_handle() {
     assert_eq!(start.boundary_loops(), 0);
 
     let inside_tip = |built: &oriented_particles::op_scene::BuiltScene| {
-        let tool = oriented_particles::op_modeling::Tools::of(&built.world)
+        let tool = oriented_particles::op_modeling::Tools::of(built.world())
             .expect("the world's tools")
             .tools()
             .iter()
             .find(|t| t.params().name == "tip")
             .expect("a tool named tip");
-        Point3::from(tool.pose(built.world.time()).position)
+        Point3::from(tool.pose(built.world().time()).position)
     };
     let mut touch = scene.clone();
     touch.world.duration = 17.0;
@@ -269,7 +269,7 @@ fn fig_13_stem_looped_onto_the_body_makes_a_handle() {
     println!(
         "end: {} particles, chi {chi}, {loops} boundary loops ({boundary} of {} edges), \
          manifold {}, segment crossings {open}",
-        built.world.particles().len(),
+        built.world().particles().len(),
         edges.len(),
         end.is_manifold()
     );
@@ -281,7 +281,7 @@ fn fig_13_stem_looped_onto_the_body_makes_a_handle() {
         "the holes are small: {boundary} of {} edges on the boundary",
         edges.len()
     );
-    let p = built.world.particles();
+    let p = built.world().particles();
     let pieces = components(p.positions(), 1.5);
     assert_eq!(pieces.len(), 1, "{pieces:?}");
     // The claim on the exported surface (the frames' `ball_surface`, only

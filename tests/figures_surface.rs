@@ -46,7 +46,7 @@ fn fig_12c_pulled_sheet_tears_beyond_the_cutoff() {
     };
     let pieces = |scene: &Scene, tag: &str| {
         let (built, _) = run(scene, tag);
-        let p = built.world.particles();
+        let p = built.world().particles();
         let widest = nearest_distances(p.positions())
             .into_iter()
             .fold(0.0, Real::max);
@@ -165,8 +165,8 @@ fn fig_12c_bonded_tearing_claim_one_tear_two_pieces() {
 /// Sizes, largest first, of the connected components of the bond graph of
 /// `built`'s world (every live particle a node).
 fn bond_components(built: &BuiltScene) -> Vec<usize> {
-    let p = built.world.particles();
-    let bonds = built.world.bonds().expect("bonded");
+    let p = built.world().particles();
+    let bonds = built.world().bonds().expect("bonded");
     let mut parent: Vec<usize> = (0..p.len()).collect();
     fn root(parent: &mut [usize], mut i: usize) -> usize {
         while parent[i] != i {
@@ -232,7 +232,7 @@ fn fig_12c_bonded_sheet_tears_cleanly_beyond_the_break_length() {
     // components, neighbour-graph components and broken count.
     let follow = |scene: &Scene| {
         let mut built = build(scene);
-        let p = built.world.particles();
+        let p = built.world().particles();
         let xs: Vec<Real> = p.positions().iter().map(|x| x.x).collect();
         let (lo, hi) = xs.iter().fold((Real::INFINITY, Real::MIN), |(a, b), &x| {
             (a.min(x), b.max(x))
@@ -251,22 +251,22 @@ fn fig_12c_bonded_sheet_tears_cleanly_beyond_the_break_length() {
         let length0 = mean_x(&built, &right) - mean_x(&built, &left);
         let mut tore_at = None;
         let mut split_at = None;
-        let steps = (built.duration * 100.0).round() as usize;
+        let steps = (built.duration() * 100.0).round() as usize;
         for k in 1..=steps {
             built
                 .advance_to(k as Real / 100.0)
                 .unwrap_or_else(|e| panic!("{e}"));
             let strain = || (mean_x(&built, &right) - mean_x(&built, &left)) / length0 - 1.0;
-            if tore_at.is_none() && built.world.bonds().expect("bonded").broken() > 0 {
-                tore_at = Some((built.world.time(), strain()));
+            if tore_at.is_none() && built.world().bonds().expect("bonded").broken() > 0 {
+                tore_at = Some((built.world().time(), strain()));
             }
             if tore_at.is_some() && split_at.is_none() && bond_components(&built).len() > 1 {
-                split_at = Some((built.world.time(), strain()));
+                split_at = Some((built.world().time(), strain()));
             }
         }
         let bonds = bond_components(&built);
-        let near = components(built.world.particles().positions(), 1.5);
-        let broken = built.world.bonds().expect("bonded").broken();
+        let near = components(built.world().particles().positions(), 1.5);
+        let broken = built.world().bonds().expect("bonded").broken();
         (tore_at, split_at, bonds, near, broken)
     };
     let (tore_at, split_at, pieces, near, broken) = follow(&scene);
@@ -312,10 +312,10 @@ fn fig_06_two_sheets_weld_into_one() {
     println!("claim: {}", claim("fig_06_weld"));
     let scene = load("fig_06_weld");
     let start = build(&scene);
-    let x0 = start.world.particles().positions().to_vec();
+    let x0 = start.world().particles().positions().to_vec();
     assert_eq!(components(&x0, 1.5), vec![36, 36], "two sheets at first");
     let (built, _) = run(&scene, "weld");
-    let p = built.world.particles();
+    let p = built.world().particles();
     let x = p.positions();
     let sizes = components(x, 1.5);
     let nearest = nearest_distances(x);
@@ -377,19 +377,19 @@ fn fig_12a_cloth_drapes_over_the_sphere() {
             .map_or([0.0; 3], |k| k.position),
     );
     let mut built = build(&scene);
-    let n = built.world.particles().len();
-    let frames = (built.duration * built.frame_rate).round() as usize;
+    let n = built.world().particles().len();
+    let frames = (built.duration() * built.frame_rate()).round() as usize;
     let mut kinetic = Vec::with_capacity(frames);
     for k in 1..=frames {
         built
-            .advance_to(k as Real / built.frame_rate)
+            .advance_to(k as Real / built.frame_rate())
             .unwrap_or_else(|e| panic!("{e}"));
-        let d = kinematic(built.world.particles());
+        let d = kinematic(built.world().particles());
         kinetic.push(d.kinetic_translational + d.kinetic_rotational);
     }
     let peak = kinetic.iter().copied().fold(0.0, Real::max);
     let last = *kinetic.last().expect("frames");
-    let x = built.world.particles().positions();
+    let x = built.world().particles().positions();
     let closest = x
         .iter()
         .map(|p| (p - centre).norm())
@@ -400,7 +400,7 @@ fn fig_12a_cloth_drapes_over_the_sphere() {
         .map(|p| p.z - centre.z)
         .fold(Real::INFINITY, Real::min);
     let pieces = components(x, 1.5);
-    let bonds = built.world.bonds().expect("a bonded cloth");
+    let bonds = built.world().bonds().expect("a bonded cloth");
     println!(
         "contact radius {:.2}: closest particle {closest:.3} from the centre; highest {top:.3}, \
          lowest {lowest:.3} above it; components {pieces:?}; {} bonds, {} broken; kinetic \
@@ -409,7 +409,7 @@ fn fig_12a_cloth_drapes_over_the_sphere() {
         bonds.len(),
         bonds.broken(),
         last / peak,
-        built.world.time()
+        built.world().time()
     );
     // Resting on the sphere: a penalty contact lets particles in by
     // load / stiffness only.
@@ -434,7 +434,7 @@ struct Dent {
 }
 
 fn dent(built: &BuiltScene) -> Dent {
-    let x = built.world.particles().positions();
+    let x = built.world().particles().positions();
     let c = x.iter().map(|p| p.coords).sum::<Vec3>() / x.len() as Real;
     let side = x
         .iter()
@@ -443,7 +443,7 @@ fn dent(built: &BuiltScene) -> Dent {
         .map(|d| d.x)
         .fold(Real::MIN, Real::max);
     Dent {
-        error: rest_shape_error(built, &built.objects[0]),
+        error: rest_shape_error(built, &built.objects()[0]),
         side,
     }
 }
@@ -475,7 +475,7 @@ struct DentRun {
 
 /// The world's bonds with their remembered offsets.
 fn remembered_offsets(b: &BuiltScene) -> Vec<((u32, u32), [Vec3; 2])> {
-    b.world.bonds().map_or(Vec::new(), |bonds| {
+    b.world().bonds().map_or(Vec::new(), |bonds| {
         bonds
             .pairs()
             .iter()
@@ -490,8 +490,8 @@ fn dent_run(name: &str) -> DentRun {
     let mut built = build(&scene);
     built.settle().expect("settles");
     let by_id = |b: &BuiltScene| -> Vec<Real> {
-        let p = b.world.particles();
-        b.objects[0]
+        let p = b.world().particles();
+        b.objects()[0]
             .ids
             .iter()
             .map(|&id| p.curvatures()[p.slot_of(id).expect("alive")])
@@ -499,7 +499,7 @@ fn dent_run(name: &str) -> DentRun {
     };
     let kappa_settled = by_id(&built);
     let offsets_settled = remembered_offsets(&built);
-    let x0 = positions(&built, &built.objects[0].ids);
+    let x0 = positions(&built, &built.objects()[0].ids);
     let c0 = x0.iter().map(|p| p.coords).sum::<Vec3>() / x0.len() as Real;
     let rest = x0.iter().map(|p| p.coords - c0).collect();
     let settled = dent(&built);
@@ -510,7 +510,10 @@ fn dent_run(name: &str) -> DentRun {
     let mut open_frames: Vec<usize> = (!closed(&built)).then_some(0).into_iter().collect();
     for k in 1..=frames {
         let t = k as Real * frame;
-        built.world.advance_to(t0 + t).expect("does not diverge");
+        built
+            .world_mut()
+            .advance_to(t0 + t)
+            .expect("does not diverge");
         if !closed(&built) {
             open_frames.push(k);
         }
@@ -542,7 +545,7 @@ fn dent_run(name: &str) -> DentRun {
         kappa_end: by_id(&built),
         offsets_settled,
         offsets_end: remembered_offsets(&built),
-        ids: built.objects[0].ids.clone(),
+        ids: built.objects()[0].ids.clone(),
         rest,
         open_frames,
     }

@@ -19,9 +19,9 @@ use figure_support::*;
 
 /// The triangulation of the scene's (single) object, as its frames hold it.
 fn surface(built: &BuiltScene) -> Triangulation {
-    let radius = built.outputs.triangulation_radius * built.objects[0].rest_spacing;
+    let radius = built.outputs().triangulation_radius * built.objects()[0].rest_spacing;
     triangulate(
-        built.world.particles(),
+        built.world().particles(),
         &TriangulationParams::with_radius(radius),
     )
     .expect("valid radius")
@@ -47,8 +47,8 @@ fn run_scene(tag: &str) -> Outcome {
     assert!(scene.outputs.triangulation, "the scene outputs its surface");
     let start = surface(&build(&scene));
     let (built, summary) = run(&scene, tag);
-    let object = &built.objects[0];
-    let p = built.world.particles();
+    let object = &built.objects()[0];
+    let p = built.world().particles();
     let alive = |id: u32| p.slot_of(id).is_some();
     let deleted = object.all_ids().filter(|&id| !alive(id)).count();
     let hole = p

@@ -24,18 +24,18 @@ const SCENE: &str = "(name: \"free_shell\", world: (dt: 0.01, duration: 12, fram
 fn free_elastic_shell_never_gains_energy_and_stays_whole() {
     let scene = parse_scene(SCENE, Format::Ron, "<free shell>").unwrap();
     let mut built = scene.build(None, None).unwrap();
-    let mut lowest = built.world.diagnostics().total;
+    let mut lowest = built.world_mut().diagnostics().total;
     let start = lowest;
     let mut worst_rise: Real = 0.0;
     for k in 1..=120 {
         let t = 0.1 * k as Real;
         built.advance_to(t).unwrap();
-        let e = built.world.diagnostics().total;
+        let e = built.world_mut().diagnostics().total;
         worst_rise = worst_rise.max(e - lowest);
         lowest = lowest.min(e);
     }
-    let end = built.world.diagnostics().total;
-    let pieces = components(built.world.particles().positions(), 2.5);
+    let end = built.world_mut().diagnostics().total;
+    let pieces = components(built.world().particles().positions(), 2.5);
     eprintln!(
         "free shell: total energy {start:.3} -> {end:.3}, largest rise above the lowest \
          earlier value {worst_rise:.2e}, pieces {pieces:?}"

@@ -29,7 +29,7 @@ fn run(scene: &Scene, frames: usize, tag: &str) -> (Summary, HashMap<u32, (Point
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     assert!(!summary.diverged, "{tag}: {:?}", summary.divergence);
-    let p = built.world.particles();
+    let p = built.world().particles();
     let state = (0..p.len())
         .map(|k| (p.ids()[k], (p.positions()[k], p.temperatures()[k])))
         .collect();

@@ -116,9 +116,9 @@ fn seed_spiral_turns_are_apart() {
     assert!(shape.turns() < 1.0);
     let mut b = s.build(None, None).unwrap();
     single_threaded(|| b.settle()).unwrap();
-    let rest = &b.objects[0].rest;
+    let rest = &b.objects()[0].rest;
     assert_eq!(rest.len(), 10);
-    let reach = b.world.neighbours().unwrap().cutoff();
+    let reach = b.world().neighbours().unwrap().cutoff();
     let mut closest = f64::INFINITY;
     for i in 0..rest.len() {
         for j in i + 2..rest.len() {
@@ -297,7 +297,11 @@ fn scaled_spiral_repeats_the_seed_motion_and_geometry_alone_does_not() {
 fn hinge_spiral_stays_connected() {
     let s = load("hinge_spiral");
     let built = s.build(None, None).unwrap();
-    assert!(built.world.enabled().iter().any(|e| e == "term:repulsion"));
+    assert!(built
+        .world()
+        .enabled()
+        .iter()
+        .any(|e| e == "term:repulsion"));
     let run = single_threaded(|| run_hinge(&s)).unwrap();
     eprintln!("hinge spiral: {run:?}");
     assert_eq!(run.part_sizes, vec![6, 6]);
@@ -352,7 +356,7 @@ fn colliding_objects_repel_and_never_merge() {
 /// Height over width (z extent over the mean of the x and y extents) and
 /// mean distance from the centroid of the first object's particles.
 fn proportions(built: &op_scene::BuiltScene) -> (f64, f64) {
-    let pos = figure_support::positions(built, &built.objects[0].ids);
+    let pos = figure_support::positions(built, &built.objects()[0].ids);
     let extent = |k: usize| {
         let (lo, hi) = pos
             .iter()
@@ -388,7 +392,7 @@ fn sphere_shell_springs_back_round() {
                 (settled, radius) = (ratio, r);
             }
             deepest = deepest.min(ratio);
-            max_error = max_error.max(op_scene::run::rest_shape_error(built, &built.objects[0]));
+            max_error = max_error.max(op_scene::run::rest_shape_error(built, &built.objects()[0]));
             let within = (ratio / settled - 1.0).abs() <= 0.01;
             back_from = match (within, back_from) {
                 (true, None) => Some(built.scene_time()),
@@ -398,14 +402,14 @@ fn sphere_shell_springs_back_round() {
         })
     });
     let (end, end_radius) = proportions(&built);
-    let error = op_scene::run::rest_shape_error(&built, &built.objects[0]);
+    let error = op_scene::run::rest_shape_error(&built, &built.objects()[0]);
     eprintln!(
         "height/width settled {settled:.3}, deepest {deepest:.3}, end {end:.3}, within 1% from t = {back_from:?}; \
          mean radius {radius:.3} -> {end_radius:.3}; rest shape error max {max_error:.3}, end {error:.4}"
     );
     assert!(deepest <= 0.72 * settled, "squeezed to {deepest}");
     let back = back_from.expect("not back within 1% of the settled proportions");
-    assert!(back <= 0.8 * built.duration, "back only from t = {back}");
+    assert!(back <= 0.8 * built.duration(), "back only from t = {back}");
     assert!(
         (end_radius / radius - 1.0).abs() < 0.01,
         "size {radius} -> {end_radius}"

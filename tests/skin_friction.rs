@@ -38,7 +38,7 @@ fn run(theta: f64, mu: f64, times: &[f64]) -> Vec<(f64, f64, f64)> {
         .iter()
         .map(|&t| {
             b.advance_to(t).unwrap();
-            let p = b.world.particles();
+            let p = b.world().particles();
             (p.positions()[0].x, p.velocities()[0].x, p.positions()[0].z)
         })
         .collect()

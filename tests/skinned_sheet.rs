@@ -32,7 +32,11 @@ fn run_tagged(
     assert!(built.stages().iter().any(|s| s == "contact"));
     // The scene lists its tools (`tool:obstacle`); the world has none.
     assert!(
-        !built.world.enabled().iter().any(|s| s.starts_with("tool:")),
+        !built
+            .world()
+            .enabled()
+            .iter()
+            .any(|s| s.starts_with("tool:")),
         "the objects are skinned: tools act on their skins, not their particles"
     );
     let out = std::env::temp_dir().join(format!("opsim-{name}{tag}-{}", std::process::id()));
@@ -43,7 +47,7 @@ fn run_tagged(
         formats: vec![op_scene::export::FrameFormat::OBJ],
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
-    let positions = built.world.particles().positions().to_vec();
+    let positions = built.world().particles().positions().to_vec();
     (summary, positions, out)
 }
 
@@ -136,7 +140,7 @@ fn sheet_rests_on_the_box_and_friction_keeps_it_there() {
             .map(|k| {
                 let t = k as Real / scene.world.frame_rate;
                 built.advance_to(t).expect("runs");
-                let p = built.world.particles().positions();
+                let p = built.world().particles().positions();
                 let (n, mean) = over_top(p);
                 let low = p.iter().map(|q| q.z).fold(Real::MAX, Real::min);
                 (n, mean, low)
@@ -227,7 +231,7 @@ fn a_skinned_shell_is_smooth_at_its_thickness() {
                                thickness: Some(0.4))))])"#;
     let scene = op_scene::parse_scene(text, op_scene::Format::Ron, "<shell>").expect("parses");
     let built = scene.build(None, None).expect("builds");
-    let mesh = built.skins[0].mesh().expect("polygonizes");
+    let mesh = built.skins()[0].mesh().expect("polygonizes");
     assert!(mesh.is_closed_oriented_manifold());
     let (mut outside, mut inside) = (Vec::new(), Vec::new());
     for p in mesh.positions() {

@@ -44,7 +44,7 @@ pub fn run(scene: &Scene, tag: &str) -> (BuiltScene, Summary) {
 
 /// Current positions of the particles with the given ids (all alive).
 pub fn positions(built: &BuiltScene, ids: &[u32]) -> Vec<Point3> {
-    let p = built.world.particles();
+    let p = built.world().particles();
     ids.iter()
         .map(|&id| p.positions()[p.slot_of(id).expect("alive")])
         .collect()
@@ -161,14 +161,14 @@ impl SurfaceTopology {
 /// and its triangles as indices into the mesh vertices.
 pub fn surface_mesh(built: &BuiltScene, name: &str) -> op_scene::export::FrameMesh {
     let object = built
-        .objects
+        .objects()
         .iter()
         .find(|o| o.name == name)
         .unwrap_or_else(|| panic!("no object {name}"));
     op_scene::export::geometry::surface_geometry(
-        &built.world,
+        built.world(),
         object,
-        &built.outputs,
+        built.outputs(),
         built.sheet_gap(),
     )
 }
@@ -208,18 +208,18 @@ fn triangle_components(triangles: &[[u32; 3]]) -> usize {
 pub fn each_frame(scene: &Scene, mut f: impl FnMut(usize, &BuiltScene)) -> BuiltScene {
     let mut built = build(scene);
     built.settle().expect("settles");
-    let t0 = built.world.time();
-    let frames = (built.duration * built.frame_rate).round() as usize;
+    let t0 = built.world().time();
+    let frames = (built.duration() * built.frame_rate()).round() as usize;
     for k in 0..=frames {
         let t = if k == 0 {
             t0
         } else {
-            t0 + k as Real / built.frame_rate
+            t0 + k as Real / built.frame_rate()
         };
         built.advance_to(t).unwrap_or_else(|e| panic!("{e}"));
         // The runner measures every frame: a force evaluation, which may
         // refresh the neighbour list and so the bits of what follows.
-        let _ = built.world.diagnostics();
+        let _ = built.world_mut().diagnostics();
         f(k, &built);
     }
     built

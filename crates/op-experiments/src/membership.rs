@@ -12,7 +12,7 @@ use op_scene::{BuiltScene, Scene};
 
 /// Positions of `ids` in the current state of `b`'s world.
 fn positions(b: &BuiltScene, ids: &[u32]) -> Vec<Point3> {
-    let p = b.world.particles();
+    let p = b.world().particles();
     ids.iter()
         .map(|&id| p.positions()[p.slot_of(id).expect("id of the scene")])
         .collect()
@@ -67,10 +67,10 @@ pub fn run_hinge(scene: &Scene) -> Result<HingeRun, String> {
     let clock = std::time::Instant::now();
     let mut b = scene.build(None, None).map_err(|e| e.to_string())?;
     b.settle().map_err(|e| format!("while settling: {e}"))?;
-    let object = b.objects[0].clone();
+    let object = b.objects()[0].clone();
     let ids = &object.ids;
     let (kinds, unoriented): (Vec<ParticleType>, Vec<bool>) = {
-        let p = b.world.particles();
+        let p = b.world().particles();
         ids.iter()
             .map(|&id| {
                 let s = p.slot_of(id).expect("id of the scene");
@@ -127,12 +127,13 @@ pub fn run_hinge(scene: &Scene) -> Result<HingeRun, String> {
         part_distance: (part_distance(&object.rest), 0.0),
         ..HingeRun::default()
     };
-    let frames = (b.duration * b.frame_rate).round() as usize;
-    let t0 = b.world.time();
+    let frames = (b.duration() * b.frame_rate()).round() as usize;
+    let t0 = b.world().time();
+    let frame_rate = b.frame_rate();
     for k in 0..=frames {
         if k > 0 {
-            b.world
-                .advance_to(t0 + k as Real / b.frame_rate)
+            b.world_mut()
+                .advance_to(t0 + k as Real / frame_rate)
                 .map_err(|e| e.to_string())?;
         }
         let p = positions(&b, ids);
@@ -204,13 +205,13 @@ pub struct CollisionRun {
 pub fn run_collision(scene: &Scene, sample_dt: Real) -> Result<CollisionRun, String> {
     let clock = std::time::Instant::now();
     let mut b = scene.build(None, None).map_err(|e| e.to_string())?;
-    if b.objects.len() < 2 {
+    if b.objects().len() < 2 {
         return Err("needs two objects".into());
     }
     b.settle().map_err(|e| format!("while settling: {e}"))?;
-    let (oa, ob) = (b.objects[0].clone(), b.objects[1].clone());
+    let (oa, ob) = (b.objects()[0].clone(), b.objects()[1].clone());
     let r0 = oa.rest_spacing;
-    let beta = b.world.params().external.linear_damping;
+    let beta = b.world().params().external.linear_damping;
     let forces_end = scene.forces.iter().map(|f| f.end).fold(0.0, Real::max);
     let mut run = CollisionRun {
         min_distance: Real::INFINITY,
@@ -218,11 +219,11 @@ pub fn run_collision(scene: &Scene, sample_dt: Real) -> Result<CollisionRun, Str
         final_errors: vec![0.0; 2],
         ..CollisionRun::default()
     };
-    let samples = (b.duration / sample_dt).round() as usize;
-    let t0 = b.world.time();
+    let samples = (b.duration() / sample_dt).round() as usize;
+    let t0 = b.world().time();
     for k in 0..=samples {
         if k > 0 {
-            b.world
+            b.world_mut()
                 .advance_to(t0 + k as Real * sample_dt)
                 .map_err(|e| e.to_string())?;
         }
@@ -247,17 +248,17 @@ pub fn run_collision(scene: &Scene, sample_dt: Real) -> Result<CollisionRun, Str
         }
         if b.scene_time() > forces_end {
             let slots: Vec<usize> = {
-                let p = b.world.particles();
+                let p = b.world().particles();
                 oa.ids
                     .iter()
                     .map(|&id| p.slot_of(id).expect("id"))
                     .collect()
             };
             let momentum: Vec3 = {
-                let p = b.world.particles();
+                let p = b.world().particles();
                 slots.iter().map(|&s| p.velocities()[s]).sum()
             };
-            let (f, _, _) = b.world.evaluate_forces();
+            let (f, _, _) = b.world_mut().evaluate_forces();
             let net: Vec3 = slots.iter().map(|&s| f[s]).sum::<Vec3>() + beta * momentum;
             let along = net.dot(&(ca - cb).normalize());
             run.max_repulsion = run.max_repulsion.max(along);

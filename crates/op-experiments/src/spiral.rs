@@ -548,12 +548,12 @@ pub fn run_spiral(scene: &Scene, schedule: &Schedule) -> Result<SpiralRun, Strin
     let clock = std::time::Instant::now();
     let mut built = scene.build(None, None).map_err(|e| e.to_string())?;
     built.settle().map_err(|e| format!("while settling: {e}"))?;
-    let object = built.objects[0].clone();
+    let object = built.objects()[0].clone();
     let n = object.ids.len();
     let r0 = object.rest_spacing;
     let rest_end_to_end = (object.rest[n - 1] - object.rest[0]).norm() / r0;
-    let frames = (built.duration * built.frame_rate).round() as usize;
-    let t0 = built.world.time();
+    let frames = (built.duration() * built.frame_rate()).round() as usize;
+    let t0 = built.world().time();
     let mut run = SpiralRun {
         rest_end_to_end,
         min_non_adjacent: Real::INFINITY,
@@ -561,11 +561,11 @@ pub fn run_spiral(scene: &Scene, schedule: &Schedule) -> Result<SpiralRun, Strin
     };
     for k in 0..=frames {
         if k > 0 {
-            let t = t0 + k as Real / built.frame_rate;
-            built.world.advance_to(t).map_err(|e| e.to_string())?;
+            let t = t0 + k as Real / built.frame_rate();
+            built.world_mut().advance_to(t).map_err(|e| e.to_string())?;
         }
         let time = built.scene_time();
-        let p = built.world.particles();
+        let p = built.world().particles();
         let slots: Vec<usize> = object
             .ids
             .iter()
@@ -607,7 +607,7 @@ pub fn run_spiral(scene: &Scene, schedule: &Schedule) -> Result<SpiralRun, Strin
         run.max_speed.push(speed);
         run.positions.push(pos);
     }
-    run.steps = built.world.steps();
+    run.steps = built.world().steps();
     run.wall_seconds = clock.elapsed().as_secs_f64();
     Ok(run)
 }

@@ -105,7 +105,7 @@ pub fn critical_recipe(
         let scene = recipe.scene("spiral", shape);
         let mut built = scene.build(None, None).map_err(|e| e.to_string())?;
         built.settle().map_err(|e| format!("while settling: {e}"))?;
-        let modes = op_scene::modes::planar_modes(&mut built.world);
+        let modes = op_scene::modes::planar_modes(built.world_mut());
         let lambda = modes.omega2.first().copied().unwrap_or(0.0);
         if !(lambda > 0.0 && lambda.is_finite()) {
             // Not at rest yet: settle longer with the same damping.

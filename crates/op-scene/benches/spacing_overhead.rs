@@ -83,7 +83,7 @@ fn bench(c: &mut Criterion) {
             .replace("NY", &ny.to_string());
         let scene = op_scene::parse_scene(&text, op_scene::Format::Ron, "<bench>").unwrap();
         let mut built = scene.build(None, None).unwrap();
-        let world = &mut built.world;
+        let world = built.world_mut();
         eprintln!("n = {n}: enabled {:?}", world.enabled());
         pool.install(|| world.step().map(|_| ()).unwrap());
         let list = world.neighbours().unwrap();

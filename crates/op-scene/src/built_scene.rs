@@ -33,24 +33,6 @@ pub struct BuiltObject {
 }
 
 impl BuiltScene {
-    /// Accepts that objects break into pieces in this run (`opsim run
-    /// --allow-breakup`): a breakup is then a warning in the summary, not
-    /// a divergence.
-    pub fn accept_breakup(&mut self) {
-        self.breakup_accepted = true;
-    }
-
-    /// Whether the run accepts the breakup warning `warning`: every
-    /// breakup is accepted ([`BuiltScene::accept_breakup`]), or the scene
-    /// expects a warning its message begins with.
-    pub fn accepts_breakup(&self, warning: &str) -> bool {
-        self.breakup_accepted
-            || self
-                .expected_warnings
-                .iter()
-                .any(|e| warning.starts_with(e))
-    }
-
     /// The gaps the exported surfaces span between particles that no
     /// longer attract: those the stretching rule leaves as sheet (seed 000
     /// §7; its `d_min` and `d_max` times its `r0`) when the scene creates
@@ -80,71 +62,216 @@ impl BuiltObject {
 /// A validated scene built into a world containing only what it enables.
 pub struct BuiltScene {
     /// Scene name (summary `scene` field, default output folder name).
-    pub name: String,
+    pub(crate) name: String,
     /// The file it came from, if any.
-    pub source: Option<PathBuf>,
+    pub(crate) source: Option<PathBuf>,
     /// The world, ready to step.
-    pub world: World,
+    pub(crate) world: World,
     /// The objects, in scene order.
-    pub objects: Vec<BuiltObject>,
+    pub(crate) objects: Vec<BuiltObject>,
     /// Simulated duration (after the settle phase).
-    pub duration: Real,
+    pub(crate) duration: Real,
     /// Duration of the settle phase run before frame 0 (`world.settle`;
     /// the force windows start counting at its end).
-    pub settle: Real,
+    pub(crate) settle: Real,
     /// True once the settle phase ran (or when there is none): see
     /// [`BuiltScene::settle`].
-    pub settled: bool,
+    pub(crate) settled: bool,
     /// Frames written per unit of simulated time.
-    pub frame_rate: Real,
+    pub(crate) frame_rate: Real,
     /// What to write.
-    pub outputs: Outputs,
+    pub(crate) outputs: Outputs,
     /// Runaway-energy threshold: the run is declared diverged when the
     /// kinetic energy exceeds `energy_growth` times the initial energy
     /// scale (|kinetic| + |potential| at t = 0, at least 1e-12 per
     /// particle). Default 1e6; infinity disables the check.
-    pub energy_growth: Real,
+    pub(crate) energy_growth: Real,
     /// Explosion threshold: a particle this many scene sizes beyond the
     /// scene's bounds ends the run as diverged (see [`crate::health`]).
-    pub extent_growth: Real,
+    pub(crate) extent_growth: Real,
     /// Warnings known before the run starts (a step above the estimated
     /// stable step, see [`crate::stability`]); the runner puts them first
     /// in the summary's `warnings`.
-    pub step_warnings: Vec<String>,
+    pub(crate) step_warnings: Vec<String>,
     /// Energy-gain threshold of passive scenes (no force window, zero
     /// gravity, no contact): the run is declared diverged when a frame's
     /// total energy exceeds the lowest earlier one by more than
     /// `energy_gain` times the initial energy scale. Infinity (the
     /// default) disables the check.
-    pub energy_gain: Real,
+    pub(crate) energy_gain: Real,
     /// The implicit skins of the skinned objects, in scene order (empty
     /// when no object has a skin: nothing of op-implicit is built).
-    pub skins: Vec<ObjectSkin>,
+    pub(crate) skins: Vec<ObjectSkin>,
     /// Every tool of the scene, in scene order (drawn in the frames as
     /// `tool_<name>`; the world and [`BuiltScene::skin_tools`] hold the
     /// ones that act).
-    pub tools: Vec<Tool>,
+    pub(crate) tools: Vec<Tool>,
     /// Obstacle tools met by skins (empty when no skinned object meets an
     /// obstacle).
-    pub skin_tools: Vec<SkinTool>,
+    pub(crate) skin_tools: Vec<SkinTool>,
     /// Contact figures accumulated by [`BuiltScene::advance_to`].
-    pub contact: ContactStats,
+    pub(crate) contact: ContactStats,
     /// The creation rules, when the scene has some (see
     /// [`crate::creation`]).
-    pub creation: Option<CreationState>,
+    pub(crate) creation: Option<CreationState>,
     /// The driver of the scene's stages ([`crate::stages`]): only those
     /// the scene uses.
-    pub driver: Driver<SceneState>,
+    pub(crate) driver: Driver<SceneState>,
     /// Wall seconds spent making the scene before its first step, by
     /// part: `build` (validation, particles, world, skins, tools:
     /// [`crate::Scene::build`]), then `estimate` (the stable-step estimate
     /// of [`crate::Scene::build_for_run`]) when it ran. The runner counts
     /// them in the run's wall time and its stage table.
-    pub setup_seconds: Vec<(String, f64)>,
+    pub(crate) setup_seconds: Vec<(String, f64)>,
     /// The scene's expected warnings ([`crate::Scene::expected_warnings`]).
     pub(crate) expected_warnings: Vec<String>,
     /// Every breakup is accepted ([`BuiltScene::accept_breakup`]).
     pub(crate) breakup_accepted: bool,
+}
+
+/// Reading the built scene: what it holds, as built and as it runs.
+impl BuiltScene {
+    /// Scene name (summary `scene` field, default output folder name).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The file it came from, if any.
+    pub fn source(&self) -> Option<&std::path::Path> {
+        self.source.as_deref()
+    }
+
+    /// The world, ready to step.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// The world, to step or edit it directly (particles, tools, stages);
+    /// [`BuiltScene::advance_to`] runs the scene's own stages as well.
+    pub fn world_mut(&mut self) -> &mut World {
+        &mut self.world
+    }
+
+    /// The objects, in scene order.
+    pub fn objects(&self) -> &[BuiltObject] {
+        &self.objects
+    }
+
+    /// Simulated duration (after the settle phase).
+    pub fn duration(&self) -> Real {
+        self.duration
+    }
+
+    /// Duration of the settle phase run before frame 0 (`world.settle`;
+    /// the force windows start counting at its end).
+    pub fn settle_duration(&self) -> Real {
+        self.settle
+    }
+
+    /// True once the settle phase ran (or when there is none): see
+    /// [`BuiltScene::settle`].
+    pub fn is_settled(&self) -> bool {
+        self.settled
+    }
+
+    /// Frames written per unit of simulated time.
+    pub fn frame_rate(&self) -> Real {
+        self.frame_rate
+    }
+
+    /// Sets the frames written per unit of simulated time (> 0).
+    pub fn set_frame_rate(&mut self, frame_rate: Real) {
+        self.frame_rate = frame_rate;
+    }
+
+    /// What to write.
+    pub fn outputs(&self) -> &Outputs {
+        &self.outputs
+    }
+
+    /// What to write, to change it before a run.
+    pub fn outputs_mut(&mut self) -> &mut Outputs {
+        &mut self.outputs
+    }
+
+    /// Runaway-energy threshold: the run is declared diverged when the
+    /// kinetic energy exceeds this many times the energy scale
+    /// (`world.divergence.energy_growth`).
+    pub fn energy_growth(&self) -> Real {
+        self.energy_growth
+    }
+
+    /// Energy-gain threshold of passive scenes
+    /// (`world.divergence.energy_gain`; infinity: off).
+    pub fn energy_gain(&self) -> Real {
+        self.energy_gain
+    }
+
+    /// Explosion threshold in scene sizes (`world.divergence.extent_growth`,
+    /// see [`crate::health`]).
+    pub fn extent_growth(&self) -> Real {
+        self.extent_growth
+    }
+
+    /// Warnings known before the run starts (a step above the estimated
+    /// stable step, see [`crate::stability`]); the runner puts them first
+    /// in the summary's `warnings`.
+    pub fn step_warnings(&self) -> &[String] {
+        &self.step_warnings
+    }
+
+    /// The implicit skins of the skinned objects, in scene order (empty
+    /// when no object has a skin).
+    pub fn skins(&self) -> &[ObjectSkin] {
+        &self.skins
+    }
+
+    /// Every tool of the scene, in scene order (drawn in the frames as
+    /// `tool_<name>`).
+    pub fn tools(&self) -> &[Tool] {
+        &self.tools
+    }
+
+    /// Obstacle tools met by skins (empty when no skinned object meets an
+    /// obstacle).
+    pub fn skin_tools(&self) -> &[SkinTool] {
+        &self.skin_tools
+    }
+
+    /// Contact figures accumulated by [`BuiltScene::advance_to`].
+    pub fn contact(&self) -> &ContactStats {
+        &self.contact
+    }
+
+    /// The creation rules, when the scene has some (see
+    /// [`crate::creation`]).
+    pub fn creation(&self) -> Option<&CreationState> {
+        self.creation.as_ref()
+    }
+
+    /// Wall seconds spent making the scene before its first step, by part
+    /// (`build`, then `estimate` when it ran).
+    pub fn setup_seconds(&self) -> &[(String, f64)] {
+        &self.setup_seconds
+    }
+
+    /// Accepts that objects break into pieces in this run (`opsim run
+    /// --allow-breakup`): a breakup is then a warning in the summary, not
+    /// a divergence.
+    pub fn accept_breakup(&mut self) {
+        self.breakup_accepted = true;
+    }
+
+    /// Whether the run accepts the breakup warning `warning`: every
+    /// breakup is accepted ([`BuiltScene::accept_breakup`]), or the scene
+    /// expects a warning its message begins with.
+    pub fn accepts_breakup(&self, warning: &str) -> bool {
+        self.breakup_accepted
+            || self
+                .expected_warnings
+                .iter()
+                .any(|e| warning.starts_with(e))
+    }
 }
 
 impl BuiltScene {

@@ -33,8 +33,8 @@ fn built(features: &str) -> op_scene::BuiltScene {
 }
 
 fn velocity(scene: &op_scene::BuiltScene, object: usize) -> op_dynamics::Vec3 {
-    let p = scene.world.particles();
-    p.velocities()[p.slot_of(scene.objects[object].ids[0]).unwrap()]
+    let p = scene.world().particles();
+    p.velocities()[p.slot_of(scene.objects()[object].ids[0]).unwrap()]
 }
 
 /// A particle of mass m left to a wind of velocity w and drag c reaches
@@ -52,7 +52,7 @@ fn wind_drags_a_particle_toward_the_air_speed() {
         let mut s = parse_scene(&text, Format::Ron, "<test>")
             .and_then(|s| s.build(None, None))
             .unwrap();
-        assert!(s.world.enabled().contains(&"wind".to_string()));
+        assert!(s.world().enabled().contains(&"wind".to_string()));
         assert!(!s.is_passive(), "wind adds energy");
         s.advance_to(t).unwrap();
         let v = velocity(&s, 0);
@@ -97,15 +97,15 @@ fn the_speed_clamp_limits_the_chosen_objects() {
         .and_then(|s| s.build(None, None))
         .unwrap();
     assert!(s.is_passive(), "a clamp only removes energy");
-    s.world.step().unwrap();
+    s.world_mut().step().unwrap();
     let v = velocity(&s, 0);
     assert!((v.norm() - 2.0).abs() < 1e-12, "clamped: {v}");
     assert!((v.x / v.y - 0.75).abs() < 1e-12, "direction kept: {v}");
     assert_eq!(velocity(&s, 1).z, 20.0, "b is not clamped");
-    let timed: Vec<&str> = s.world.stage_seconds().iter().map(|(n, _)| *n).collect();
+    let timed: Vec<&str> = s.world().stage_seconds().iter().map(|(n, _)| *n).collect();
     assert!(timed.contains(&"speed_clamp"), "timed: {timed:?}");
     assert_eq!(
-        s.world.stage_names(),
+        s.world().stage_names(),
         ["reorder", "neighbours", "integrate", "speed_clamp", "check"]
     );
 }
@@ -128,14 +128,19 @@ impl AfterStep for Named {
 fn a_stage_name_is_registered_once() {
     let mut s = built(r#"SpeedClamp((max_speed: 2))"#);
     for name in ["speed_clamp", "check", "heat"] {
-        let e = s.world.add_after_step(Box::new(Named(name))).unwrap_err();
+        let e = s
+            .world_mut()
+            .add_after_step(Box::new(Named(name)))
+            .unwrap_err();
         assert!(
             matches!(&e, WorldError::DuplicateName { name: n, .. } if n == name),
             "{e}"
         );
     }
-    s.world.add_after_step(Box::new(Named("mine"))).unwrap();
-    assert!(s.world.enabled().contains(&"mine".to_string()));
+    s.world_mut()
+        .add_after_step(Box::new(Named("mine")))
+        .unwrap();
+    assert!(s.world().enabled().contains(&"mine".to_string()));
 }
 
 fn refused(features: &str) -> String {

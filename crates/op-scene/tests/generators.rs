@@ -141,7 +141,7 @@ fn sphere_shell_particles_lie_on_the_sphere_with_outward_normals() {
     let built = build_ron(
         "(name: \"s\", materials: {\"m\": ()}, objects: [(name: \"s\", material: \"m\", generator: SphereShell(radius: 3, spacing: 0.5))])",
     );
-    let r0 = built.objects[0].rest_spacing;
+    let r0 = built.objects()[0].rest_spacing;
     assert!(r0 > 0.8 * spacing && r0 < 1.1 * spacing, "{r0}");
 }
 

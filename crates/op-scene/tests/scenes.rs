@@ -60,21 +60,21 @@ fn every_example_scene_loads_builds_and_steps() {
     }
     for path in &files {
         let mut built = build(path);
-        let n = built.world.particles().len();
+        let n = built.world().particles().len();
         assert!(n > 0 && n <= 2000, "{}: {n} particles", path.display());
-        assert!(!built.objects.is_empty());
-        for o in &built.objects {
+        assert!(!built.objects().is_empty());
+        for o in built.objects() {
             assert_eq!(o.ids.len(), o.rest.len());
             assert!(o.rest_spacing > 0.0 && o.rest_spacing.is_finite());
         }
-        assert!(built.duration > 0.0 && built.frame_rate > 0.0);
+        assert!(built.duration() > 0.0 && built.frame_rate() > 0.0);
         for _ in 0..5 {
             built
-                .world
+                .world_mut()
                 .step()
                 .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         }
-        assert_eq!(built.world.steps(), 5);
+        assert_eq!(built.world().steps(), 5);
     }
 }
 
@@ -83,13 +83,13 @@ fn the_demo_scene_matches_its_description() {
     // The spiral that uncoils and recovers (seed 002 fig. 5), embedded in
     // `opsim` as the default demo.
     let built = build(&scenes_dir().join("spiral.ron"));
-    assert_eq!(built.name, "spiral");
-    assert_eq!(built.world.params().dt, 5e-3);
-    assert_eq!((built.settle, built.duration), (40.0, 80.0));
-    assert_eq!(built.world.params().external.linear_damping, 0.3);
-    assert_eq!(built.world.params().external.angular_damping, 0.05);
-    assert_eq!(built.world.particles().len(), 10);
-    let enabled = built.world.enabled();
+    assert_eq!(built.name(), "spiral");
+    assert_eq!(built.world().params().dt, 5e-3);
+    assert_eq!((built.settle_duration(), built.duration()), (40.0, 80.0));
+    assert_eq!(built.world().params().external.linear_damping, 0.3);
+    assert_eq!(built.world().params().external.angular_damping, 0.05);
+    assert_eq!(built.world().particles().len(), 10);
+    let enabled = built.world().enabled();
     for term in [
         "term:cohesion",
         "term:form",
@@ -100,7 +100,7 @@ fn the_demo_scene_matches_its_description() {
     ] {
         assert!(enabled.iter().any(|e| e == term), "{enabled:?}");
     }
-    let forces = &built.world.params().external.forces;
+    let forces = &built.world().params().external.forces;
     assert_eq!(forces.len(), 2);
     assert_eq!(
         (forces[0].start, forces[0].end, forces[0].ramp),
@@ -120,33 +120,34 @@ fn every_example_scene_runs_to_the_end() {
         built
             .settle()
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let t0 = built.world.time();
-        let frames = (built.duration * built.frame_rate).round() as usize;
-        let mut worst = vec![0.0f64; built.objects.len()];
+        let t0 = built.world().time();
+        let frames = (built.duration() * built.frame_rate()).round() as usize;
+        let mut worst = vec![0.0f64; built.objects().len()];
         for k in 1..=frames {
-            let t = t0 + built.duration * k as Real / frames as Real;
+            let t = t0 + built.duration() * k as Real / frames as Real;
             built
-                .world
+                .world_mut()
                 .advance_to(t)
                 .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            for (o, w) in built.objects.iter().zip(&mut worst) {
+            for (o, w) in built.objects().iter().zip(&mut worst) {
                 let err =
-                    rest_shape_rms(&o.rest, &positions_of(&built.world, &o.ids)) / o.rest_spacing;
+                    rest_shape_rms(&o.rest, &positions_of(built.world(), &o.ids)) / o.rest_spacing;
                 *w = w.max(err);
             }
         }
-        let d = built.world.diagnostics();
+        let d = built.world_mut().diagnostics();
         print!(
             "{}: {} particles, {} steps, {:.1} s, kinetic {:.2e}, potential {:.3e};",
             path.display(),
-            built.world.particles().len(),
-            built.world.steps(),
+            built.world().particles().len(),
+            built.world().steps(),
             clock.elapsed().as_secs_f64(),
             d.kinetic_translational + d.kinetic_rotational,
             d.potential
         );
-        for (o, w) in built.objects.iter().zip(&worst) {
-            let err = rest_shape_rms(&o.rest, &positions_of(&built.world, &o.ids)) / o.rest_spacing;
+        for (o, w) in built.objects().iter().zip(&worst) {
+            let err =
+                rest_shape_rms(&o.rest, &positions_of(built.world(), &o.ids)) / o.rest_spacing;
             print!(" {}: rest error final {err:.3} max {w:.3};", o.name);
         }
         println!();
@@ -173,9 +174,9 @@ fn overrides_and_selections_apply() {
         ],
     )"#,
     );
-    let p = built.world.particles();
+    let p = built.world().particles();
     let at = |id: u32| p.slot_of(id).unwrap();
-    assert_eq!(built.objects[1].ids, (3..13).collect::<Vec<u32>>());
+    assert_eq!(built.objects()[1].ids, (3..13).collect::<Vec<u32>>());
     for local in 0..10u32 {
         let s = at(3 + local);
         let i = local as usize;
@@ -225,7 +226,7 @@ fn initial_velocities_from_a_temperature_or_a_file() {
         )
     };
     let velocities = |b: &BuiltScene| -> Vec<Vec3> {
-        let p = b.world.particles();
+        let p = b.world().particles();
         (0..40u32)
             .map(|id| p.velocities()[p.slot_of(id).unwrap()])
             .collect()
@@ -275,7 +276,7 @@ fn particles_are_oriented_from_their_normal_axis() {
              generator: SphereShell(radius: 2, spacing: 1)),
         ])"#,
     );
-    let p = built.world.particles();
+    let p = built.world().particles();
     for s in 0..p.len() {
         assert_eq!(p.normal_axes()[s], Vec3::x());
         let n = p.normal(s);
@@ -302,7 +303,7 @@ fn force_windows_map_to_global_ids() {
         ],
     )"#,
     );
-    let forces = &built.world.params().external.forces;
+    let forces = &built.world().params().external.forces;
     assert_eq!(forces.len(), 4);
     assert_eq!(forces[0].particles, vec![5, 6]);
     assert_eq!(
@@ -333,20 +334,21 @@ fn settle_phase_shifts_forces_and_sets_the_rest_shape() {
         )
     };
     let plain = build_ron(&text("0"));
-    assert!(plain.settled);
+    assert!(plain.is_settled());
     let mut built = build_ron(&text("2.5"));
-    assert!(!built.settled);
-    let w = &built.world.params().external.forces[0];
+    assert!(!built.is_settled());
+    let w = &built.world().params().external.forces[0];
     assert_eq!((w.start, w.end, w.ramp), (2.75, 3.25, 0.25));
-    let generated = built.objects[0].rest.clone();
-    assert_eq!(generated, plain.objects[0].rest, "build does not settle");
+    let generated = built.objects()[0].rest.clone();
+    assert_eq!(generated, plain.objects()[0].rest, "build does not settle");
     built.settle().unwrap();
-    assert!(built.settled);
-    assert_eq!(built.world.time(), 2.5);
+    assert!(built.is_settled());
+    assert_eq!(built.world().time(), 2.5);
     assert_eq!(built.scene_time(), 0.0);
-    let settled = positions_of(&built.world, &built.objects[0].ids);
+    let settled = positions_of(built.world(), &built.objects()[0].ids);
     assert_eq!(
-        built.objects[0].rest, settled,
+        built.objects()[0].rest,
+        settled,
         "the settled shape is the reference"
     );
     let moved = rest_shape_rms(&generated, &settled);
@@ -364,9 +366,9 @@ fn settle_phase_shifts_forces_and_sets_the_rest_shape() {
         };
         (0..p.len()).map(nearest).sum::<Real>() / p.len() as Real
     };
-    assert!((built.objects[0].rest_spacing - mean(&settled)).abs() < 1e-12);
+    assert!((built.objects()[0].rest_spacing - mean(&settled)).abs() < 1e-12);
     built.settle().unwrap();
-    assert_eq!(built.world.time(), 2.5, "settles once");
+    assert_eq!(built.world().time(), 2.5, "settles once");
     // The runner settles, then reports scene time.
     let dir = std::env::temp_dir().join(format!("op-scene-settle-{}", std::process::id()));
     let mut again = build_ron(&text("2.5"));
@@ -413,13 +415,13 @@ fn window_starting_at_scene_time_zero_does_not_act_in_the_settle_phase() {
     };
     let window = r#"(object: "s", particles: First(2), force: (3, -1, 0.5), start: 0)"#;
     let state = |b: &BuiltScene| {
-        let p = b.world.particles();
-        let ids = &b.objects[0].ids;
+        let p = b.world().particles();
+        let ids = &b.objects()[0].ids;
         let v: Vec<Vec3> = ids
             .iter()
             .map(|&id| p.velocities()[p.slot_of(id).unwrap()])
             .collect();
-        (positions_of(&b.world, ids), v)
+        (positions_of(b.world(), ids), v)
     };
     for scheme in ["VelocityVerlet", "SymplecticEuler", "Rk4"] {
         for settle in ["0.5", "0.37", "0.123"] {
@@ -431,8 +433,8 @@ fn window_starting_at_scene_time_zero_does_not_act_in_the_settle_phase() {
                 state(&with) == state(&without),
                 "{scheme}, settle {settle}: the window acted before scene time 0"
             );
-            with.world.step().unwrap();
-            without.world.step().unwrap();
+            with.world_mut().step().unwrap();
+            without.world_mut().step().unwrap();
             assert!(
                 state(&with) != state(&without),
                 "{scheme}, settle {settle}: the window does not act after scene time 0"
@@ -454,9 +456,9 @@ fn only_used_materials_enter_the_world() {
         objects: [(name: "x", material: "b_used", generator: Chain(count: 3, spacing: 1))],
     )"#,
     );
-    assert_eq!(built.world.materials().len(), 1);
-    assert_eq!(built.world.particles().materials(), &[0, 0, 0]);
-    let enabled = built.world.enabled();
+    assert_eq!(built.world().materials().len(), 1);
+    assert_eq!(built.world().particles().materials(), &[0, 0, 0]);
+    let enabled = built.world().enabled();
     assert!(
         enabled.contains(&"term:cohesion".to_string()),
         "{enabled:?}"
@@ -525,12 +527,12 @@ fn ron_and_json_versions_build_identical_worlds() {
     );
     let mut a = from_json.build(json_path.parent(), None).unwrap();
     let mut b = from_ron.build(None, None).unwrap();
-    assert_same_world(&a.world, &b.world);
+    assert_same_world(a.world(), b.world());
     for _ in 0..20 {
-        a.world.step().unwrap();
-        b.world.step().unwrap();
+        a.world_mut().step().unwrap();
+        b.world_mut().step().unwrap();
     }
-    assert_same_world(&a.world, &b.world);
+    assert_same_world(a.world(), b.world());
 }
 
 #[test]

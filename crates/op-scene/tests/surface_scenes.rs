@@ -179,13 +179,13 @@ fn obstacles_meet_skins_while_settling() {
     let mut built = scene.build(path.parent(), None).unwrap();
     built.settle().unwrap();
     assert!(
-        built.contact.total_impulse > 0.0,
+        built.contact().total_impulse > 0.0,
         "contact acted while settling"
     );
     // The lowest particle above the box's top (|x| < 3, |y| < 5 at z 0):
     // the part of the sheet beyond its edge drapes down.
     let lowest = built
-        .world
+        .world()
         .particles()
         .positions()
         .iter()

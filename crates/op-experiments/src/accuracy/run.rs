@@ -45,8 +45,8 @@ pub fn simulate(case: &Case, method: &Method) -> Result<Trajectory, String> {
         .build(case.base_dir.as_deref(), None)
         .map_err(|e| e.to_string())?;
     built.settle().map_err(|e| format!("while settling: {e}"))?;
-    let t0 = built.world.time();
-    let mut ids: Vec<u32> = built.world.particles().ids().to_vec();
+    let t0 = built.world().time();
+    let mut ids: Vec<u32> = built.world().particles().ids().to_vec();
     ids.sort_unstable();
     let mut out = Trajectory {
         times: Vec::new(),
@@ -58,8 +58,8 @@ pub fn simulate(case: &Case, method: &Method) -> Result<Trajectory, String> {
     };
     for &t in &case.entry.samples {
         built.advance_to(t0 + t).map_err(|e| e.to_string())?;
-        let energy = built.world.diagnostics().total;
-        let p = built.world.particles();
+        let energy = built.world_mut().diagnostics().total;
+        let p = built.world().particles();
         let slots: Vec<usize> = ids
             .iter()
             .map(|&id| p.slot_of(id).expect("a particle of the scene"))
@@ -71,8 +71,8 @@ pub fn simulate(case: &Case, method: &Method) -> Result<Trajectory, String> {
             .push(slots.iter().map(|&k| p.orientations()[k]).collect());
         out.energies.push(energy);
     }
-    out.steps = built.world.steps();
-    out.force_evaluations = built.world.force_evaluations();
+    out.steps = built.world().steps();
+    out.force_evaluations = built.world().force_evaluations();
     Ok(out)
 }
 

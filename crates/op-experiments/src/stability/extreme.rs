@@ -216,8 +216,8 @@ pub fn run_scene(path: &Path, out_dir: &Path, overrides: Overrides) -> Result<Ex
         Err(RunError::Diverged { message, summary }) => (*summary, Some(message)),
         Err(e) => return Err(e.to_string()),
     };
-    let n = built.world.particles().len();
-    let final_oscillation = built.world.oscillation();
+    let n = built.world().particles().len();
+    let final_oscillation = built.world().oscillation();
     if let Some(message) = diverged {
         return Ok(ExtremeRun {
             outcome: ExtremeOutcome::Diverged(message),
@@ -227,7 +227,7 @@ pub fn run_scene(path: &Path, out_dir: &Path, overrides: Overrides) -> Result<Ex
             scheme: used,
         });
     }
-    let nn = nearest_neighbour_distances(built.world.particles().positions());
+    let nn = nearest_neighbour_distances(built.world().particles().positions());
     let range = (n >= 2).then(|| {
         nn.iter()
             .fold((Real::INFINITY, 0.0), |(a, b): (Real, Real), &d| {

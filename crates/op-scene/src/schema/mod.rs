@@ -32,7 +32,7 @@
 //! assert_eq!(a.objects, b.objects);
 //! assert_eq!(a.materials, b.materials);
 //! let built = a.build(None, None)?;
-//! assert_eq!(built.world.particles().len(), 400);
+//! assert_eq!(built.world().particles().len(), 400);
 //! # Ok::<(), op_scene::SceneError>(())
 //! ```
 //!

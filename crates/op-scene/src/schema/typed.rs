@@ -44,7 +44,7 @@
 //!     });
 //! let mut built = scene.build(None, None)?;
 //! built.advance_to(0.5).expect("steps");
-//! assert_eq!(built.world.particles().len(), 64);
+//! assert_eq!(built.world().particles().len(), 64);
 //! # Ok::<(), op_scene::SceneError>(())
 //! ```
 
