@@ -80,6 +80,10 @@ enum Command {
         /// into N pieces (why)`).
         #[arg(long)]
         allow_breakup: bool,
+        /// Run a `dt` beyond the estimated edge of stability (`opsim check`
+        /// prints it) instead of refusing it.
+        #[arg(long)]
+        allow_unstable_step: bool,
         /// Frame file formats, comma-separated: obj (one y-up OBJ file per
         /// object and frame, for Blender and other OBJ readers), ply
         /// (binary PLY, z-up), vtu (particle state with attributes, for
@@ -232,6 +236,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             profile,
             format,
             allow_breakup,
+            allow_unstable_step,
         }) => {
             if let Some(k) = threads {
                 rayon::ThreadPoolBuilder::new()
@@ -244,6 +249,9 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             let mut built = load(&scene, limits, frames)?;
             if allow_breakup {
                 built.accept_breakup();
+            }
+            if !allow_unstable_step {
+                refuse_unstable_step(&scene, &built)?;
             }
             run_built(built, out, frames, &format, profile)
         }
@@ -486,6 +494,25 @@ fn load(path: &Path, limits: op_scene::WorkLimits, frames: Option<usize>) -> Res
     Ok(scene.build_for_run(base.as_deref(), Some(path.to_path_buf()))?)
 }
 
+/// Refuses a `dt` beyond the estimated edge of stability (exit 2), naming
+/// the edge, the recommended step and the flag that runs it anyway.
+fn refuse_unstable_step(path: &Path, built: &BuiltScene) -> Result<(), Failure> {
+    let dt = built.world().params().dt;
+    let Some(e) = built.step_estimate().filter(|e| e.beyond_edge(dt)) else {
+        return Ok(());
+    };
+    Err(anyhow!(
+        "{}: world.dt = {dt} is beyond the estimated edge of stability {:.3e} ({} recommended; \
+         see `opsim check`): reduce dt, use the Adaptive scheme, or run it anyway with \
+         --allow-unstable-step",
+        path.display(),
+        e.dt_max.unwrap_or(f64::NAN),
+        e.recommended()
+            .map_or("no step".to_string(), |r| format!("{r:.3e}"))
+    )
+    .into())
+}
+
 fn run_built(
     mut built: BuiltScene,
     out: Option<PathBuf>,
@@ -608,14 +635,19 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
         scene.world.frame_rate
     );
     let e = &sample.estimate;
-    match e.dt_max {
-        Some(max) => outln!(
-            "  stable step: at most {max:.3e} for {:?} (stiffest mode ω² = {:.3e} 1/time², object {:?})",
+    let contact = e.contact.as_ref().map_or(String::new(), |(l, o)| {
+        format!(", of which skin contact at most {l:.3e}, object {o:?}")
+    });
+    match (e.dt_max, e.recommended()) {
+        (Some(max), Some(recommended)) => outln!(
+            "  stable step: recommended at most {recommended:.3e} ({} of the edge of stability), \
+             edge {max:.3e} for {:?} (stiffest mode ω² = {:.3e} 1/time², object {:?}{contact})",
+            op_scene::stability::RECOMMENDED_FRACTION,
             p.scheme,
             e.lambda,
             e.object
         ),
-        None => outln!(
+        _ => outln!(
             "  stable step: not bounded for {:?} (ω² = {:.3e} 1/time²)",
             p.scheme,
             e.lambda

@@ -274,7 +274,9 @@ fn same_frames_at_one_and_two_threads() {
 fn divergence_exits_3_and_keeps_valid_frames() {
     let out = temp_dir("diverge");
     let scene = repo().join("tests/data/diverge.ron");
-    let o = run_scene(&scene, &out, &[]);
+    // Explicit Euler without damping: beyond the edge of stability at any
+    // step, refused unless asked.
+    let o = run_scene(&scene, &out, &["--allow-unstable-step"]);
     assert_eq!(o.status.code(), Some(3), "{}", text(&o));
     let msg = text(&o);
     assert!(
@@ -576,8 +578,8 @@ fn values_without_a_finite_run_are_refused() {
     );
 }
 
-/// `check` warns when dt exceeds the estimated stable step, and the run
-/// carries the same warning.
+/// `check` warns when dt exceeds the recommended step, and `run` refuses
+/// a step beyond the edge of stability unless asked.
 #[test]
 fn a_step_above_the_stable_step_is_reported() {
     let dir = temp_dir("stable");
@@ -588,7 +590,15 @@ fn a_step_above_the_stable_step_is_reported() {
     let o = opsim(&["check", path.to_str().unwrap()], &dir);
     assert!(o.status.success(), "{}", text(&o));
     assert!(
-        text(&o).contains("exceeds the estimated largest stable step"),
+        text(&o).contains("exceeds the recommended step"),
+        "{}",
+        text(&o)
+    );
+    let o = run_scene(&path, &dir.join("out"), &["--frames", "2"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("beyond the estimated edge of stability")
+            && text(&o).contains("--allow-unstable-step"),
         "{}",
         text(&o)
     );
@@ -597,7 +607,11 @@ fn a_step_above_the_stable_step_is_reported() {
         &dir,
     );
     assert!(!text(&o).contains("warning"), "{}", text(&o));
-    assert!(text(&o).contains("stable step: at most"), "{}", text(&o));
+    assert!(
+        text(&o).contains("stable step: recommended at most") && text(&o).contains("edge"),
+        "{}",
+        text(&o)
+    );
 }
 
 /// An object pulled apart is not a silent success: the run ends with exit
@@ -743,7 +757,9 @@ fn particles_starting_inside_an_obstacle_are_warned_about() {
         "{}",
         text(&o)
     );
-    let o = run_scene(&scene, &out.join("run"), &[]);
+    // The penalty of the particles inside makes the step unstable: the run
+    // is asked for all the same, to show the warning.
+    let o = run_scene(&scene, &out.join("run"), &["--allow-unstable-step"]);
     assert!(
         text(&o).contains("start inside obstacle \"ball\""),
         "{}",

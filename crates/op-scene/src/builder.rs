@@ -53,8 +53,9 @@ impl Scene {
     }
 
     /// [`Scene::build`], then the stable-step estimate
-    /// ([`crate::stability`]): a `dt` above it becomes the first of the
-    /// run's warnings ([`BuiltScene::step_warnings`]). What `opsim run`
+    /// ([`crate::stability`], kept in [`BuiltScene::step_estimate`]): a
+    /// `dt` above the recommended step becomes the first of the run's
+    /// warnings ([`BuiltScene::step_warnings`]). What `opsim run`
     /// uses. The estimate is advice: a sample that cannot be built (the
     /// full scene could) only means there is no estimate.
     pub fn build_for_run(
@@ -69,6 +70,7 @@ impl Scene {
                 .warning(self.world.dt, &self.world.integrator)
                 .into_iter()
                 .collect();
+            built.step_estimate = Some(estimate);
         }
         built
             .setup_seconds
@@ -172,6 +174,7 @@ impl Scene {
             setup_seconds: vec![("build".into(), clock.elapsed().as_secs_f64())],
             expected_warnings: self.expected_warnings.clone(),
             breakup_accepted: false,
+            step_estimate: None,
         })
     }
 

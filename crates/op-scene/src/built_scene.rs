@@ -127,6 +127,9 @@ pub struct BuiltScene {
     pub(crate) expected_warnings: Vec<String>,
     /// Every breakup is accepted ([`BuiltScene::accept_breakup`]).
     pub(crate) breakup_accepted: bool,
+    /// The stable-step estimate, when [`crate::Scene::build_for_run`]
+    /// made one.
+    pub(crate) step_estimate: Option<crate::stability::StepEstimate>,
 }
 
 /// Reading the built scene: what it holds, as built and as it runs.
@@ -247,6 +250,12 @@ impl BuiltScene {
     /// [`crate::creation`]).
     pub fn creation(&self) -> Option<&CreationState> {
         self.creation.as_ref()
+    }
+
+    /// The stable-step estimate ([`crate::stability`]), when
+    /// [`crate::Scene::build_for_run`] made one.
+    pub fn step_estimate(&self) -> Option<&crate::stability::StepEstimate> {
+        self.step_estimate.as_ref()
     }
 
     /// Wall seconds spent making the scene before its first step, by part

@@ -16,6 +16,41 @@
 //! materials and tools, its Hessian-vector products by central differences
 //! of the forces and torques. The sample's memory and work are bounded
 //! whatever the scene's size, so `opsim check` can afford it.
+//!
+//! **Skin contact** acts outside the world (a stage of the scene), so the
+//! sample has no skins; its stiffness is added as a bound instead
+//! ([`contact_stiffness`]). By Weyl's inequality the largest eigenvalue of
+//! the sum of two symmetric operators is at most the sum of theirs, so
+//! `λ ≤ λ_world + λ_contact`, with `λ_contact` the largest contact spring
+//! of a particle over its mass:
+//!
+//! - an obstacle tool meeting a skin pushes each skin sample inside it
+//!   with `k · depth` (per sample, op-implicit `contact`); a particle's
+//!   share of the skin holds about `r0² / h²` samples (its footprint over
+//!   the polygonization cell `h`), so its spring is `k r0² / h²`;
+//! - two skins press with `s · e · area` (op-implicit `implicit_contact`),
+//!   `s` the mean of their stiffnesses and `e` the other skin's field
+//!   excess, which grows with depth at the other skin's field slope `g`
+//!   at its surface (`g = ISO |f'(t)| / f(t)` for a skin `t` from its
+//!   skeleton, `19 / (12 R)` at the default `t = R / 2`): over a
+//!   particle's footprint `r0²` the spring is `s g r0²`.
+//!
+//! **The edge and the recommended step.** The bound is the edge of linear
+//! stability: at it a run can still blow up (the spiral breaks at exactly
+//! 1.0). `opsim run` at multiples of the bound (exit 3 on a blow-up or an
+//! unexpected breakup) measured where six shipped scenes fail:
+//!
+//! | scene | bound | runs clean at | fails at |
+//! |---|---|---|---|
+//! | `spiral` | 0.1422 | 0.9 | 1.0 |
+//! | `fig_12_plastic` | 0.01929 | 1.2 | 2.0 |
+//! | `sphere_shell` | 0.09618 | 1.0 | (above 1.0 the frame interval refuses it) |
+//! | `ball_vs_spiral` (two skins) | 0.04286 | 1.0 | 1.99 (0.6 of the world-only bound, 0.1422) |
+//! | `sheet_on_box` (obstacle on a skin) | 0.03297 | 0.9 | 1.0 |
+//! | `sheet_on_sphere` (obstacle on a skin) | 0.02008 | 0.7 | 0.8 |
+//!
+//! So the recommended step is [`RECOMMENDED_FRACTION`] of the bound: every
+//! one of them runs clean there.
 
 use std::path::Path;
 
@@ -29,6 +64,10 @@ use crate::schema::Scene;
 pub const SAMPLE_PARTICLES: usize = 400;
 /// Power iterations.
 const ITERATIONS: usize = 60;
+/// The recommended step as a fraction of the estimated edge of stability
+/// (module docs: the largest fraction at which every measured scene runs
+/// clean).
+pub const RECOMMENDED_FRACTION: Real = 0.7;
 
 /// What [`estimate`] found.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,6 +76,10 @@ pub struct StepEstimate {
     pub lambda: Real,
     /// Object whose particle moves most in that mode.
     pub object: String,
+    /// The skin contact's part of `lambda`, when the scene has skin
+    /// contact ([`contact_stiffness`]): its bound and the object with the
+    /// stiffest contact spring per mass.
+    pub contact: Option<(Real, String)>,
     /// Largest stable step of the scene's scheme (`None` for the adaptive
     /// scheme, whose controller shrinks the step as needed, or when the
     /// scene has no stiffness).
@@ -44,18 +87,38 @@ pub struct StepEstimate {
 }
 
 impl StepEstimate {
-    /// The warning for a step `dt` above [`StepEstimate::dt_max`].
+    /// The recommended step: [`RECOMMENDED_FRACTION`] of
+    /// [`StepEstimate::dt_max`].
+    pub fn recommended(&self) -> Option<Real> {
+        self.dt_max.map(|m| m * RECOMMENDED_FRACTION)
+    }
+
+    /// Whether `dt` is beyond the estimated edge of stability
+    /// ([`StepEstimate::dt_max`]): `opsim run` refuses it unless asked.
+    pub fn beyond_edge(&self, dt: Real) -> bool {
+        self.dt_max.is_some_and(|max| dt > max)
+    }
+
+    /// The warning for a step `dt` above [`StepEstimate::recommended`].
     pub fn warning(&self, dt: Real, scheme: &Scheme) -> Option<String> {
-        let max = self.dt_max?;
-        (dt > max).then(|| {
+        let (max, recommended) = (self.dt_max?, self.recommended()?);
+        (dt > recommended).then(|| {
             format!(
-                "world.dt = {} exceeds the estimated largest stable step of {scheme:?}, {} (stiffest \
-                 mode ω² = {} 1/time², in object {:?}): the run may oscillate or blow up; reduce \
-                 dt or use the Adaptive scheme",
+                "world.dt = {} exceeds the recommended step {} ({RECOMMENDED_FRACTION} of the \
+                 estimated edge of stability of {scheme:?}, {}; stiffest mode ω² = {} 1/time², in \
+                 object {:?}{}): the run may oscillate or blow up; reduce dt or use the \
+                 Adaptive scheme",
                 short(dt),
+                short(recommended),
                 short(max),
                 short(self.lambda),
-                self.object
+                self.object,
+                self.contact
+                    .as_ref()
+                    .map_or(String::new(), |(l, o)| format!(
+                        ", skin contact at most {} of it, in object {o:?}",
+                        short(*l)
+                    ))
             )
         })
     }
@@ -213,9 +276,12 @@ pub fn sample(scene: &Scene, base_dir: Option<&Path>) -> Result<Sample, SceneErr
         .filter(|m| *m > 0.0)
         .fold(0.0, Real::max);
     let damping_rate = scene.world.linear_damping / mass.max(Real::MIN_POSITIVE);
+    let contact = contact_stiffness(scene, &built);
+    let lambda = lambda + contact.as_ref().map_or(0.0, |c| c.0);
     let estimate = StepEstimate {
         lambda,
         object,
+        contact,
         dt_max: largest_stable_step(&scene.world.integrator, lambda, damping_rate),
     };
     let skins = scene.objects.iter().filter(|o| o.skin.is_some()).count();
@@ -232,6 +298,64 @@ pub fn sample(scene: &Scene, base_dir: Option<&Path>) -> Result<Sample, SceneErr
         estimate,
         stages,
     })
+}
+
+/// The bound of skin contact's part of the largest eigenvalue (module
+/// docs): the stiffest contact spring of a particle over its mass, and its
+/// object; `None` when the scene has no skin contact. `sample` is the
+/// scene's sample as built (its objects in scene order, without skins).
+pub fn contact_stiffness(scene: &Scene, sample: &crate::BuiltScene) -> Option<(Real, String)> {
+    let skinned: Vec<usize> = (0..scene.objects.len())
+        .filter(|&o| scene.objects[o].skin.is_some())
+        .collect();
+    let (_, skin_tools, _) = scene.tool_params();
+    let mut stiffest: Option<(Real, String)> = None;
+    for &o in &skinned {
+        let (Some(skin), Some(built)) = (&scene.objects[o].skin, sample.objects().get(o)) else {
+            continue;
+        };
+        let footprint = built.rest_spacing * built.rest_spacing;
+        let tools: Real = skin_tools
+            .iter()
+            .filter(|t| t.2.contains(&o))
+            .map(|t| t.3 .0 * footprint / (skin.cell_size * skin.cell_size))
+            .fold(0.0, Real::max);
+        let skins = skinned
+            .iter()
+            .filter(|&&q| q != o)
+            .filter_map(|&q| scene.objects[q].skin.as_ref())
+            .map(|other| {
+                0.5 * (skin.stiffness + other.stiffness) * surface_slope(other) * footprint
+            })
+            .fold(0.0, Real::max);
+        let p = sample.world().particles();
+        let mass = built
+            .ids
+            .iter()
+            .filter_map(|&id| p.slot_of(id))
+            .map(|s| p.masses()[s])
+            .filter(|m| *m > 0.0)
+            .fold(Real::INFINITY, Real::min);
+        let lambda = (tools + skins) / mass;
+        if lambda.is_finite() && lambda > 0.0 && stiffest.as_ref().is_none_or(|s| lambda > s.0) {
+            stiffest = Some((lambda, scene.objects[o].name.clone()));
+        }
+    }
+    stiffest
+}
+
+/// The slope of a skin's field at its surface: `ISO |f'(t)| / f(t)` for a
+/// skin `t` from its skeleton (the amplitude puts the iso value there),
+/// `19 / (12 R)` at the default `t = R / 2` (op-implicit `kernel`).
+fn surface_slope(skin: &crate::skins::SkinSpec) -> Real {
+    use op_implicit::kernel::{derivative, iso_radius, value, ISO};
+    let t = skin.thickness.unwrap_or(iso_radius(skin.radius));
+    let f = value(t, skin.radius);
+    if f > 0.0 {
+        ISO * derivative(t, skin.radius).abs() / f
+    } else {
+        0.0
+    }
 }
 
 /// The largest eigenvalue (in magnitude) of the mass-weighted Hessian at
