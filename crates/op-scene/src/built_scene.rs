@@ -367,8 +367,8 @@ impl BuiltScene {
         contact(self.skins.len(), !self.skin_tools.is_empty())
     }
 
-    /// Advances the world to world time `t_end` through the scene's driver
-    /// ([`BuiltScene::driver`]): the stages of [`crate::stages`] act between
+    /// Advances the world to world time `t_end` through the scene's driver:
+    /// the stages of [`crate::stages`] act between
     /// the world's steps (creation, a fit's release, skin contact) and skins
     /// follow the particles. The shared state ([`BuiltScene::objects`],
     /// `skins`, `skin_tools`, `contact`, `creation`) is lent to the driver
