@@ -302,6 +302,52 @@ impl Health {
     }
 }
 
+/// Largest coordinate a frame file can hold: PLY stores single-precision
+/// floats.
+pub const MAX_WRITTEN_COORDINATE: Real = f32::MAX as Real;
+
+/// The divergence a frame would write: a particle with a non-finite
+/// temperature, or a coordinate beyond [`MAX_WRITTEN_COORDINATE`] (which a
+/// PLY frame would write as infinity), named with its object; `None` when
+/// every value of the state can be written. (The world's own check after
+/// each step already refuses non-finite positions, velocities and
+/// orientations.) The runner checks it before every frame, so no frame file
+/// ever holds a non-finite value.
+pub fn unwritable(scene: &BuiltScene) -> Option<Divergence> {
+    let w = &scene.world;
+    let p = w.particles();
+    let bad = (0..p.len()).find_map(|s| {
+        let x = p.positions()[s];
+        if x.iter().any(|c| !(c.abs() <= MAX_WRITTEN_COORDINATE)) {
+            Some((
+                s,
+                format!(
+                    "position {:?} beyond what a frame file holds",
+                    x.coords.as_slice()
+                ),
+            ))
+        } else if !p.temperatures()[s].is_finite() {
+            Some((s, format!("temperature {}", p.temperatures()[s])))
+        } else {
+            None
+        }
+    })?;
+    let (slot, what) = bad;
+    let object = scene
+        .objects
+        .get(p.objects()[slot] as usize)
+        .map_or("?", |o| o.name.as_str());
+    Some(Divergence {
+        step: w.steps(),
+        time: w.time(),
+        particle: Some(p.ids()[slot]),
+        reason: format!(
+            "{what} in object {object:?}: the frame is not written (exit 3, the frames before \
+             it are valid)"
+        ),
+    })
+}
+
 /// Interaction range of an object: the largest cut-off of its particles'
 /// materials.
 fn object_range(scene: &BuiltScene, o: &BuiltObject) -> Real {

@@ -456,6 +456,7 @@ impl Tally {
             .check(scene, &d)
             .err()
             .or_else(|| health.observe(scene))
+            .or_else(|| crate::health::unwritable(scene))
         {
             self.divergence = Some(format!("{when}{d}"));
             return false;
@@ -734,6 +735,52 @@ mod tests {
                 assert_eq!(summary.frames, 17, "every frame written");
             }
             other => panic!("expected a breakup at the end, got {other:?}"),
+        }
+    }
+
+    /// A value no frame file can hold ends the run before that frame is
+    /// written: exit 3, naming the particle and its object, and no file of
+    /// the run holds a non-finite value.
+    #[test]
+    fn a_state_no_frame_can_hold_is_a_divergence() {
+        for (what, edit) in [
+            (
+                "temperature",
+                (|p: &mut op_dynamics::Particles| p.set_temperature(3, Real::INFINITY))
+                    as fn(&mut op_dynamics::Particles),
+            ),
+            ("position", |p: &mut op_dynamics::Particles| {
+                p.set_position(3, op_dynamics::Point3::new(1e39, 0.0, 0.0))
+            }),
+        ] {
+            let dir = std::env::temp_dir()
+                .join(format!("op-scene-unwritable-{what}-{}", std::process::id()));
+            let mut built = tight_curvature().build(None, None).expect("builds");
+            edit(built.world_mut().particles_mut());
+            let opts = RunOptions {
+                out_dir: dir.clone(),
+                frames: Some(3),
+                formats: vec![
+                    crate::export::FrameFormat::OBJ,
+                    crate::export::FrameFormat::PLY,
+                    crate::export::FrameFormat::VTU,
+                ],
+            };
+            match run(&mut built, &opts, &mut |_, _| {}) {
+                Err(RunError::Diverged { message, summary }) => {
+                    // The temperature is caught by the writability check; the far
+                    // position already by the explosion check.
+                    let expected = if what == "temperature" {
+                        "temperature inf in object \"chain\""
+                    } else {
+                        "object \"chain\""
+                    };
+                    assert!(message.contains(expected), "{message}");
+                    assert_eq!(summary.frames, 0, "{what}: no frame written: {message}");
+                }
+                other => panic!("{what}: expected a divergence, got {other:?}"),
+            }
+            let _ = std::fs::remove_dir_all(&dir);
         }
     }
 }
