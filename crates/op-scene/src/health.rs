@@ -318,7 +318,9 @@ pub fn unwritable(scene: &BuiltScene) -> Option<Divergence> {
     let p = w.particles();
     let bad = (0..p.len()).find_map(|s| {
         let x = p.positions()[s];
-        if x.iter().any(|c| c.is_nan() || c.abs() > MAX_WRITTEN_COORDINATE) {
+        if x.iter()
+            .any(|c| c.is_nan() || c.abs() > MAX_WRITTEN_COORDINATE)
+        {
             Some((
                 s,
                 format!(
