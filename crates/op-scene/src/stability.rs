@@ -33,7 +33,8 @@
 //!   excess, which grows with depth at the other skin's field slope `g`
 //!   at its surface (`g = ISO |f'(t)| / f(t)` for a skin `t` from its
 //!   skeleton, `19 / (12 R)` at the default `t = R / 2`): over a
-//!   particle's footprint `r0²` the spring is `s g r0²`.
+//!   particle's footprint `r0²` the spring is `s g r0²`;
+//! - the springs of every obstacle and skin an object meets add.
 //!
 //! **The edge and the recommended step.** The bound is the edge of linear
 //! stability: at it a run can still blow up (the spiral breaks at exactly
@@ -315,11 +316,13 @@ pub fn contact_stiffness(scene: &Scene, sample: &crate::BuiltScene) -> Option<(R
             continue;
         };
         let footprint = built.rest_spacing * built.rest_spacing;
+        // Every obstacle and skin it meets may press at once: their springs
+        // add.
         let tools: Real = skin_tools
             .iter()
             .filter(|t| t.2.contains(&o))
             .map(|t| t.3 .0 * footprint / (skin.cell_size * skin.cell_size))
-            .fold(0.0, Real::max);
+            .sum();
         let skins = skinned
             .iter()
             .filter(|&&q| q != o)
@@ -327,7 +330,7 @@ pub fn contact_stiffness(scene: &Scene, sample: &crate::BuiltScene) -> Option<(R
             .map(|other| {
                 0.5 * (skin.stiffness + other.stiffness) * surface_slope(other) * footprint
             })
-            .fold(0.0, Real::max);
+            .sum::<Real>();
         let p = sample.world().particles();
         let mass = built
             .ids

@@ -79,19 +79,13 @@ impl EnergyWatch {
         self.lowest_total = self.lowest_total.min(d.total);
         Ok(())
     }
-}
 
-impl EnergyWatch {
     /// The runaway check alone: non-finite energy, or kinetic energy above
     /// `energy_growth` times the scale. The scale is taken at the first
     /// check (see [`EnergyWatch::new`]), and again (keeping the larger)
     /// whenever the creation rules changed the particle count: new
     /// particles bring energy the first check did not hold.
-    pub(super) fn check_runaway(
-        &mut self,
-        scene: &BuiltScene,
-        d: &Diagnostics,
-    ) -> Result<(), Divergence> {
+    fn check_runaway(&mut self, scene: &BuiltScene, d: &Diagnostics) -> Result<(), Divergence> {
         let count = scene.world.particles().len();
         let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
         let scale = match self.scale {
