@@ -109,6 +109,28 @@ impl ObjectSkin {
         )
     }
 
+    /// The cell size the skin is exported at: its own, or, when its support
+    /// box has grown beyond what [`PolygonizeParams::max_nodes_per_axis`]
+    /// nodes of that size cover (particles flung apart), the smallest cell
+    /// that fits, so a skin that outgrew its grid is written coarser rather
+    /// than not at all. The polygonizer's grid spans the support box and a
+    /// cell of margin on each side: `ceil(extent / h) + 3` nodes.
+    pub fn export_cell_size(&self) -> Real {
+        let max = PolygonizeParams::with_cell_size(self.cell_size).max_nodes_per_axis;
+        let Some((lo, hi)) = self.display_field().support_box() else {
+            return self.cell_size;
+        };
+        let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, Real::max);
+        // `ceil(extent / h) + 3` nodes: `extent / h <= max - 3` fits (with
+        // a hair of margin for the rounding of the division).
+        let fitting = extent / (max as Real - 3.0) * (1.0 + 1e-9);
+        if fitting.is_finite() && extent / self.cell_size > max as Real - 3.0 {
+            fitting
+        } else {
+            self.cell_size
+        }
+    }
+
     /// The skin's mesh at its current pose, deformed by contact (Gascuel,
     /// seed 002 §6): when another skin of `skins` overlaps its support, the
     /// exported surface is the deformed field's, so two skins in contact
@@ -116,7 +138,8 @@ impl ObjectSkin {
     /// overlapping skins, the first one in scene order deforms it. Then
     /// the obstacle tools of `tools` that touch this skin at world time `t`
     /// clip it ([`crate::ClippedField`]): a skin pressed on a rigid
-    /// collider is exported lying on its surface.
+    /// collider is exported lying on its surface. The cell size is
+    /// [`ObjectSkin::export_cell_size`].
     pub fn mesh_in(
         &self,
         skins: &[ObjectSkin],
@@ -124,7 +147,7 @@ impl ObjectSkin {
         t: Real,
     ) -> Result<Mesh, crate::PolygonizeError> {
         let own = self.display_field();
-        let params = PolygonizeParams::with_cell_size(self.cell_size);
+        let params = PolygonizeParams::with_cell_size(self.export_cell_size());
         let index = skins.iter().position(|s| s.object == self.object);
         let poses: Vec<(&Tool, Pose)> = tools
             .iter()

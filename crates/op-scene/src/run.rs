@@ -348,6 +348,7 @@ fn run_here(
     if let Err(f) = writer.finish() {
         tally.write_failed(f);
     }
+    warnings.extend(writer.warnings());
     tally.export_seconds += finishing.elapsed().as_secs_f64();
     let measuring = Instant::now();
     if let Some(m) = metrics.as_mut() {
@@ -782,5 +783,39 @@ mod tests {
             }
             let _ = std::fs::remove_dir_all(&dir);
         }
+    }
+
+    /// A skin whose particles are far apart outgrows the polygonizer's
+    /// grid: it is written coarser, with a warning, instead of ending the
+    /// run with a write error.
+    #[test]
+    fn a_skin_that_outgrows_its_grid_is_written_coarser() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sheet_on_box.ron");
+        let scene = crate::load_scene(&path).expect("the scene loads");
+        let mut built = scene.build(None, None).expect("builds");
+        // 300 away: 1200 cells of 0.25, beyond the 512 nodes of the grid.
+        let p = built.world_mut().particles_mut();
+        let x = p.positions()[0];
+        p.set_position(0, x + op_dynamics::Vec3::new(300.0, 0.0, 0.0));
+        let dir = std::env::temp_dir().join(format!("op-scene-coarser-{}", std::process::id()));
+        let opts = RunOptions {
+            out_dir: dir.clone(),
+            frames: Some(2),
+            formats: vec![crate::export::FrameFormat::OBJ],
+        };
+        let result = run(&mut built, &opts, &mut |_, _| {});
+        let _ = std::fs::remove_dir_all(&dir);
+        // The particle starts apart (two pieces from the start, no breakup):
+        // the run ends normally, with the warning.
+        let summary = result.expect("runs to the end");
+        assert_eq!(summary.frames, 2);
+        assert!(
+            summary
+                .warnings
+                .iter()
+                .any(|w| w.contains("skin \"sheet_skin\" outgrew its polygonization grid")),
+            "{:?}",
+            summary.warnings
+        );
     }
 }

@@ -146,9 +146,29 @@ pub struct FrameWriter {
     state_files: Vec<Vec<(String, Real)>>,
     sheet_gap: SheetGap,
     files: FileQueue,
+    /// The skins written coarser than their cell size because they outgrew
+    /// the polygonizer's grid: name, first frame, cell size, cell used.
+    coarsened: Vec<(String, usize, Real, Real)>,
 }
 
 impl FrameWriter {
+    /// Warnings about what was written: each skin written coarser than its
+    /// cell size because it outgrew the polygonizer's grid (its particles
+    /// flung apart), from which frame and at which cell size.
+    pub fn warnings(&self) -> Vec<String> {
+        self.coarsened
+            .iter()
+            .map(|(name, k, h, used)| {
+                format!(
+                    "skin {name:?} outgrew its polygonization grid from frame {k}: written with \
+                     cells of {} instead of {} (its particles spread too far apart)",
+                    crate::error::short(*used),
+                    crate::error::short(*h)
+                )
+            })
+            .collect()
+    }
+
     /// The writer of a scene's frames under `out` in `formats` (duplicates
     /// ignored): unless [`Outputs::particles`] is `None`, a particle
     /// sequence per object; a skin sequence per skin; a surface sequence
@@ -209,6 +229,7 @@ impl FrameWriter {
             sources,
             sheet_gap: SheetGap::default(),
             files: FileQueue::default(),
+            coarsened: Vec::new(),
         }
     }
 
@@ -297,6 +318,7 @@ impl FrameWriter {
             error,
         };
         let mesh_formats: Vec<FrameFormat> = self.formats_of(Files::PerSequence).collect();
+        let mut coarsened = Vec::new();
         if !mesh_formats.is_empty() {
             for (seq, source) in self.sequences.iter().zip(&self.sources) {
                 let at = |f| seq.path(&self.out, k, f);
@@ -308,6 +330,10 @@ impl FrameWriter {
                     Source::Tool(t) => geometry::tool_geometry(t, &tools[t], world.time()),
                     Source::Skin(s) => {
                         let skin = &skins[s];
+                        let h = skin.export_cell_size();
+                        if h > skin.cell_size {
+                            coarsened.push((skin.name.clone(), k, skin.cell_size, h));
+                        }
                         let mesh = skin
                             .mesh_in(skins, skin_tools, world.time())
                             .map_err(|e| failure(at(mesh_formats[0]), std::io::Error::other(e)))?;
@@ -322,6 +348,11 @@ impl FrameWriter {
                         .map_err(|e| failure(path.clone(), e))?;
                     self.files.push(k, path, bytes)?;
                 }
+            }
+        }
+        for c in coarsened {
+            if !self.coarsened.iter().any(|d| d.0 == c.0) {
+                self.coarsened.push(c);
             }
         }
         for (n, f) in self.formats.iter().enumerate() {
