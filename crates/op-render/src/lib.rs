@@ -25,8 +25,7 @@ mod raster;
 mod run_dir;
 mod styles;
 
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 pub use camera::{CameraSpec, DEFAULT_AZIMUTH_DEG, DEFAULT_ELEVATION_DEG, DEFAULT_FOV_Y_DEG};
 pub use contact_sheet::{render_contact_sheet, sheet_grid};
@@ -293,58 +292,36 @@ pub(crate) fn render_with_camera(
     })
 }
 
-/// Writes `img` as a PNG at `path` atomically: a temporary file in the same
-/// directory, then a rename, so readers never see a half-written picture.
+/// Writes `img` as a PNG at `path` atomically, as the runner writes its
+/// frames ([`op_scene::export::write_atomically`]): a temporary file in the
+/// same directory, created exclusively under a name no other process can
+/// predict (so a link planted there is never written through), then a
+/// rename, so readers never see a half-written picture.
 ///
 /// # Errors
 /// [`RenderError::Io`] if the directory is missing or not writable,
 /// [`RenderError::BadOption`] if `path` has no file name,
 /// [`RenderError::Encode`] if the encoder fails.
 pub fn save_png(img: &RgbImage, path: &Path) -> Result<(), RenderError> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| {
-            RenderError::option(
-                "output path",
-                format!("'{}' has no file name", path.display()),
-            )
-        })?
-        .to_string_lossy()
-        .into_owned();
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = write_png(img, &tmp, path)
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| RenderError::io(path, e)));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
-fn write_png(img: &RgbImage, tmp: &Path, path: &Path) -> Result<(), RenderError> {
     use image::ImageEncoder;
-    let file = std::fs::File::create(tmp).map_err(|e| RenderError::io(path, e))?;
-    let mut writer = std::io::BufWriter::new(file);
-    image::codecs::png::PngEncoder::new(&mut writer)
+    if path.file_name().is_none() {
+        return Err(RenderError::option(
+            "output path",
+            format!("'{}' has no file name", path.display()),
+        ));
+    }
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
         .write_image(
             img.as_raw(),
             img.width(),
             img.height(),
             image::ExtendedColorType::Rgb8,
         )
-        .map_err(|e| match e {
-            image::ImageError::IoError(io) => RenderError::io(path, io),
-            e => RenderError::Encode {
-                path: path.to_path_buf(),
-                source: e,
-            },
+        .map_err(|e| RenderError::Encode {
+            path: path.to_path_buf(),
+            source: e,
         })?;
-    writer.flush().map_err(|e| RenderError::io(path, e))?;
-    let file = writer
-        .into_inner()
-        .map_err(|e| RenderError::io(path, e.into_error()))?;
-    file.sync_all().map_err(|e| RenderError::io(path, e))
+    op_scene::export::write_atomically(path, |w| w.write_all(&png))
+        .map_err(|e| RenderError::io(path, e))
 }
