@@ -319,9 +319,10 @@ fn run_here(
     // settle phase: an explosion while settling is measured against them.
     let measuring = Instant::now();
     let before = if scene.settled { 0.0 } else { scene.settle };
+    tally.settles = before > 0.0;
     let mut health = Health::new(scene, before + duration, scene.extent_growth);
     let floor = energy_floor(scene, health.size(), duration);
-    let mut watch = EnergyWatch::new(scene, floor, before > 0.0);
+    let mut watch = EnergyWatch::new(scene, floor, tally.settles);
     tally.measure_seconds += measuring.elapsed().as_secs_f64();
     if let Err(d) = scene.settle() {
         tally.divergence = Some(format!("while settling: {d}"));
@@ -402,6 +403,8 @@ struct Tally {
     /// The output folders prepared and the scene checked before its first
     /// step.
     prepare_seconds: f64,
+    /// The run settles the scene before frame 0.
+    settles: bool,
     divergence: Option<String>,
     failure: Option<RunError>,
 }
@@ -418,6 +421,7 @@ impl Tally {
             measure_seconds: 0.0,
             export_seconds: 0.0,
             prepare_seconds: 0.0,
+            settles: false,
             divergence: None,
             failure: None,
         }
@@ -448,7 +452,7 @@ impl Tally {
         let d = scene.world.diagnostics();
         // Frame 0 is the end of the settle phase: what went wrong there
         // went wrong while settling.
-        let when = if frame.k == 0 && scene.settle > 0.0 {
+        let when = if frame.k == 0 && self.settles {
             "while settling: "
         } else {
             ""

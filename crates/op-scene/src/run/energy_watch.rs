@@ -51,9 +51,9 @@ impl EnergyWatch {
     /// Checks the frame with diagnostics `d`; the divergence message when
     /// it fails.
     pub(super) fn check(&mut self, scene: &BuiltScene, d: &Diagnostics) -> Result<(), Divergence> {
-        self.check_runaway(scene, d)?;
         let count = scene.world.particles().len();
         let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
+        self.check_runaway(scene, d, count, here)?;
         // The gain of a passive scene is measured against its own energy at
         // frame 0 (a damped scene at rest holds only potential energy).
         let own_scale = *self
@@ -84,10 +84,15 @@ impl EnergyWatch {
     /// `energy_growth` times the scale. The scale is taken at the first
     /// check (see [`EnergyWatch::new`]), and again (keeping the larger)
     /// whenever the creation rules changed the particle count: new
-    /// particles bring energy the first check did not hold.
-    fn check_runaway(&mut self, scene: &BuiltScene, d: &Diagnostics) -> Result<(), Divergence> {
-        let count = scene.world.particles().len();
-        let here = (d.kinetic_translational + d.kinetic_rotational).abs() + d.potential.abs();
+    /// particles bring energy the first check did not hold. `count` is the
+    /// particle count and `here` the frame's `|kinetic| + |potential|`.
+    fn check_runaway(
+        &mut self,
+        scene: &BuiltScene,
+        d: &Diagnostics,
+        count: usize,
+        here: Real,
+    ) -> Result<(), Divergence> {
         let scale = match self.scale {
             Some((s, c)) if c == count => s,
             Some((s, _)) => Real::max(s, here),
