@@ -117,6 +117,7 @@ fn flag_to(out: PathBuf) -> Result<(), Box<dyn std::error::Error>> {
         out_dir: out.clone(),
         frames: None,
         formats: vec![FrameFormat::OBJ],
+        ..Default::default()
     };
     let summary = run(&mut built, &opts, &mut |_, _| {})?;
     println!(

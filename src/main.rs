@@ -13,7 +13,7 @@ use clap::{Parser, Subcommand};
 use op_render::{self as render, RenderOptions, Style};
 use op_scene::export::obj::scene_to_obj;
 use op_scene::export::FrameFormat;
-use op_scene::{BuiltScene, RunError, RunOptions};
+use op_scene::{BuiltScene, CheckpointEvery, RunError, RunOptions};
 
 /// `println!` that ends the program quietly when stdout is closed early (a
 /// broken pipe, as in `opsim check SCENE | head -1`) instead of panicking;
@@ -46,51 +46,68 @@ struct Cli {
     command: Option<Command>,
 }
 
+/// The arguments of `opsim run`.
+#[derive(clap::Args, Debug)]
+struct RunArgs {
+    /// Scene file (.ron or .json).
+    scene: PathBuf,
+    /// Output directory. Default: `./opsim-out/<scene name>`.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Number of frames to write (overrides the scene's duration).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    frames: Option<u64>,
+    /// Worker threads (results are identical for any count).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    threads: Option<u64>,
+    /// Lift the work limits (steps, frames, particle-steps, created
+    /// particles) that keep every valid scene's run bounded.
+    #[arg(long)]
+    no_work_limits: bool,
+    /// Largest number of particle-steps (particles times steps) the run
+    /// may take, and 30 times as many pair-steps (interacting pairs
+    /// times steps); a scene that needs more is refused before it
+    /// starts. Default: 1e12.
+    #[arg(long)]
+    max_particle_steps: Option<f64>,
+    /// Print the seconds spent in each stage of the step at the end.
+    #[arg(long)]
+    profile: bool,
+    /// Accept objects breaking into pieces: a warning instead of a
+    /// divergence (exit 3). A scene that tears on purpose says so in
+    /// its header instead (`// expect-warning: object "NAME" broke
+    /// into N pieces (why)`).
+    #[arg(long)]
+    allow_breakup: bool,
+    /// Run a `dt` beyond the estimated edge of stability (`opsim check`
+    /// prints it) instead of refusing it.
+    #[arg(long)]
+    allow_unstable_step: bool,
+    /// Frame file formats, comma-separated: obj (one y-up OBJ file per
+    /// object and frame, for Blender and other OBJ readers), ply
+    /// (binary PLY, z-up), vtu (particle state with attributes, for
+    /// ParaView).
+    #[arg(long, value_delimiter = ',', default_value = "obj", value_parser = parse_format)]
+    format: Vec<FrameFormat>,
+    /// When to write `checkpoint.bin` into the output directory (what
+    /// `--resume` goes on from; always after the last frame too): `60s`
+    /// (the default) after the first frame a minute after the last
+    /// checkpoint, `10` every 10 frames, `off` never.
+    #[arg(long, default_value = "60s", value_parser = parse_checkpoint_every)]
+    checkpoint_every: CheckpointSetting,
+    /// Go on from the checkpoint in the output directory of an
+    /// interrupted run (killed, out of disk, rebooted) instead of
+    /// starting over: run it with the same scene file, --frames and
+    /// --format; the frames, metrics and summary come out as an
+    /// uninterrupted run's.
+    #[arg(long)]
+    resume: bool,
+}
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run a scene: OBJ frames, metrics.csv and summary.json.
-    Run {
-        /// Scene file (.ron or .json).
-        scene: PathBuf,
-        /// Output directory. Default: `./opsim-out/<scene name>`.
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Number of frames to write (overrides the scene's duration).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
-        frames: Option<u64>,
-        /// Worker threads (results are identical for any count).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
-        threads: Option<u64>,
-        /// Lift the work limits (steps, frames, particle-steps, created
-        /// particles) that keep every valid scene's run bounded.
-        #[arg(long)]
-        no_work_limits: bool,
-        /// Largest number of particle-steps (particles times steps) the run
-        /// may take, and 30 times as many pair-steps (interacting pairs
-        /// times steps); a scene that needs more is refused before it
-        /// starts. Default: 1e12.
-        #[arg(long)]
-        max_particle_steps: Option<f64>,
-        /// Print the seconds spent in each stage of the step at the end.
-        #[arg(long)]
-        profile: bool,
-        /// Accept objects breaking into pieces: a warning instead of a
-        /// divergence (exit 3). A scene that tears on purpose says so in
-        /// its header instead (`// expect-warning: object "NAME" broke
-        /// into N pieces (why)`).
-        #[arg(long)]
-        allow_breakup: bool,
-        /// Run a `dt` beyond the estimated edge of stability (`opsim check`
-        /// prints it) instead of refusing it.
-        #[arg(long)]
-        allow_unstable_step: bool,
-        /// Frame file formats, comma-separated: obj (one y-up OBJ file per
-        /// object and frame, for Blender and other OBJ readers), ply
-        /// (binary PLY, z-up), vtu (particle state with attributes, for
-        /// ParaView).
-        #[arg(long, value_delimiter = ',', default_value = "obj", value_parser = parse_format)]
-        format: Vec<FrameFormat>,
-    },
+    Run(RunArgs),
     /// Validate a scene, print what it enables and estimate its largest
     /// stable step (on a bounded sample of the scene: memory proportional to
     /// the scene file, not to its particles).
@@ -219,42 +236,19 @@ fn demo() -> Result<(), Failure> {
     )?;
     let built = scene.build_for_run(None, None)?;
     let out = Path::new("opsim-out").join(built.name());
-    run_built(built, Some(out.clone()), None, &[FrameFormat::OBJ], false)?;
+    let opts = RunOptions {
+        out_dir: out.clone(),
+        formats: vec![FrameFormat::OBJ],
+        ..Default::default()
+    };
+    run_built(built, &opts, false)?;
     demo_contact_sheet(&out)
 }
 
 fn dispatch(cli: Cli) -> Result<(), Failure> {
     match cli.command {
         None => demo(),
-        Some(Command::Run {
-            scene,
-            out,
-            frames,
-            threads,
-            no_work_limits,
-            max_particle_steps,
-            profile,
-            format,
-            allow_breakup,
-            allow_unstable_step,
-        }) => {
-            if let Some(k) = threads {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(k as usize)
-                    .build_global()
-                    .context("cannot start the thread pool")?;
-            }
-            let frames = frames.map(|f| usize::try_from(f).unwrap_or(usize::MAX));
-            let limits = limits(no_work_limits, max_particle_steps)?;
-            let mut built = load(&scene, limits, frames)?;
-            if allow_breakup {
-                built.accept_breakup();
-            }
-            if !allow_unstable_step {
-                refuse_unstable_step(&scene, &built)?;
-            }
-            run_built(built, out, frames, &format, profile)
-        }
+        Some(Command::Run(args)) => run_command(args),
         Some(Command::Check {
             scene,
             no_work_limits,
@@ -318,6 +312,37 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             Ok(())
         }
     }
+}
+
+/// `opsim run`.
+fn run_command(args: RunArgs) -> Result<(), Failure> {
+    if let Some(k) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(k as usize)
+            .build_global()
+            .context("cannot start the thread pool")?;
+    }
+    let frames = args
+        .frames
+        .map(|f| usize::try_from(f).unwrap_or(usize::MAX));
+    let limits = limits(args.no_work_limits, args.max_particle_steps)?;
+    let mut built = load(&args.scene, limits, frames)?;
+    if args.allow_breakup {
+        built.accept_breakup();
+    }
+    if !args.allow_unstable_step {
+        refuse_unstable_step(&args.scene, &built)?;
+    }
+    let opts = RunOptions {
+        out_dir: args
+            .out
+            .unwrap_or_else(|| Path::new("opsim-out").join(built.name())),
+        frames,
+        formats: args.format,
+        checkpoints: args.checkpoint_every.0,
+        resume: args.resume,
+    };
+    run_built(built, &opts, args.profile)
 }
 
 /// The up direction of a picture when none is given: the run's `up`
@@ -472,6 +497,29 @@ fn parse_format(name: &str) -> Result<FrameFormat, String> {
     FrameFormat::named(name)
 }
 
+/// `--checkpoint-every`: when to write checkpoints, or never.
+#[derive(Clone, Copy, Debug)]
+struct CheckpointSetting(Option<CheckpointEvery>);
+
+fn parse_checkpoint_every(text: &str) -> Result<CheckpointSetting, String> {
+    let expected = "expected a number of frames (`10`), of wall seconds (`60s`) or `off`";
+    if text == "off" {
+        return Ok(CheckpointSetting(None));
+    }
+    if let Some(seconds) = text.strip_suffix('s') {
+        return match seconds.parse::<f64>() {
+            Ok(s) if s.is_finite() && s >= 0.0 => {
+                Ok(CheckpointSetting(Some(CheckpointEvery::Seconds(s))))
+            }
+            _ => Err(format!("{text:?}: {expected}")),
+        };
+    }
+    match text.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(CheckpointSetting(Some(CheckpointEvery::Frames(n)))),
+        _ => Err(format!("{text:?}: {expected}")),
+    }
+}
+
 /// The work limits the flags ask for.
 fn limits(no_work_limits: bool, max_particle_steps: Option<f64>) -> Result<op_scene::WorkLimits> {
     let mut limits = if no_work_limits {
@@ -513,19 +561,8 @@ fn refuse_unstable_step(path: &Path, built: &BuiltScene) -> Result<(), Failure> 
     .into())
 }
 
-fn run_built(
-    mut built: BuiltScene,
-    out: Option<PathBuf>,
-    frames: Option<usize>,
-    formats: &[FrameFormat],
-    profile: bool,
-) -> Result<(), Failure> {
-    let out_dir = out.unwrap_or_else(|| Path::new("opsim-out").join(built.name()));
-    let opts = RunOptions {
-        out_dir: out_dir.clone(),
-        frames,
-        formats: formats.to_vec(),
-    };
+fn run_built(mut built: BuiltScene, opts: &RunOptions, profile: bool) -> Result<(), Failure> {
+    let out_dir = &opts.out_dir;
     let bar = if std::io::stderr().is_terminal() {
         let b = indicatif::ProgressBar::new(0);
         b.set_style(
@@ -538,7 +575,7 @@ fn run_built(
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let result = op_scene::run(&mut built, &opts, &mut |k, total| {
+    let result = op_scene::run(&mut built, opts, &mut |k, total| {
         bar.set_length(total as u64);
         bar.set_position(k as u64);
     });

@@ -41,6 +41,7 @@ fn ball_hits_spiral_which_deforms_and_recovers() {
         out_dir: out.clone(),
         frames: None,
         formats: vec![op_scene::export::FrameFormat::OBJ],
+        ..Default::default()
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     assert!(!summary.diverged);

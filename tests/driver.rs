@@ -36,6 +36,7 @@ fn a_skinned_sheet_with_creation_heat_eraser_and_obstacle_runs_with_its_skin() {
         out_dir: out.clone(),
         frames: None,
         formats: vec![op_scene::export::FrameFormat::OBJ],
+        ..Default::default()
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs to the end");
     assert!(!summary.diverged);
@@ -120,6 +121,7 @@ fn a_skin_is_written_without_particle_output() {
         out_dir: out.clone(),
         frames: None,
         formats: vec![op_scene::export::FrameFormat::OBJ],
+        ..Default::default()
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     let dirs: Vec<String> = std::fs::read_dir(out.join("frames"))

@@ -26,6 +26,7 @@ fn run(scene: &Scene, frames: usize, tag: &str) -> (Summary, HashMap<u32, (Point
         out_dir: op_test_support::temp_dir(tag),
         frames: Some(frames),
         formats: Vec::new(),
+        ..Default::default()
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     assert!(!summary.diverged, "{tag}: {:?}", summary.divergence);

@@ -70,6 +70,7 @@ fn run_scene(mut scene: Scene) -> Summary {
         out_dir: out.clone(),
         frames: None,
         formats: vec![op_scene::export::FrameFormat::OBJ],
+        ..Default::default()
     };
     let summary = single_threaded(|| op_scene::run(&mut built, &opts, &mut |_, _| {}))
         .unwrap_or_else(|e| panic!("{}: {e}", scene.name));

@@ -45,6 +45,7 @@ fn run_tagged(
         out_dir: out.clone(),
         frames: None,
         formats: vec![op_scene::export::FrameFormat::OBJ],
+        ..Default::default()
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     let positions = built.world().particles().positions().to_vec();

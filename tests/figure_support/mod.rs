@@ -35,6 +35,7 @@ pub fn run(scene: &Scene, tag: &str) -> (BuiltScene, Summary) {
         out_dir: out.clone(),
         frames: None,
         formats: vec![op_scene::export::FrameFormat::OBJ],
+        ..Default::default()
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {}).expect("runs");
     assert!(!summary.diverged);

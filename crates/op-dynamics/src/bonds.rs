@@ -135,7 +135,7 @@ impl BondParams {
 
 /// The bonds of a world, by stable particle id (built by the world; read
 /// it through [`crate::World::bonds`]).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Bonds {
     /// Live bonds `(lower id, higher id)`, sorted.
     pairs: Vec<(u32, u32)>,
@@ -154,6 +154,7 @@ pub struct Bonds {
     /// Bonds broken since the world was built.
     broken: u64,
     /// Scratch of the breaking pass: bond `k` is over-stretched.
+    #[serde(skip)]
     stretched: Vec<bool>,
 }
 

@@ -32,6 +32,7 @@
 
 use std::time::Instant;
 
+use crate::checkpoint::StateError;
 use crate::contributors::Contributor;
 use crate::world::{Divergence, World};
 use crate::Real;
@@ -179,6 +180,21 @@ pub trait Stage<C>: Send {
     fn at_target(&mut self, _world: &World, _ctx: &mut C) -> Result<(), StageError> {
         Ok(())
     }
+
+    /// What the stage itself changes as the run goes on (not its
+    /// context's: that is its owner's to save), encoded
+    /// ([`crate::checkpoint::encode`]), for a checkpoint taken at a target
+    /// time ([`Driver::states`]). Default: nothing, right for a stage that
+    /// recomputes what it holds at the start of every interval.
+    fn save_state(&self) -> Vec<u8> {
+        Vec::new()
+    }
+
+    /// Puts back what [`Stage::save_state`] returned. Default: accepts only
+    /// the empty state.
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), StateError> {
+        crate::checkpoint::no_state(self.name(), state)
+    }
 }
 
 /// Runs stages around a world's steps; see the module docs.
@@ -221,6 +237,32 @@ impl<C> Driver<C> {
         }
         self.stages.push(stage);
         self.seconds.push(0.0);
+        Ok(())
+    }
+
+    /// Every stage's state ([`Stage::save_state`]) by name, in order: what a
+    /// checkpoint saves of the driver between two calls of
+    /// [`Driver::advance_to`].
+    pub fn states(&self) -> Vec<(String, Vec<u8>)> {
+        self.stages
+            .iter()
+            .map(|s| (s.name().to_string(), s.save_state()))
+            .collect()
+    }
+
+    /// Puts back the states [`Driver::states`] returned, into a driver with
+    /// the same stages in the same order.
+    pub fn restore(&mut self, states: &[(String, Vec<u8>)]) -> Result<(), StateError> {
+        let names: Vec<&str> = states.iter().map(|(n, _)| n.as_str()).collect();
+        if names != self.names() {
+            return Err(StateError(format!(
+                "the checkpoint has the stages {names:?}, the scene {:?}",
+                self.names()
+            )));
+        }
+        for (stage, (_, state)) in self.stages.iter_mut().zip(states) {
+            stage.restore_state(state)?;
+        }
         Ok(())
     }
 

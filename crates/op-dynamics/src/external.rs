@@ -172,7 +172,7 @@ impl ExternalParams {
 /// Force and torque added to particles by other crates for the next step
 /// (op-implicit contact reactions, tools), indexed by particle id. They are
 /// held constant during the step, then cleared.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct ExternalAccumulator {
     forces: Vec<Vec3>,
     torques: Vec<Vec3>,
@@ -200,6 +200,13 @@ impl ExternalAccumulator {
 
     /// Grows the tables to hold ids `0..n` (new ids start with nothing
     /// pending; existing entries are kept).
+    /// The ids it can hold forces for (a checkpoint's accumulator is
+    /// checked against its particles).
+    pub(crate) fn capacity(&self) -> usize {
+        self.forces.len().min(self.torques.len())
+    }
+
+    /// Grows the accumulator to hold `n` ids.
     pub fn grow(&mut self, n: usize) {
         if n > self.forces.len() {
             self.forces.resize(n, Vec3::zeros());

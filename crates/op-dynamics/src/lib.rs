@@ -21,6 +21,7 @@
 
 pub mod bond_memory;
 pub mod bonds;
+pub mod checkpoint;
 pub mod contributors;
 pub mod diagnostics;
 pub mod driver;

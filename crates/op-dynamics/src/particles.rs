@@ -197,7 +197,7 @@ pub(crate) fn live_slot(slot_of: &[u32], id: u32) -> Option<usize> {
 
 /// Structure-of-arrays particle store. All arrays have the same length,
 /// which only the store's methods can change.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct Particles {
     positions: Vec<Point3>,
     velocities: Vec<Vec3>,
@@ -207,7 +207,7 @@ pub struct Particles {
 }
 
 /// The arrays the integrator does not advance.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct AttributeArrays {
     ids: Vec<u32>,
     slot_of: Vec<u32>,
@@ -278,6 +278,39 @@ impl Particles {
     #[inline]
     pub fn id_bound(&self) -> usize {
         self.statics.slot_of.len()
+    }
+
+    /// Whether the store is well formed (a store read back from a
+    /// checkpoint is checked before use): every array of one length, and
+    /// ids and slots that map to each other.
+    pub(crate) fn is_consistent(&self) -> bool {
+        let n = self.len();
+        let a = &self.statics;
+        let lengths = [
+            self.velocities.len(),
+            self.orientations.len(),
+            self.angular_velocities.len(),
+            a.ids.len(),
+            a.masses.len(),
+            a.inv_masses.len(),
+            a.inertias.len(),
+            a.normal_axes.len(),
+            a.tangent_axes.len(),
+            a.flags.len(),
+            a.objects.len(),
+            a.kinds.len(),
+            a.materials.len(),
+            a.curvatures.len(),
+            a.temperatures.len(),
+        ];
+        lengths.iter().all(|&l| l == n)
+            && a.ids
+                .iter()
+                .enumerate()
+                .all(|(s, &id)| a.slot_of.get(id as usize).map(|&t| t as usize) == Some(s))
+            && a.slot_of
+                .iter()
+                .all(|&s| s == Self::REMOVED || (s as usize) < n)
     }
 
     /// Adds a particle after validating it; returns its stable id (the

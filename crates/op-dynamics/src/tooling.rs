@@ -17,6 +17,7 @@
 
 use std::any::Any;
 
+use crate::checkpoint::StateError;
 use crate::contributors::Contributor;
 use crate::math::{Point3, Real};
 use crate::particles::Particles;
@@ -55,4 +56,17 @@ pub trait ToolSet: Contributor + std::fmt::Debug + Send + Sync {
     /// The set as [`Any`], so that its owner can read it back with its
     /// concrete type ([`crate::World::tools`]).
     fn as_any(&self) -> &dyn Any;
+
+    /// What the tools change as the run goes on (the particles a grabbing
+    /// tool holds), encoded ([`crate::checkpoint::encode`]), for a
+    /// checkpoint ([`crate::World::state`]). Default: nothing.
+    fn save_state(&self) -> Vec<u8> {
+        Vec::new()
+    }
+
+    /// Puts back what [`ToolSet::save_state`] returned, leaving the tools
+    /// unchanged when it fails. Default: accepts only the empty state.
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), StateError> {
+        crate::checkpoint::no_state("tools", state)
+    }
 }

@@ -22,6 +22,7 @@ mod after_step;
 mod editing;
 mod params;
 mod pipeline;
+mod state;
 pub use after_step::{AfterStep, AfterStepContext};
 pub use editing::Merge;
 pub use params::{DivergenceParams, NeighbourParams, WorldParams, MAX_SKIN};

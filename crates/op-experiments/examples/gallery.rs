@@ -105,6 +105,7 @@ fn draw(root: &Path, picture: &Picture) -> anyhow::Result<PathBuf> {
         out_dir: out.clone(),
         frames: None,
         formats: vec![FrameFormat::OBJ],
+        ..Default::default()
     };
     let summary = op_scene::run(&mut built, &opts, &mut |_, _| {})?;
     anyhow::ensure!(!summary.diverged, "{} diverged", picture.name);

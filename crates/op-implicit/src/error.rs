@@ -23,6 +23,10 @@ pub enum SkinError {
         /// Index of the primitive in the skin's list.
         index: usize,
     },
+    /// A checkpoint's state of the skin does not fit it
+    /// ([`crate::ObjectSkin::restore`]).
+    #[error("{0}")]
+    State(String),
 }
 
 /// Polygonizing a field failed.

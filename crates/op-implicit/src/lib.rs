@@ -54,5 +54,5 @@ pub use polygonize::{
     PolygonizeStats,
 };
 pub use primitives::{PosedPrimitive, Primitive, Skeleton};
-pub use skin::Skin;
+pub use skin::{Skin, SkinState};
 pub use stretch::StretchCompensation;

@@ -23,7 +23,7 @@ use op_modeling::tools::parry_pose;
 use op_modeling::Tool;
 use parry3d_f64::math::Pose;
 use parry3d_f64::shape::Shape;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::{
     collider_reactions, polygonize, polygonize_deformed, polygonize_field, surface_points,
@@ -70,6 +70,39 @@ impl ObjectSkin {
     /// The field shown ([`ObjectSkin::display`], else the contact field).
     pub fn display_field(&self) -> &crate::Field {
         self.display.as_ref().unwrap_or(&self.skin).field()
+    }
+
+    /// The states of its skins ([`Skin::state`]): the contact skin, then
+    /// the display skin when it has one.
+    pub fn state(&self) -> Vec<crate::skin::SkinState> {
+        std::iter::once(&self.skin)
+            .chain(self.display.as_ref())
+            .map(Skin::state)
+            .collect()
+    }
+
+    /// Puts back the states [`ObjectSkin::state`] returned and poses the
+    /// skins on `particles`.
+    pub fn restore(
+        &mut self,
+        states: Vec<crate::skin::SkinState>,
+        particles: &op_dynamics::Particles,
+    ) -> Result<(), crate::SkinError> {
+        let skins = 1 + usize::from(self.display.is_some());
+        if states.len() != skins {
+            return Err(crate::SkinError::State(format!(
+                "skin {:?} has {skins} fields, the checkpoint {}",
+                self.name,
+                states.len()
+            )));
+        }
+        let mut states = states.into_iter();
+        for (skin, _) in self.skins_mut() {
+            if let Some(s) = states.next() {
+                skin.restore(s, particles)?;
+            }
+        }
+        Ok(())
     }
 
     /// Re-poses the skins on the particles of `world`.
@@ -191,7 +224,7 @@ fn boxes_overlap(a: Option<(Point3, Point3)>, b: Option<(Point3, Point3)>) -> bo
 }
 
 /// Contact figures of a run (module doc): `summary.json` `contact`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ContactStats {
     /// Largest overlap of two undeformed skins, or depth of a skin inside
     /// an obstacle tool, in units of r0.

@@ -28,7 +28,7 @@ use op_dynamics::{Point3, Quat, Real, Vec3};
 use crate::kernel;
 
 /// The geometry of a skeleton primitive in its own frame (module doc).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Skeleton {
     /// A point at the origin.
     Point,
@@ -102,7 +102,7 @@ impl Skeleton {
 
 /// A skeleton primitive posed in a particle's body frame, with the support
 /// radius of its field kernel.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Primitive {
     /// Origin of the primitive's frame in the particle's body frame.
     /// Default (constructors): zero unless given.

@@ -8,6 +8,13 @@ use crate::field::Field;
 use crate::primitives::Primitive;
 use crate::stretch::StretchCompensation;
 
+/// The part of a [`Skin`] that changes during a run ([`Skin::state`]).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SkinState {
+    attachments: Vec<(u32, Primitive)>,
+    stretch: Option<StretchCompensation>,
+}
+
 /// An implicit object: skeleton primitives attached to particles of an
 /// op-dynamics world, and the field they produce at the particles' current
 /// poses. Call [`Skin::repose`] after the world moved to follow it.
@@ -68,6 +75,34 @@ impl Skin {
         if let Some(stretch) = self.stretch.as_mut() {
             stretch.apply(&mut self.field);
         }
+        Ok(())
+    }
+
+    /// What changes of the skin during a run (a checkpoint saves it):
+    /// its attachments (particles created by the creation rules gain one,
+    /// removed particles lose theirs) and the stretch references kept. The
+    /// field is not part of it: it follows from them at each pose.
+    pub fn state(&self) -> SkinState {
+        SkinState {
+            attachments: self.attachments.clone(),
+            stretch: self.stretch.clone(),
+        }
+    }
+
+    /// Puts back a state taken by [`Skin::state`] and poses the skin on
+    /// `particles`; the skin is unchanged when it fails (an invalid
+    /// primitive, a particle that is not in `particles`).
+    pub fn restore(&mut self, state: SkinState, particles: &Particles) -> Result<(), SkinError> {
+        if let Some(index) = state.attachments.iter().position(|(_, p)| !p.is_valid()) {
+            return Err(SkinError::InvalidPrimitive { index });
+        }
+        let mut restored = Skin {
+            attachments: state.attachments,
+            field: Field::default(),
+            stretch: state.stretch,
+        };
+        restored.repose_particles(particles)?;
+        *self = restored;
         Ok(())
     }
 

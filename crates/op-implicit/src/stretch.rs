@@ -37,7 +37,7 @@ use rayon::prelude::*;
 use crate::field::Field;
 
 /// The reference densities of a skin's primitives (module doc).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum StretchCompensation {
     /// One reference for every primitive: the median density at rest.
     Uniform(Real),

@@ -175,6 +175,7 @@ impl Scene {
             expected_warnings: self.expected_warnings.clone(),
             breakup_accepted: false,
             step_estimate: None,
+            inputs: crate::run::checkpoint::fnv1a(&serde_json::to_vec(self).unwrap_or_default()),
         })
     }
 

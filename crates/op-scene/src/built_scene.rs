@@ -13,7 +13,7 @@ use crate::skins::{ContactStats, ObjectSkin, SkinTool};
 use crate::stages::SceneState;
 
 /// One object of a built scene.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct BuiltObject {
     /// Object name (unique in the scene; the OBJ object name).
     pub name: String,
@@ -130,6 +130,10 @@ pub struct BuiltScene {
     /// The stable-step estimate, when [`crate::Scene::build_for_run`]
     /// made one.
     pub(crate) step_estimate: Option<crate::stability::StepEstimate>,
+    /// Hash of the scene as built (its every setting, after any change
+    /// made in code), which a checkpoint records so that `--resume`
+    /// refuses another scene ([`crate::run`]).
+    pub(crate) inputs: u64,
 }
 
 /// Reading the built scene: what it holds, as built and as it runs.

@@ -49,7 +49,7 @@ pub const DEFAULT_EXTENT_GROWTH: Real = 1e4;
 pub const ENERGY_GAIN_WARNING: Real = 1e-2;
 
 /// Axis-aligned box.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 struct Bounds {
     min: Vec3,
     max: Vec3,
@@ -87,7 +87,7 @@ impl Bounds {
 }
 
 /// Per-object figures of the health report.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 struct ObjectHealth {
     /// Interaction range of the object's material (0: no interaction, no
     /// pieces reported).
@@ -112,7 +112,7 @@ pub struct ObjectFindings {
 }
 
 /// Watches a run frame by frame; see the module docs.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Health {
     bounds: Bounds,
     size: Real,

@@ -4,6 +4,7 @@
 //! a bad frame: frames already on disk stay valid and the summary says
 //! `diverged: true`.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -17,13 +18,16 @@ use crate::export::{write_atomically, FrameFormat, FrameWriter, Sequence};
 use crate::health::{energy_floor, Health, ObjectFindings, ENERGY_GAIN_WARNING};
 use crate::skins::ContactStats;
 
+pub mod checkpoint;
 mod energy_watch;
 mod output;
+pub use checkpoint::CheckpointEvery;
+use checkpoint::{Carried, Checkpoint};
 use energy_watch::EnergyWatch;
 pub use output::prepare_output;
 
 /// How to run a scene.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct RunOptions {
     /// Output directory (created if missing).
     pub out_dir: PathBuf,
@@ -33,13 +37,29 @@ pub struct RunOptions {
     /// Frame file formats (`opsim run --format`); OBJ alone is the default
     /// of the CLI. Duplicates are ignored; none writes no frame file.
     pub formats: Vec<FrameFormat>,
+    /// When to write a checkpoint ([`checkpoint`]; `checkpoint.bin` in the
+    /// output directory), or never (`None`, the default of the library;
+    /// `opsim run` writes one about every minute).
+    pub checkpoints: Option<CheckpointEvery>,
+    /// Go on from the checkpoint in the output directory instead of
+    /// starting over (`opsim run --resume`): the frames and metrics
+    /// already written stay, and the run ends as an uninterrupted one would.
+    pub resume: bool,
 }
 
 /// The runner's own timing names in `summary.json` `stages` (besides the
 /// scene's setup, `build` and `estimate`, and the pipeline's stages): no
 /// stage of a scene may take them.
-/// The runner's own first (`prepare`, `measure`, `export`).
-pub const RUNNER_STAGES: [&str; 5] = ["prepare", "measure", "export", "build", "estimate"];
+/// The runner's own first (`prepare`, `measure`, `export`, and
+/// `checkpoint` in a run that writes checkpoints).
+pub const RUNNER_STAGES: [&str; 6] = [
+    "prepare",
+    "measure",
+    "export",
+    "checkpoint",
+    "build",
+    "estimate",
+];
 
 /// Per-object figures of a run.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -187,6 +207,15 @@ pub enum RunError {
         /// The link.
         path: PathBuf,
     },
+    /// The checkpoint to resume from is missing, damaged, of another
+    /// version or of another scene: nothing was run or written.
+    #[error("cannot resume from {}: {message}", path.display())]
+    Resume {
+        /// The checkpoint file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
     /// The simulation diverged; the summary (with `diverged: true`) and the
     /// frames before it were written.
     #[error("{message}")]
@@ -291,7 +320,7 @@ fn run_here(
     on_frame: &mut (dyn FnMut(usize, usize) + Send),
 ) -> Result<Summary, RunError> {
     let clock = Instant::now();
-    let mut writer = FrameWriter::new(
+    let writer = FrameWriter::new(
         &opts.out_dir,
         &opts.formats,
         &scene.objects,
@@ -300,90 +329,226 @@ fn run_here(
         &scene.outputs,
     )
     .with_sheet_gap(scene.sheet_gap());
-    prepare_output(&opts.out_dir, &writer.folders())?;
+    let checkpoint_path = opts.out_dir.join(checkpoint::FILE);
+    let resume_error = |message| RunError::Resume {
+        path: checkpoint_path.clone(),
+        message,
+    };
+    // The checkpoint is read before anything in the folder changes.
+    let resumed = match opts.resume {
+        true => Some(Checkpoint::read(&checkpoint_path).map_err(resume_error)?),
+        false => None,
+    };
+    if resumed.is_some() {
+        output::prepare_resume(&opts.out_dir, &writer.folders())?;
+    } else {
+        prepare_output(&opts.out_dir, &writer.folders())?;
+    }
     let total = opts
         .frames
         .unwrap_or_else(|| (scene.duration * scene.frame_rate).round() as usize + 1)
         .max(1);
-    let duration = (total - 1) as Real / scene.frame_rate;
-    let mut metrics = scene
-        .outputs
-        .metrics
-        .then(|| Metrics::new(opts.out_dir.join("metrics.csv")));
-    let mut tally = Tally::new(scene);
-    let mut warnings = scene.step_warnings.clone();
-    warnings.extend(crate::health::started_inside(scene));
-    warnings.extend(crate::health::unbonded(scene));
-    tally.prepare_seconds = clock.elapsed().as_secs_f64();
-    // The scales of the checks come from the scene's inputs, before the
-    // settle phase: an explosion while settling is measured against them.
-    let measuring = Instant::now();
-    let before = if scene.settled { 0.0 } else { scene.settle };
-    tally.settles = before > 0.0;
-    let mut health = Health::new(scene, before + duration, scene.extent_growth);
-    let floor = energy_floor(scene, health.size(), duration);
-    let mut watch = EnergyWatch::new(scene, floor, tally.settles);
-    tally.measure_seconds += measuring.elapsed().as_secs_f64();
-    if let Err(d) = scene.settle() {
-        tally.divergence = Some(format!("while settling: {d}"));
-    }
-    let t0 = scene.world.time();
-    for k in 0..total {
-        if tally.divergence.is_some() {
+    let mut run = Run::start(scene, opts, writer, total, &clock);
+    // What identifies the run, taken before its first step.
+    let inputs = if opts.checkpoints.is_some() || resumed.is_some() {
+        checkpoint::run_inputs(scene, total, run.writer.formats())
+    } else {
+        0
+    };
+    let (first, t0, carried) = match resumed {
+        Some(ck) => ck.restore(scene, &mut run, inputs).map_err(resume_error)?,
+        None => {
+            if let Err(d) = scene.settle() {
+                run.tally.divergence = Some(format!("while settling: {d}"));
+            }
+            (0, scene.world.time(), Carried::default())
+        }
+    };
+    let mut saved = Instant::now();
+    for k in first..total {
+        if run.tally.divergence.is_some() {
             break;
         }
-        let t = t0 + k as Real / scene.frame_rate;
-        let frame = Frame {
-            k,
-            t,
-            wall: &clock,
-            writer: &mut writer,
-            metrics: metrics.as_mut(),
-        };
-        if !tally.frame(scene, &mut health, &mut watch, frame) {
+        let wall = carried.wall_seconds + clock.elapsed().as_secs_f64();
+        if !run.frame(scene, k, t0 + k as Real / scene.frame_rate, wall) {
             break;
         }
         on_frame(k + 1, total);
-    }
-    let finishing = Instant::now();
-    if let Err(f) = writer.finish() {
-        tally.write_failed(f);
-    }
-    warnings.extend(writer.warnings());
-    tally.export_seconds += finishing.elapsed().as_secs_f64();
-    let measuring = Instant::now();
-    if let Some(m) = metrics.as_mut() {
-        if let Err(e) = m.save() {
-            tally.failure.get_or_insert(e);
+        let due = match opts.checkpoints {
+            None => false,
+            Some(_) if k + 1 == total => true,
+            Some(CheckpointEvery::Frames(n)) => (k + 1) % n.max(1) == 0,
+            Some(CheckpointEvery::Seconds(s)) => saved.elapsed().as_secs_f64() >= s,
+        };
+        if due {
+            let at = (k, t0, &carried, clock.elapsed().as_secs_f64());
+            let saving = Instant::now();
+            if let Err(e) = run.save_checkpoint(scene, at, inputs, &checkpoint_path) {
+                run.tally.failure.get_or_insert(e);
+                break;
+            }
+            run.tally.checkpoint_seconds += saving.elapsed().as_secs_f64();
+            saved = Instant::now();
         }
     }
-    let findings = tally.conclude(scene, &health, &watch, &mut warnings);
-    tally.measure_seconds += measuring.elapsed().as_secs_f64();
-    let summary = tally.summary(scene, &writer, findings, warnings, clock.elapsed());
-    let path = opts.out_dir.join("summary.json");
-    let saved = write_atomically(&path, |w| {
-        serde_json::to_writer_pretty(&mut *w, &summary).map_err(std::io::Error::other)?;
-        writeln!(w)
-    })
-    .map_err(io(&path));
-    if let Some(e) = tally.failure {
-        return Err(e);
+    run.finish(scene, &opts.out_dir, (&clock, &carried))
+}
+
+/// The runner's state over a run: the tally, the health and energy
+/// watches, `metrics.csv`, the frame writer and the warnings so far.
+struct Run {
+    tally: Tally,
+    health: Health,
+    watch: EnergyWatch,
+    metrics: Option<Metrics>,
+    writer: FrameWriter,
+    warnings: Vec<String>,
+}
+
+impl Run {
+    /// The runner's state before the first step of a run of `total`
+    /// frames (the scene not settled yet).
+    fn start(
+        scene: &BuiltScene,
+        opts: &RunOptions,
+        writer: FrameWriter,
+        total: usize,
+        clock: &Instant,
+    ) -> Run {
+        let duration = (total - 1) as Real / scene.frame_rate;
+        let metrics = scene
+            .outputs
+            .metrics
+            .then(|| Metrics::new(opts.out_dir.join("metrics.csv")));
+        let mut tally = Tally::new(scene);
+        let mut warnings = scene.step_warnings.clone();
+        warnings.extend(crate::health::started_inside(scene));
+        warnings.extend(crate::health::unbonded(scene));
+        tally.prepare_seconds = clock.elapsed().as_secs_f64();
+        // The scales of the checks come from the scene's inputs, before the
+        // settle phase: an explosion while settling is measured against them.
+        let measuring = Instant::now();
+        let before = if scene.settled { 0.0 } else { scene.settle };
+        tally.settles = before > 0.0;
+        let health = Health::new(scene, before + duration, scene.extent_growth);
+        let floor = energy_floor(scene, health.size(), duration);
+        let watch = EnergyWatch::new(scene, floor, tally.settles);
+        tally.measure_seconds += measuring.elapsed().as_secs_f64();
+        Run {
+            tally,
+            health,
+            watch,
+            metrics,
+            writer,
+            warnings,
+        }
     }
-    saved?;
-    match tally.divergence {
-        Some(message) => Err(RunError::Diverged {
-            message,
-            summary: Box::new(summary),
-        }),
-        None => Ok(summary),
+
+    /// Takes frame `k` at world time `t` ([`Tally::frame`]), `wall` seconds
+    /// into the run. Returns whether the run goes on.
+    fn frame(&mut self, scene: &mut BuiltScene, k: usize, t: Real, wall: f64) -> bool {
+        let frame = Frame {
+            k,
+            t,
+            wall,
+            writer: &mut self.writer,
+            metrics: self.metrics.as_mut(),
+        };
+        self.tally
+            .frame(scene, &mut self.health, &mut self.watch, frame)
+    }
+
+    /// Ends the run: the last files written, the health concluded, the
+    /// summary written into `out_dir`. `clock`: the run's clock, and what
+    /// it carried over from the run it resumed.
+    fn finish(
+        mut self,
+        scene: &BuiltScene,
+        out_dir: &Path,
+        (clock, carried): (&Instant, &Carried),
+    ) -> Result<Summary, RunError> {
+        let tally = &mut self.tally;
+        let finishing = Instant::now();
+        if let Err(f) = self.writer.finish() {
+            tally.write_failed(f);
+        }
+        self.warnings.extend(self.writer.warnings());
+        tally.export_seconds += finishing.elapsed().as_secs_f64();
+        let measuring = Instant::now();
+        if let Some(m) = self.metrics.as_mut() {
+            if let Err(e) = m.save() {
+                tally.failure.get_or_insert(e);
+            }
+        }
+        let findings = tally.conclude(scene, &self.health, &self.watch, &mut self.warnings);
+        tally.measure_seconds += measuring.elapsed().as_secs_f64();
+        let wall = clock.elapsed().as_secs_f64();
+        let summary = tally.summary(
+            scene,
+            &self.writer,
+            findings,
+            self.warnings,
+            (wall, carried),
+        );
+        let path = out_dir.join("summary.json");
+        let saved = write_atomically(&path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &summary).map_err(std::io::Error::other)?;
+            writeln!(w)
+        })
+        .map_err(io(&path));
+        if let Some(e) = self.tally.failure {
+            return Err(e);
+        }
+        saved?;
+        match self.tally.divergence {
+            Some(message) => Err(RunError::Diverged {
+                message,
+                summary: Box::new(summary),
+            }),
+            None => Ok(summary),
+        }
     }
 }
 
-/// One frame to take: its index and time, the run's clock, where it goes.
+impl Run {
+    /// Writes the checkpoint after frame `at.0` ([`checkpoint`]): the frame
+    /// files and `metrics.csv` first, so that the checkpoint never counts a
+    /// frame that is not on disk, then `checkpoint.bin`, atomically. `at`:
+    /// the frame, the world time of frame 0, what the run carried over and
+    /// the seconds of its clock.
+    fn save_checkpoint(
+        &mut self,
+        scene: &BuiltScene,
+        at: (usize, Real, &Carried, f64),
+        inputs: u64,
+        path: &Path,
+    ) -> Result<(), RunError> {
+        let (k, t0, carried, elapsed) = at;
+        if let Err(f) = self.writer.flush() {
+            self.tally.written = self.tally.written.min(f.frame);
+            return Err(io(&f.path)(f.error));
+        }
+        if let Some(m) = self.metrics.as_mut() {
+            m.save()?;
+        }
+        let so_far = Carried {
+            wall_seconds: carried.wall_seconds + elapsed,
+            setup_seconds: carried.setup_seconds
+                + scene.setup_seconds.iter().map(|(_, t)| t).sum::<f64>(),
+            stages: self.tally.stage_table(scene, carried),
+        };
+        Checkpoint::take(scene, self, (k, t0), inputs, so_far)
+            .write(path)
+            .map_err(io(path))
+    }
+}
+
+/// One frame to take: its index and time, the run's wall seconds so far,
+/// where it goes.
 struct Frame<'a> {
     k: usize,
     t: Real,
-    wall: &'a Instant,
+    wall: f64,
     writer: &'a mut FrameWriter,
     metrics: Option<&'a mut Metrics>,
 }
@@ -391,6 +556,7 @@ struct Frame<'a> {
 /// What a run accumulates over its frames: per-object rest-shape errors and
 /// temperatures, frames written, the stage timings of the runner, and how
 /// it ended.
+#[derive(serde::Serialize, serde::Deserialize)]
 struct Tally {
     max_err: Vec<Real>,
     last_err: Vec<Real>,
@@ -400,12 +566,15 @@ struct Tally {
     written: usize,
     measure_seconds: f64,
     export_seconds: f64,
+    /// Checkpoints written ([`checkpoint`]).
+    checkpoint_seconds: f64,
     /// The output folders prepared and the scene checked before its first
     /// step.
     prepare_seconds: f64,
     /// The run settles the scene before frame 0.
     settles: bool,
     divergence: Option<String>,
+    #[serde(skip)]
     failure: Option<RunError>,
 }
 
@@ -420,6 +589,7 @@ impl Tally {
             written: 0,
             measure_seconds: 0.0,
             export_seconds: 0.0,
+            checkpoint_seconds: 0.0,
             prepare_seconds: 0.0,
             settles: false,
             divergence: None,
@@ -496,7 +666,7 @@ impl Tally {
                 d.total,
                 d.oscillation,
                 d.max_speed,
-                frame.wall.elapsed().as_secs_f64()
+                frame.wall
             )) {
                 self.failure = Some(e);
                 return false;
@@ -575,31 +745,22 @@ impl Tally {
         writer: &FrameWriter,
         findings: Vec<ObjectFindings>,
         warnings: Vec<String>,
-        wall: std::time::Duration,
+        (wall, carried): (f64, &Carried),
     ) -> Summary {
         Summary {
             scene: scene.name.clone(),
             steps: scene.world.steps(),
             sim_time: scene.scene_time(),
             settle: if scene.settled { scene.settle } else { 0.0 },
-            wall_seconds: wall.as_secs_f64()
+            wall_seconds: carried.wall_seconds
+                + carried.setup_seconds
+                + wall
                 + scene.setup_seconds.iter().map(|(_, t)| t).sum::<f64>(),
             diverged: self.divergence.is_some(),
             divergence: self.divergence.clone(),
             warnings,
             failure: self.failure.as_ref().map(error_chain),
-            stages: scene
-                .timings()
-                .into_iter()
-                .chain(
-                    // `build` and `estimate` come with the scene's timings.
-                    RUNNER_STAGES[..3].iter().map(|s| s.to_string()).zip([
-                        self.prepare_seconds,
-                        self.measure_seconds,
-                        self.export_seconds,
-                    ]),
-                )
-                .collect(),
+            stages: self.stage_table(scene, carried),
             frames: self.written,
             frame_rate: scene.frame_rate,
             up: scene.outputs.up.unwrap_or_else(|| up_direction(scene)),
@@ -610,6 +771,48 @@ impl Tally {
             contact: scene.has_contact().then_some(scene.contact),
             bonds_broken: scene.world.bonds().map(|b| b.broken()),
             objects: self.objects(scene, findings),
+        }
+    }
+
+    /// Seconds per stage so far (the summary's `stages`): the scene's and
+    /// the runner's, plus those `carried` over from the run this one
+    /// resumed.
+    fn stage_table(&self, scene: &BuiltScene, carried: &Carried) -> BTreeMap<String, f64> {
+        let mut table = carried.stages.clone();
+        let now = scene.timings().into_iter().chain(
+            // `build` and `estimate` come with the scene's timings.
+            RUNNER_STAGES[..4].iter().map(|s| s.to_string()).zip([
+                self.prepare_seconds,
+                self.measure_seconds,
+                self.export_seconds,
+                self.checkpoint_seconds,
+            ]),
+        );
+        for (name, seconds) in now {
+            if name == "checkpoint" && seconds == 0.0 {
+                continue;
+            }
+            *table.entry(name).or_insert(0.0) += seconds;
+        }
+        table
+    }
+
+    /// A copy of the tally for a checkpoint: everything but a failure
+    /// (checkpoints are taken only while the run goes well).
+    fn snapshot(&self) -> Tally {
+        Tally {
+            max_err: self.max_err.clone(),
+            last_err: self.last_err.clone(),
+            heat: self.heat,
+            hottest: self.hottest.clone(),
+            written: self.written,
+            measure_seconds: self.measure_seconds,
+            export_seconds: self.export_seconds,
+            checkpoint_seconds: self.checkpoint_seconds,
+            prepare_seconds: self.prepare_seconds,
+            settles: self.settles,
+            divergence: self.divergence.clone(),
+            failure: None,
         }
     }
 
@@ -704,6 +907,7 @@ mod tests {
             out_dir: dir.clone(),
             frames: Some(17),
             formats: vec![crate::export::FrameFormat::OBJ],
+            ..Default::default()
         };
         let result = run(&mut built, &opts, &mut |_, _| {});
         let _ = std::fs::remove_dir_all(&dir);
@@ -770,6 +974,7 @@ mod tests {
                     crate::export::FrameFormat::PLY,
                     crate::export::FrameFormat::VTU,
                 ],
+                ..Default::default()
             };
             match run(&mut built, &opts, &mut |_, _| {}) {
                 Err(RunError::Diverged { message, summary }) => {
@@ -806,6 +1011,7 @@ mod tests {
             out_dir: dir.clone(),
             frames: Some(2),
             formats: vec![crate::export::FrameFormat::OBJ],
+            ..Default::default()
         };
         let result = run(&mut built, &opts, &mut |_, _| {});
         let _ = std::fs::remove_dir_all(&dir);

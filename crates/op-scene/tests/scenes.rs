@@ -378,6 +378,7 @@ fn settle_phase_shifts_forces_and_sets_the_rest_shape() {
             out_dir: dir.clone(),
             frames: None,
             formats: vec![op_scene::export::FrameFormat::OBJ],
+            ..Default::default()
         },
         &mut |_, _| {},
     )

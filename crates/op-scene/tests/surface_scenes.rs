@@ -16,6 +16,7 @@ fn run_scene(scene: &Scene, out: &Path, frames: usize) -> Summary {
         out_dir: out.to_path_buf(),
         frames: Some(frames),
         formats: vec![op_scene::export::FrameFormat::OBJ],
+        ..Default::default()
     };
     run(&mut built, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"))
 }

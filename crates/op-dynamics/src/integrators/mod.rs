@@ -305,7 +305,7 @@ impl StateMut<'_> {
 /// Owns only scratch buffers (state lives in the world), the forces cached at
 /// the end of the previous step (velocity Verlet, and the FSAL stage of the
 /// adaptive scheme) and the adaptive scheme's suggested step.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Integrator {
     scheme: Scheme,
     /// Forces and torques: the last evaluation, and between steps the cache.

@@ -17,7 +17,7 @@ use super::{Bodies, ForceField, Particle, StateRef};
 use crate::math::{rotate_by, Point3, Quat, Real, Vec3};
 
 /// The time derivative of one particle's state at an RKMK stage.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Deriv {
     /// `ṗ = v`.
     pub dp: Vec3,
@@ -91,7 +91,7 @@ impl Tableau {
 }
 
 /// Stage state and slopes, reused across steps.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(crate) struct RkBuffers {
     pub positions: Vec<Point3>,
     pub velocities: Vec<Vec3>,

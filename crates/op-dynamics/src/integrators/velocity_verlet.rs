@@ -78,7 +78,7 @@ pub(crate) fn midpoint_drift(q: &Quat, l: &Vec3, inertia: &Vec3, h: Real) -> (Qu
 /// `L → ω` conversion of the previous step's end in reverse, and the
 /// round-off of that round trip accumulates (8e-11 relative drift of a free
 /// body's `L` after 200,000 steps, against none when `L` is carried).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Momenta {
     /// Per particle: `L½` within a step, `L₁` after it.
     l: Vec<Vec3>,

@@ -97,6 +97,7 @@ pub(crate) struct Scratch {
 ///
 /// The list also keeps the scratch buffers of the searches, so rebuilding a
 /// list of stable size does not reallocate. `Clone` copies the lists only.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct PairList {
     /// `offsets[i]..offsets[i + 1]` is the pair range of row `i` (`n + 1` entries).
     offsets: Vec<u32>,
@@ -108,6 +109,7 @@ pub struct PairList {
     incoming: Vec<u32>,
     /// `in_offsets` and `incoming` describe the current rows.
     has_incoming: bool,
+    #[serde(skip)]
     pub(crate) scratch: Scratch,
 }
 
@@ -168,6 +170,23 @@ impl PairList {
             has_incoming: true,
             scratch: Scratch::default(),
         }
+    }
+
+    /// Whether the list is well formed over `n` rows: offsets that start
+    /// at 0, never decrease and end at the pair count, second particles
+    /// below `n`, and the same of the incoming index when it is built (a
+    /// list read back from a checkpoint is checked before use).
+    pub(crate) fn is_consistent(&self, n: usize) -> bool {
+        fn index_ok(offsets: &[u32], entries: &[u32], rows: usize, bound: usize) -> bool {
+            offsets.len() == rows + 1
+                && offsets.first() == Some(&0)
+                && offsets.windows(2).all(|w| w[0] <= w[1])
+                && offsets.last().map(|&o| o as usize) == Some(entries.len())
+                && entries.iter().all(|&e| (e as usize) < bound)
+        }
+        index_ok(&self.offsets, &self.neighbours, n, n)
+            && (!self.has_incoming
+                || index_ok(&self.in_offsets, &self.incoming, n, self.neighbours.len()))
     }
 
     /// Number of particles (rows).

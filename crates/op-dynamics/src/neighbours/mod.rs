@@ -135,7 +135,7 @@ fn search_rows(backend: NeighbourBackend, positions: &[Point3], radius: Real, ou
 ///
 /// A particle whose position turns non-finite (or finite again) triggers a
 /// rebuild; one that stays non-finite does not, and has no neighbours.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct NeighbourList {
     backend: NeighbourBackend,
     cutoff: Real,
@@ -310,6 +310,13 @@ impl NeighbourList {
     /// The half list of the last build (empty before the first).
     pub fn pairs(&self) -> &PairList {
         &self.pairs
+    }
+
+    /// Whether the list is well formed for `n` particles (a list read back
+    /// from a checkpoint is checked before use): unbuilt, or built over `n`
+    /// reference positions with a consistent pair list.
+    pub(crate) fn is_consistent(&self, n: usize) -> bool {
+        !self.built || (self.reference.len() == n && self.pairs.is_consistent(n))
     }
 
     /// The interaction cut-off radius.

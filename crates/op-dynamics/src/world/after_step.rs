@@ -28,6 +28,7 @@
 use super::{StepReport, World, WorldError};
 use crate::bond_memory;
 use crate::bonds::Bonds;
+use crate::checkpoint::StateError;
 use crate::driver::Effects;
 use crate::heat::{self, HeatParams, HeatScratch};
 use crate::interactions::PreparedMaterial;
@@ -75,6 +76,20 @@ pub trait AfterStep: Send + Sync {
     /// in the effects' `removed` (the world removes them); changed
     /// velocities or a changed force function set `forces_stale`.
     fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects;
+
+    /// What the stage changes as the run goes on, encoded
+    /// ([`crate::checkpoint::encode`]), for a checkpoint
+    /// ([`crate::World::state`]). Default: nothing (a stage that keeps no
+    /// state between steps).
+    fn save_state(&self) -> Vec<u8> {
+        Vec::new()
+    }
+
+    /// Puts back what [`AfterStep::save_state`] returned. Default: accepts
+    /// only the empty state.
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), StateError> {
+        crate::checkpoint::no_state(self.name(), state)
+    }
 }
 
 /// Names of the world's own stages, in their order.

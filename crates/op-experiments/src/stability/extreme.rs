@@ -209,6 +209,7 @@ pub fn run_scene(path: &Path, out_dir: &Path, overrides: Overrides) -> Result<Ex
         out_dir: out_dir.to_path_buf(),
         frames: length.map(|l| l.frames),
         formats: vec![op_scene::export::FrameFormat::OBJ],
+        ..Default::default()
     };
     let result = run(&mut built, &opts, &mut |_, _| {});
     let (summary, diverged) = match result {

@@ -26,6 +26,7 @@ use parry3d_f64::shape::{Shape, SharedShape};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use op_dynamics::checkpoint;
 use op_dynamics::contributors::{Contribution, Contributor, ContributorInput};
 use op_dynamics::error::ParamError;
 use op_dynamics::integrators::StateRef;
@@ -614,6 +615,29 @@ impl ToolSet for Tools {
 
     fn as_any(&self) -> &dyn std::any::Any {
         self
+    }
+
+    /// The particles each grabbing tool holds, with their offsets in the
+    /// tool's frame: the only part of a tool that changes during a run
+    /// (erasers drop the particles they remove).
+    fn save_state(&self) -> Vec<u8> {
+        let grabbed: Vec<&[(u32, Vec3)]> = self.tools.iter().map(|t| &t.grabbed[..]).collect();
+        checkpoint::encode(&grabbed)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> Result<(), checkpoint::StateError> {
+        let grabbed: Vec<Vec<(u32, Vec3)>> = checkpoint::decode(state)?;
+        if grabbed.len() != self.tools.len() {
+            return Err(checkpoint::StateError(format!(
+                "the checkpoint has {} tools, the world {}",
+                grabbed.len(),
+                self.tools.len()
+            )));
+        }
+        for (tool, g) in self.tools.iter_mut().zip(grabbed) {
+            tool.grabbed = g;
+        }
+        Ok(())
     }
 }
 

@@ -151,7 +151,49 @@ pub struct FrameWriter {
     coarsened: Vec<(String, usize, Real, Real)>,
 }
 
+/// What a [`FrameWriter`] remembers of the frames it wrote (a checkpoint
+/// saves it, [`crate::run`]): the state files listed in the series files,
+/// and the skins written coarser.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct WriterState {
+    state_files: Vec<Vec<(String, Real)>>,
+    coarsened: Vec<(String, usize, Real, Real)>,
+}
+
 impl FrameWriter {
+    /// What the writer remembers of the frames written so far.
+    pub fn state(&self) -> WriterState {
+        WriterState {
+            state_files: self.state_files.clone(),
+            coarsened: self.coarsened.clone(),
+        }
+    }
+
+    /// Puts back what [`FrameWriter::state`] returned, into a writer of the
+    /// same formats.
+    pub fn restore(&mut self, state: WriterState) -> Result<(), String> {
+        if state.state_files.len() != self.state_files.len() {
+            return Err(format!(
+                "the checkpoint's frames have {} state formats, this run {}",
+                state.state_files.len(),
+                self.state_files.len()
+            ));
+        }
+        self.state_files = state.state_files;
+        self.coarsened = state.coarsened;
+        Ok(())
+    }
+
+    /// Waits until every frame file handed to the writer is on disk (the
+    /// writing thread starts again with the next frame).
+    ///
+    /// # Errors
+    ///
+    /// The first file that could not be written.
+    pub fn flush(&mut self) -> Result<(), WriteFailure> {
+        self.files.finish()
+    }
+
     /// Warnings about what was written: each skin written coarser than its
     /// cell size because it outgrew the polygonizer's grid (its particles
     /// flung apart), from which frame and at which cell size.

@@ -9,6 +9,7 @@ use crate::error::short;
 /// The energy checks of every frame (README "Running scenes"): runaway
 /// kinetic energy against the energy scale, and the gain of a passive
 /// scene over its lowest earlier total.
+#[derive(Clone, serde::Serialize, serde::Deserialize)]
 pub(super) struct EnergyWatch {
     /// The energy the scene's own inputs can give it
     /// ([`crate::health::energy_floor`]), at least its kinetic energy when

@@ -9,12 +9,24 @@ use crate::export::{layout, Files, FrameFormat};
 /// Makes `out_dir` ready for a run: creates it and `folders` (the frame
 /// folders, [`crate::export::FrameWriter::folders`]), refuses symbolic links where opsim
 /// writes, and removes the files a previous run left there (only the names
-/// opsim writes: `summary.json`, `metrics.csv`, the sequence files
+/// opsim writes: `summary.json`, `metrics.csv`, `checkpoint.bin`, the sequence files
 /// `frames/<stem>/<stem>_<digits>.obj|ply` (and the emptied folders), the
 /// older layout's `frames/frame_*.obj`, `vtu/state_*.vtu`,
 /// `vtu/state.vtu.series` and opsim's temporary files), so frames of two
 /// runs never mix.
 pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunError> {
+    prepare(out_dir, folders, false)
+}
+
+/// [`prepare_output`] for a run resumed from a checkpoint
+/// ([`super::checkpoint`]): the same checks, but only the temporary files
+/// of an interrupted write are removed; the frames, `metrics.csv` and the
+/// checkpoint stay (frames after the checkpoint's are written again).
+pub(super) fn prepare_resume(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunError> {
+    prepare(out_dir, folders, true)
+}
+
+fn prepare(out_dir: &Path, folders: &[PathBuf], resume: bool) -> Result<(), RunError> {
     fs::create_dir_all(out_dir).map_err(io(out_dir))?;
     let frames_dir = out_dir.join("frames");
     let state_dirs: Vec<(FrameFormat, PathBuf)> = FrameFormat::all()
@@ -30,6 +42,7 @@ pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunErro
         frames_dir.clone(),
         out_dir.join("metrics.csv"),
         out_dir.join("summary.json"),
+        out_dir.join(super::checkpoint::FILE),
     ]
     .iter()
     .chain(state_dirs.iter().map(|(_, d)| d))
@@ -48,7 +61,7 @@ pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunErro
         for e in entries {
             let e = e.map_err(io(dir))?;
             let name = e.file_name().to_string_lossy().into_owned();
-            if ours(&name) || temporary(&name) {
+            if (ours(&name) && !resume) || temporary(&name) {
                 let path = e.path();
                 if link(&path) {
                     return Err(RunError::Symlink { path });
@@ -61,7 +74,7 @@ pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunErro
         Ok(left)
     };
     clean(out_dir, &|name| {
-        name == "summary.json" || name == "metrics.csv"
+        name == "summary.json" || name == "metrics.csv" || name == super::checkpoint::FILE
     })?;
     for (f, dir) in &state_dirs {
         clean(dir, &|name| f.format().owns(name, ""))?;
@@ -78,7 +91,7 @@ pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunErro
                 FrameFormat::all()
                     .any(|f| f.files() == Files::PerSequence && f.format().owns(name, &stem))
             })?;
-            if !left {
+            if !left && !resume {
                 fs::remove_dir(&path).map_err(io(&path))?;
             }
         }

@@ -1,0 +1,133 @@
+//! Taking and restoring a world's state ([`crate::checkpoint`]).
+
+use super::{Config, World};
+use crate::checkpoint::{StateError, WorldState};
+
+impl World {
+    /// Everything the world changes as it steps, to restore later with
+    /// [`World::restore`] ([`crate::checkpoint`]). Take it between steps.
+    pub fn state(&self) -> WorldState {
+        WorldState {
+            particles: self.particles.clone(),
+            integrator: self.integrator.clone(),
+            neighbours: self.model.neighbours.clone(),
+            bonds: self.model.bonds.clone(),
+            tools: self.model.tools.as_ref().map(|t| t.save_state()),
+            stages: self
+                .registered_stages
+                .iter()
+                .map(|s| (s.name().to_string(), s.save_state()))
+                .collect(),
+            accumulator: self.accumulator.clone(),
+            forces: self.forces.clone(),
+            torques: self.torques.clone(),
+            prev_positions: self.prev_positions.clone(),
+            time: self.time,
+            steps: self.steps,
+            dt_next: self.dt_next,
+            may_rotate: self.may_rotate,
+        }
+    }
+
+    /// Puts back a state taken by [`World::state`] from a world built from
+    /// the same inputs (materials, parameters, tools, after-step stages):
+    /// the world then steps exactly as the one the state was taken from.
+    /// What depends on the particle set (kernel, neighbour radius, the
+    /// after-step stages in use) is derived again.
+    ///
+    /// A state that does not fit this world (other materials, integrator,
+    /// tools, or arrays of inconsistent sizes) is refused, and the world is
+    /// left as it was.
+    pub fn restore(&mut self, state: WorldState) -> Result<(), StateError> {
+        let fail = |what: &str| {
+            Err(StateError(format!(
+                "the state does not fit the world: {what}"
+            )))
+        };
+        let p = &state.particles;
+        let n = p.len();
+        if !p.is_consistent() {
+            return fail("its particle arrays are inconsistent");
+        }
+        if let Some(&m) = p
+            .materials()
+            .iter()
+            .find(|&&m| m as usize >= self.model.materials.len())
+        {
+            return fail(&format!(
+                "a particle has material {m}, the world has {}",
+                self.model.materials.len()
+            ));
+        }
+        if state.integrator.scheme() != self.params.scheme {
+            return fail("it was taken with another integrator");
+        }
+        if state.tools.is_some() != self.model.tools.is_some() {
+            return fail("tools in one and not in the other");
+        }
+        if state.bonds.is_some() != self.model.bonds.is_some() {
+            return fail("bonds in one and not in the other");
+        }
+        if [
+            state.forces.len(),
+            state.torques.len(),
+            state.prev_positions.len(),
+        ] != [n; 3]
+            || state.accumulator.capacity() < p.id_bound()
+        {
+            return fail("its force or position arrays do not match its particles");
+        }
+        let config = Config::of(p, &self.model.materials);
+        let list_fits = match (&state.neighbours, config.kernel) {
+            (None, super::Kernel::None) => true,
+            (Some(l), k) => {
+                k != super::Kernel::None && l.cutoff() == config.cutoff && l.is_consistent(n)
+            }
+            (None, _) => false,
+        };
+        if !list_fits {
+            return fail("its neighbour list does not match its particles");
+        }
+        let names = |s: &[(String, Vec<u8>)]| s.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
+        let registered: Vec<String> = self
+            .registered_stages
+            .iter()
+            .map(|s| s.name().to_string())
+            .collect();
+        if names(&state.stages) != registered {
+            return fail(&format!(
+                "it has the after-step stages {:?}, the world {registered:?}",
+                names(&state.stages)
+            ));
+        }
+        if let (Some(tools), Some(saved)) = (self.model.tools.as_mut(), &state.tools) {
+            tools.restore_state(saved)?;
+        }
+        for (stage, (_, saved)) in self.registered_stages.iter_mut().zip(&state.stages) {
+            stage.restore_state(saved)?;
+        }
+        self.model.kernel = config.kernel;
+        self.model.friction = config.friction;
+        self.model.heated = config.heated;
+        self.model.memory = config.memory;
+        self.model.has_fixed = config.has_fixed;
+        self.repulsion = config.repulsion;
+        self.plastic = config.plastic;
+        self.memory_flows = config.memory_flows;
+        self.model.neighbours = state.neighbours;
+        self.model.bonds = state.bonds;
+        self.particles = state.particles;
+        self.integrator = state.integrator;
+        self.accumulator = state.accumulator;
+        self.forces = state.forces;
+        self.torques = state.torques;
+        self.prev_positions = state.prev_positions;
+        self.time = state.time;
+        self.steps = state.steps;
+        self.dt_next = state.dt_next;
+        self.may_rotate = state.may_rotate;
+        self.effects = Default::default();
+        self.sync_built_in_stages();
+        Ok(())
+    }
+}

@@ -1,0 +1,311 @@
+//! Checkpoints of a run, and resuming from one (`opsim run --resume`;
+//! docs/running.md "Checkpoints and resume").
+//!
+//! A run writes `checkpoint.bin` into its output directory after a frame
+//! ([`CheckpointEvery`]: every so many frames, or once the wall time since
+//! the last one passed a bound; and after the last frame). It holds
+//! everything the run needs to go on from that frame: the world's state
+//! ([`op_dynamics::checkpoint`]: particles, integrator, neighbour list,
+//! bonds and their memories, heat, plastic curvatures, tools, time and
+//! steps), the driver's stages' states, the scene's parts that change
+//! (objects with their created particles and settled rest shapes, skins'
+//! attachments, creation schedule, fit release, contact figures), and the
+//! runner's own (the health and energy watches, the per-object figures,
+//! `metrics.csv` so far, the frame writer's series and warnings, the
+//! warnings, the wall time and stage timings so far). The frames up to it
+//! are on disk before it is written, and it is written atomically: a run
+//! killed at any moment leaves the previous checkpoint or the new one,
+//! whole.
+//!
+//! A resumed run rebuilds the scene from its file, checks that it is the
+//! scene the checkpoint was taken of (a hash of the scene's settings, the
+//! particles it builds, the frame count and formats), puts the state back
+//! and goes on from the next frame. Every step then takes the same
+//! floating-point operations in the same order as in the run that was
+//! interrupted, so the frames, the metrics rows and the summary are the
+//! same bytes as an uninterrupted run's, at any thread count; only the
+//! wall-clock figures differ, as they do between any two runs.
+//!
+//! The file: the magic line `opsim checkpoint\n`, the format version (u32
+//! little-endian, [`FORMAT`]), the program's version (u32 length, then
+//! UTF-8), the payload's length (u64) and its FNV-1a hash (u64), then the
+//! payload (postcard, [`op_dynamics::checkpoint::encode`]). A file of
+//! another format or program version, truncated, or with any bit changed
+//! is refused with a message saying which.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use op_dynamics::checkpoint::{decode, encode, WorldState};
+use op_dynamics::Real;
+use op_implicit::SkinState;
+use serde::{Deserialize, Serialize};
+
+use super::energy_watch::EnergyWatch;
+use super::{Run, Tally};
+use crate::built_scene::{BuiltObject, BuiltScene};
+use crate::export::{FrameFormat, WriterState};
+use crate::health::Health;
+use crate::skins::ContactStats;
+
+/// The checkpoint's file name in the output directory.
+pub const FILE: &str = "checkpoint.bin";
+
+/// Version of the checkpoint's layout (this module's and op-dynamics'
+/// [`op_dynamics::checkpoint::STATE_VERSION`]): a file of another version
+/// is refused.
+pub const FORMAT: u32 = 1000 + op_dynamics::checkpoint::STATE_VERSION;
+
+const MAGIC: &[u8] = b"opsim checkpoint\n";
+
+/// The program's version a checkpoint records: a checkpoint is resumed
+/// only by the version that wrote it (another may step differently).
+const PROGRAM: &str = env!("CARGO_PKG_VERSION");
+
+/// When a run writes checkpoints (always after its last frame too).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CheckpointEvery {
+    /// After every `n`-th frame (`n >= 1`).
+    Frames(usize),
+    /// After the first frame that ends at least this many wall seconds
+    /// after the last checkpoint (or the start of the run).
+    Seconds(f64),
+}
+
+impl Default for CheckpointEvery {
+    /// About every minute of wall time: what `opsim run` does.
+    fn default() -> Self {
+        CheckpointEvery::Seconds(60.0)
+    }
+}
+
+/// The 64-bit FNV-1a hash of `bytes` (the checkpoint's integrity check
+/// and its scene hash: not a cryptographic one).
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// What identifies the run a checkpoint belongs to: the scene as built
+/// ([`BuiltScene::inputs`]), the particles it built (data files read by
+/// the scene), the frame count and the formats. Taken before the first
+/// step.
+pub(super) fn run_inputs(scene: &BuiltScene, total: usize, formats: &[FrameFormat]) -> u64 {
+    let mut bytes = encode(scene.world.particles());
+    bytes.extend_from_slice(&scene.inputs.to_le_bytes());
+    bytes.extend_from_slice(&(total as u64).to_le_bytes());
+    for f in formats {
+        bytes.extend_from_slice(f.extension().as_bytes());
+        bytes.push(b',');
+    }
+    fnv1a(&bytes)
+}
+
+/// Everything a run needs to go on after frame [`Checkpoint::frame`]
+/// (module docs).
+#[derive(Serialize, Deserialize)]
+pub(super) struct Checkpoint {
+    /// [`run_inputs`] of the run.
+    pub inputs: u64,
+    /// The scene's name (for messages).
+    pub scene: String,
+    /// The last frame written.
+    pub frame: usize,
+    /// World time of frame 0.
+    pub t0: Real,
+    pub world: WorldState,
+    pub driver: Vec<(String, Vec<u8>)>,
+    pub objects: Vec<BuiltObject>,
+    pub skins: Vec<Vec<SkinState>>,
+    pub contact: ContactStats,
+    /// The creation rules' next step and, with a fit, whether its samples
+    /// were released.
+    pub creation: Option<(u64, Option<bool>)>,
+    pub settled: bool,
+    pub tally: Tally,
+    pub health: Health,
+    pub watch: EnergyWatch,
+    /// `metrics.csv` so far, when the run writes it.
+    pub metrics: Option<String>,
+    pub writer: WriterState,
+    pub warnings: Vec<String>,
+    /// What a resumed run counts on from ([`Carried`]).
+    pub wall_seconds: f64,
+    pub setup_seconds: f64,
+    pub stages: BTreeMap<String, f64>,
+}
+
+impl Checkpoint {
+    /// Writes the checkpoint to `path` atomically.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let payload = encode(self);
+        crate::export::write_atomically(path, |w| {
+            w.write_all(MAGIC)?;
+            w.write_all(&FORMAT.to_le_bytes())?;
+            w.write_all(&(PROGRAM.len() as u32).to_le_bytes())?;
+            w.write_all(PROGRAM.as_bytes())?;
+            w.write_all(&(payload.len() as u64).to_le_bytes())?;
+            w.write_all(&fnv1a(&payload).to_le_bytes())?;
+            w.write_all(&payload)
+        })
+    }
+
+    /// Reads a checkpoint written by [`Checkpoint::write`]; the error says
+    /// what is wrong with the file.
+    pub fn read(path: &Path) -> Result<Checkpoint, String> {
+        let bytes = std::fs::read(path).map_err(|e| format!("cannot read it: {e}"))?;
+        let mut rest = bytes
+            .strip_prefix(MAGIC)
+            .ok_or("it is not an opsim checkpoint (its first line is not `opsim checkpoint`)")?;
+        let mut take = |n: usize| -> Result<&[u8], String> {
+            if rest.len() < n {
+                return Err("it is truncated (it ends inside its header)".into());
+            }
+            let (head, tail) = rest.split_at(n);
+            rest = tail;
+            Ok(head)
+        };
+        let u32_at = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        let u64_at = |b: &[u8]| {
+            let mut a = [0u8; 8];
+            a.copy_from_slice(b);
+            u64::from_le_bytes(a)
+        };
+        let format = u32_at(take(4)?);
+        let program_len = u32_at(take(4)?) as usize;
+        let program = String::from_utf8_lossy(take(program_len.min(256))?).into_owned();
+        if format != FORMAT || program != PROGRAM {
+            return Err(format!(
+                "it was written by opsim {program} (checkpoint format {format}); this opsim \
+                 {PROGRAM} resumes only its own (format {FORMAT}): run the scene again \
+                 without --resume, or resume with the opsim that wrote it"
+            ));
+        }
+        let length = u64_at(take(8)?);
+        let hash = u64_at(take(8)?);
+        if rest.len() as u64 != length {
+            return Err(format!(
+                "it is truncated or damaged: its payload has {} bytes, its header says {length}",
+                rest.len()
+            ));
+        }
+        if fnv1a(rest) != hash {
+            return Err("it is damaged: its payload does not match its checksum".into());
+        }
+        decode(rest).map_err(|e| format!("it is damaged: {e}"))
+    }
+}
+
+/// What a resumed run carries over from the run it continues: the wall
+/// seconds and stage timings up to the checkpoint.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Carried {
+    /// Seconds of the runs' clocks (the `wall_seconds` of `metrics.csv`).
+    pub wall_seconds: f64,
+    /// Seconds spent making the scene in each of them.
+    pub setup_seconds: f64,
+    pub stages: BTreeMap<String, f64>,
+}
+
+impl Checkpoint {
+    /// The checkpoint of `scene` and the runner after frame `frame`, whose
+    /// files are all on disk.
+    pub fn take(
+        scene: &BuiltScene,
+        run: &Run,
+        at: (usize, Real),
+        inputs: u64,
+        carried: Carried,
+    ) -> Checkpoint {
+        Checkpoint {
+            inputs,
+            scene: scene.name.clone(),
+            frame: at.0,
+            t0: at.1,
+            world: scene.world.state(),
+            driver: scene.driver.states(),
+            objects: scene.objects.clone(),
+            skins: scene.skins.iter().map(|s| s.state()).collect(),
+            contact: scene.contact,
+            creation: scene
+                .creation
+                .as_ref()
+                .map(|c| (c.next_step, c.fit.as_ref().map(|f| f.released))),
+            settled: scene.settled,
+            tally: run.tally.snapshot(),
+            health: run.health.clone(),
+            watch: run.watch.clone(),
+            metrics: run.metrics.as_ref().map(|m| m.text.clone()),
+            writer: run.writer.state(),
+            warnings: run.warnings.clone(),
+            wall_seconds: carried.wall_seconds,
+            setup_seconds: carried.setup_seconds,
+            stages: carried.stages,
+        }
+    }
+
+    /// Puts the checkpoint back into `scene` (built from the same scene
+    /// file as the run it was taken of) and the runner; returns the frame
+    /// to go on from, the world time of frame 0 and what the resumed run
+    /// carries over. When it fails, `scene` may be left half restored:
+    /// it is not to be run.
+    pub fn restore(
+        self,
+        scene: &mut BuiltScene,
+        run: &mut Run,
+        inputs: u64,
+    ) -> Result<(usize, Real, Carried), String> {
+        if self.inputs != inputs {
+            return Err(format!(
+                "it was taken of another run: scene {:?} with other settings, particles, \
+                 frame count or formats (resume with the same scene file and the same \
+                 --frames and --format, or run without --resume to start over)",
+                self.scene
+            ));
+        }
+        let names = |o: &[BuiltObject]| o.iter().map(|o| o.name.clone()).collect::<Vec<_>>();
+        if names(&self.objects) != names(&scene.objects)
+            || self.skins.len() != scene.skins.len()
+            || self.creation.is_some() != scene.creation.is_some()
+        {
+            return Err("its objects, skins or creation rules are not the scene's".into());
+        }
+        let damaged = |e: &dyn std::fmt::Display| format!("it does not fit the scene: {e}");
+        scene.world.restore(self.world).map_err(|e| damaged(&e))?;
+        scene
+            .driver
+            .restore(&self.driver)
+            .map_err(|e| damaged(&e))?;
+        for (skin, state) in scene.skins.iter_mut().zip(self.skins) {
+            skin.restore(state, scene.world.particles())
+                .map_err(|e| damaged(&e))?;
+        }
+        run.writer.restore(self.writer).map_err(|e| damaged(&e))?;
+        scene.objects = self.objects;
+        scene.contact = self.contact;
+        if let (Some(c), Some((next, released))) = (scene.creation.as_mut(), self.creation) {
+            c.next_step = next;
+            if let (Some(f), Some(r)) = (c.fit.as_mut(), released) {
+                f.released = r;
+            }
+        }
+        scene.settled = self.settled;
+        run.tally = self.tally;
+        run.health = self.health;
+        run.watch = self.watch;
+        if let (Some(m), Some(text)) = (run.metrics.as_mut(), self.metrics) {
+            m.text = text;
+        }
+        run.warnings = self.warnings;
+        Ok((
+            self.frame + 1,
+            self.t0,
+            Carried {
+                wall_seconds: self.wall_seconds,
+                setup_seconds: self.setup_seconds,
+                stages: self.stages,
+            },
+        ))
+    }
+}
