@@ -3,7 +3,7 @@
 //! crash as if it had never stopped (op-scene `checkpoint`, `opsim run
 //! --resume`).
 //!
-//! [`World::state`] takes everything that changes as the world steps: the
+//! [`crate::World::state`] takes everything that changes as the world steps: the
 //! particles (positions, velocities, orientations, angular velocities and
 //! every per-particle attribute, in their current slot order), the
 //! integrator's carried state (velocity Verlet's cached forces and angular
@@ -12,7 +12,7 @@
 //! pairs in the same order give the same sums to the last bit), the bonds
 //! and their remembered offsets, the pending external forces, the tools'
 //! state ([`crate::ToolSet::save_state`]), the time, the step count and the
-//! next step size. [`World::restore`] puts it into a world built from the
+//! next step size. [`crate::World::restore`] puts it into a world built from the
 //! same inputs (materials, parameters, tools): everything derived from the
 //! particle set (kernel, neighbour radius, after-step stages) is derived
 //! again, so a restored world steps bit for bit as the saved one would.

@@ -24,7 +24,7 @@ pub enum SkinError {
         index: usize,
     },
     /// A checkpoint's state of the skin does not fit it
-    /// ([`crate::ObjectSkin::restore`]).
+    /// ([`crate::object_skin::ObjectSkin::restore`]).
     #[error("{0}")]
     State(String),
 }

@@ -132,7 +132,7 @@ pub struct BuiltScene {
     pub(crate) step_estimate: Option<crate::stability::StepEstimate>,
     /// Hash of the scene as built (its every setting, after any change
     /// made in code), which a checkpoint records so that `--resume`
-    /// refuses another scene ([`crate::run`]).
+    /// refuses another scene ([`crate::run::checkpoint`]).
     pub(crate) inputs: u64,
 }
 

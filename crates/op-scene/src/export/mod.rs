@@ -152,7 +152,7 @@ pub struct FrameWriter {
 }
 
 /// What a [`FrameWriter`] remembers of the frames it wrote (a checkpoint
-/// saves it, [`crate::run`]): the state files listed in the series files,
+/// saves it, [`crate::run::checkpoint`]): the state files listed in the series files,
 /// and the skins written coarser.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WriterState {

@@ -1,5 +1,5 @@
 //! Checkpoints of a run, and resuming from one (`opsim run --resume`;
-//! docs/running.md "Checkpoints and resume").
+//! docs/checkpoints.md).
 //!
 //! A run writes `checkpoint.bin` into its output directory after a frame
 //! ([`CheckpointEvery`]: every so many frames, or once the wall time since
