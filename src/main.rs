@@ -412,7 +412,10 @@ fn run_fit(
         )
         .into());
     }
-    let data = op_scene::pointsets::read_point_set(points)?;
+    // Refused from the file's header or point lines, before its points
+    // are read, when it holds more samples than a fit takes.
+    let data =
+        op_scene::pointsets::read_point_set_at_most(points, op_modeling::fit::MAX_PARTICLES)?;
     let params = op_scene::fit::FitParams {
         spacing,
         open,
@@ -645,11 +648,13 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
     let sample = op_scene::stability::sample(&scene, path.parent())?;
     let built = &sample.built;
     let w = &built.world();
-    outln!("scene {:?} ({}): valid", scene.name, path.display());
+    // Names as long as the scene file allows are cut in what is printed.
+    let name = |n: &str| op_scene::input::excerpt(n);
+    outln!("scene {:?} ({}): valid", name(&scene.name), path.display());
     for ((o, n), b) in scene.objects.iter().zip(&counts).zip(built.objects()) {
         outln!(
             "  object {:?}: {n} particles, rest spacing {:.4}",
-            o.name,
+            name(&o.name),
             b.rest_spacing
         );
     }
@@ -673,7 +678,10 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
     );
     let e = &sample.estimate;
     let contact = e.contact.as_ref().map_or(String::new(), |(l, o)| {
-        format!(", of which skin contact at most {l:.3e}, object {o:?}")
+        format!(
+            ", of which skin contact at most {l:.3e}, object {:?}",
+            name(o)
+        )
     });
     match (e.dt_max, e.recommended()) {
         (Some(max), Some(recommended)) => outln!(
@@ -682,7 +690,7 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
             op_scene::stability::RECOMMENDED_FRACTION,
             p.scheme,
             e.lambda,
-            e.object
+            name(&e.object)
         ),
         _ => outln!(
             "  stable step: not bounded for {:?} (ω² = {:.3e} 1/time²)",

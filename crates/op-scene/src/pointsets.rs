@@ -69,7 +69,18 @@ fn format_err(file: &str, line: Option<usize>, message: impl Into<String>) -> Po
 /// [`MAX_POINT_FILE_BYTES`], an unknown extension, malformed content, no
 /// point, or a non-finite value.
 pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
-    let set = read_points(path)?;
+    read_point_set_at_most(path, usize::MAX)
+}
+
+/// [`read_point_set`], refusing a file of more than `max_points` points
+/// before its points are parsed: from a PLY file's header, from the point
+/// lines of an `.xyz` or `.obj` file (`opsim fit` reads at most
+/// [`op_modeling::fit::MAX_PARTICLES`] samples).
+///
+/// # Errors
+/// As [`read_point_set`], and more points than `max_points`.
+pub fn read_point_set_at_most(path: &Path, max_points: usize) -> Result<PointSet, PointSetError> {
+    let set = read_points_at_most(path, max_points)?;
     if set.positions.is_empty() {
         return Err(format_err(
             &path.display().to_string(),
@@ -88,6 +99,11 @@ pub fn read_point_set(path: &Path) -> Result<PointSet, PointSetError> {
 /// [`MAX_POINT_FILE_BYTES`], an unknown extension, malformed content or a
 /// non-finite value.
 pub fn read_points(path: &Path) -> Result<PointSet, PointSetError> {
+    read_points_at_most(path, usize::MAX)
+}
+
+/// [`read_points`] with the limit of [`read_point_set_at_most`].
+fn read_points_at_most(path: &Path, max_points: usize) -> Result<PointSet, PointSetError> {
     let file = path.display().to_string();
     let ext = path
         .extension()
@@ -112,8 +128,16 @@ pub fn read_points(path: &Path) -> Result<PointSet, PointSetError> {
     };
     let bytes = strip_bom(&bytes);
     Ok(match ext.as_str() {
-        "ply" => parse_ply(bytes, &file)?,
+        "ply" => parse_ply_at_most(bytes, &file, max_points)?,
         _ => {
+            let lines = point_lines(bytes, ext == "obj");
+            if lines > max_points {
+                return Err(format_err(
+                    &file,
+                    None,
+                    format!("it has {lines} point lines, more than the {max_points} allowed"),
+                ));
+            }
             let text = std::str::from_utf8(bytes)
                 .map_err(|e| format_err(&file, None, format!("not UTF-8 text: {e}")))?;
             if ext == "xyz" {
@@ -259,7 +283,25 @@ pub fn parse_obj(text: &str, file: &str) -> Result<PointSet, PointSetError> {
 }
 
 mod ply;
-pub use ply::parse_ply;
+pub use ply::{parse_ply, parse_ply_at_most};
+
+/// The lines of a text point set that can hold a point (one pass over the
+/// bytes, before parsing): `v` lines of an OBJ file, lines of an `.xyz`
+/// file that are neither blank nor `#` comments.
+fn point_lines(bytes: &[u8], obj: bool) -> usize {
+    bytes
+        .split(|&b| b == b'\n')
+        .filter(|line| {
+            let start = line.iter().position(|b| !b.is_ascii_whitespace());
+            let line = start.map_or(&[][..], |s| &line[s..]);
+            if obj {
+                line.len() > 1 && line[0] == b'v' && line[1].is_ascii_whitespace()
+            } else {
+                !line.is_empty() && line[0] != b'#'
+            }
+        })
+        .count()
+}
 
 #[cfg(test)]
 mod tests {
@@ -456,5 +498,72 @@ mod tests {
         let source = std::error::Error::source(&e).expect("a source").to_string();
         assert!(!e.to_string().contains(&source), "{e} / {source}");
         assert!(e.to_string().contains("p.xyz"), "{e}");
+    }
+
+    /// A PLY whose header declares fewer rows than its data holds is
+    /// refused (it used to be fitted on the header's count, the rest
+    /// ignored), in ascii and in binary, and elements after the vertices
+    /// are read, not mistaken for extra data.
+    #[test]
+    fn ply_data_beyond_the_header_counts_is_refused() {
+        let header = |n: usize, format: &str| {
+            format!(
+                "ply\nformat {format} 1.0\nelement vertex {n}\nproperty float x\n\
+                 property float y\nproperty float z\nelement face 1\n\
+                 property list uchar int vertex_indices\nend_header\n"
+            )
+        };
+        let ascii = format!("{}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", header(3, "ascii"));
+        assert_eq!(
+            parse_ply(ascii.as_bytes(), "a.ply")
+                .unwrap()
+                .positions
+                .len(),
+            3
+        );
+        let short = ascii.replace("vertex 3", "vertex 2");
+        let e = parse_ply(short.as_bytes(), "a.ply")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("after the rows its header declares"), "{e}");
+        let mut binary = header(3, "binary_little_endian").into_bytes();
+        for c in [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+            binary.extend_from_slice(&c.to_le_bytes());
+        }
+        binary.push(3);
+        for i in [0i32, 1, 2] {
+            binary.extend_from_slice(&i.to_le_bytes());
+        }
+        assert_eq!(parse_ply(&binary, "b.ply").unwrap().positions.len(), 3);
+        binary.extend_from_slice(&[0; 12]);
+        let e = parse_ply(&binary, "b.ply").unwrap_err().to_string();
+        assert!(e.contains("12 bytes of data after"), "{e}");
+    }
+
+    /// A point limit is applied from a PLY header (before the data, which
+    /// here does not even exist) and from the point lines of text formats.
+    #[test]
+    fn the_point_limit_is_applied_before_the_points_are_read() {
+        let ply = "ply\nformat binary_little_endian 1.0\nelement vertex 25000000\n\
+                   property float x\nproperty float y\nproperty float z\nend_header\n";
+        let e = parse_ply_at_most(ply.as_bytes(), "big.ply", 1_000_000)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("declares 25000000 points, more than the 1000000"),
+            "{e}"
+        );
+        let dir = std::env::temp_dir().join(format!("op-pointset-limit-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let xyz = dir.join("p.xyz");
+        std::fs::write(&xyz, "# three points\n0 0 0\n1 0 0\n\n0 1 0\n").unwrap();
+        assert_eq!(read_point_set_at_most(&xyz, 3).unwrap().positions.len(), 3);
+        let e = read_point_set_at_most(&xyz, 2).unwrap_err().to_string();
+        assert!(e.contains("3 point lines, more than the 2"), "{e}");
+        let obj = dir.join("p.obj");
+        std::fs::write(&obj, "v 0 0 0\nvn 0 0 1\nv 1 0 0\nf 1 2 1\n").unwrap();
+        assert_eq!(read_point_set_at_most(&obj, 2).unwrap().positions.len(), 2);
+        assert!(read_point_set_at_most(&obj, 1).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -51,10 +51,17 @@ impl Sequence {
     }
 }
 
+/// Longest stem, in bytes: a frame file's name (`<stem>_<frame>.<ext>`)
+/// and the temporary name it is written under (`.<file>.<pid>-<n>-<ns>.opsim-tmp`,
+/// [`super::write_atomically`]) stay far below the 255 bytes file systems
+/// allow in one path component, whatever the object's name.
+pub const MAX_STEM: usize = 96;
+
 /// Gives each name a file-system-safe stem, unique ignoring case: every
 /// character other than ASCII letters, digits, `-`, `_` and `.` becomes
-/// `_`, a leading `.` becomes `_`, and a stem already taken gets `-2`,
-/// `-3`, ... appended.
+/// `_`, a leading `.` becomes `_`, the stem is cut to [`MAX_STEM`] bytes,
+/// and a stem already taken gets `-2`, `-3`, ... appended. The name itself
+/// is kept whole (in `summary.json` `files.sequences`).
 pub fn sequences(named: impl IntoIterator<Item = (String, SequenceKind)>) -> Vec<Sequence> {
     let mut taken = std::collections::HashSet::new();
     let mut out = Vec::new();
@@ -72,6 +79,8 @@ pub fn sequences(named: impl IntoIterator<Item = (String, SequenceKind)>) -> Vec
         if base.is_empty() || base.starts_with('.') {
             base.insert(0, '_');
         }
+        // ASCII only: cutting at a byte is cutting at a character.
+        base.truncate(MAX_STEM);
         let mut stem = base.clone();
         let mut k = 1;
         while !taken.insert(stem.to_ascii_lowercase()) {
@@ -121,5 +130,24 @@ mod tests {
             s[0].path(Path::new("o"), 7, FrameFormat::PLY),
             Path::new("o/frames/sheet/sheet_00007.ply")
         );
+    }
+
+    /// A name of thousands of characters gives a stem that fits a file
+    /// name with room for the frame number and the temporary suffix; two
+    /// long names alike in their first bytes stay apart.
+    #[test]
+    fn long_names_give_short_unique_stems() {
+        let long = "a".repeat(5000);
+        let s = sequences([
+            (long.clone(), SequenceKind::Particles),
+            (format!("{long}b"), SequenceKind::Particles),
+        ]);
+        assert_eq!(s[0].stem.len(), MAX_STEM);
+        assert_eq!(s[1].stem, format!("{}-2", &s[0].stem));
+        assert_eq!(s[0].name, long, "the name is kept whole");
+        let file = s[1].path(Path::new(""), 999_999, FrameFormat::PLY);
+        let file = file.file_name().unwrap().to_string_lossy().len();
+        // `.{file}.{pid}-{counter}-{nanos}.opsim-tmp`: at most 54 more.
+        assert!(file + 54 < 255, "{file}");
     }
 }

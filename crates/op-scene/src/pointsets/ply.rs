@@ -78,12 +78,32 @@ struct Element {
 /// their normals when all three are present. Other elements (faces, ...)
 /// are skipped.
 pub fn parse_ply(bytes: &[u8], file: &str) -> Result<PointSet, PointSetError> {
+    parse_ply_at_most(bytes, file, usize::MAX)
+}
+
+/// [`parse_ply`], refusing from the header a file of more than
+/// `max_points` vertices, before any of its data is read.
+pub fn parse_ply_at_most(
+    bytes: &[u8],
+    file: &str,
+    max_points: usize,
+) -> Result<PointSet, PointSetError> {
     let bytes = strip_bom(bytes);
     let header = PlyHeader::parse(bytes, file)?;
     let Some(vertex_index) = header.elements.iter().position(|e| e.name == "vertex") else {
         return Err(format_err(file, None, "no `vertex` element"));
     };
     let vertex = &header.elements[vertex_index];
+    if vertex.count > max_points {
+        return Err(format_err(
+            file,
+            None,
+            format!(
+                "its header declares {} points, more than the {max_points} allowed",
+                vertex.count
+            ),
+        ));
+    }
     let find = |n: &str| {
         vertex
             .properties
@@ -247,7 +267,7 @@ fn binary_rows(
 ) -> Result<Vec<Vec<Real>>, PointSetError> {
     let mut rows = Vec::with_capacity(elements[vertex_index].count.min(1 << 24));
     let truncated = || format_err(file, None, "binary data ends early");
-    for (k, element) in elements.iter().enumerate().take(vertex_index + 1) {
+    for (k, element) in elements.iter().enumerate() {
         if element.properties.is_empty() {
             // Rows of no bytes (the vertex element has x, y and z):
             // nothing to skip, however large the count.
@@ -284,7 +304,23 @@ fn binary_rows(
             }
         }
     }
+    if !data.is_empty() {
+        return Err(beyond_header(file, data.len(), "bytes"));
+    }
     Ok(rows)
+}
+
+/// The error of data beyond the rows the header declares: a header count
+/// smaller than the data would silently drop points.
+fn beyond_header(file: &str, extra: usize, unit: &str) -> PointSetError {
+    format_err(
+        file,
+        None,
+        format!(
+            "{extra} {unit} of data after the rows its header declares: an `element` count \
+             is smaller than the data (fix the counts)"
+        ),
+    )
 }
 
 /// The values of every row of element `vertex_index` in ascii `data` (the
@@ -303,7 +339,7 @@ fn ascii_rows(
         line_no += 1;
         (line_no, l)
     });
-    for (k, element) in header.elements.iter().enumerate().take(vertex_index + 1) {
+    for (k, element) in header.elements.iter().enumerate() {
         for _ in 0..element.count {
             let Some((line, l)) = lines.next() else {
                 return Err(format_err(
@@ -344,6 +380,10 @@ fn ascii_rows(
                     .collect::<Result<Vec<_>, _>>()?,
             );
         }
+    }
+    let extra = lines.filter(|(_, l)| !l.trim().is_empty()).count();
+    if extra > 0 {
+        return Err(beyond_header(file, extra, "lines"));
     }
     Ok(rows)
 }
