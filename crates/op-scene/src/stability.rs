@@ -63,6 +63,49 @@ use crate::schema::Scene;
 
 /// Largest number of particles per object in the sample.
 pub const SAMPLE_PARTICLES: usize = 400;
+/// Largest number of particles in the whole sample: a scene of many
+/// objects samples fewer particles of each (at least
+/// [`SAMPLE_PARTICLES_MIN`]), so the sample stays bounded in total.
+pub const SAMPLE_TOTAL: usize = 2000;
+/// Fewest particles per object in the sample.
+pub const SAMPLE_PARTICLES_MIN: usize = 8;
+
+/// Largest number of neighbour pairs in the sample (module docs).
+pub const SAMPLE_PAIRS: usize = 20_000;
+
+/// Removes from each object of `built` all but the `n` particles nearest
+/// its first one (by rest position; ties by id).
+fn trim(built: &mut crate::BuiltScene, n: usize) -> Result<(), op_dynamics::WorldError> {
+    let p = built.world.particles();
+    let mut extra = Vec::new();
+    for o in &built.objects {
+        let live: Vec<(u32, Point3)> = o
+            .ids
+            .iter()
+            .zip(&o.rest)
+            .filter(|(&id, _)| p.slot_of(id).is_some())
+            .map(|(&id, x)| (id, *x))
+            .collect();
+        if live.len() > n {
+            let first = live[0].1;
+            let mut by_distance: Vec<(Real, u32)> = live
+                .iter()
+                .map(|(id, x)| ((x - first).norm(), *id))
+                .collect();
+            by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            extra.extend(by_distance[n..].iter().map(|e| e.1));
+        }
+    }
+    if !extra.is_empty() {
+        built.world.remove_particles(&extra)?;
+    }
+    Ok(())
+}
+
+/// The sample's particles per object for a scene of `objects` objects.
+fn per_object(objects: usize) -> usize {
+    (SAMPLE_TOTAL / objects.max(1)).clamp(SAMPLE_PARTICLES_MIN, SAMPLE_PARTICLES)
+}
 /// Power iterations.
 const ITERATIONS: usize = 60;
 /// The recommended step as a fraction of the estimated edge of stability
@@ -140,10 +183,10 @@ pub fn largest_stable_step(scheme: &Scheme, lambda: Real, damping_rate: Real) ->
 }
 
 /// A generator of the same spacing and curvature as `g`, with at most
-/// about [`SAMPLE_PARTICLES`] particles (points files and lists are kept
-/// whole here and trimmed after the build).
-fn sample_generator(g: &Generator) -> Generator {
-    let n = SAMPLE_PARTICLES;
+/// about `n` particles (a list keeps the `n` particles nearest its first
+/// one, as the trim after the build does; points files are kept whole here
+/// and trimmed after the build).
+fn sample_generator(g: &Generator, n: usize) -> Generator {
     let mut g = g.clone();
     match &mut g {
         Generator::Spiral { count, .. } | Generator::Chain { count, .. } => {
@@ -187,7 +230,21 @@ fn sample_generator(g: &Generator) -> Generator {
                 *major = (*major * f).max(2.0 * *minor);
             }
         }
-        Generator::Points { .. } | Generator::List { .. } => {}
+        Generator::List { particles } => {
+            if particles.len() > n {
+                let first = Point3::from(particles[0].position);
+                let mut by_distance: Vec<(Real, usize)> = particles
+                    .iter()
+                    .enumerate()
+                    .map(|(k, q)| ((Point3::from(q.position) - first).norm(), k))
+                    .collect();
+                by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                let mut keep: Vec<usize> = by_distance[..n].iter().map(|e| e.1).collect();
+                keep.sort_unstable();
+                *particles = keep.into_iter().map(|k| particles[k].clone()).collect();
+            }
+        }
+        Generator::Points { .. } => {}
     }
     g
 }
@@ -197,8 +254,9 @@ fn sample_generator(g: &Generator) -> Generator {
 /// no creation, no skin, no settle phase.
 fn sample_scene(scene: &Scene) -> Scene {
     let mut s = scene.clone();
+    let n = per_object(s.objects.len());
     for o in &mut s.objects {
-        o.generator = sample_generator(&o.generator);
+        o.generator = sample_generator(&o.generator, n);
         o.overrides.clear();
         o.skin = None;
     }
@@ -213,7 +271,9 @@ fn sample_scene(scene: &Scene) -> Scene {
 /// the whole scene.
 pub struct Sample {
     /// The sample, built (each object at most [`SAMPLE_PARTICLES`]
-    /// particles; its world holds the scene's materials, kernel and tools).
+    /// particles, fewer in a scene of more than five objects:
+    /// [`SAMPLE_TOTAL`]; its world holds the scene's materials, kernel and
+    /// tools).
     pub built: crate::BuiltScene,
     /// The stable-step estimate.
     pub estimate: StepEstimate,
@@ -240,31 +300,31 @@ pub fn estimate(scene: &Scene, base_dir: Option<&Path>) -> Result<StepEstimate, 
 pub fn sample(scene: &Scene, base_dir: Option<&Path>) -> Result<Sample, SceneError> {
     let sample = sample_scene(scene);
     let mut built = sample.build_world(base_dir, None)?;
-    let world = &mut built.world;
+    let failed = |e: op_dynamics::WorldError| SceneError::Build {
+        file: scene.origin().to_string(),
+        message: format!("sampling the scene for its stable step: {e}"),
+    };
     // Trim points files and lists to the particles nearest each object's
     // first one.
-    let mut extra = Vec::new();
-    for o in &built.objects {
-        if o.ids.len() > SAMPLE_PARTICLES {
-            let first = o.rest[0];
-            let mut by_distance: Vec<(Real, u32)> = o
-                .ids
-                .iter()
-                .zip(&o.rest)
-                .map(|(&id, x)| ((x - first).norm(), id))
-                .collect();
-            by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            extra.extend(by_distance[SAMPLE_PARTICLES..].iter().map(|e| e.1));
+    let mut n = per_object(built.objects.len());
+    trim(&mut built, n).map_err(failed)?;
+    // A dense cloud (many particles within one cut-off) has pairs growing
+    // as the square of its particles: fewer particles per object until
+    // the sample's pairs are bounded too.
+    for _ in 0..8 {
+        built.world.evaluate_forces();
+        let pairs = built
+            .world
+            .neighbours()
+            .map_or(0, |l| l.pairs().num_pairs());
+        if pairs <= SAMPLE_PAIRS || n <= SAMPLE_PARTICLES_MIN {
+            break;
         }
+        let shrink = (SAMPLE_PAIRS as Real / pairs as Real).sqrt();
+        n = ((n as Real * shrink) as usize).max(SAMPLE_PARTICLES_MIN);
+        trim(&mut built, n).map_err(failed)?;
     }
-    if !extra.is_empty() {
-        world
-            .remove_particles(&extra)
-            .map_err(|e| SceneError::Build {
-                file: scene.origin().to_string(),
-                message: format!("sampling the scene for its stable step: {e}"),
-            })?;
-    }
+    let world = &mut built.world;
     let (lambda, slot) = largest_eigenvalue(world);
     let p = world.particles();
     let object = slot
