@@ -8,9 +8,11 @@
 //! `OPSIM_FUZZ_MUTANTS` (default 240) and `OPSIM_FUZZ_SEED` (default 13)
 //! set the run; the counts by class are printed (`--nocapture`).
 
+mod fuzz_support;
+
+use fuzz_support::{non_finite_outputs, Outcome};
 use op_test_support::Rng;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -142,105 +144,24 @@ fn mutate(text: &str, json: bool, rng: &mut Rng) -> (String, String) {
     (text, what.join(", "))
 }
 
-/// How a mutant ended.
-#[derive(Debug)]
-enum Outcome {
-    Exit(i32),
-    Timeout,
-}
-
 /// Runs `opsim run` on `scene` into `out` with the time bound.
 fn run(scene: &Path, out: &Path) -> (Outcome, String, f64) {
-    let start = Instant::now();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_opsim"))
-        .args([
+    let (outcome, msg, secs, _) = fuzz_support::opsim(
+        &[
             "run",
             scene.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
-        ])
-        .args([
             "--frames",
             "3",
             "--threads",
             "1",
             "--max-particle-steps",
             BUDGET,
-        ])
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run opsim");
-    let stderr = child.stderr.take().unwrap();
-    let reader = std::thread::spawn(move || {
-        use std::io::Read;
-        let mut s = String::new();
-        let _ = std::io::BufReader::new(stderr)
-            .take(1 << 20)
-            .read_to_string(&mut s);
-        s
-    });
-    let outcome = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break Outcome::Exit(status.code().unwrap_or(-1));
-        }
-        if start.elapsed() > TIME_BOUND {
-            let _ = child.kill();
-            let _ = child.wait();
-            break Outcome::Timeout;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    let msg = reader.join().unwrap_or_default();
-    (outcome, msg, start.elapsed().as_secs_f64())
-}
-
-/// Files under `out` holding a non-finite number: a `null` value in
-/// `summary.json` (serde's form of NaN and infinity), a field of
-/// `metrics.csv` or a coordinate of a frame that does not parse as a finite
-/// number.
-fn non_finite_outputs(out: &Path) -> Vec<PathBuf> {
-    fn has_null(v: &serde_json::Value) -> bool {
-        match v {
-            serde_json::Value::Null => true,
-            serde_json::Value::Array(a) => a.iter().any(has_null),
-            serde_json::Value::Object(o) => o.values().any(has_null),
-            _ => false,
-        }
-    }
-    let finite = |t: &str| t.parse::<f64>().is_ok_and(f64::is_finite);
-    let mut bad = Vec::new();
-    let summary = out.join("summary.json");
-    if let Ok(t) = std::fs::read_to_string(&summary) {
-        if serde_json::from_str::<serde_json::Value>(&t).map_or(true, |v| has_null(&v)) {
-            bad.push(summary);
-        }
-    }
-    let metrics = out.join("metrics.csv");
-    if let Ok(t) = std::fs::read_to_string(&metrics) {
-        if !t.lines().skip(1).flat_map(|l| l.split(',')).all(finite) {
-            bad.push(metrics);
-        }
-    }
-    // Frame files: frames/<stem>/<stem>_00000.obj, one folder per object.
-    let files = std::fs::read_dir(out.join("frames"))
-        .into_iter()
-        .flatten()
-        .flat_map(|e| std::fs::read_dir(e.unwrap().path()).into_iter().flatten())
-        .map(|e| e.unwrap().path());
-    for f in files {
-        let t = std::fs::read_to_string(&f).unwrap_or_default();
-        let ok = t
-            .lines()
-            .filter(|l| l.starts_with("v ") || l.starts_with("vn "))
-            .flat_map(|l| l.split_whitespace().skip(1))
-            .all(finite);
-        if !ok {
-            bad.push(f);
-        }
-    }
-    bad
+        ],
+        TIME_BOUND,
+    );
+    (outcome, msg, secs)
 }
 
 #[test]
