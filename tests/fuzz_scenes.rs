@@ -15,7 +15,7 @@ use op_test_support::Rng;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Wall-clock bound of one mutant's run.
 const TIME_BOUND: Duration = Duration::from_secs(90);
