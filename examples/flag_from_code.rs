@@ -40,7 +40,7 @@ fn flag() -> Scene {
             w.duration = 12.0;
             w.frame_rate = 2.0;
             w.gravity = [0.0, 0.0, -0.2];
-            w.linear_damping = 0.1;
+            w.linear_damping = 0.1.into();
             w.angular_damping = 0.05;
         })
         // `cloth` is a preset material: no materials section needed.

@@ -27,7 +27,7 @@ fn scene() -> Scene {
             w.dt = 0.004;
             w.duration = 6.0;
             w.gravity = [0.0, 0.0, -1.0];
-            w.linear_damping = 0.2;
+            w.linear_damping = 0.2.into();
             w.angular_damping = 0.1;
         })
         // The cohesion force of seed 002 §3 holds the ball together.

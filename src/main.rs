@@ -639,12 +639,36 @@ fn print_profile(s: &op_scene::Summary) {
     outln!("{:<12} {:>10.4} {:>6.1}%", "wall", s.wall_seconds, 100.0);
 }
 
+/// Particle-steps `opsim check` spends at most on finding the slowest mode
+/// of a scene that does not ask for it (a few seconds).
+const CHECK_MODE_WORK: f64 = 1e8;
+
 /// `opsim check`: validates the scene, builds a bounded sample of it
 /// (`op_scene::stability`) and prints what it enables, its objects and the
-/// stable-step estimate, with a warning when `dt` exceeds it.
+/// stable-step estimate, with a warning when `dt` exceeds it, then the
+/// slowest mode and its critical damping (`op_scene::damping`) when the
+/// scene is small enough. A scene with `linear_damping: "Critical"` is
+/// checked as it runs, with the numbers of the rule (or refused).
 fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
-    let scene = op_scene::load_scene_with(path, limits, None)?;
-    let counts = scene.validate(path.parent())?;
+    let written = op_scene::load_scene_with(path, limits, None)?;
+    let counts = written.validate(path.parent())?;
+    // The slowest mode and its critical damping, for any scene small
+    // enough; a scene that asks for them runs with them (or cannot run).
+    let mut as_critical = written.clone();
+    as_critical.world.linear_damping = op_scene::Damping::Critical;
+    as_critical.world.angular_damping = 0.0;
+    let asks = written.world.linear_damping.is_critical();
+    let budget = if asks {
+        written.limits.max_particle_steps
+    } else {
+        CHECK_MODE_WORK
+    };
+    let found = op_scene::damping::resolve_within(&as_critical, path.parent(), budget);
+    let (critical, scene) = match found {
+        Ok((resolved, c)) => (Ok(c), if asks { resolved } else { written.clone() }),
+        Err(e) if asks => return Err(e.into()),
+        Err(e) => (Err(e), written.clone()),
+    };
     let sample = op_scene::stability::sample(&scene, path.parent())?;
     let built = &sample.built;
     let w = &built.world();
@@ -714,10 +738,78 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
     for warning in health {
         eprintln!("opsim: warning: {warning}");
     }
+    print_critical_damping(&written, critical.as_ref());
     if let Some(warning) = e.warning(scene.world.dt, &scene.world.integrator) {
         eprintln!("opsim: warning: {warning}");
     }
     Ok(())
+}
+
+/// `opsim check`'s lines on the slowest deformation mode and its critical
+/// damping (`op_scene::damping`), for the scene as `written`: what
+/// `linear_damping: "Critical"` resolves to (or why it cannot), and how the
+/// scene's own damping and times compare.
+fn print_critical_damping(
+    written: &op_scene::Scene,
+    critical: Result<&op_scene::damping::CriticalDamping, &op_scene::SceneError>,
+) {
+    let c = match critical {
+        Ok(c) => c,
+        Err(e) => {
+            let e = e.to_string();
+            let why = e.split("\"Critical\": ").last().unwrap_or(&e);
+            outln!("  slowest mode: not found: {why}");
+            return;
+        }
+    };
+    let (m, tau) = (&c.mode, c.tau);
+    outln!(
+        "  slowest mode: ω1 = {:.4} 1/time (τ = 1/ω1 = {tau:.4}, period 2π/ω1 = {:.4}), among {} {} deformation modes of the settled scene",
+        m.omega1,
+        std::f64::consts::TAU * tau,
+        m.modes,
+        match m.basis {
+            op_scene::modes::Basis::Planar => "planar (in z = 0)",
+            op_scene::modes::Basis::Spatial => "spatial",
+        },
+    );
+    let release = c.release.map_or_else(
+        || "no force window ends before the run does: duration unchanged".to_string(),
+        |r| {
+            format!(
+                "duration {:.4} (at least 20 τ after the last force window ends at {r})",
+                c.duration
+            )
+        },
+    );
+    outln!(
+        "  critical damping (Lombardo & Puech §5): linear_damping {:.4} (2 ω1 m, m = {:.4}), angular {:.4} (2 ω1 I, I = {:.4}); settle {:.4} (at least 12 τ); {release}",
+        c.linear_damping,
+        m.mass,
+        c.angular_damping,
+        m.inertia,
+        c.settle,
+    );
+    let w = &written.world;
+    match w.linear_damping.value() {
+        None => outln!(
+            "  linear_damping: \"Critical\": the scene runs with these numbers ({} settle passes)",
+            c.passes
+        ),
+        Some(beta) => {
+            let after = c.release.map_or_else(String::new, |r| {
+                format!(
+                    ", {:.1} τ after its last force window",
+                    (w.duration - r) / tau
+                )
+            });
+            outln!(
+                "  the scene as written: linear_damping {beta} (damping ratio of the slowest mode {:.2}), settle {:.1} τ{after}; `linear_damping: \"Critical\"` runs with the numbers above",
+                beta / (2.0 * m.omega1 * m.mass),
+                w.settle / tau,
+            );
+        }
+    }
 }
 
 #[cfg(test)]

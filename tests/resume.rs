@@ -93,9 +93,18 @@ impl Moments {
 /// Runs `scene` uninterrupted, then again killed (SIGKILL) `kills` times
 /// at random moments and resumed after each (from scratch while no
 /// checkpoint exists yet), alternating 1 and 2 threads; the two runs must
-/// end with the same files. Returns how many runs the kills ended and how
-/// many of the restarts resumed.
-fn killed_and_resumed(scene: &str, extra: &[&str], kills: usize, seed: u64) -> (usize, usize) {
+/// end with the same files. With `first_checkpoint`, the first run is let
+/// run until it has written a checkpoint, for a scene whose making takes
+/// most of its run (so that random kills would rarely let one be written).
+/// Returns how many runs the kills ended and how many of the restarts
+/// resumed.
+fn killed_and_resumed(
+    scene: &str,
+    extra: &[&str],
+    kills: usize,
+    seed: u64,
+    first_checkpoint: bool,
+) -> (usize, usize) {
     let scene = repo().join(scene);
     let scene = scene.to_str().unwrap();
     let reference = fresh_path("resume-reference");
@@ -138,11 +147,16 @@ fn killed_and_resumed(scene: &str, extra: &[&str], kills: usize, seed: u64) -> (
         // checkpoints included; the first checkpoint comes after frame 0,
         // so a run that has none yet (the spiral settles for a third of its
         // run before frame 0) gets long enough to reach it.
-        let share = if resume {
+        let share = if resume || first_checkpoint {
             2.0 * moments.next() / kills.max(1) as f64
         } else {
             0.4 + 0.4 * moments.next()
         };
+        if first_checkpoint && !resume {
+            while !dir.join("checkpoint.bin").exists() && child.try_wait().unwrap().is_none() {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        }
         let wait = uninterrupted.mul_f64(share);
         std::thread::sleep(wait.max(Duration::from_millis(5)));
         let _ = child.kill();
@@ -185,6 +199,7 @@ fn a_skinned_scene_with_creation_and_erasers_resumes_bit_identically() {
         &["--format", "obj,ply,vtu", "--allow-breakup"],
         10,
         7,
+        false,
     );
     assert!(killed >= 5, "only {killed} kills landed in a run");
     assert!(resumed >= 3, "only {resumed} restarts found a checkpoint");
@@ -193,9 +208,31 @@ fn a_skinned_scene_with_creation_and_erasers_resumes_bit_identically() {
 /// The demo spiral over its 161 frames, killed 20 times.
 #[test]
 fn a_long_run_killed_twenty_times_resumes_bit_identically() {
-    let (killed, resumed) = killed_and_resumed("scenes/spiral.ron", &[], 20, 11);
+    let (killed, resumed) = killed_and_resumed("scenes/spiral.ron", &[], 20, 11, false);
     assert!(killed >= 10, "only {killed} kills landed in a run");
     assert!(resumed >= 10, "only {resumed} restarts found a checkpoint");
+}
+
+/// A scene whose damping is resolved at build (`linear_damping:
+/// "Critical"`, `op_scene::damping`): every restart resolves it again to
+/// the same numbers, so the resumed run is the uninterrupted one.
+#[test]
+fn a_critically_damped_scene_resumes_bit_identically() {
+    let text = std::fs::read_to_string(repo().join("tests/data/user_spiral_14_quadratic.ron"))
+        .expect("read the user's spiral");
+    let fixed = "        linear_damping: 0.3,\n        angular_damping: 0.05,\n";
+    assert!(text.contains(fixed), "the recipe's damping lines");
+    let dir = temp_dir("resume-critical");
+    let scene = dir.join("critical.ron");
+    std::fs::write(
+        &scene,
+        text.replace(fixed, "        linear_damping: \"Critical\",\n"),
+    )
+    .expect("write the scene");
+    let (killed, resumed) = killed_and_resumed(scene.to_str().unwrap(), &[], 8, 5, true);
+    assert!(killed >= 4, "only {killed} kills landed in a run");
+    assert!(resumed >= 3, "only {resumed} restarts found a checkpoint");
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A finished short run of the spiral with a checkpoint at its end, in a

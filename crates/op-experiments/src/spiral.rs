@@ -396,7 +396,7 @@ impl SpiralRecipe {
             duration: s.end,
             settle: s.settle,
             frame_rate: self.frame_rate / units.time,
-            linear_damping: self.linear_damping * units.mass / units.time,
+            linear_damping: (self.linear_damping * units.mass / units.time).into(),
             angular_damping: self.angular_damping * units.mass * units.length * units.length
                 / units.time,
             ..WorldSettings::default()

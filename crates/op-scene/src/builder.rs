@@ -2,6 +2,7 @@
 //! indices, and build an op-dynamics [`World`] holding only what the scene
 //! uses (README "Running scenes").
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -15,6 +16,7 @@ use op_modeling::{Role, Tool, ToolParams};
 
 use crate::built_scene::{BuiltObject, BuiltScene};
 use crate::creation::CreationState;
+use crate::damping::CriticalDamping;
 use crate::error::SceneError;
 use crate::fit::{DataNeighbourhood, SceneFit};
 use crate::generators::Generated;
@@ -44,12 +46,43 @@ impl Scene {
     /// [`BuiltScene::settle`] runs (the runner does it first). Coincident
     /// particles within an object are an error. `source` is stored in the
     /// result.
+    ///
+    /// A scene with `linear_damping: "Critical"` is resolved first
+    /// ([`Scene::resolved`]): settled in trial builds until its slowest
+    /// mode is known, then built with the numbers of the rule
+    /// ([`BuiltScene::critical_damping`]).
     pub fn build(
         &self,
         base_dir: Option<&Path>,
         source: Option<PathBuf>,
     ) -> Result<BuiltScene, SceneError> {
-        self.build_world(base_dir, source)
+        let clock = Instant::now();
+        let (scene, critical) = self.resolved(base_dir)?;
+        let seconds = clock.elapsed().as_secs_f64();
+        let mut built = scene.build_world(base_dir, source)?;
+        built.set_critical_damping(critical, seconds);
+        Ok(built)
+    }
+
+    /// This scene as it runs: itself, or, with `linear_damping: "Critical"`
+    /// ([`crate::schema::Damping::Critical`]), the scene with the damping,
+    /// settle phase and duration of the rule ([`crate::damping::resolve`])
+    /// and what the rule found. Validates the scene as written first.
+    ///
+    /// # Errors
+    ///
+    /// The scene's validation and build errors, a divergence while
+    /// settling, or no slowest mode to damp.
+    pub fn resolved(
+        &self,
+        base_dir: Option<&Path>,
+    ) -> Result<(Cow<'_, Scene>, Option<CriticalDamping>), SceneError> {
+        if !self.world.linear_damping.is_critical() {
+            return Ok((Cow::Borrowed(self), None));
+        }
+        self.validate(base_dir)?;
+        let (scene, critical) = crate::damping::resolve(self, base_dir)?;
+        Ok((Cow::Owned(scene), Some(critical)))
     }
 
     /// [`Scene::build`], then the stable-step estimate
@@ -63,9 +96,13 @@ impl Scene {
         base_dir: Option<&Path>,
         source: Option<PathBuf>,
     ) -> Result<BuiltScene, SceneError> {
-        let mut built = self.build_world(base_dir, source)?;
         let clock = Instant::now();
-        if let Ok(estimate) = crate::stability::estimate(self, base_dir) {
+        let (scene, critical) = self.resolved(base_dir)?;
+        let seconds = clock.elapsed().as_secs_f64();
+        let mut built = scene.build_world(base_dir, source)?;
+        built.set_critical_damping(critical, seconds);
+        let clock = Instant::now();
+        if let Ok(estimate) = crate::stability::estimate(&scene, base_dir) {
             built.step_warnings = estimate
                 .warning(self.world.dt, &self.world.integrator)
                 .into_iter()
@@ -79,7 +116,8 @@ impl Scene {
     }
 
     /// The build of [`Scene::build`] (the stable-step estimate builds its
-    /// sample of the scene through this).
+    /// sample of the scene through this), without resolving
+    /// `linear_damping: "Critical"` (which counts as 0 here).
     pub(crate) fn build_world(
         &self,
         base_dir: Option<&Path>,
@@ -176,6 +214,7 @@ impl Scene {
             breakup_accepted: false,
             step_estimate: None,
             inputs: crate::run::checkpoint::fnv1a(&serde_json::to_vec(self).unwrap_or_default()),
+            critical_damping: None,
         })
     }
 

@@ -120,8 +120,9 @@ pub struct BuiltScene {
     /// Wall seconds spent making the scene before its first step, by
     /// part: `build` (validation, particles, world, skins, tools:
     /// [`crate::Scene::build`]), then `estimate` (the stable-step estimate
-    /// of [`crate::Scene::build_for_run`]) when it ran. The runner counts
-    /// them in the run's wall time and its stage table.
+    /// of [`crate::Scene::build_for_run`]) when it ran; `damping` first
+    /// when `linear_damping: "Critical"` was resolved ([`crate::damping`]).
+    /// The runner counts them in the run's wall time and its stage table.
     pub(crate) setup_seconds: Vec<(String, f64)>,
     /// The scene's expected warnings ([`crate::Scene::expected_warnings`]).
     pub(crate) expected_warnings: Vec<String>,
@@ -134,6 +135,31 @@ pub struct BuiltScene {
     /// made in code), which a checkpoint records so that `--resume`
     /// refuses another scene ([`crate::run::checkpoint`]).
     pub(crate) inputs: u64,
+    /// What `linear_damping: "Critical"` resolved to, when the scene asked
+    /// for it ([`crate::damping`]).
+    pub(crate) critical_damping: Option<crate::damping::CriticalDamping>,
+}
+
+impl BuiltScene {
+    /// What `linear_damping: "Critical"` resolved to ([`crate::damping`]:
+    /// the slowest mode, the damping, settle phase and duration this scene
+    /// runs with), when the scene asked for it.
+    pub fn critical_damping(&self) -> Option<&crate::damping::CriticalDamping> {
+        self.critical_damping.as_ref()
+    }
+
+    /// Records what the rule resolved to and the seconds it took (a
+    /// `damping` part of [`BuiltScene::setup_seconds`]), when it ran.
+    pub(crate) fn set_critical_damping(
+        &mut self,
+        critical: Option<crate::damping::CriticalDamping>,
+        seconds: f64,
+    ) {
+        if critical.is_some() {
+            self.setup_seconds.insert(0, ("damping".into(), seconds));
+        }
+        self.critical_damping = critical;
+    }
 }
 
 /// Reading the built scene: what it holds, as built and as it runs.

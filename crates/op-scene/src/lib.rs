@@ -8,6 +8,7 @@
 
 pub mod built_scene;
 pub mod creation;
+pub mod damping;
 pub mod export;
 pub mod features;
 pub mod fit;
@@ -41,6 +42,6 @@ pub use error::SceneError;
 pub use generators::{CurvatureLaw, Generator};
 pub use load::{build_scene_file, load_scene, load_scene_with, parse_scene, Format};
 pub use schema::{
-    DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, ToolSpec, WorkLimits,
-    WorldSettings,
+    Damping, DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, ToolSpec,
+    WorkLimits, WorldSettings,
 };

@@ -5,6 +5,6 @@ pub use crate::export::FrameFormat;
 pub use crate::features::{SpeedClamp, Wind};
 pub use crate::skins::{SkinPrimitive, SkinSpec};
 pub use crate::{
-    load_scene, run, BuiltScene, Generator, ObjectSpec, Outputs, ParticleOutput, RunOptions, Scene,
-    SceneError, Summary, ToolSpec, WorldSettings,
+    load_scene, run, BuiltScene, Damping, Generator, ObjectSpec, Outputs, ParticleOutput,
+    RunOptions, Scene, SceneError, Summary, ToolSpec, WorldSettings,
 };

@@ -169,7 +169,12 @@ mod tests {
                 p.name,
                 p.scene
             );
-            assert_eq!(scene.world.linear_damping, p.linear_damping, "{}", p.name);
+            assert_eq!(
+                scene.world.linear_damping,
+                p.linear_damping.into(),
+                "{}",
+                p.name
+            );
             assert_eq!(scene.world.angular_damping, p.angular_damping, "{}", p.name);
         }
     }

@@ -162,6 +162,11 @@ pub struct Summary {
     /// bonded materials (op-dynamics `bonds`; seed 000 fig. 12c tearing).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bonds_broken: Option<u64>,
+    /// What `linear_damping: "Critical"` resolved to, when the scene asked
+    /// for it ([`crate::damping::CriticalDamping`]: the slowest mode, the
+    /// damping, settle phase and duration run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub critical_damping: Option<crate::damping::CriticalDamping>,
     /// Per-object figures.
     pub objects: Vec<ObjectSummary>,
 }
@@ -770,6 +775,7 @@ impl Tally {
             enabled: scene.stages(),
             contact: scene.has_contact().then_some(scene.contact),
             bonds_broken: scene.world.bonds().map(|b| b.broken()),
+            critical_damping: scene.critical_damping.clone(),
             objects: self.objects(scene, findings),
         }
     }
@@ -924,7 +930,7 @@ mod tests {
         // normalized terms now fade out there and it does not.)
         let mut scene = tight_curvature();
         scene.world.integrator = op_dynamics::Scheme::ExplicitEuler;
-        scene.world.linear_damping = 0.0;
+        scene.world.linear_damping = 0.0.into();
         scene.world.angular_damping = 0.0;
         assert_eq!(scene.world.divergence.energy_gain, 1e-6);
         match run_into(&scene, "on") {

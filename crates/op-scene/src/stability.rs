@@ -336,7 +336,7 @@ pub fn sample(scene: &Scene, base_dir: Option<&Path>) -> Result<Sample, SceneErr
         .copied()
         .filter(|m| *m > 0.0)
         .fold(0.0, Real::max);
-    let damping_rate = scene.world.linear_damping / mass.max(Real::MIN_POSITIVE);
+    let damping_rate = world.params().external.linear_damping / mass.max(Real::MIN_POSITIVE);
     let contact = contact_stiffness(scene, &built);
     let lambda = lambda + contact.as_ref().map_or(0.0, |c| c.0);
     let estimate = StepEstimate {

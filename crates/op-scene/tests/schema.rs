@@ -87,3 +87,36 @@ fn common_mistakes_are_caught() {
     unknown_variant["objects"][0]["generator"] = serde_json::json!({"Cube": {"side": 3}});
     assert!(!v.is_valid(&unknown_variant), "an unknown generator passes");
 }
+
+/// `world.linear_damping` is a number >= 0 or the string `"Critical"`
+/// (`op_scene::Damping`), in the schema as in the reader.
+#[test]
+fn linear_damping_is_a_number_or_critical() {
+    let v = validator();
+    let scene = |damping: serde_json::Value| {
+        serde_json::json!({
+            "name": "chain",
+            "world": {"linear_damping": damping},
+            "materials": {"lj": {"spacing": {"LennardJones": {"cutoff": 1.5}}}},
+            "objects": [{"name": "c", "material": "lj",
+                         "generator": {"Chain": {"count": 3, "spacing": 1}}}]
+        })
+    };
+    for good in [
+        serde_json::json!(0.3),
+        serde_json::json!(0),
+        serde_json::json!("Critical"),
+    ] {
+        assert!(v.is_valid(&scene(good.clone())), "{good} refused");
+        let text = scene(good.clone()).to_string();
+        op_scene::parse_scene(&text, op_scene::Format::Json, "<test>")
+            .unwrap_or_else(|e| panic!("{good}: {e}"));
+    }
+    for bad in [
+        serde_json::json!(-1),
+        serde_json::json!("critical"),
+        serde_json::json!(null),
+    ] {
+        assert!(!v.is_valid(&scene(bad.clone())), "{bad} passes the schema");
+    }
+}

@@ -254,7 +254,7 @@ fn recipe_variants(root: &Path, recipe: &SpiralRecipe, schedule: &Schedule) -> R
     };
     for beta in [0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0, 2.0] {
         let mut sc = seed_scene.clone();
-        sc.world.linear_damping = beta;
+        sc.world.linear_damping = beta.into();
         variant(
             format!(
                 "linear damping {beta}{}",

@@ -262,7 +262,7 @@ pub fn triangle_scene(p: Real) -> Scene {
 pub fn free_spiral_scene() -> Scene {
     let mut scene = SpiralRecipe::default().scene("spiral_free", &SpiralShape::seed());
     scene.world.settle = 0.0;
-    scene.world.linear_damping = 0.0;
+    scene.world.linear_damping = 0.0.into();
     scene.world.angular_damping = 0.0;
     scene.forces.clear();
     for m in scene.materials.values_mut() {

@@ -208,6 +208,15 @@ impl Scene {
         w.params(Vec::new())
             .validate(0)
             .map_err(|e| SceneError::param(file, "", e.renamed(WorldSettings::field_of_param)))?;
+        if w.linear_damping.is_critical() && w.angular_damping != 0.0 {
+            return Err(SceneError::value(
+                file,
+                "world.angular_damping",
+                w.angular_damping,
+                "with linear_damping: \"Critical\" the rule sets the angular damping too \
+                 (β1 = 2 ω1 I, seed 002 §5): leave it out, or give both as numbers",
+            ));
+        }
         positive(file, "world.duration", w.duration)?;
         non_negative(file, "world.settle", w.settle)?;
         positive(file, "world.frame_rate", w.frame_rate)?;
