@@ -60,3 +60,22 @@ def test_every_public_name_has_a_docstring_and_a_stub():
                 assert getattr(value, attr).__doc__, f"{name}.{attr}"
                 assert attr in stubs[name], f"{name}.{attr} is not in _native.pyi"
     assert (REPO / "crates/op-python/python/oriented_particles/py.typed").is_file()
+
+
+def test_the_stub_matches_the_module(tmp_path):
+    """mypy's stubtest finds _native.pyi in agreement with the extension
+    (every name, signature and class); skipped without mypy."""
+    import subprocess
+    import sys
+
+    import pytest
+
+    pytest.importorskip("mypy")
+    # mypy's cache: .ci/run keeps one beside its environment.
+    env = dict(os.environ)
+    env.setdefault("MYPY_CACHE_DIR", str(tmp_path / "mypy-cache"))
+    done = subprocess.run(
+        [sys.executable, "-m", "mypy.stubtest", "--ignore-disjoint-bases", "oriented_particles._native"],
+        capture_output=True, text=True, env=env,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr

@@ -5,10 +5,13 @@ that every public name of the module is stubbed here.
 """
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+import pathlib
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
+
+__all__ = ["Scene", "Simulation", "FitResult", "fit", "DivergenceError", "__version__"]
 
 __version__: str
 
@@ -27,6 +30,7 @@ class DivergenceError(RuntimeError):
 
     summary: Optional[Dict[str, Any]]
 
+@final
 class Scene:
     """A validated scene: what to simulate, for how long, what to write.
 
@@ -66,10 +70,10 @@ class Scene:
     def origin(self) -> str:
         """Where the scene came from, in messages."""
     @property
-    def source(self) -> Optional[str]:
+    def source(self) -> Optional[pathlib.Path]:
         """The scene file, or None for a scene made from a dict."""
     @property
-    def base_dir(self) -> Optional[str]:
+    def base_dir(self) -> Optional[pathlib.Path]:
         """Where relative points files are found (None: the working directory)."""
     @property
     def expected_warnings(self) -> List[str]:
@@ -106,9 +110,10 @@ class Scene:
         ``KeyboardInterrupt`` on Ctrl-C (after writing the summary and a
         checkpoint).
         """
-    def __eq__(self, other: object) -> bool: ...
+    def __eq__(self, value: object, /) -> bool: ...
     def __reduce__(self) -> Tuple[Any, ...]: ...
 
+@final
 class Simulation:
     """A scene built into a world, stepped from Python (``Scene.build()``).
 
@@ -172,6 +177,7 @@ class Simulation:
     def energies(self) -> Dict[str, float]:
         """``kinetic``, ``potential``, ``total``, ``oscillation``, ``max_speed`` now."""
 
+@final
 class FitResult:
     """The result of :func:`fit`: the mesh and the figures ``opsim fit`` prints."""
 
