@@ -274,7 +274,9 @@ fn warn(py: Python<'_>, warnings: &[String]) -> PyResult<()> {
     let module = py.import("warnings")?;
     let category = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
     for w in warnings {
-        module.call_method1("warn", (format!("opsim: {w}"), &category, 2))?;
+        // stacklevel 1: the line of Python that called `run` (no frame of
+        // Python code lies between).
+        module.call_method1("warn", (format!("opsim: {w}"), &category, 1))?;
     }
     Ok(())
 }
