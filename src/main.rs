@@ -441,42 +441,7 @@ fn run_fit(
     })?;
     op_scene::fit::write_obj(out, &fit)
         .with_context(|| format!("cannot write {}", out.display()))?;
-    let number = |x: f64| {
-        if x.is_finite() {
-            // Exponent notation for very large or small values.
-            format!("{x:?}")
-        } else {
-            "null".to_string()
-        }
-    };
-    // The thin features: where the two sides lie within the
-    // triangulation radius (ears, fingers), largest first.
-    let thin: Vec<String> = fit
-        .thin_features
-        .iter()
-        .map(|t| {
-            format!(
-                "{{\"centre\": [{}, {}, {}], \"samples\": {}, \"thickness\": {}}}",
-                number(t.centre.x),
-                number(t.centre.y),
-                number(t.centre.z),
-                t.samples,
-                number(t.thickness)
-            )
-        })
-        .collect();
-    outln!(
-        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"thin_features\": [{}]}}",
-        fit.particles,
-        fit.mesh.vertices.len(),
-        fit.mesh.faces.len(),
-        fit.mesh.euler_characteristic,
-        fit.mesh.boundary_loops,
-        number(fit.mesh.rms_distance),
-        number(fit.mesh.max_distance),
-        number(fit.spacing),
-        thin.join(", ")
-    );
+    outln!("{}", op_scene::fit::figures_json(&fit));
     Ok(())
 }
 
@@ -549,19 +514,13 @@ fn load(path: &Path, limits: op_scene::WorkLimits, frames: Option<usize>) -> Res
 /// the edge, the recommended step and the flag that runs it anyway.
 fn refuse_unstable_step(path: &Path, built: &BuiltScene) -> Result<(), Failure> {
     let dt = built.world().params().dt;
-    let Some(e) = built.step_estimate().filter(|e| e.beyond_edge(dt)) else {
-        return Ok(());
-    };
-    Err(anyhow!(
-        "{}: world.dt = {dt} is beyond the estimated edge of stability {:.3e} ({} recommended; \
-         see `opsim check`): reduce dt, use the Adaptive scheme, or run it anyway with \
-         --allow-unstable-step",
-        path.display(),
-        e.dt_max.unwrap_or(f64::NAN),
-        e.recommended()
-            .map_or("no step".to_string(), |r| format!("{r:.3e}"))
-    )
-    .into())
+    let refusal = built
+        .step_estimate()
+        .and_then(|e| e.refusal(dt, &path.display().to_string(), "--allow-unstable-step"));
+    match refusal {
+        Some(message) => Err(anyhow!(message).into()),
+        None => Ok(()),
+    }
 }
 
 fn run_built(mut built: BuiltScene, opts: &RunOptions, profile: bool) -> Result<(), Failure> {

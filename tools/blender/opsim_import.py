@@ -13,6 +13,11 @@ with Blender's OBJ importer's own axis defaults, forward -Z and up Y) or PLY
 (scene coordinates, z-up). Either way Blender shows scene coordinates: the
 scene's +z (against gravity in the shipped scenes) is Blender's +Z.
 
+File > Import > opsim scene (run in Blender) runs a scene file inside
+Blender instead, with the `oriented_particles` Python package (README
+"Python"), and builds the same animated objects from its arrays, with no
+file in between (`run_scene`).
+
 Headless use (the repository's tests do this):
 
     blender -b --factory-startup --python-expr \
@@ -34,7 +39,7 @@ bl_info = {
     "version": (1, 0, 0),
     "blender": (3, 4, 0),
     "location": "File > Import > opsim run (summary.json)",
-    "description": "Import an opsim run folder as animated objects (one mesh per frame)",
+    "description": "Import an opsim run folder, or run a scene in Blender, as animated objects",
     "category": "Import-Export",
 }
 
@@ -161,6 +166,94 @@ def import_run(path, fmt=None, collection_name=None):
     return created
 
 
+def _mesh_from_arrays(name, vertices, faces=None):
+    """A mesh from numpy arrays: vertices (n, 3) and triangles (k, 3), set
+    in bulk (foreach_set), no file in between."""
+    import numpy as np
+
+    mesh = bpy.data.meshes.new(name)
+    vertices = np.ascontiguousarray(vertices, dtype=np.float32)
+    mesh.vertices.add(len(vertices))
+    mesh.vertices.foreach_set("co", vertices.ravel())
+    if faces is not None and len(faces):
+        faces = np.ascontiguousarray(faces, dtype=np.int32)
+        k = len(faces)
+        mesh.loops.add(3 * k)
+        mesh.loops.foreach_set("vertex_index", faces.ravel())
+        mesh.polygons.add(k)
+        mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * k, 3, dtype=np.int32))
+        mesh.polygons.foreach_set("loop_total", np.full(k, 3, dtype=np.int32))
+    mesh.update()
+    return mesh
+
+
+def _sequences(scene_dict):
+    """What a live run shows, as (sequence name, object, kind): each object's
+    particles, its skin when it has one, its triangulation when the scene's
+    outputs ask for one (the sequences a run's frames hold, tools aside)."""
+    surfaces = scene_dict.get("outputs", {}).get("triangulation", False)
+    for o in scene_dict["objects"]:
+        yield o["name"], o["name"], "particles"
+        if o.get("skin"):
+            yield o["name"] + "_skin", o["name"], "skin"
+        if surfaces:
+            yield o["name"] + "_surface", o["name"], "surface"
+
+
+def run_scene(scene, frames=None, threads=None, collection_name=None):
+    """Runs a scene inside Blender with the `oriented_particles` package
+    (README "Python": Blender's Python must find it and numpy) and builds
+    its animated objects from the simulation's arrays, no file in between:
+    one object per sequence (each object's particles, skin and
+    triangulation), its mesh swapped on every frame change as for an
+    imported run. Opsim frame k is Blender frame k, at the scene's frame
+    rate; coordinates are the scene's (z-up, Blender's +Z up).
+
+    `scene` is a scene file (.ron, .json) or an `oriented_particles.Scene`;
+    `frames` the number of frames (default: the scene's duration);
+    `threads` the simulation's threads. Returns the created objects.
+    """
+    import oriented_particles as op
+
+    if not isinstance(scene, op.Scene):
+        scene = op.Scene.load(scene)
+    sim = scene.build(threads=threads)
+    rate = sim.frame_rate
+    if frames is None:
+        frames = int(round(sim.duration * rate)) + 1
+    sequences = list(_sequences(scene.to_dict()))
+    names = {seq: [] for seq, _, _ in sequences}
+    for k in range(frames):
+        sim.advance(k / rate)
+        for seq, obj, kind in sequences:
+            if kind == "particles":
+                mesh = _mesh_from_arrays("%s.%05d" % (seq, k), sim.positions(obj))
+            elif kind == "skin":
+                mesh = _mesh_from_arrays("%s.%05d" % (seq, k), *sim.skin_mesh(obj))
+            else:
+                mesh = _mesh_from_arrays("%s.%05d" % (seq, k), *sim.surface_mesh(obj))
+            # Meshes shown by no object would be dropped on saving.
+            mesh.use_fake_user = True
+            names[seq].append(mesh.name)
+    bl_scene = bpy.context.scene
+    collection = bpy.data.collections.new(collection_name or scene.name)
+    bl_scene.collection.children.link(collection)
+    created = []
+    for seq, _, kind in sequences:
+        ob = bpy.data.objects.new(seq, bpy.data.meshes[names[seq][0]])
+        ob[FRAMES_KEY] = names[seq]
+        ob["opsim_kind"] = kind
+        collection.objects.link(ob)
+        created.append(ob)
+    _set_frame_rate(bl_scene, rate)
+    bl_scene.frame_start = 0
+    bl_scene.frame_end = max(frames - 1, 0)
+    if _swap_meshes not in bpy.app.handlers.frame_change_post:
+        bpy.app.handlers.frame_change_post.append(_swap_meshes)
+    bl_scene.frame_set(0)
+    return created
+
+
 class ImportOpsimRun(bpy.types.Operator, ImportHelper):
     """Import an opsim run folder (its summary.json) as animated objects"""
 
@@ -191,12 +284,41 @@ class ImportOpsimRun(bpy.types.Operator, ImportHelper):
         return {"FINISHED"}
 
 
+class RunOpsimScene(bpy.types.Operator, ImportHelper):
+    """Run an opsim scene file inside Blender (the oriented_particles package) as animated objects"""
+
+    bl_idname = "import_scene.opsim_scene"
+    bl_label = "Run opsim scene"
+    bl_options = {"REGISTER", "UNDO"}
+
+    filename_ext = ".ron"
+    filter_glob: StringProperty(default="*.ron;*.json", options={"HIDDEN"})
+
+    def execute(self, context):
+        try:
+            objs = run_scene(self.filepath)
+        except ImportError as e:
+            self.report(
+                {"ERROR"},
+                "opsim scene: the oriented_particles package is not importable from "
+                "Blender's Python (README \"Python\", Blender): %s" % e,
+            )
+            return {"CANCELLED"}
+        except (OSError, ValueError, RuntimeError) as e:
+            self.report({"ERROR"}, "opsim scene: %s" % e)
+            return {"CANCELLED"}
+        self.report({"INFO"}, "opsim scene: %d objects" % len(objs))
+        return {"FINISHED"}
+
+
 def _menu(self, _context):
     self.layout.operator(ImportOpsimRun.bl_idname, text="opsim run (summary.json)")
+    self.layout.operator(RunOpsimScene.bl_idname, text="opsim scene (run in Blender)")
 
 
 def register():
     bpy.utils.register_class(ImportOpsimRun)
+    bpy.utils.register_class(RunOpsimScene)
     bpy.types.TOPBAR_MT_file_import.append(_menu)
     if _swap_meshes not in bpy.app.handlers.frame_change_post:
         bpy.app.handlers.frame_change_post.append(_swap_meshes)
@@ -204,6 +326,7 @@ def register():
 
 def unregister():
     bpy.types.TOPBAR_MT_file_import.remove(_menu)
+    bpy.utils.unregister_class(RunOpsimScene)
     bpy.utils.unregister_class(ImportOpsimRun)
     if _swap_meshes in bpy.app.handlers.frame_change_post:
         bpy.app.handlers.frame_change_post.remove(_swap_meshes)

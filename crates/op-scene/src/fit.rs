@@ -49,3 +49,47 @@ pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
         Ok(())
     })
 }
+
+/// The figures of a fit as one line of JSON, what `opsim fit` prints:
+/// `particles`, `vertices`, `faces`, `euler_characteristic`,
+/// `boundary_loops`, `rms_distance`, `max_distance` (samples to mesh),
+/// `spacing` and `thin_features` (`centre`, `samples`, `thickness`; largest
+/// first). A non-finite figure is `null`.
+pub fn figures_json(fit: &Fit) -> String {
+    let number = |x: Real| {
+        if x.is_finite() {
+            // Exponent notation for very large or small values.
+            format!("{x:?}")
+        } else {
+            "null".to_string()
+        }
+    };
+    // The thin features: where the two sides lie within the
+    // triangulation radius (ears, fingers), largest first.
+    let thin: Vec<String> = fit
+        .thin_features
+        .iter()
+        .map(|t| {
+            format!(
+                "{{\"centre\": [{}, {}, {}], \"samples\": {}, \"thickness\": {}}}",
+                number(t.centre.x),
+                number(t.centre.y),
+                number(t.centre.z),
+                t.samples,
+                number(t.thickness)
+            )
+        })
+        .collect();
+    format!(
+        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"thin_features\": [{}]}}",
+        fit.particles,
+        fit.mesh.vertices.len(),
+        fit.mesh.faces.len(),
+        fit.mesh.euler_characteristic,
+        fit.mesh.boundary_loops,
+        number(fit.mesh.rms_distance),
+        number(fit.mesh.max_distance),
+        number(fit.spacing),
+        thin.join(", ")
+    )
+}

@@ -29,7 +29,7 @@ pub mod stages;
 pub use built_scene::{BuiltObject, BuiltScene};
 pub use creation::CreationSettings;
 pub use outputs::{Outputs, ParticleOutput};
-pub use run::{run, CheckpointEvery, RunError, RunOptions, Summary};
+pub use run::{run, run_with_stop, CheckpointEvery, RunError, RunOptions, Summary};
 pub use skins::{ContactStats, ObjectSkin, SkinPrimitive, SkinSpec, SkinTool};
 
 pub mod builder;

@@ -64,14 +64,27 @@ pub fn load_scene_with(
     let text = read_text_file(path, MAX_SCENE_FILE_BYTES)?;
     let mut scene = parse_unvalidated(&text, format, &path.display().to_string())?;
     scene.limits = limits;
-    if let Some(n) = frames.filter(|&n| n >= 2) {
-        let d = (n - 1) as op_dynamics::Real / scene.world.frame_rate;
-        if d.is_finite() && d > 0.0 && d < scene.world.duration {
-            scene.world.duration = d;
-        }
+    if let Some(n) = frames {
+        scene.cut_to_frames(n);
     }
     scene.validate(path.parent())?;
     Ok(scene)
+}
+
+impl Scene {
+    /// Cuts the duration to the first `frames` frames (the runner's frame
+    /// count override, `opsim run --frames`) when that is shorter, so that
+    /// validation counts the work of the run that will be made. Fewer than
+    /// 2 frames leave the duration as it is.
+    pub fn cut_to_frames(&mut self, frames: usize) {
+        if frames < 2 {
+            return;
+        }
+        let d = (frames - 1) as op_dynamics::Real / self.world.frame_rate;
+        if d.is_finite() && d > 0.0 && d < self.world.duration {
+            self.world.duration = d;
+        }
+    }
 }
 
 /// Largest scene file read, in bytes (256 MiB: a `List` of a million

@@ -6,6 +6,7 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use op_dynamics::diagnostics::rest_shape_rms;
@@ -230,6 +231,15 @@ pub enum RunError {
         /// The summary as written.
         summary: Box<Summary>,
     },
+    /// The caller asked the run to stop ([`run_with_stop`]) and it stopped
+    /// after frame `frames - 1`: those frames, `metrics.csv`, the summary
+    /// (its `failure` says so) and, when the run writes checkpoints, a
+    /// checkpoint to resume from were written.
+    #[error("interrupted after {frames} frames")]
+    Interrupted {
+        /// Frames written.
+        frames: usize,
+    },
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
@@ -312,17 +322,34 @@ pub fn run(
     opts: &RunOptions,
     on_frame: &mut (dyn FnMut(usize, usize) + Send),
 ) -> Result<Summary, RunError> {
-    if rayon::current_thread_index().is_some() {
-        return run_here(scene, opts, on_frame);
-    }
-    rayon::scope(|_| run_here(scene, opts, on_frame))
+    run_with_stop(scene, opts, on_frame, &AtomicBool::new(false))
 }
 
-/// [`run`] on the calling thread.
+/// [`run`], stopping early when `stop` becomes true (another thread sets
+/// it: the Python package's Ctrl-C): after the frame being computed, the
+/// run writes what an ended run writes (the frames so far, `metrics.csv`,
+/// the summary with `failure` saying it was interrupted, and a checkpoint
+/// when [`RunOptions::checkpoints`] asks for them, so that
+/// [`RunOptions::resume`] goes on from it) and returns
+/// [`RunError::Interrupted`]. A run that is not stopped is [`run`]'s.
+pub fn run_with_stop(
+    scene: &mut BuiltScene,
+    opts: &RunOptions,
+    on_frame: &mut (dyn FnMut(usize, usize) + Send),
+    stop: &AtomicBool,
+) -> Result<Summary, RunError> {
+    if rayon::current_thread_index().is_some() {
+        return run_here(scene, opts, on_frame, stop);
+    }
+    rayon::scope(|_| run_here(scene, opts, on_frame, stop))
+}
+
+/// [`run_with_stop`] on the calling thread.
 fn run_here(
     scene: &mut BuiltScene,
     opts: &RunOptions,
     on_frame: &mut (dyn FnMut(usize, usize) + Send),
+    stop: &AtomicBool,
 ) -> Result<Summary, RunError> {
     let clock = Instant::now();
     let writer = FrameWriter::new(
@@ -379,9 +406,10 @@ fn run_here(
             break;
         }
         on_frame(k + 1, total);
+        let stopping = k + 1 < total && stop.load(Ordering::Relaxed);
         let due = match opts.checkpoints {
             None => false,
-            Some(_) if k + 1 == total => true,
+            Some(_) if k + 1 == total || stopping => true,
             Some(CheckpointEvery::Frames(n)) => (k + 1) % n.max(1) == 0,
             Some(CheckpointEvery::Seconds(s)) => saved.elapsed().as_secs_f64() >= s,
         };
@@ -394,6 +422,12 @@ fn run_here(
             }
             run.tally.checkpoint_seconds += saving.elapsed().as_secs_f64();
             saved = Instant::now();
+        }
+        if stopping {
+            run.tally
+                .failure
+                .get_or_insert(RunError::Interrupted { frames: k + 1 });
+            break;
         }
     }
     run.finish(scene, &opts.out_dir, (&clock, &carried))
@@ -951,6 +985,45 @@ mod tests {
             }
             other => panic!("expected a breakup at the end, got {other:?}"),
         }
+    }
+
+    /// A run asked to stop stops after the frame being computed, writes
+    /// its summary (saying so) and a checkpoint, and resuming from that
+    /// checkpoint ends with the frames of an uninterrupted run.
+    #[test]
+    fn a_stopped_run_stops_between_frames_and_resumes() {
+        let dir = std::env::temp_dir().join(format!("op-scene-stop-{}", std::process::id()));
+        let opts = |resume| RunOptions {
+            out_dir: dir.clone(),
+            frames: Some(6),
+            formats: vec![crate::export::FrameFormat::PLY],
+            checkpoints: Some(CheckpointEvery::Frames(100)),
+            resume,
+        };
+        let frame = |k: usize| std::fs::read(dir.join(format!("frames/chain/chain_{k:05}.ply")));
+        let mut built = tight_curvature().build(None, None).expect("builds");
+        let whole = run(&mut built, &opts(false), &mut |_, _| {}).expect("runs");
+        let last = frame(5).expect("the last frame");
+        let stop = AtomicBool::new(false);
+        let mut built = tight_curvature().build(None, None).expect("builds");
+        let result = run_with_stop(
+            &mut built,
+            &opts(false),
+            &mut |k, _| stop.store(k == 3, Ordering::Relaxed),
+            &stop,
+        );
+        assert!(
+            matches!(result, Err(RunError::Interrupted { frames: 3 })),
+            "{result:?}"
+        );
+        let summary = std::fs::read_to_string(dir.join("summary.json")).expect("a summary");
+        assert!(summary.contains("interrupted after 3 frames"), "{summary}");
+        assert!(frame(2).is_ok() && frame(3).is_err());
+        let mut built = tight_curvature().build(None, None).expect("builds");
+        let resumed = run(&mut built, &opts(true), &mut |_, _| {}).expect("resumes");
+        assert_eq!(resumed.frames, whole.frames);
+        assert_eq!(frame(5).expect("the last frame"), last);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// A value no frame file can hold ends the run before that frame is

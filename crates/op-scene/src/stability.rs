@@ -143,6 +143,25 @@ impl StepEstimate {
         self.dt_max.is_some_and(|max| dt > max)
     }
 
+    /// The refusal of a step `dt` beyond the edge
+    /// ([`StepEstimate::beyond_edge`]), or `None` for a step within it:
+    /// the edge, the recommended step and what runs it anyway
+    /// (`override_hint`: `opsim run`'s flag, the Python package's keyword),
+    /// after `origin` (the scene file). `opsim run` and the Python package
+    /// refuse such a step with this message.
+    pub fn refusal(&self, dt: Real, origin: &str, override_hint: &str) -> Option<String> {
+        self.beyond_edge(dt).then(|| {
+            format!(
+                "{origin}: world.dt = {dt} is beyond the estimated edge of stability {:.3e} \
+                 ({} recommended; see `opsim check`): reduce dt, use the Adaptive scheme, or \
+                 run it anyway with {override_hint}",
+                self.dt_max.unwrap_or(Real::NAN),
+                self.recommended()
+                    .map_or("no step".to_string(), |r| format!("{r:.3e}"))
+            )
+        })
+    }
+
     /// The warning for a step `dt` above [`StepEstimate::recommended`].
     pub fn warning(&self, dt: Real, scheme: &Scheme) -> Option<String> {
         let (max, recommended) = (self.dt_max?, self.recommended()?);
