@@ -470,22 +470,7 @@ fn parse_format(name: &str) -> Result<FrameFormat, String> {
 struct CheckpointSetting(Option<CheckpointEvery>);
 
 fn parse_checkpoint_every(text: &str) -> Result<CheckpointSetting, String> {
-    let expected = "expected a number of frames (`10`), of wall seconds (`60s`) or `off`";
-    if text == "off" {
-        return Ok(CheckpointSetting(None));
-    }
-    if let Some(seconds) = text.strip_suffix('s') {
-        return match seconds.parse::<f64>() {
-            Ok(s) if s.is_finite() && s >= 0.0 => {
-                Ok(CheckpointSetting(Some(CheckpointEvery::Seconds(s))))
-            }
-            _ => Err(format!("{text:?}: {expected}")),
-        };
-    }
-    match text.parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(CheckpointSetting(Some(CheckpointEvery::Frames(n)))),
-        _ => Err(format!("{text:?}: {expected}")),
-    }
+    CheckpointEvery::parse_setting(text).map(CheckpointSetting)
 }
 
 /// The work limits the flags ask for.

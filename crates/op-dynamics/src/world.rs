@@ -224,6 +224,23 @@ impl Config {
     }
 }
 
+impl World {
+    /// Takes the kernel and the flags of `config` (what the materials in
+    /// use enable), after its particles changed ([`World::insert_particles`]
+    /// and the other edits) or were restored from a checkpoint; the
+    /// neighbour list is the caller's.
+    fn apply_config(&mut self, config: &Config) {
+        self.model.kernel = config.kernel;
+        self.model.friction = config.friction;
+        self.model.heated = config.heated;
+        self.model.memory = config.memory;
+        self.model.has_fixed = config.has_fixed;
+        self.repulsion = config.repulsion;
+        self.plastic = config.plastic;
+        self.memory_flows = config.memory_flows;
+    }
+}
+
 /// Checks that every material's cut-off with the skin gives a neighbour
 /// list (a finite radius `cutoff * (1 + skin)`), so that no later choice of
 /// the materials in use (particles inserted by [`World::insert_particles`]

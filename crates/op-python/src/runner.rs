@@ -49,35 +49,23 @@ pub struct Request {
 /// `checkpoint_every` as `opsim run --checkpoint-every` reads it: `"60s"`
 /// (the default, for None), `"10"` or `10` frames, `"off"`.
 pub fn checkpoint_setting(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<CheckpointEvery>> {
-    let expected = "expected a number of frames (`10`), of wall seconds (`\"60s\"`) or `\"off\"`";
     let Some(value) = value else {
         return Ok(Some(CheckpointEvery::Seconds(60.0)));
     };
     if let Ok(n) = value.extract::<usize>() {
         return match n {
             0 => Err(PyValueError::new_err(format!(
-                "checkpoint_every = 0: {expected}"
+                "checkpoint_every = 0: {}",
+                CheckpointEvery::EXPECTED
             ))),
             n => Ok(Some(CheckpointEvery::Frames(n))),
         };
     }
-    let text: String = value
-        .extract()
-        .map_err(|_| PyValueError::new_err(format!("checkpoint_every: {expected}")))?;
-    if text == "off" {
-        return Ok(None);
-    }
-    let bad = || PyValueError::new_err(format!("checkpoint_every = {text:?}: {expected}"));
-    if let Some(seconds) = text.strip_suffix('s') {
-        return match seconds.parse::<f64>() {
-            Ok(s) if s.is_finite() && s >= 0.0 => Ok(Some(CheckpointEvery::Seconds(s))),
-            _ => Err(bad()),
-        };
-    }
-    match text.parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(Some(CheckpointEvery::Frames(n))),
-        _ => Err(bad()),
-    }
+    let text: String = value.extract().map_err(|_| {
+        PyValueError::new_err(format!("checkpoint_every: {}", CheckpointEvery::EXPECTED))
+    })?;
+    CheckpointEvery::parse_setting(&text)
+        .map_err(|e| PyValueError::new_err(format!("checkpoint_every = {e}")))
 }
 
 /// A rayon pool of `threads` threads, or None for the global pool.

@@ -177,14 +177,7 @@ impl World {
         } else {
             self.model.neighbours = config.neighbour_list(&self.params.neighbours);
         }
-        self.model.kernel = config.kernel;
-        self.model.friction = config.friction;
-        self.model.heated = config.heated;
-        self.model.memory = config.memory;
-        self.model.has_fixed = config.has_fixed;
-        self.repulsion = config.repulsion;
-        self.plastic = config.plastic;
-        self.memory_flows = config.memory_flows;
+        self.apply_config(&config);
         self.may_rotate |= config.memory;
         self.accumulator.grow(self.particles.id_bound());
         self.forces.clear();

@@ -106,14 +106,7 @@ impl World {
         for (stage, (_, saved)) in self.registered_stages.iter_mut().zip(&state.stages) {
             stage.restore_state(saved)?;
         }
-        self.model.kernel = config.kernel;
-        self.model.friction = config.friction;
-        self.model.heated = config.heated;
-        self.model.memory = config.memory;
-        self.model.has_fixed = config.has_fixed;
-        self.repulsion = config.repulsion;
-        self.plastic = config.plastic;
-        self.memory_flows = config.memory_flows;
+        self.apply_config(&config);
         self.model.neighbours = state.neighbours;
         self.model.bonds = state.bonds;
         self.particles = state.particles;

@@ -79,6 +79,33 @@ impl Default for CheckpointEvery {
     }
 }
 
+impl CheckpointEvery {
+    /// What the setting accepts, for messages.
+    pub const EXPECTED: &'static str =
+        "expected a number of frames (`10`), of wall seconds (`60s`) or `off`";
+
+    /// Reads a setting as `opsim run --checkpoint-every` takes it: `N`
+    /// frames (`N >= 1`), `Ss` wall seconds (`60s`, finite, `>= 0`), or
+    /// `off` (no checkpoints: `None`). The error is the text quoted with
+    /// [`CheckpointEvery::EXPECTED`].
+    pub fn parse_setting(text: &str) -> Result<Option<CheckpointEvery>, String> {
+        let bad = || format!("{text:?}: {}", Self::EXPECTED);
+        if text == "off" {
+            return Ok(None);
+        }
+        if let Some(seconds) = text.strip_suffix('s') {
+            return match seconds.parse::<f64>() {
+                Ok(s) if s.is_finite() && s >= 0.0 => Ok(Some(CheckpointEvery::Seconds(s))),
+                _ => Err(bad()),
+            };
+        }
+        match text.parse::<usize>() {
+            Ok(n) if n >= 1 => Ok(Some(CheckpointEvery::Frames(n))),
+            _ => Err(bad()),
+        }
+    }
+}
+
 /// The 64-bit FNV-1a hash of `bytes` (the checkpoint's integrity check
 /// and its scene hash: not a cryptographic one).
 pub fn fnv1a(bytes: &[u8]) -> u64 {
