@@ -29,6 +29,7 @@ pub struct Outputs {
     pub particles: ParticleOutput,
     /// Size of discs and axes as a fraction of the object's rest spacing,
     /// > 0. Default: 0.4.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub glyph_size: f64,
     /// Write `metrics.csv` (energies, oscillation, max speed per frame).
     /// Default: true.
@@ -42,17 +43,20 @@ pub struct Outputs {
     /// object's rest spacing, > 0; the exported surface uses at least the
     /// spacing cut-off of the object's material (a pair that still attracts
     /// may be an edge). Default: 1.7.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub triangulation_radius: f64,
     /// The direction the camera of the scene's pictures looks along, in
     /// scene coordinates (z-up), chosen so the picture shows the scene's
     /// claim: written to `summary.json` (`view`) and the default of `opsim
     /// render` on the run. Default: none (the renderer's own view).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
     pub view: Option<[f64; 3]>,
     /// The up direction of the scene's pictures, in scene coordinates, not
     /// along `view`: written to `summary.json` (`up`) in place of the
     /// direction against gravity. Default: none (against gravity, else +z).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
     pub up: Option<[f64; 3]>,
 }
 

@@ -61,6 +61,15 @@ fn validate_cohesion_scale(file: &str, path: &str, m: &Material) -> Result<(), S
     Ok(())
 }
 
+/// The JSON Schema pattern of [`Scene::name`]: one or more characters,
+/// none of them `/`, `\` or a control character (Unicode category Cc,
+/// what `char::is_control` tests). The names `.` and `..`, which it lets
+/// through, the schema refuses with a `not` beside it.
+pub(crate) const SCENE_NAME_PATTERN: &str = r"^[^/\\\x00-\x1F\x7F-\x9F]+$";
+/// The JSON Schema pattern of an object's name ([`ObjectSpec::name`]):
+/// one or more characters, none of them a control character.
+pub(crate) const OBJECT_NAME_PATTERN: &str = r"^[^\x00-\x1F\x7F-\x9F]+$";
+
 /// Largest `alpha r0²` of a cohesion spacing the scene layer accepts.
 pub const MAX_COHESION_ALPHA_R0_SQUARED: Real = 1e6;
 /// Largest cohesion cut-off, in units of `r0`, the scene layer accepts.
