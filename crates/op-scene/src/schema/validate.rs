@@ -10,7 +10,7 @@ use op_dynamics::{Material, Real};
 
 use super::checks::{self, direction, finite, finite3, non_negative, positive, positive3};
 use super::{ForceSpec, ObjectSpec, Scene, ToolSpec, WorldSettings};
-use crate::error::SceneError;
+use crate::error::{short, SceneError};
 use crate::generators::MAX_PARTICLES;
 
 /// `objects[k] "name"`: how messages name an object.
@@ -378,7 +378,10 @@ impl Scene {
                 file,
                 at("end"),
                 f.end,
-                &format!("must be greater than start = {} (or infinite)", f.start),
+                &format!(
+                    "must be greater than start = {} (or infinite)",
+                    short(f.start)
+                ),
             ));
         }
         let settle = self.world.settle;
@@ -389,7 +392,7 @@ impl Scene {
                 settle,
                 &format!(
                     "is too large for {path} (start {} and end {} become equal once shifted by the settle phase)",
-                    f.start, f.end
+                    short(f.start), short(f.end)
                 ),
             ));
         }
@@ -400,7 +403,7 @@ impl Scene {
                 file,
                 at("ramp"),
                 f.ramp,
-                &format!("must be at most half of end - start = {half}"),
+                &format!("must be at most half of end - start = {}", short(half)),
             ));
         }
         Ok(())
