@@ -73,3 +73,59 @@ impl Default for Outputs {
         }
     }
 }
+
+impl crate::Scene {
+    /// What a run of this scene writes besides `summary.json`, as `opsim
+    /// check` prints it after `outputs:`: the particle geometry, the
+    /// metrics table, the triangulations (`<object>_surface`) and the
+    /// skins, each named only when written (`particles as Points,
+    /// metrics.csv, triangulations, skins of "ball"`).
+    pub fn outputs_summary(&self) -> String {
+        let o = &self.outputs;
+        let mut parts = vec![format!("particles as {:?}", o.particles)];
+        if o.metrics {
+            parts.push("metrics.csv".into());
+        }
+        if o.triangulation {
+            parts.push("triangulations (<object>_surface)".into());
+        }
+        let skinned: Vec<String> = self
+            .objects
+            .iter()
+            .filter(|ob| ob.skin.is_some())
+            .map(|ob| format!("{:?}", crate::input::excerpt(&ob.name)))
+            .collect();
+        if !skinned.is_empty() {
+            parts.push(format!("skins of {}", skinned.join(", ")));
+        }
+        parts.join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{parse_scene, Format};
+
+    #[test]
+    fn the_summary_names_triangulations_and_skins() {
+        let scene = |outputs: &str, skin: &str| {
+            let text = format!(
+                "(name: \"s\", materials: {{\"m\": ()}}, outputs: ({outputs}), objects: [
+                    (name: \"ball\", material: \"m\", generator: SphereShell(radius: 2, spacing: 1){skin}),
+                    (name: \"bare\", material: \"m\",
+                     generator: Chain(count: 2, spacing: 1, start: (0, 0, 9))),
+                ])"
+            );
+            parse_scene(&text, Format::Ron, "<test>").unwrap()
+        };
+        assert_eq!(
+            scene("", "").outputs_summary(),
+            "particles as Points, metrics.csv"
+        );
+        let skin = ", skin: (primitive: Point, radius: 1.2, cell_size: 0.25)";
+        assert_eq!(
+            scene("metrics: false, triangulation: true", skin).outputs_summary(),
+            "particles as Points, triangulations (<object>_surface), skins of \"ball\""
+        );
+    }
+}
