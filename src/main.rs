@@ -666,15 +666,7 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
             e.lambda
         ),
     }
-    outln!(
-        "  outputs: particles as {:?}{}",
-        built.outputs().particles,
-        if built.outputs().metrics {
-            ", metrics.csv"
-        } else {
-            ""
-        }
-    );
+    outln!("  outputs: {}", scene.outputs_summary());
     // On the sample's particles (at most a bounded number per object).
     let health = op_scene::health::started_inside(built)
         .into_iter()

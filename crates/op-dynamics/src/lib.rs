@@ -38,6 +38,7 @@ pub mod neighbours;
 pub mod particles;
 pub mod plasticity;
 pub mod prelude;
+pub mod schema_rules;
 pub mod tooling;
 pub mod world;
 

@@ -89,12 +89,18 @@ pub enum SceneError {
     },
 }
 
-/// A number for messages: as Rust prints it when that is short (at most 12
-/// characters), otherwise in scientific notation with at most 6 significant
-/// digits (`1e308`, not 309 digits).
+/// A number for messages: the shortest decimal that reads back as `x`
+/// rounded to 12 significant digits, as Rust prints it, when that is short
+/// (at most 12 characters: `0.72`, not `0.7200000000000001`), otherwise in
+/// scientific notation with at most 6 significant digits (`1e308`, not 309
+/// digits). Frame files do not use it: they keep every digit.
 pub fn short(x: f64) -> String {
-    let plain = format!("{x}");
-    if plain.len() <= 12 || !x.is_finite() {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let rounded: f64 = format!("{x:.11e}").parse().unwrap_or(x);
+    let plain = format!("{rounded}");
+    if plain.len() <= 12 {
         return plain;
     }
     let sci = format!("{x:.5e}");
@@ -216,6 +222,14 @@ mod tests {
         assert_eq!(e.to_string(), "scenes/bad.ron:3:5: unknown field");
         let e = SceneError::value("s.ron", "world.dt", 1e308, "too large");
         assert_eq!(e.to_string(), "s.ron: world.dt = 1e308: too large");
+        assert_eq!(short(0.7200000000000001), "0.72");
+        assert_eq!(short(0.1 + 0.2), "0.3");
+        assert_eq!(short(1.0 / 3.0), "3.33333e-1");
+        assert_eq!(short(2.5), "2.5");
+        assert_eq!(short(-1e-7 * 3.0), "-0.0000003");
+        assert_eq!(short(f64::INFINITY), "inf");
+        let e = SceneError::value("s.ron", "forces[0].ramp", 0.1 + 0.2, "too long");
+        assert_eq!(e.to_string(), "s.ron: forces[0].ramp = 0.3: too long");
         let e = SceneError::value("s.ron", "name", "x".repeat(4_000_000), "bad");
         assert!(e.to_string().len() < 200, "{}", e.to_string().len());
         assert!(e.to_string().contains("(4000000 characters)"));

@@ -29,6 +29,7 @@ pub struct Outputs {
     pub particles: ParticleOutput,
     /// Size of discs and axes as a fraction of the object's rest spacing,
     /// > 0. Default: 0.4.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub glyph_size: f64,
     /// Write `metrics.csv` (energies, oscillation, max speed per frame).
     /// Default: true.
@@ -42,17 +43,20 @@ pub struct Outputs {
     /// object's rest spacing, > 0; the exported surface uses at least the
     /// spacing cut-off of the object's material (a pair that still attracts
     /// may be an edge). Default: 1.7.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub triangulation_radius: f64,
     /// The direction the camera of the scene's pictures looks along, in
     /// scene coordinates (z-up), chosen so the picture shows the scene's
     /// claim: written to `summary.json` (`view`) and the default of `opsim
     /// render` on the run. Default: none (the renderer's own view).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
     pub view: Option<[f64; 3]>,
     /// The up direction of the scene's pictures, in scene coordinates, not
     /// along `view`: written to `summary.json` (`up`) in place of the
     /// direction against gravity. Default: none (against gravity, else +z).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
     pub up: Option<[f64; 3]>,
 }
 
@@ -67,5 +71,61 @@ impl Default for Outputs {
             view: None,
             up: None,
         }
+    }
+}
+
+impl crate::Scene {
+    /// What a run of this scene writes besides `summary.json`, as `opsim
+    /// check` prints it after `outputs:`: the particle geometry, the
+    /// metrics table, the triangulations (`<object>_surface`) and the
+    /// skins, each named only when written (`particles as Points,
+    /// metrics.csv, triangulations, skins of "ball"`).
+    pub fn outputs_summary(&self) -> String {
+        let o = &self.outputs;
+        let mut parts = vec![format!("particles as {:?}", o.particles)];
+        if o.metrics {
+            parts.push("metrics.csv".into());
+        }
+        if o.triangulation {
+            parts.push("triangulations (<object>_surface)".into());
+        }
+        let skinned: Vec<String> = self
+            .objects
+            .iter()
+            .filter(|ob| ob.skin.is_some())
+            .map(|ob| format!("{:?}", crate::input::excerpt(&ob.name)))
+            .collect();
+        if !skinned.is_empty() {
+            parts.push(format!("skins of {}", skinned.join(", ")));
+        }
+        parts.join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{parse_scene, Format};
+
+    #[test]
+    fn the_summary_names_triangulations_and_skins() {
+        let scene = |outputs: &str, skin: &str| {
+            let text = format!(
+                "(name: \"s\", materials: {{\"m\": ()}}, outputs: ({outputs}), objects: [
+                    (name: \"ball\", material: \"m\", generator: SphereShell(radius: 2, spacing: 1){skin}),
+                    (name: \"bare\", material: \"m\",
+                     generator: Chain(count: 2, spacing: 1, start: (0, 0, 9))),
+                ])"
+            );
+            parse_scene(&text, Format::Ron, "<test>").unwrap()
+        };
+        assert_eq!(
+            scene("", "").outputs_summary(),
+            "particles as Points, metrics.csv"
+        );
+        let skin = ", skin: (primitive: Point, radius: 1.2, cell_size: 0.25)";
+        assert_eq!(
+            scene("metrics: false, triangulation: true", skin).outputs_summary(),
+            "particles as Points, triangulations (<object>_surface), skins of \"ball\""
+        );
     }
 }

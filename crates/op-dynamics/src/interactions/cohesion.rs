@@ -81,8 +81,10 @@ pub const TABLE_FORCE_TOLERANCE: Real = 1e-6;
 pub const TABLE_ENERGY_TOLERANCE: Real = 1e-9;
 
 /// Most table nodes [`CohesionParams::prepare`] may use to meet the
-/// tolerances.
+/// tolerances, and the largest [`CohesionParams::table_nodes`].
 const MAX_TABLE_NODES: usize = 1_000_000;
+/// The smallest [`CohesionParams::table_nodes`].
+const MIN_TABLE_NODES: usize = 16;
 
 /// How the cohesion energy and force are evaluated.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -99,27 +101,34 @@ pub enum CohesionMode {
 pub struct CohesionParams {
     /// Scaling factor `E` (> 0): stiffness. Default: 200 (maximum
     /// attraction ≈ 0.98 at `r ≈ 1.29` with the default `r0` and `alpha`).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub e: Real,
     /// Rest distance `r0` (> 0). Default: 1.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub r0: Real,
     /// Gaussian decay `α` (> 0, units 1/length²). Default: 16 (reach
     /// ≈ 2.08 r0 with the automatic cut-off).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub alpha: Real,
     /// Cut-off radius, or `None` for the automatic one (where `|f|` falls
     /// to 1e-6 of its maximum attraction). The taper must start beyond the
     /// maximum-attraction distance `r_m`. Default: `None`.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub cutoff: Option<Real>,
     /// Fraction of the cut-off over which the force is tapered to 0
     /// (`0 < taper <= 1`). Default: 0.1.
+    #[schemars(extend("exclusiveMinimum" = 0), range(max = 1))]
     pub taper: Real,
     /// Evaluation mode. Default: `Tabulated`.
     pub mode: CohesionMode,
     /// Start of the table as a fraction of `r0` (`0 < table_start < 1`);
     /// shorter distances use the exact mode. Default: 0.5.
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 1))]
     pub table_start: Real,
     /// Number of table nodes at least (16 ..= 1 000 000), over the range
     /// where the force is not negligible; raised when needed to meet the
     /// error bound of the module docs. Default: 1024.
+    #[schemars(range(min = MIN_TABLE_NODES, max = MAX_TABLE_NODES))]
     pub table_nodes: usize,
 }
 
@@ -236,7 +245,7 @@ impl CohesionParams {
         check(
             "table_nodes",
             self.table_nodes as Real,
-            (16..=1_000_000).contains(&self.table_nodes),
+            (MIN_TABLE_NODES..=MAX_TABLE_NODES).contains(&self.table_nodes),
             "must be between 16 and 1000000",
         )?;
         let (r_m, _) = self.max_attraction();

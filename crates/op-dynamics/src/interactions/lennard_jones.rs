@@ -37,18 +37,24 @@ fn int_pow(mut x: Real, n: i32) -> Real {
 #[serde(deny_unknown_fields, default)]
 pub struct LennardJonesParams {
     /// Well depth `ε` (> 0): `U(r0) = -ε`. Default: 1.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub epsilon: Real,
     /// Rest distance `r0` (> 0), where the force vanishes. Default: 1.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub r0: Real,
     /// Repulsive exponent `n` (> m). Default: 12.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub n: Real,
     /// Attractive exponent `m` (> 0). Default: 6.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub m: Real,
     /// Cut-off radius `r_c`; the taper must start beyond `r0`
     /// (`cutoff (1 - taper) > r0`). Default: 2.5.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub cutoff: Real,
     /// Fraction of the cut-off over which `U` is tapered to 0
     /// (`0 < taper <= 1`). Default: 0.2.
+    #[schemars(extend("exclusiveMinimum" = 0), range(max = 1))]
     pub taper: Real,
 }
 

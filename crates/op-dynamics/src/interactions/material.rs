@@ -63,14 +63,19 @@ pub struct Material {
     /// `K = 1`, `a = 1`, cut-off 2.5.
     pub weight: WeightParams,
     /// Weight `α_P` of co-planarity (>= 0). Default: 0.
+    #[schemars(range(min = 0))]
     pub coplanarity: Real,
     /// Weight `α_N` of co-normality (>= 0). Default: 0.
+    #[schemars(range(min = 0))]
     pub conormality: Real,
     /// Weight `α_C` of co-circularity (>= 0). Default: 0.
+    #[schemars(range(min = 0))]
     pub cocircularity: Real,
     /// Weight `α_F` of the form (shape memory) term (>= 0). Default: 0.
+    #[schemars(range(min = 0))]
     pub form: Real,
     /// Weight `α_S` of the spin torque (>= 0). Default: 0.
+    #[schemars(range(min = 0))]
     pub spin: Real,
     /// Which spin potential. Default: `MinCurvature` (seed 000 eq. 14).
     pub spin_kind: SpinKind,
@@ -82,6 +87,7 @@ pub struct Material {
     pub repulsion: RepulsionParams,
     /// Inter-particle friction coefficient (>= 0; damping of relative
     /// velocity, seed 002 §5, applied by the world). Default: 0.
+    #[schemars(range(min = 0))]
     pub friction: Real,
     /// How heat weakens this material's bonds ([`crate::heat`]), or `None`
     /// for not at all. Default: `None`.

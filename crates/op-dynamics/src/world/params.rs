@@ -24,6 +24,7 @@ pub struct NeighbourParams {
     /// skin. `0 < skin <= 10` ([`MAX_SKIN`]); the list
     /// radius `cutoff * (1 + skin)` of every material must also be finite
     /// ([`crate::World::new`] checks it). Default: 0.2.
+    #[schemars(extend("exclusiveMinimum" = 0), range(max = MAX_SKIN))]
     pub skin: Real,
     /// Re-sort particles in spatial (Morton) order at each rebuild.
     /// Default: true.

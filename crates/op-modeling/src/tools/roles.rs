@@ -23,10 +23,12 @@ pub enum Role {
     /// out along the outward normal, growing with depth.
     Obstacle {
         /// Penalty stiffness `k`, > 0 (force per unit depth).
+        #[schemars(extend("exclusiveMinimum" = 0))]
         stiffness: Real,
         /// Contact offset from the surface (a particle radius), >= 0.
         /// Default: 0.
         #[serde(default)]
+        #[schemars(range(min = 0))]
         margin: Real,
         /// Damping of the normal relative velocity while in contact,
         /// `-c ((v - v_tool) · n) n`, >= 0 (dissipative, not from an
@@ -35,6 +37,7 @@ pub enum Role {
         /// skin are damped the same way (`op_implicit::friction`).
         /// Default: 0.
         #[serde(default)]
+        #[schemars(range(min = 0))]
         damping: Real,
         /// Coulomb friction coefficient `μ` (at least 0) of skins meeting
         /// the obstacle (dissipative): each skinned particle pressed on it
@@ -43,6 +46,7 @@ pub enum Role {
         /// (`op_implicit::friction`). Particles meeting the obstacle
         /// without a skin feel no friction. Default: 0.
         #[serde(default)]
+        #[schemars(range(min = 0))]
         friction: Real,
     },
     /// An attractor (seed 000 §6: "attract particles to its surface"): a
@@ -51,8 +55,10 @@ pub enum Role {
     /// force `-2 k s (1 - s²/R²) n`, zero at the surface and at the reach.
     Attractor {
         /// Strength `k`, > 0 (the well's stiffness at the surface is `2k`).
+        #[schemars(extend("exclusiveMinimum" = 0))]
         strength: Real,
         /// Reach `R`, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         reach: Real,
     },
     /// A mover (seed 000 §6: grabs the particles inside it and carries
@@ -63,10 +69,12 @@ pub enum Role {
     /// object's rest shape (what the rest shape error is measured from).
     Mover {
         /// Spring stiffness `k`, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         stiffness: Real,
         /// Damping of the velocity relative to the carried point, >= 0
         /// (dissipative). Default: 0.
         #[serde(default)]
+        #[schemars(range(min = 0))]
         damping: Real,
         /// Time the tool lets go. Default: never.
         #[serde(default = "infinity", skip_serializing_if = "is_infinite")]
@@ -86,8 +94,10 @@ pub enum Role {
     Heater {
         /// Heating rate at and inside the surface, > 0 (temperature per
         /// unit time).
+        #[schemars(extend("exclusiveMinimum" = 0))]
         power: Real,
         /// How far outside the surface it heats, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         reach: Real,
     },
     /// A hot knife (seed 000 §6, fig. 7: "we use the heat of the cutting
@@ -96,16 +106,21 @@ pub enum Role {
     /// [`Role::Heater`]. Needs the world's `heat` settings.
     Knife {
         /// Penalty stiffness `k`, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         stiffness: Real,
         /// Contact offset from the surface, >= 0. Default: 0.
         #[serde(default)]
+        #[schemars(range(min = 0))]
         margin: Real,
         /// Normal damping in contact, >= 0. Default: 0.
         #[serde(default)]
+        #[schemars(range(min = 0))]
         damping: Real,
         /// Heating rate at and inside the surface, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         power: Real,
         /// How far outside the surface it heats, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         reach: Real,
     },
     /// A shaping tool (seed 000 §8, fig. 14: a sphere is pushed into a
@@ -127,13 +142,16 @@ pub enum Role {
     /// steps, not a potential (energy is not conserved across it).
     Shaper {
         /// Penalty stiffness `k`, > 0 (as [`Role::Obstacle`]).
+        #[schemars(extend("exclusiveMinimum" = 0))]
         stiffness: Real,
         /// Contact offset from the surface (a particle radius), > 0: the
         /// reach of the penalty and of the trap rule.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         margin: Real,
         /// Damping of the normal relative velocity while in contact, >= 0
         /// (as [`Role::Obstacle`]). Default: 0.
         #[serde(default)]
+        #[schemars(range(min = 0))]
         damping: Real,
     },
 }

@@ -20,28 +20,34 @@ pub enum ToolShape {
     /// (upward) `normal`.
     Plane {
         /// Outward normal (need not be unit; must be non-zero).
+        #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
         normal: [Real; 3],
     },
     /// A ball centred at the origin.
     Ball {
         /// Radius, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         radius: Real,
     },
     /// A box centred at the origin.
     Cuboid {
         /// Half extents along x, y, z, each > 0.
+        #[schemars(transform = op_dynamics::schema_rules::positive_items)]
         half_extents: [Real; 3],
     },
     /// A cylinder centred at the origin with its axis along y.
     Cylinder {
         /// Half height, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         half_height: Real,
         /// Radius, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         radius: Real,
     },
     /// The convex hull of points (a convex polyhedron).
     ConvexHull {
         /// At least four points, not all coplanar.
+        #[schemars(length(min = 4))]
         points: Vec<[Real; 3]>,
     },
     /// A closed, consistently oriented triangle mesh (a general

@@ -64,6 +64,7 @@ pub struct ListParticle {
     pub position: [Real; 3],
     /// World normal (normalized; non-zero). Default: +z.
     #[serde(default)]
+    #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
     pub normal: Option<[Real; 3]>,
     /// Rest curvature. Default: 0.
     #[serde(default)]
@@ -120,8 +121,10 @@ pub enum Generator {
     /// §7): settle first if a reference is needed.
     Spiral {
         /// Number of particles, >= 2.
+        #[schemars(range(min = 2, max = MAX_PARTICLES))]
         count: usize,
         /// Arc length between neighbours, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         spacing: Real,
         /// Curvature of the first particle (1/length, finite,
         /// `|curvature_start| * spacing <= 1`: at most one radian of turning
@@ -138,6 +141,7 @@ pub enum Generator {
         center: [Real; 3],
         /// Normal of the plane of the curve. Default: +z.
         #[serde(default = "plus_z")]
+        #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
         normal: [Real; 3],
     },
     /// A hexagonal lattice of `nx` x `ny` particles (rows `spacing √3/2`
@@ -145,21 +149,26 @@ pub enum Generator {
     /// normals all equal to the sheet normal, curvature 0.
     HexSheet {
         /// Particles per row, >= 1.
+        #[schemars(range(min = 1, max = MAX_PARTICLES))]
         nx: usize,
         /// Rows, >= 1.
+        #[schemars(range(min = 1, max = MAX_PARTICLES))]
         ny: usize,
         /// Distance between neighbours, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         spacing: Real,
         /// Centroid (before noise). Default: origin.
         #[serde(default = "zero3")]
         center: [Real; 3],
         /// Sheet normal. Default: +z.
         #[serde(default = "plus_z")]
+        #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
         normal: [Real; 3],
         /// Amplitude (length) of a uniform random displacement in
         /// `[-noise, noise]` along each of the sheet's three axes, in
         /// `[0, spacing/4]` (so particles never coincide). Default: 0.
         #[serde(default)]
+        #[schemars(range(min = 0))]
         noise: Real,
         /// Seed of the noise. Default: 0.
         #[serde(default)]
@@ -169,17 +178,21 @@ pub enum Generator {
     /// `spacing` apart, all with the given normal, curvature 0.
     Chain {
         /// Number of particles, >= 1.
+        #[schemars(range(min = 1, max = MAX_PARTICLES))]
         count: usize,
         /// Distance between neighbours, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         spacing: Real,
         /// First particle. Default: origin.
         #[serde(default = "zero3")]
         start: [Real; 3],
         /// Direction of the line (normalized). Default: +x.
         #[serde(default = "plus_x")]
+        #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
         direction: [Real; 3],
         /// Normal of every particle (normalized). Default: +z.
         #[serde(default = "plus_z")]
+        #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
         normal: [Real; 3],
     },
     /// A Fibonacci sphere: `round(4πR² / (√3/2 spacing²))` particles (the
@@ -187,8 +200,10 @@ pub enum Generator {
     /// outward normals, curvature `1/radius`.
     SphereShell {
         /// Radius, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         radius: Real,
         /// Target distance between neighbours, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         spacing: Real,
         /// Centre. Default: origin.
         #[serde(default = "zero3")]
@@ -203,8 +218,10 @@ pub enum Generator {
     /// keeps the same twelve partners: an elastic solid.
     SolidBall {
         /// Radius, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         radius: Real,
         /// Distance between nearest neighbours, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         spacing: Real,
         /// Centre (a particle sits there). Default: origin.
         #[serde(default = "zero3")]
@@ -220,16 +237,20 @@ pub enum Generator {
     /// so a torus is only approximately at rest.
     TorusShell {
         /// Major radius `R` (axis to tube centre), > minor.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         major: Real,
         /// Minor (tube) radius `r`, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         minor: Real,
         /// Target distance between neighbours, > 0.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         spacing: Real,
         /// Centre. Default: origin.
         #[serde(default = "zero3")]
         center: [Real; 3],
         /// Axis of revolution. Default: +z.
         #[serde(default = "plus_z")]
+        #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
         axis: [Real; 3],
     },
     /// Points read from a file by [`crate::pointsets::read_point_set`]'s
@@ -245,6 +266,7 @@ pub enum Generator {
     /// Explicit particles.
     List {
         /// The particles (at least one).
+        #[schemars(length(min = 1, max = MAX_PARTICLES))]
         particles: Vec<ListParticle>,
     },
 }

@@ -68,6 +68,31 @@ the particle mass as M = 1, as every default does; time then follows from the st
 [units.md](units.md) says how to choose a stable step, gravity and damping. `×r0` means a multiple of
 the object's (or the creation rules') rest spacing; `1` means dimensionless; a force is M·L/T², an
 energy M·L²/T², a linear stiffness M/T², a linear damping coefficient M/T.
+
+## What the JSON Schema checks and what only `opsim check` checks
+
+The JSON Schema (`opsim schema`) states every rule on a single field that JSON Schema can
+express: types, required and unknown fields, enum variants, vector lengths, the ranges below
+(`> 0`, `>= 0`, `0 < taper <= 1`, counts and list lengths), name patterns (a scene name
+non-empty, without `/`, `\\` or control characters and not `.` or `..`; an object name
+non-empty, without control characters) and non-zero direction vectors. It never refuses a
+scene `opsim check` accepts. The rules that relate fields, or that JSON Schema cannot state,
+only `opsim check` (and `opsim run`) applies:
+
+- `world.dt` at most the frame interval `1 / world.frame_rate`; the work limits (steps,
+  particle-steps, frames, particles) from `dt`, `duration`, `frame_rate` and the generators;
+- a material's Lennard-Jones taper starting beyond `r0` (`cutoff (1 - taper) > r0`) and
+  `n > m`; a cohesion cut-off at most 1000 `r0` and `1e-6 <= alpha r0² <= 1e6`;
+- an object's `material` a key of `materials` or a preset; object names unique; a force's or
+  tool's `object` an object of the scene; selections within the object's particles;
+- a direction not shorter than 1e-12 (the schema refuses only the zero vector); a sheet's
+  `noise` at most `spacing / 4`; a torus's `major > minor`; a sphere's `spacing` small enough
+  for one particle; a spiral's `|curvature| * spacing <= 1`;
+- a force window's `end > start` and `ramp` at most half of it; `outputs.up` not parallel to
+  `outputs.view`; points files that exist and hold the right number of points; the rules
+  between features, tools, skins and creation settings and the world (heat settings for a
+  heater, plasticity needing `form`, bond memory needing bonds, ...).
+
 ";
 
 /// One section: a struct's field table, or an enum's variants.

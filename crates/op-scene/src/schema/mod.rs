@@ -61,6 +61,7 @@ pub use fit::FitSettings;
 pub use limits::WorkLimits;
 
 pub use validate::{MAX_COHESION_ALPHA_R0_SQUARED, MAX_COHESION_CUTOFF_OVER_R0};
+use validate::{OBJECT_NAME_PATTERN, SCENE_NAME_PATTERN};
 
 use std::collections::BTreeMap;
 
@@ -80,6 +81,8 @@ pub struct Scene {
     /// Scene name: the summary's `scene` field and the default output
     /// folder name. Non-empty; no path separators, no control characters,
     /// not `.` or `..`. Required.
+    #[schemars(length(min = 1), regex(pattern = SCENE_NAME_PATTERN))]
+    #[schemars(extend("not" = {"enum": [".", ".."]}))]
     pub name: String,
     /// Time stepping, neighbour lists and global external actions.
     /// Default: [`WorldSettings::default`].
@@ -187,9 +190,11 @@ pub struct WorldSettings {
     /// Time step (fixed-step schemes), or initial and largest step
     /// (adaptive), > 0. Default: 1e-3.
     #[serde(default = "one_thousandth")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub dt: Real,
     /// Simulated duration, > 0 (after the settle phase). Default: 1.
     #[serde(default = "one")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub duration: Real,
     /// Settle phase, >= 0: the runner advances the scene by this duration
     /// before frame 0, every stage acting (tools, skin contact, creation)
@@ -203,9 +208,11 @@ pub struct WorldSettings {
     /// settle phase. Building a scene does not settle it; see
     /// [`crate::BuiltScene::settle`]. Default: 0 (no settle phase).
     #[serde(default)]
+    #[schemars(range(min = 0))]
     pub settle: Real,
     /// Frames written per unit of simulated time, > 0. Default: 30.
     #[serde(default = "thirty")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub frame_rate: Real,
     /// Neighbour-list settings. Default: [`NeighbourParams::default`].
     #[serde(default)]
@@ -224,6 +231,7 @@ pub struct WorldSettings {
     /// "Critical"` it follows the rule (`β1 = 2 ω1 I`) and must be left out
     /// (or 0). Default: 0.
     #[serde(default)]
+    #[schemars(range(min = 0))]
     pub angular_damping: Real,
     /// When a run is declared diverged. Default:
     /// [`DivergenceSettings::default`].
@@ -430,6 +438,7 @@ pub struct DivergenceSettings {
     /// Largest particle speed considered physical, > 0 (infinity disables
     /// the check). Default: infinity.
     #[serde(default = "infinity", skip_serializing_if = "is_infinite")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_speed: Real,
     /// The run is declared diverged when the kinetic energy exceeds this
     /// factor times the initial energy scale (see
@@ -437,6 +446,7 @@ pub struct DivergenceSettings {
     /// check; JSON has no infinity literal: use a huge number there).
     /// Default: 1e6.
     #[serde(default = "million")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub energy_growth: Real,
     /// Opt-in check for passive scenes (no force window, zero gravity, no
     /// implicit contact: damping can only remove energy): the run is
@@ -448,6 +458,7 @@ pub struct DivergenceSettings {
     /// limit or runaway energy (`scenes/extreme/tight_curvature.ron`), > 0.
     /// Default: infinity (off; JSON: omit it).
     #[serde(default = "infinity", skip_serializing_if = "is_infinite")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub energy_gain: Real,
     /// Explosion threshold: the run is declared diverged (exit 3) when a
     /// particle gets this many scene sizes beyond the scene's bounds (the
@@ -459,6 +470,7 @@ pub struct DivergenceSettings {
         default = "extent_growth",
         skip_serializing_if = "is_default_extent_growth"
     )]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub extent_growth: Real,
 }
 
@@ -503,6 +515,7 @@ pub enum Velocities {
     /// exactly. RON: `velocities: Some(Temperature(t: 1.44, seed: 87287))`.
     Temperature {
         /// Temperature, >= 0.
+        #[schemars(range(min = 0))]
         t: Real,
         /// Seed of the draw.
         seed: u64,
@@ -516,6 +529,7 @@ pub enum Velocities {
 pub struct ObjectSpec {
     /// Object name, unique in the scene (OBJ object name, summary).
     /// Non-empty, no control characters. Required.
+    #[schemars(length(min = 1), regex(pattern = OBJECT_NAME_PATTERN))]
     pub name: String,
     /// Name of its material: a key of [`Scene::materials`], or the name of
     /// a preset ([`crate::presets`]: `cloth`, `elastic_shell`,
@@ -526,14 +540,17 @@ pub struct ObjectSpec {
     pub generator: Generator,
     /// Mass of each particle, > 0. Default: 1.
     #[serde(default = "one")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub mass: Real,
     /// Principal moments of inertia (body frame), each > 0.
     /// Default: `[0.1, 0.1, 0.1]`.
     #[serde(default = "default_inertia")]
+    #[schemars(transform = op_dynamics::schema_rules::positive_items)]
     pub inertia: [Real; 3],
     /// Body-frame normal axis `a` (normalized; the world normal is
     /// `R(q) a`). Default: +z.
     #[serde(default = "plus_z")]
+    #[schemars(transform = op_dynamics::schema_rules::non_zero_vector)]
     pub normal_axis: [Real; 3],
     /// Particle type of seed 002 §5 (`Standard(k)` or `Hinge`).
     /// Default: `Standard(0)`.
@@ -574,13 +591,13 @@ pub enum Selection {
     #[default]
     All,
     /// These indices (each `< count`; a repeated index counts once).
-    List(Vec<usize>),
+    List(#[schemars(length(min = 1))] Vec<usize>),
     /// Indices `start..end` (half open, `start < end <= count`).
     Range(usize, usize),
     /// The first `n` particles (`1 <= n <= count`).
-    First(usize),
+    First(#[schemars(range(min = 1))] usize),
     /// The last `n` particles (`1 <= n <= count`).
-    Last(usize),
+    Last(#[schemars(range(min = 1))] usize),
 }
 
 impl Selection {
@@ -675,6 +692,7 @@ pub struct Override {
     pub temperature: Option<Real>,
     /// Set their mass (> 0). Default: unchanged.
     #[serde(default)]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub mass: Option<Real>,
 }
 
@@ -699,6 +717,7 @@ pub struct ForceSpec {
     /// Linear ramp at each end, >= 0 and at most half of `end - start`.
     /// Default: 0 (a step load).
     #[serde(default)]
+    #[schemars(range(min = 0))]
     pub ramp: Real,
 }
 

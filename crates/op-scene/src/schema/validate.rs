@@ -10,7 +10,7 @@ use op_dynamics::{Material, Real};
 
 use super::checks::{self, direction, finite, finite3, non_negative, positive, positive3};
 use super::{ForceSpec, ObjectSpec, Scene, ToolSpec, WorldSettings};
-use crate::error::SceneError;
+use crate::error::{short, SceneError};
 use crate::generators::MAX_PARTICLES;
 
 /// `objects[k] "name"`: how messages name an object.
@@ -60,6 +60,15 @@ fn validate_cohesion_scale(file: &str, path: &str, m: &Material) -> Result<(), S
     }
     Ok(())
 }
+
+/// The JSON Schema pattern of [`Scene::name`]: one or more characters,
+/// none of them `/`, `\` or a control character (Unicode category Cc,
+/// what `char::is_control` tests). The names `.` and `..`, which it lets
+/// through, the schema refuses with a `not` beside it.
+pub(crate) const SCENE_NAME_PATTERN: &str = r"^[^/\\\x00-\x1F\x7F-\x9F]+$";
+/// The JSON Schema pattern of an object's name ([`ObjectSpec::name`]):
+/// one or more characters, none of them a control character.
+pub(crate) const OBJECT_NAME_PATTERN: &str = r"^[^\x00-\x1F\x7F-\x9F]+$";
 
 /// Largest `alpha r0²` of a cohesion spacing the scene layer accepts.
 pub const MAX_COHESION_ALPHA_R0_SQUARED: Real = 1e6;
@@ -369,7 +378,10 @@ impl Scene {
                 file,
                 at("end"),
                 f.end,
-                &format!("must be greater than start = {} (or infinite)", f.start),
+                &format!(
+                    "must be greater than start = {} (or infinite)",
+                    short(f.start)
+                ),
             ));
         }
         let settle = self.world.settle;
@@ -380,7 +392,7 @@ impl Scene {
                 settle,
                 &format!(
                     "is too large for {path} (start {} and end {} become equal once shifted by the settle phase)",
-                    f.start, f.end
+                    short(f.start), short(f.end)
                 ),
             ));
         }
@@ -391,7 +403,7 @@ impl Scene {
                 file,
                 at("ramp"),
                 f.ramp,
-                &format!("must be at most half of end - start = {half}"),
+                &format!("must be at most half of end - start = {}", short(half)),
             ));
         }
         Ok(())
