@@ -3,9 +3,10 @@
 //! identical at any thread count.
 //!
 //! The scheme is "fixed blocks, ordered merge": particles are cut
-//! into blocks of consecutive slots (`Blocks`: an even number of equal
-//! blocks of at most `BLOCK` (2048) particles, a function of the particle
-//! count only, never of the thread count; the world keeps particles in
+//! into blocks of consecutive slots (`Blocks`: one block below
+//! `SPLIT_MIN` (384) particles, else an even number of equal blocks of at
+//! most `BLOCK` (2048) particles, a function of the particle count only,
+//! never of the thread count; the world keeps particles in
 //! spatial order, so a block is a compact region). Each block, in parallel, visits the half-list rows
 //! of its particles in order and evaluates every pair once: the pair's
 //! share for its first particle goes into that particle's running sum, the
@@ -64,6 +65,7 @@ pub enum Kernel {
 }
 
 mod blocks;
+pub(crate) use blocks::SPLIT_MIN;
 use blocks::{accumulate, BlockScratch, OrientedPair, PairSource, Scalar, SpacingPair, Sums};
 mod uniform_spacing;
 use uniform_spacing::uniform_spacing_pass;

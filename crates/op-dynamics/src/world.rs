@@ -11,7 +11,7 @@ use crate::error::ParamError;
 use crate::external::ExternalAccumulator;
 use crate::flags::Flags;
 use crate::forces::{ForceModel, ForceScratch, Kernel};
-use crate::integrators::{per_particle, Integrator};
+use crate::integrators::Integrator;
 use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
 use crate::neighbours::{copy_positions, spatial_order, NeighbourList};
@@ -782,8 +782,9 @@ impl World {
 /// each fork-join hands its work to the other threads by work stealing;
 /// entered from outside the pool, each one injects a job, wakes a pool
 /// thread and puts the caller to sleep until it is done, two thread
-/// wake-ups per pass. Worlds of at most one integrator chunk
-/// ([`per_particle::CHUNK`]) have no parallel pass and stay on the
+/// wake-ups per pass. Worlds of one accumulation block (fewer than
+/// [`crate::forces::SPLIT_MIN`] particles, so also one integrator chunk,
+/// [`crate::integrators::per_particle::CHUNK`]) have no parallel pass and stay on the
 /// caller's thread. Same work, same bits: only the thread that runs the
 /// serial parts changes.
 ///
@@ -794,7 +795,7 @@ impl World {
 /// caller's, and peak memory was 10% higher at 1 thread (133 against 120
 /// MB) and 4% at 2.
 fn on_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
-    if n <= per_particle::CHUNK || rayon::current_thread_index().is_some() {
+    if n < crate::forces::SPLIT_MIN || rayon::current_thread_index().is_some() {
         return f();
     }
     rayon::scope(|_| f())

@@ -17,11 +17,26 @@ use crate::neighbours::NeighbourList;
 /// [`Blocks`]).
 pub(crate) const BLOCK: usize = 2048;
 
+/// Fewest particles cut into two blocks: smaller worlds are one block (a
+/// serial scatter's order), worlds of `SPLIT_MIN..=BLOCK` particles two.
+///
+/// Measured (release `opsim run --profile`, 2 cores, interleaved runs,
+/// wall seconds at 1 / 2 threads, one block against two): worlds of 400
+/// particles and more gain at 2 threads and lose nothing at 1
+/// (`drape_sphere`, 400: 1.71-1.93 / 1.56-1.63 against 1.70-1.93 at 2
+/// threads with one block; `torus_shell`, 679: 2.59-2.60 against
+/// 3.38-3.70; `cookbook/cloth_on_box`, 576: 7.86-8.24 against
+/// 9.68-11.57; `fig_10_interpolation`, up to 1,627: 3.05-3.25 against
+/// 4.12-4.57), smaller ones gain nothing, the fork-join of a pass costing
+/// what half its pairs save (`sphere_shell`, 363; `fig_12_plastic`, 232;
+/// `cookbook/sheet_tear`, 155; `fig_08_crease`, 90).
+pub(crate) const SPLIT_MIN: usize = 384;
+
 /// How `n` particles are cut into accumulation blocks: one block when
-/// `n <= BLOCK` (a serial scatter's order), else `ceil(n / BLOCK)` rounded
-/// up to an even count of equal blocks (the last one shorter by the
-/// remainder). The order of every sum depends on `n` only, never on the
-/// thread count.
+/// `n < SPLIT_MIN` (a serial scatter's order), two equal blocks up to
+/// `BLOCK`, else `ceil(n / BLOCK)` rounded up to an even count of equal
+/// blocks (the last one shorter by the remainder). The order of every sum
+/// depends on `n` only, never on the thread count.
 ///
 /// Equal halves for two threads: blocks are the units the pool's threads
 /// share, so with `ceil(n / BLOCK)` full blocks one thread could be left
@@ -43,8 +58,10 @@ pub(crate) struct Blocks {
 impl Blocks {
     /// The blocks of `n` particles.
     pub(crate) fn new(n: usize) -> Self {
-        let count = n.div_ceil(BLOCK);
-        let count = if count > 1 { count + count % 2 } else { 1 };
+        let count = match n.div_ceil(BLOCK).max(2) {
+            _ if n < SPLIT_MIN => 1,
+            count => count + count % 2,
+        };
         // At least 2: `magic` is then below 2^64.
         let size = n.div_ceil(count).max(2);
         Blocks {
@@ -435,8 +452,9 @@ impl BlockScratch {
 mod block_tests {
     use super::*;
 
-    /// One block up to `BLOCK` particles; above, an even count of equal
-    /// blocks of at most `BLOCK` covering every slot; the block of a slot
+    /// One block below `SPLIT_MIN` particles; from there, an even count
+    /// of equal blocks of at most `BLOCK` covering every slot (two up to
+    /// `2 BLOCK`); the block of a slot
     /// by multiplication equals the division, for every slot of those
     /// sizes and at the top of the 32-bit range.
     #[test]
@@ -446,6 +464,9 @@ mod block_tests {
             1,
             2,
             3,
+            SPLIT_MIN - 1,
+            SPLIT_MIN,
+            SPLIT_MIN + 1,
             BLOCK - 1,
             BLOCK,
             BLOCK + 1,
@@ -456,8 +477,9 @@ mod block_tests {
             let cut = Blocks::new(n);
             assert!(cut.size >= 2 && cut.size <= BLOCK.max(2), "{n}: {cut:?}");
             assert!(cut.count * cut.size >= n && (cut.count.max(1) - 1) * cut.size < n.max(1));
-            if n > BLOCK {
+            if n >= SPLIT_MIN {
                 assert_eq!(cut.count % 2, 0, "{n}: {cut:?}");
+                assert_eq!(cut.count == 2, n <= 2 * BLOCK, "{n}: {cut:?}");
             } else {
                 assert!(cut.count <= 1);
             }
