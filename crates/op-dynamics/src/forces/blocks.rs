@@ -20,16 +20,16 @@ pub(crate) const BLOCK: usize = 2048;
 /// Fewest particles cut into two blocks: smaller worlds are one block (a
 /// serial scatter's order), worlds of `SPLIT_MIN..=BLOCK` particles two.
 ///
-/// Measured (release `opsim run --profile`, 2 cores, interleaved runs,
-/// wall seconds at 1 / 2 threads, one block against two): worlds of 400
-/// particles and more gain at 2 threads and lose nothing at 1
-/// (`drape_sphere`, 400: 1.71-1.93 / 1.56-1.63 against 1.70-1.93 at 2
-/// threads with one block; `torus_shell`, 679: 2.59-2.60 against
-/// 3.38-3.70; `cookbook/cloth_on_box`, 576: 7.86-8.24 against
-/// 9.68-11.57; `fig_10_interpolation`, up to 1,627: 3.05-3.25 against
-/// 4.12-4.57), smaller ones gain nothing, the fork-join of a pass costing
-/// what half its pairs save (`sphere_shell`, 363; `fig_12_plastic`, 232;
-/// `cookbook/sheet_tear`, 155; `fig_08_crease`, 90).
+/// Measured (release `opsim run --profile`, 2 cores, interleaved runs):
+/// worlds of 400 particles and more gain at 2 threads and lose nothing at
+/// one thread. Wall seconds at 2 threads, two blocks against one: `drape_sphere`
+/// (400) 1.56-1.63 against 1.71-1.93; `cookbook/cloth_on_box` (576)
+/// 7.86-8.24 against 9.68-11.57; `torus_shell` (679) 2.59-2.60 against
+/// 3.38-3.70; `fig_10_interpolation` (up to 1,627) 3.05-3.25 against
+/// 4.12-4.57. Smaller worlds gain nothing, the fork-join of a pass
+/// costing what half its pairs save (`sphere_shell`, 363;
+/// `fig_12_plastic`, 232; `cookbook/sheet_tear`, 155; `fig_08_crease`,
+/// 90).
 pub(crate) const SPLIT_MIN: usize = 384;
 
 /// How `n` particles are cut into accumulation blocks: one block when
