@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use anyhow::{anyhow, Context, Result};
 use clap::{Parser, Subcommand};
-use op_render::{self as render, RenderOptions, Style};
+use op_render::{self as render, FrameChoice, RenderOptions, Style};
 use op_scene::export::obj::scene_to_obj;
 use op_scene::export::FrameFormat;
 use op_scene::{BuiltScene, CheckpointEvery, RunError, RunOptions};
@@ -172,9 +172,15 @@ enum Command {
         /// Picture height in pixels (per frame for a contact sheet).
         #[arg(long, default_value_t = 600)]
         height: u32,
-        /// Frames in a contact sheet, >= 1.
-        #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u32).range(1..))]
-        frames: u32,
+        /// Frames of a run directory: `N` (>= 1) frames chosen evenly for a
+        /// contact sheet, or `A:B:S` the frames numbered A to B every S
+        /// (`0:40:10`: 0, 10, 20, 30, 40).
+        #[arg(long, default_value = "9", value_parser = parse_frame_choice)]
+        frames: FrameChoice,
+        /// One frame of a run directory, by its number (the picture of
+        /// `--frames K:K:1`), seen from the camera that frames the whole run.
+        #[arg(long, conflicts_with = "frames")]
+        frame: Option<u64>,
         /// Direction the camera looks along, `X,Y,Z` in scene coordinates
         /// (z-up), e.g. `0,0,-1` from above. Default: the run's view (the
         /// scene's `outputs.view`, from summary.json), else from the front
@@ -277,6 +283,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             width,
             height,
             frames,
+            frame,
             view,
             up,
         }) => {
@@ -302,8 +309,28 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
                 up: up.map(scene_to_obj),
                 ..Default::default()
             };
-            let rendering = render::render_path(&input, &opts, frames as usize)
-                .with_context(|| format!("cannot render {}", input.display()))?;
+            let choice = match frame {
+                Some(k) => FrameChoice::Numbers {
+                    first: k,
+                    last: k,
+                    step: 1,
+                },
+                None => frames,
+            };
+            if input.is_file() && (frame.is_some() || frames != FrameChoice::Spread(9)) {
+                return Err(anyhow!(
+                    "cannot render {}: --frame and --frames choose frames of a run directory, \
+                     and this is one frame file",
+                    input.display()
+                )
+                .into());
+            }
+            let rendering = if input.is_dir() {
+                render::render_run_frames(&input, &opts, choice)
+            } else {
+                render::render_path(&input, &opts, 1)
+            }
+            .with_context(|| format!("cannot render {}", input.display()))?;
             for note in &rendering.notes {
                 eprintln!("opsim: note: {note}");
             }
@@ -458,6 +485,33 @@ fn parse_direction(text: &str) -> Result<[f64; 3], String> {
         return Err(format!("{text:?}: a direction must be finite and non-zero"));
     }
     Ok(v)
+}
+
+/// `opsim render --frames`: `N` frames chosen evenly, or `A:B:S`.
+fn parse_frame_choice(text: &str) -> Result<FrameChoice, String> {
+    let expected = "expected a count N >= 1 or frame numbers A:B:S (first, last, step >= 1)";
+    let parts: Vec<&str> = text.split(':').collect();
+    let number = |t: &str| {
+        t.trim()
+            .parse::<u64>()
+            .map_err(|_| format!("{text:?}: {expected}"))
+    };
+    match parts.as_slice() {
+        [n] => match number(n)? {
+            0 => Err(format!("{text:?}: {expected}")),
+            n => Ok(FrameChoice::Spread(
+                usize::try_from(n).unwrap_or(usize::MAX),
+            )),
+        },
+        [a, b, step] => {
+            let (first, last, step) = (number(a)?, number(b)?, number(step)?);
+            if step == 0 || last < first {
+                return Err(format!("{text:?}: {expected}, A <= B"));
+            }
+            Ok(FrameChoice::Numbers { first, last, step })
+        }
+        _ => Err(format!("{text:?}: {expected}")),
+    }
 }
 
 /// `--format`'s parser: one format name.

@@ -193,6 +193,70 @@ fn render_is_upright_by_default_and_follows_view_and_up() {
     assert!(!out.join("bad.png").exists());
 }
 
+/// `render RUN --frame K` draws frame K alone and `--frames A:B:S` the
+/// frames numbered A to B every S, from the camera that frames the whole
+/// run; a choice that selects no frame, a reversed range and a frame
+/// asked of a single frame file exit 2 and write nothing.
+#[test]
+fn render_chooses_frames_by_number() {
+    let out = temp_dir("render-frames");
+    let o = run_scene(&repo().join("scenes/spiral.ron"), &out, &["--frames", "61"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let render = |name: &str, extra: &[&str]| {
+        let mut args = vec![
+            "render", ".", "--out", name, "--width", "160", "--height", "120",
+        ];
+        args.extend_from_slice(extra);
+        let o = opsim(&args, &out);
+        assert!(o.status.success(), "{extra:?}: {}", text(&o));
+        image::open(out.join(name)).unwrap().to_rgb8()
+    };
+    let first = render("f0.png", &["--frame", "0"]);
+    let pulled = render("f60.png", &["--frame", "60"]);
+    assert_eq!(first.dimensions(), (160, 120), "one frame, one picture");
+    let differing = first
+        .pixels()
+        .zip(pulled.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        differing > 500,
+        "frame 0 and frame 60 (the spiral pulled open) look alike: {differing} pixels differ"
+    );
+    let sheet = render("sheet.png", &["--frames", "0:60:20"]);
+    assert_eq!(
+        sheet.dimensions(),
+        (320, 240),
+        "frames 0, 20, 40, 60 in a 2 x 2 grid"
+    );
+    for (bad, says) in [
+        (vec!["--frame", "9999"], "the run has frames 0 to 60"),
+        (vec!["--frames", "5:2:1"], "A <= B"),
+        (vec!["--frames", "0:10:0"], "step >= 1"),
+    ] {
+        let mut args = vec!["render", ".", "--out", "bad.png"];
+        args.extend_from_slice(&bad);
+        let o = opsim(&args, &out);
+        assert_eq!(o.status.code(), Some(2), "{bad:?}: {}", text(&o));
+        assert!(text(&o).contains(says), "{bad:?}: {}", text(&o));
+        assert!(!out.join("bad.png").exists());
+    }
+    let file = frame_files(&out)[0].clone();
+    let o = opsim(
+        &[
+            "render",
+            file.to_str().unwrap(),
+            "--out",
+            "bad.png",
+            "--frame",
+            "3",
+        ],
+        &out,
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(!out.join("bad.png").exists());
+}
+
 /// `run` writes the frames, metrics and summary; the OBJ frames re-read
 /// with the expected counts and finite values.
 #[test]

@@ -49,18 +49,88 @@ pub fn sheet_grid(frames: usize) -> (usize, usize) {
     (cols, frames.div_ceil(cols))
 }
 
+/// Which frames of a run a picture shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameChoice {
+    /// At most this many frames, chosen evenly, first and last included
+    /// (`opsim render RUN --frames 9`).
+    Spread(usize),
+    /// The frames numbered `first`, `first + step`, ... up to `last`
+    /// (`--frames A:B:S`; `--frame K` is `K:K:1`).
+    Numbers {
+        /// First frame number.
+        first: u64,
+        /// Last frame number (included when on the step).
+        last: u64,
+        /// Step between frame numbers, >= 1.
+        step: u64,
+    },
+}
+
+impl FrameChoice {
+    /// The indices into `files` (frame number or rank, and files) chosen.
+    fn indices<T>(&self, files: &[(Option<u64>, T)]) -> Result<Vec<usize>, RenderError> {
+        match *self {
+            FrameChoice::Spread(0) => {
+                Err(RenderError::option("max_frames", "0; allowed: 1 or more"))
+            }
+            FrameChoice::Spread(m) => Ok(choose(files.len(), m)),
+            FrameChoice::Numbers { step: 0, .. } => Err(RenderError::option(
+                "frames",
+                "a step of 0; allowed: 1 or more",
+            )),
+            FrameChoice::Numbers { first, last, step } => {
+                let number = |k: usize| files[k].0.unwrap_or(k as u64);
+                let chosen: Vec<usize> = (0..files.len())
+                    .filter(|&k| {
+                        let n = number(k);
+                        (first..=last).contains(&n) && (n - first) % step == 0
+                    })
+                    .collect();
+                if chosen.is_empty() {
+                    let range = match files.len() {
+                        0 => "none".to_string(),
+                        len => format!("{} to {}", number(0), number(len - 1)),
+                    };
+                    return Err(RenderError::option(
+                        "frames",
+                        format!(
+                            "{first}:{last}:{step} selects no frame; the run has frames {range}"
+                        ),
+                    ));
+                }
+                Ok(chosen)
+            }
+        }
+    }
+}
+
 /// [`render_contact_sheet`] with the notes of every frame (each note once).
 pub(crate) fn contact_sheet(
     dir: &Path,
     opts: &RenderOptions,
     max_frames: usize,
 ) -> Result<Rendering, RenderError> {
+    render_run_frames(dir, opts, FrameChoice::Spread(max_frames))
+}
+
+/// The frames `choice` picks from the run (or frame folder) `dir`, in a
+/// grid as [`render_contact_sheet`] draws them (one frame: one labelled
+/// picture), seen from `opts.camera` or from the camera that frames the
+/// whole run, so that pictures of different frames of a run compare.
+///
+/// # Errors
+/// As [`render_contact_sheet`]; [`RenderError::BadOption`] also for a
+/// choice that selects no frame (the message gives the run's frame
+/// numbers) or a step of 0.
+pub fn render_run_frames(
+    dir: &Path,
+    opts: &RenderOptions,
+    choice: FrameChoice,
+) -> Result<Rendering, RenderError> {
     opts.validate()?;
-    if max_frames == 0 {
-        return Err(RenderError::option("max_frames", "0; allowed: 1 or more"));
-    }
     let files = frame_sets(dir)?;
-    let chosen = choose(files.len(), max_frames);
+    let chosen = choice.indices(&files)?;
     let (cols, rows) = sheet_grid(chosen.len());
     let (w, h) = (opts.width as usize, opts.height as usize);
     check_area((cols * w) as u64, (rows * h) as u64)?;

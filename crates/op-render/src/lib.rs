@@ -28,7 +28,7 @@ mod styles;
 use std::path::Path;
 
 pub use camera::{CameraSpec, DEFAULT_AZIMUTH_DEG, DEFAULT_ELEVATION_DEG, DEFAULT_FOV_Y_DEG};
-pub use contact_sheet::{render_contact_sheet, sheet_grid};
+pub use contact_sheet::{render_contact_sheet, render_run_frames, sheet_grid, FrameChoice};
 pub use error::RenderError;
 pub use image::RgbImage;
 pub use obj::{ObjData, ObjObject, MAX_OBJ_FILE_BYTES};
