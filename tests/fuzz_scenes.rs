@@ -166,14 +166,8 @@ fn run(scene: &Path, out: &Path) -> (Outcome, String, f64) {
 
 #[test]
 fn mutated_scenes_exit_cleanly_in_bounded_time_with_finite_outputs() {
-    let count: usize = std::env::var("OPSIM_FUZZ_MUTANTS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(240);
-    let seed: u64 = std::env::var("OPSIM_FUZZ_SEED")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(13);
+    let count: usize = fuzz_support::env_or("OPSIM_FUZZ_MUTANTS", 240);
+    let seed: u64 = fuzz_support::env_or("OPSIM_FUZZ_SEED", 13);
     let scenes = scenes();
     let root = std::env::temp_dir().join(format!("opsim-fuzz-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);

@@ -233,14 +233,8 @@ struct Tally {
 #[test]
 #[ignore = "minutes per mutant with a thousand duplicated objects; run by hand"]
 fn structural_mutants_are_checked_and_run_within_bounds() {
-    let count: usize = std::env::var("OPSIM_FUZZ_STRUCT_MUTANTS")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(40);
-    let seed: u64 = std::env::var("OPSIM_FUZZ_STRUCT_SEED")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(5);
+    let count: usize = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_MUTANTS", 40);
+    let seed: u64 = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_SEED", 5);
     let verbose = std::env::var_os("OPSIM_FUZZ_VERBOSE").is_some();
     let scenes = scenes();
     let root = std::env::temp_dir().join(format!("opsim-fuzz-structure-{}", std::process::id()));

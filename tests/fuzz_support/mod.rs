@@ -111,3 +111,12 @@ pub fn non_finite_outputs(out: &Path) -> Vec<PathBuf> {
     }
     bad
 }
+
+/// The number in environment variable `name`, else `default` (a fuzz
+/// test's mutant count or seed, set by hand to run more or others).
+pub fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}

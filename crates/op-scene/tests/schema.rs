@@ -12,21 +12,7 @@ fn validator() -> jsonschema::Validator {
 }
 
 fn shipped_scenes() -> Vec<std::path::PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
-    let mut out = Vec::new();
-    let mut dirs = vec![root];
-    while let Some(d) = dirs.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                dirs.push(p);
-            } else if matches!(p.extension().and_then(|e| e.to_str()), Some("ron" | "json")) {
-                out.push(p);
-            }
-        }
-    }
-    out.sort();
-    out
+    op_test_support::scene_files_under(&[op_test_support::scenes_dir()])
 }
 
 #[test]

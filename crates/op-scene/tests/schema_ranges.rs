@@ -11,8 +11,6 @@
 //! Values that `check` accepts at the edges of the ranges pass the schema
 //! too, and so does every scene and object name `check` accepts.
 
-use std::path::Path;
-
 use op_scene::reference::json_schema;
 use op_scene::{parse_scene, Format};
 use serde_json::{json, Value};
@@ -472,19 +470,8 @@ fn name_patterns_agree_with_check_character_by_character() {
 /// written as JSON, passes the schema with its ranges.
 #[test]
 fn every_shipped_and_test_scene_passes_the_ranges() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let mut files = Vec::new();
-    let mut dirs = vec![root.join("scenes"), root.join("tests/data")];
-    while let Some(d) = dirs.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                dirs.push(p);
-            } else if matches!(p.extension().and_then(|e| e.to_str()), Some("ron" | "json")) {
-                files.push(p);
-            }
-        }
-    }
+    let root = op_test_support::workspace_root();
+    let files = op_test_support::scene_files_under(&[root.join("scenes"), root.join("tests/data")]);
     assert!(files.len() > 40, "found only {} scenes", files.len());
     let v = validator();
     let mut failures = Vec::new();

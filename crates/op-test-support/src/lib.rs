@@ -265,3 +265,26 @@ pub fn scene_files() -> Vec<std::path::PathBuf> {
     v.sort();
     v
 }
+
+/// Every scene file (`.ron` and `.json`) under `roots`, their
+/// subfolders included, sorted.
+///
+/// # Panics
+///
+/// If a folder cannot be read.
+pub fn scene_files_under(roots: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    let mut dirs = roots.to_vec();
+    while let Some(d) = dirs.pop() {
+        for e in std::fs::read_dir(&d).expect("a readable folder of scenes") {
+            let p = e.expect("a readable entry").path();
+            if p.is_dir() {
+                dirs.push(p);
+            } else if matches!(p.extension().and_then(|e| e.to_str()), Some("ron" | "json")) {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
