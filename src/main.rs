@@ -581,19 +581,19 @@ fn run_built(mut built: BuiltScene, opts: &RunOptions, profile: bool) -> Result<
         bar.set_position(k as u64);
     });
     bar.finish_and_clear();
-    let warnings = match &result {
-        Ok(s) => &s.warnings,
-        Err(RunError::Diverged { summary, .. }) => &summary.warnings,
-        Err(_) => &Vec::new(),
-    };
-    for w in warnings {
-        eprintln!("opsim: warning: {w}");
-    }
     let summary = match &result {
         Ok(s) => Some(s),
         Err(RunError::Diverged { summary, .. }) => Some(&**summary),
         Err(_) => None,
     };
+    if let Some(s) = summary {
+        for w in &s.warnings {
+            eprintln!("opsim: warning: {w}");
+        }
+        for e in &s.expected {
+            eprintln!("opsim: expected: {e}");
+        }
+    }
     if let (true, Some(s)) = (profile, summary) {
         print_profile(s);
     }
@@ -641,6 +641,25 @@ fn print_profile(s: &op_scene::Summary) {
 /// of a scene that does not ask for it (a few seconds).
 const CHECK_MODE_WORK: f64 = 1e8;
 
+/// What `opsim check` adds to the line of an object made by a `HexSheet`
+/// that is not square within 5%: its extent, and the `ny` that would make
+/// it square (rows are `spacing √3/2` apart, so `nx = ny` is longer than
+/// wide; [`op_scene::Generator::sheet_extent`]).
+fn sheet_note(g: &op_scene::Generator) -> String {
+    let (Some((w, l)), op_scene::Generator::HexSheet { spacing, .. }) = (g.sheet_extent(), g)
+    else {
+        return String::new();
+    };
+    if w <= 0.0 || l <= 0.0 || (l / w - 1.0).abs() <= 0.05 {
+        return String::new();
+    }
+    let square_ny = 1.0 + (w / (spacing * 3f64.sqrt() / 2.0)).round();
+    format!(
+        ", a sheet {w:.1} wide and {l:.1} long (rows are spacing √3/2 apart: ny = \
+         {square_ny} makes it square)"
+    )
+}
+
 /// `opsim check`: validates the scene, builds a bounded sample of it
 /// (`op_scene::stability`) and prints what it enables, its objects and the
 /// stable-step estimate, with a warning when `dt` exceeds it, then the
@@ -675,9 +694,10 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
     outln!("scene {:?} ({}): valid", name(&scene.name), path.display());
     for ((o, n), b) in scene.objects.iter().zip(&counts).zip(built.objects()) {
         outln!(
-            "  object {:?}: {n} particles, rest spacing {:.4}",
+            "  object {:?}: {n} particles, rest spacing {:.4}{}",
             name(&o.name),
-            b.rest_spacing
+            b.rest_spacing,
+            sheet_note(&o.generator)
         );
     }
     outln!("  enabled: {}", sample.stages.join(", "));

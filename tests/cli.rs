@@ -405,6 +405,33 @@ fn check_prints_enabled_terms() {
     );
 }
 
+/// `check` gives the extent of a hexagonal sheet that is not square (rows
+/// are `spacing √3/2` apart, so `nx = ny` is longer than wide) and the
+/// `ny` that makes it square; a square one gets no note.
+#[test]
+fn check_says_when_a_hex_sheet_is_not_square() {
+    let dir = temp_dir("hex-aspect");
+    let sheet = |nx: usize, ny: usize| {
+        format!(
+            "(name: \"s\", materials: {{\"m\": ()}}, objects: [(name: \"sheet\", \
+             material: \"m\", generator: HexSheet(nx: {nx}, ny: {ny}, spacing: 1))])"
+        )
+    };
+    let path = scene_file(&dir, "long.ron", &sheet(20, 20));
+    let o = opsim(&["check", path.to_str().unwrap()], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    let t = text(&o);
+    assert!(
+        t.contains("a sheet 19.5 wide and 16.5 long") && t.contains("ny = 24 makes it square"),
+        "{t}"
+    );
+    let path = scene_file(&dir, "square.ron", &sheet(20, 24));
+    let o = opsim(&["check", path.to_str().unwrap()], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(!text(&o).contains("makes it square"), "{}", text(&o));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `render` produces a PNG of the requested size for each style.
 #[test]
 fn render_each_style() {

@@ -92,7 +92,8 @@ fn a_skinned_scene_breaking_apart_exits_3() {
     let _ = std::fs::remove_dir_all(scene.parent().unwrap());
 }
 
-/// A scene that declares its breakup runs to exit 0 with the warning; the
+/// A scene that declares its breakup runs to exit 0 and lists the breakup
+/// under `expected`, not as a warning (nor prints it as one); the
 /// declaration accepts only the object it names.
 #[test]
 fn a_declared_breakup_is_a_warning_and_only_for_its_object() {
@@ -105,9 +106,19 @@ fn a_declared_breakup_is_a_warning_and_only_for_its_object() {
     std::fs::write(&declared, &text).unwrap();
     let (o, summary) = run(&declared, &[]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert!(summary["warnings"]
+    assert!(summary["expected"]
         .to_string()
         .contains("broke into 2 pieces"));
+    assert!(
+        !summary["warnings"].to_string().contains("broke into"),
+        "{summary}"
+    );
+    assert!(
+        stderr(&o).contains("opsim: expected: object \"sheet\" broke into 2 pieces"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!stderr(&o).contains("warning: object"), "{}", stderr(&o));
 
     let other = dir.join("other.ron");
     std::fs::write(

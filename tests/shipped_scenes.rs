@@ -1,6 +1,6 @@
-//! Every shipped scene runs to the end without a warning, unless its header
-//! says which one it expects (`// expect-warning: TEXT (why)`: a warning
-//! containing TEXT must then be printed, as for the tearing scenes), and its
+//! Every shipped scene runs to the end without a warning; a finding its
+//! header expects (`// expect-warning: TEXT (why)`, as for the tearing
+//! scenes) must be printed as `opsim: expected: ...` with TEXT, and its
 //! frames hash to the golden value in `tests/data/golden_frames.txt` (a
 //! refactoring of the step must not change a bit; a change of the physics
 //! named in its commit re-blesses them with `OPSIM_BLESS=1`).
@@ -152,24 +152,28 @@ fn shipped_scenes_run_without_unexpected_warnings() {
                     .output()
                     .expect("run opsim");
                 let stderr = String::from_utf8_lossy(&o.stderr);
-                let warnings: Vec<&str> = stderr
-                    .lines()
-                    .filter_map(|l| l.strip_prefix("opsim: warning: "))
-                    .collect();
+                let lines = |prefix: &str| -> Vec<String> {
+                    stderr
+                        .lines()
+                        .filter_map(|l| l.strip_prefix(prefix))
+                        .map(str::to_string)
+                        .collect()
+                };
+                let (warnings, found) = (lines("opsim: warning: "), lines("opsim: expected: "));
                 let expect = expected(&std::fs::read_to_string(&scene).unwrap());
                 let fail = |why: String| failures.lock().unwrap().push(format!("{name}: {why}"));
                 if !o.status.success() {
                     fail(format!("exit {:?}: {stderr}", o.status.code()));
                 }
+                // An expected finding is printed as `expected:`, never as
+                // a warning; every other warning is unexpected.
                 for w in &warnings {
-                    if !expect.iter().any(|e| w.contains(e.as_str())) {
-                        fail(format!("unexpected warning: {w}"));
-                    }
+                    fail(format!("unexpected warning: {w}"));
                 }
                 for e in &expect {
-                    if !warnings.iter().any(|w| w.contains(e.as_str())) {
+                    if !found.iter().any(|w| w.contains(e.as_str())) {
                         fail(format!(
-                            "expected a warning containing {e:?}, got {warnings:?}"
+                            "expected a finding containing {e:?}, got {found:?}"
                         ));
                     }
                 }

@@ -305,11 +305,17 @@ impl BuiltScene {
     /// breakup is accepted ([`BuiltScene::accept_breakup`]), or the scene
     /// expects a warning its message begins with.
     pub fn accepts_breakup(&self, warning: &str) -> bool {
-        self.breakup_accepted
-            || self
-                .expected_warnings
-                .iter()
-                .any(|e| warning.starts_with(e))
+        self.breakup_accepted || self.expects(warning)
+    }
+
+    /// Whether the scene's header expects `warning`: one of its
+    /// `// expect-warning: TEXT` lines begins the message
+    /// ([`crate::Scene::expected_warnings`]). The run reports such a
+    /// finding under `expected`, not as a warning.
+    pub fn expects(&self, warning: &str) -> bool {
+        self.expected_warnings
+            .iter()
+            .any(|e| warning.starts_with(e))
     }
 }
 

@@ -118,8 +118,15 @@ pub struct Summary {
     /// What a user should know before trusting the frames: an object that
     /// broke into pieces, left the scene's bounds, a passive scene that
     /// gained energy, a step above the estimated stable step (see
-    /// [`crate::health`]). Also printed by `opsim run`.
+    /// [`crate::health`]). Also printed by `opsim run`. A finding the
+    /// scene's header expects is under `expected` instead.
     pub warnings: Vec<String>,
+    /// The findings the scene's header expects (`// expect-warning: TEXT`,
+    /// [`crate::Scene::expected_warnings`]), such as the tear of a tearing
+    /// scene: what the scene is meant to do, so `opsim run` prints them as
+    /// `expected:` lines, not as warnings. A breakup accepted by `opsim run
+    /// --allow-breakup` alone stays a warning.
+    pub expected: Vec<String>,
     /// Why the run stopped early other than by diverging (an output that
     /// could not be written, a skin that could not be polygonized), when
     /// it did.
@@ -786,6 +793,7 @@ impl Tally {
         warnings: Vec<String>,
         (wall, carried): (f64, &Carried),
     ) -> Summary {
+        let (expected, warnings) = warnings.into_iter().partition(|w| scene.expects(w));
         Summary {
             scene: scene.name.clone(),
             steps: scene.world.steps(),
@@ -798,6 +806,7 @@ impl Tally {
             diverged: self.divergence.is_some(),
             divergence: self.divergence.clone(),
             warnings,
+            expected,
             failure: self.failure.as_ref().map(error_chain),
             stages: self.stage_table(scene, carried),
             frames: self.written,

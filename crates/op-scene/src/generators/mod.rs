@@ -147,6 +147,12 @@ pub enum Generator {
     /// A hexagonal lattice of `nx` x `ny` particles (rows `spacing √3/2`
     /// apart, odd rows shifted half a spacing), centroid at `center`,
     /// normals all equal to the sheet normal, curvature 0.
+    ///
+    /// The sheet is `(nx - 1/2) spacing` wide (`(nx - 1) spacing` for one
+    /// row) and `(ny - 1) spacing √3/2` long, so `nx = ny` is not square
+    /// (20 x 20 at spacing 1: 19.5 x 16.5); a square sheet takes
+    /// `ny ≈ 1.155 nx` ([`Generator::sheet_extent`]; `opsim check` prints
+    /// the extent of a sheet that is not square).
     HexSheet {
         /// Particles per row, >= 1.
         #[schemars(range(min = 1, max = MAX_PARTICLES))]
@@ -283,6 +289,23 @@ impl Generator {
             Generator::TorusShell { .. } => "TorusShell",
             Generator::Points { .. } => "Points",
             Generator::List { .. } => "List",
+        }
+    }
+
+    /// The width (along its rows) and length (across them) of a
+    /// [`Generator::HexSheet`] before noise; `None` for other generators.
+    pub fn sheet_extent(&self) -> Option<(Real, Real)> {
+        match self {
+            Generator::HexSheet {
+                nx, ny, spacing, ..
+            } => {
+                let shift = if *ny > 1 { 0.5 } else { 0.0 };
+                Some((
+                    (nx.saturating_sub(1) as Real + shift) * spacing,
+                    ny.saturating_sub(1) as Real * spacing * 3f64.sqrt() / 2.0,
+                ))
+            }
+            _ => None,
         }
     }
 
