@@ -31,9 +31,27 @@ fn stages_include_skins_and_contact_only_when_used() {
     }
 }
 
+/// The scene's `// claim:` line.
+fn claim() -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/ball_vs_spiral.ron");
+    std::fs::read_to_string(path)
+        .expect("scene")
+        .lines()
+        .find_map(|l| l.strip_prefix("// claim: ").map(str::to_string))
+        .expect("ball_vs_spiral states its claim")
+}
+
 #[test]
 fn ball_hits_spiral_which_deforms_and_recovers() {
-    let mut built = scene("ball_vs_spiral").build(None, None).expect("builds");
+    println!("claim: {}", claim());
+    let scene = scene("ball_vs_spiral");
+    // The scene's camera sees the contact: it looks across the ball's
+    // approach (+y), not along it (from the front the ball hides where it
+    // presses the spiral).
+    let view = scene.outputs.view.expect("the scene chooses its view");
+    let along = view[1].abs() / view.iter().map(|c| c * c).sum::<f64>().sqrt();
+    assert!(along < 0.5, "the view {view:?} looks along the ball's path");
+    let mut built = scene.build(None, None).expect("builds");
     let out: PathBuf =
         std::env::temp_dir().join(format!("opsim-ball-vs-spiral-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
