@@ -3,8 +3,10 @@
 //!
 //! Elements: `vertex` (`x y z nx ny nz`, float), `face` (`vertex_indices`,
 //! a list of `uchar` count and `int` indices, three per triangle) and
-//! `edge` (`vertex1 vertex2`, int) for line segments. The elements with no
-//! entry (no face or no edge) are still declared, with count 0.
+//! `edge` (`vertex1 vertex2`, int) for line segments. `face` is declared
+//! even with no entry (count 0: a point cloud); `edge` only when the mesh
+//! has line segments, because readers that do not know it (trimesh
+//! without scipy among them) refuse a file that declares it.
 
 use std::io::Write;
 
@@ -97,7 +99,9 @@ fn model(mesh: &FrameMesh) -> Ply<Element> {
     }
     ply.header.elements.add(vertex);
     ply.header.elements.add(face);
-    ply.header.elements.add(edge);
+    if !mesh.lines.is_empty() {
+        ply.header.elements.add(edge);
+    }
     let vertices = mesh
         .vertices
         .iter()
@@ -125,7 +129,9 @@ fn model(mesh: &FrameMesh) -> Ply<Element> {
         .collect();
     ply.payload.insert("vertex".to_string(), vertices);
     ply.payload.insert("face".to_string(), faces);
-    ply.payload.insert("edge".to_string(), edges);
+    if !mesh.lines.is_empty() {
+        ply.payload.insert("edge".to_string(), edges);
+    }
     ply
 }
 
@@ -192,5 +198,40 @@ mod tests {
             Property::ListInt(vec![0, 1, 2])
         );
         assert_eq!(ply.payload["edge"][0]["vertex2"], Property::Int(2));
+    }
+
+    /// A mesh without line segments declares no `edge` element (trimesh
+    /// without scipy refuses `element edge 0`); a point cloud still
+    /// declares `face` with count 0.
+    #[test]
+    fn declares_edges_only_when_there_are_some() {
+        let header = |mesh: &FrameMesh| {
+            let mut bytes = Vec::new();
+            write(mesh, &mut bytes).unwrap();
+            let end = bytes
+                .windows(11)
+                .position(|w| w == b"end_header\n")
+                .unwrap();
+            String::from_utf8(bytes[..end].to_vec()).unwrap()
+        };
+        let mut mesh = FrameMesh {
+            name: "m".into(),
+            vertices: vec![Vec3::zeros(), Vec3::x(), Vec3::y()],
+            normals: vec![Vec3::z(); 3],
+            triangles: vec![[0, 1, 2]],
+            lines: vec![],
+        };
+        let h = header(&mesh);
+        assert!(h.contains("element face 1\n"), "{h}");
+        assert!(!h.contains("element edge"), "{h}");
+        mesh.triangles.clear();
+        let h = header(&mesh);
+        assert!(
+            h.contains("element vertex 3\n") && h.contains("element face 0\n"),
+            "{h}"
+        );
+        assert!(!h.contains("element edge"), "{h}");
+        mesh.lines.push([0, 1]);
+        assert!(header(&mesh).contains("element edge 1\n"));
     }
 }
