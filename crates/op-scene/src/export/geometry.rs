@@ -150,20 +150,73 @@ pub fn tool_name(k: usize, tool: &Tool) -> String {
     }
 }
 
-/// The mesh [`tool_name`] of tool `k` at world time `t`: flat-shaded
-/// triangles (three vertices each, with the face normal). Planes are drawn
-/// as a square of half side 10.
+/// The mesh [`tool_name`] of tool `k` at world time `t`, shaded smooth
+/// where the surface is and sharp at its creases ([`weld_smooth`], crease
+/// angle [`TOOL_CREASE_DEGREES`]): a ball or a cylinder's side shares its
+/// vertices and shades round, a cuboid's faces and a cylinder's caps keep
+/// their edges. Planes are drawn as a square of half side 10.
 pub fn tool_geometry(k: usize, tool: &Tool, t: Real) -> FrameMesh {
     let (v, tris) = tool.surface_mesh(t, 10.0);
-    let mut mesh = FrameMesh::named(tool_name(k, tool));
-    for tri in &tris {
-        let [a, b, c] = tri.map(|i| v[i as usize].coords);
-        let n = (b - a)
-            .cross(&(c - a))
-            .try_normalize(0.0)
-            .unwrap_or_default();
-        let f = [a, b, c].map(|x| mesh.push(x, n));
-        mesh.triangles.push(f);
+    let positions: Vec<Vec3> = v.iter().map(|p| p.coords).collect();
+    weld_smooth(tool_name(k, tool), &positions, &tris, TOOL_CREASE_DEGREES)
+}
+
+/// Faces of a tool meeting at more than this angle meet at a crease
+/// (sharp in the pictures); below it they shade as one smooth surface.
+/// Between the finest facets of a tool (a ball's 15° bands, a cylinder's
+/// 11.25° sides) and the 90° of a cuboid's edges.
+pub const TOOL_CREASE_DEGREES: Real = 40.0;
+
+/// A mesh over `positions` and `triangles` whose corners share a vertex
+/// where they share a position and shade as one smooth surface: each
+/// corner's normal is the area-weighted mean of the face normals at its
+/// vertex within `crease_degrees` of its own face's (the "auto smooth" of
+/// modelling tools), and the corners of one input vertex with the same
+/// normal are one vertex. Degenerate triangles are dropped. Vertices come
+/// in the order of their first corner, so the mesh is a function of its
+/// input only.
+pub fn weld_smooth(
+    name: String,
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    crease_degrees: Real,
+) -> FrameMesh {
+    // Each triangle's area-weighted normal (twice its area long).
+    let faces: Vec<([u32; 3], Vec3)> = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            (*t, (b - a).cross(&(c - a)))
+        })
+        .filter(|(_, n)| n.norm() > 0.0)
+        .collect();
+    let mut incident = vec![Vec::new(); positions.len()];
+    for (f, (t, _)) in faces.iter().enumerate() {
+        for &v in t {
+            incident[v as usize].push(f);
+        }
+    }
+    let cos_crease = crease_degrees.to_radians().cos();
+    let mut mesh = FrameMesh::named(name);
+    let mut welded = std::collections::HashMap::new();
+    for (t, n) in &faces {
+        let own = n.normalize();
+        let corner = |v: u32| {
+            let smooth: Vec3 = incident[v as usize]
+                .iter()
+                .map(|&g| faces[g].1)
+                .filter(|m| m.normalize().dot(&own) >= cos_crease)
+                .sum();
+            smooth.try_normalize(0.0).unwrap_or(own)
+        };
+        let tri = t.map(|v| {
+            let normal = corner(v);
+            let key = (v, [normal.x, normal.y, normal.z].map(Real::to_bits));
+            *welded
+                .entry(key)
+                .or_insert_with(|| mesh.push(positions[v as usize], normal))
+        });
+        mesh.triangles.push(tri);
     }
     mesh
 }
@@ -330,5 +383,89 @@ mod tests {
         assert_eq!(m.normals.len(), 3);
         assert_eq!(m.triangles, vec![[0, 1, 2]]);
         assert_eq!(m.vertices[2].x, 4.0);
+    }
+
+    fn tool(shape: op_modeling::ToolShape) -> Tool {
+        let mut particles = op_dynamics::Particles::new();
+        particles
+            .push(op_dynamics::ParticleDesc::at(op_dynamics::Point3::new(
+                9.0, 9.0, 9.0,
+            )))
+            .unwrap();
+        let params = op_modeling::ToolParams {
+            name: "t".into(),
+            shape,
+            path: op_modeling::tools::ToolPath::fixed([1.0, 2.0, 3.0]),
+            role: op_modeling::Role::Obstacle {
+                stiffness: 1.0,
+                margin: 0.0,
+                damping: 0.0,
+                friction: 0.0,
+            },
+            objects: None,
+        };
+        Tool::new(&params, &particles).unwrap()
+    }
+
+    /// A ball tool shares its vertices (no more than the parry mesh has)
+    /// and shades round: every vertex normal is within a few degrees of the
+    /// radial direction.
+    #[test]
+    fn a_ball_tool_is_welded_and_smooth() {
+        use op_modeling::ToolShape;
+        let t = tool(ToolShape::Ball { radius: 1.0 });
+        let (raw, tris) = t.surface_mesh(0.0, 10.0);
+        let mesh = tool_geometry(0, &t, 0.0);
+        assert_eq!(mesh.triangles.len(), tris.len());
+        assert!(
+            mesh.vertices.len() <= raw.len(),
+            "{} > {}",
+            mesh.vertices.len(),
+            raw.len()
+        );
+        assert!(mesh.vertices.len() < 3 * tris.len() / 2);
+        let centre = Vec3::new(1.0, 2.0, 3.0);
+        for (x, n) in mesh.vertices.iter().zip(&mesh.normals) {
+            let radial = (x - centre).normalize();
+            assert!(n.dot(&radial) > 0.99, "{n:?} at {x:?}");
+        }
+    }
+
+    /// A cuboid keeps its edges: four vertices per face, each with the
+    /// face's normal.
+    #[test]
+    fn a_cuboid_tool_keeps_its_creases() {
+        use op_modeling::ToolShape;
+        let t = tool(ToolShape::Cuboid {
+            half_extents: [1.0, 2.0, 0.5],
+        });
+        let mesh = tool_geometry(0, &t, 0.0);
+        assert_eq!(mesh.triangles.len(), 12);
+        assert_eq!(mesh.vertices.len(), 24);
+        for tri in &mesh.triangles {
+            let [a, b, c] = tri.map(|v| mesh.vertices[v as usize]);
+            let face = (b - a).cross(&(c - a)).normalize();
+            for v in tri {
+                assert!((mesh.normals[*v as usize] - face).norm() < 1e-12);
+            }
+        }
+    }
+
+    /// Two triangles folded at 90° along a shared edge keep separate
+    /// vertices there; folded at 10° they share them.
+    #[test]
+    fn welding_follows_the_crease_angle() {
+        let fold = |degrees: Real| {
+            let a = degrees.to_radians();
+            let positions = vec![
+                Vec3::zeros(),
+                Vec3::x(),
+                Vec3::new(0.5, 1.0, 0.0),
+                Vec3::new(0.5, -a.cos(), a.sin()),
+            ];
+            weld_smooth("f".into(), &positions, &[[0, 1, 2], [1, 0, 3]], 40.0)
+        };
+        assert_eq!(fold(10.0).vertices.len(), 4);
+        assert_eq!(fold(90.0).vertices.len(), 6);
     }
 }
