@@ -46,6 +46,7 @@ pub struct CreationSettings {
     /// The rest spacing `r0` the rules' lengths are fractions of, > 0.
     /// Default: the rest spacing of the first object.
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub spacing: Option<Real>,
     /// The stretching rule (`d_min`, `d_max`, `reach`, fractions of `r0`).
     /// Default: none.
@@ -61,10 +62,12 @@ pub struct CreationSettings {
     pub merging: Option<MergingParams>,
     /// Steps between two applications, >= 1. Default: 10.
     #[serde(default = "ten")]
+    #[schemars(range(min = 1))]
     pub interval: u64,
     /// No particle is created once the world holds this many, >= 1.
     /// Default: 100 000.
     #[serde(default = "hundred_thousand")]
+    #[schemars(range(min = 1))]
     pub max_particles: usize,
     /// Point-set interpolation (seed 000 §7): an object's particles are
     /// fixed samples, the rules fill only near them and stop at a release

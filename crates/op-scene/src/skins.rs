@@ -45,6 +45,7 @@ pub enum SkinPrimitive {
     /// perpendicular to its normal axis (the object's `normal_axis`).
     Square {
         /// Half side length, >= 0 (world units). Required.
+        #[schemars(range(min = 0))]
         half_side: Real,
     },
     /// A point at the particle (an isotropic blob of radius `radius / 2`).
@@ -63,13 +64,16 @@ pub struct SkinSpec {
     pub primitive: SkinPrimitive,
     /// Support radius `R` of the field kernel, > 0: an isolated primitive's
     /// skin lies at `R / 2` from it. Required.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub radius: Real,
     /// Cell size of polygonization and of contact sampling, > 0 (the pair
     /// uses the smaller of its two). Required.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub cell_size: Real,
     /// Contact pressure per unit removed field excess, >= 0 (a pair uses the
     /// mean of its two). Default: 100.
     #[serde(default = "hundred")]
+    #[schemars(range(min = 0))]
     pub stiffness: Real,
     /// How far primitives blend in the displayed skin, in `[1, 4]`: its
     /// kernel's support is `smoothness · radius` (a square's support also
@@ -84,6 +88,7 @@ pub struct SkinSpec {
     /// Puech §6, on which contact always acts
     /// ([`SkinSpec::contact_shape`]). Default: [`DEFAULT_SMOOTHNESS`].
     #[serde(default = "default_smoothness")]
+    #[schemars(range(min = 1, max = 4))]
     pub smoothness: Real,
     /// Distance from the skeleton to the skin, at least half the cell size
     /// and below 0.9 `radius` (the contact skin's support). The amplitude
@@ -99,6 +104,7 @@ pub struct SkinSpec {
     /// primitive's size, `radius / 2` from each particle, so a clump of
     /// points is round.
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub thickness: Option<Real>,
     /// Iterations of Taubin's volume-preserving smoothing applied to the
     /// skin's mesh in the written frames (op-implicit
@@ -107,6 +113,7 @@ pub struct SkinSpec {
     /// contact and the field are unchanged. Default: 0 (the exact iso
     /// surface).
     #[serde(default)]
+    #[schemars(range(max = 100))]
     pub smoothing: u32,
 }
 

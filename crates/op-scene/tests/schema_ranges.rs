@@ -21,14 +21,15 @@ fn validator() -> jsonschema::Validator {
 }
 
 /// A valid scene touching the fields the cases break: two objects, two
-/// materials (Lennard-Jones and cohesion), a force window, a tool and
-/// outputs with a view.
+/// materials (Lennard-Jones and cohesion), a skin, a force window, a tool
+/// with a keyframed path, creation rules with a fit, a wind and a speed
+/// clamp, and outputs with a view.
 fn base() -> Value {
     json!({
         "name": "probe",
         "world": {
             "dt": 1e-3, "duration": 1, "frame_rate": 10, "gravity": [0, 0, -1],
-            "settle": 0.5, "angular_damping": 0.1,
+            "angular_damping": 0.1,
             "neighbours": {"skin": 0.2},
             "divergence": {"energy_growth": 1e6}
         },
@@ -45,7 +46,10 @@ fn base() -> Value {
             {"name": "sheet", "material": "co",
              "generator": {"HexSheet": {"nx": 3, "ny": 3, "spacing": 1, "center": [0, 0, 5],
                                         "noise": 0.1}},
-             "velocities": {"Temperature": {"t": 1, "seed": 7}}}
+             "velocities": {"Temperature": {"t": 1, "seed": 7}},
+             "skin": {"primitive": {"Square": {"half_side": 0.5}}, "radius": 0.8,
+                      "cell_size": 0.25, "stiffness": 100, "smoothness": 1.5,
+                      "thickness": 0.3, "smoothing": 2}}
         ],
         "forces": [
             {"object": "chain", "particles": {"Last": 1}, "force": [0, 1, 0],
@@ -53,7 +57,20 @@ fn base() -> Value {
         ],
         "tools": [
             {"shape": {"Plane": {"normal": [0, 0, 1]}},
-             "role": {"Obstacle": {"stiffness": 100, "damping": 1}}}
+             "role": {"Obstacle": {"stiffness": 100, "damping": 1}},
+             "path": [{"time": 0, "position": [0, 0, -1]}, {"time": 1, "position": [0, 0, -2]}]}
+        ],
+        "creation": {
+            "spacing": 1, "interval": 10, "max_particles": 1000,
+            "stretching": {"d_min": 2, "d_max": 2.5, "reach": 1.5, "max_normal_angle": 1.5},
+            "growing": {"radius": 1.5, "min_gap": 1.7, "max_gap": 6, "clearance": 0.7},
+            "merging": {"distance": 0.3},
+            "fit": {"object": "chain", "release": 0.5}
+        },
+        "features": [
+            {"Wind": {"velocity": [1, 0, 0], "drag": 0.1,
+                      "gusts": [{"time": 0, "velocity": [0, 0, 1]}]}},
+            {"SpeedClamp": {"max_speed": 5}}
         ],
         "outputs": {"glyph_size": 0.4, "view": [0, -1, 0]}
     })
@@ -271,6 +288,69 @@ fn object_mistakes() -> Vec<Case> {
     ]
 }
 
+/// Mistakes of skins, creation rules, the fit and the features, one field
+/// each, which the schema catches.
+fn skin_creation_and_feature_mistakes() -> Vec<Case> {
+    let skin = |field: &'static str, v: Value| -> Edit {
+        let pointer: &'static str = Box::leak(format!("/objects/1/skin/{field}").into_boxed_str());
+        Set(pointer, v)
+    };
+    vec![
+        ("zero skin radius", skin("radius", json!(0))),
+        ("zero skin cell_size", skin("cell_size", json!(0))),
+        ("negative skin stiffness", skin("stiffness", json!(-1))),
+        ("skin smoothness below 1", skin("smoothness", json!(0.5))),
+        ("skin smoothness above 4", skin("smoothness", json!(5))),
+        ("zero skin thickness", skin("thickness", json!(0))),
+        ("101 smoothing iterations", skin("smoothing", json!(101))),
+        (
+            "negative square half_side",
+            skin("primitive", json!({"Square": {"half_side": -0.5}})),
+        ),
+        ("zero creation spacing", Set("/creation/spacing", json!(0))),
+        (
+            "zero creation interval",
+            Set("/creation/interval", json!(0)),
+        ),
+        (
+            "zero max_particles",
+            Set("/creation/max_particles", json!(0)),
+        ),
+        ("zero d_min", Set("/creation/stretching/d_min", json!(0))),
+        ("zero reach", Set("/creation/stretching/reach", json!(0))),
+        (
+            "max_normal_angle above pi",
+            Set("/creation/stretching/max_normal_angle", json!(3.5)),
+        ),
+        (
+            "zero growing radius",
+            Set("/creation/growing/radius", json!(0)),
+        ),
+        ("zero min_gap", Set("/creation/growing/min_gap", json!(0))),
+        (
+            "max_gap above 2 pi",
+            Set("/creation/growing/max_gap", json!(7)),
+        ),
+        (
+            "clearance above 1",
+            Set("/creation/growing/clearance", json!(1.5)),
+        ),
+        (
+            "merging distance 1",
+            Set("/creation/merging/distance", json!(1)),
+        ),
+        (
+            "negative fit release",
+            Set("/creation/fit/release", json!(-1)),
+        ),
+        ("zero wind drag", Set("/features/0/Wind/drag", json!(0))),
+        (
+            "negative clamp speed",
+            Set("/features/1/SpeedClamp/max_speed", json!(-5)),
+        ),
+    ]
+}
+
 /// The mistakes only `check` catches (rules between fields, and a
 /// tolerance): what docs/scenes.md lists under "What the JSON Schema
 /// checks and what only `opsim check` checks".
@@ -330,6 +410,53 @@ fn check_only_mistakes() -> Vec<Case> {
             Set("/forces/0/ramp", json!(0.6)),
         ),
         ("up parallel to view", Set("/outputs/up", json!([0, -2, 0]))),
+        (
+            "skin radius below its cell size",
+            Set("/objects/1/skin/radius", json!(0.2)),
+        ),
+        (
+            "skin thickness below half a cell",
+            Set("/objects/1/skin/thickness", json!(0.1)),
+        ),
+        (
+            "d_max below d_min",
+            Set("/creation/stretching/d_max", json!(1.5)),
+        ),
+        (
+            "reach not above d_max / 2",
+            Set("/creation/stretching/reach", json!(1)),
+        ),
+        (
+            "max_neighbours below min_neighbours",
+            Set("/creation/growing/min_neighbours", json!(6)),
+        ),
+        (
+            "max_gap below min_gap",
+            Set("/creation/growing/max_gap", json!(1)),
+        ),
+        (
+            "creation without a rule",
+            Set("/creation", json!({"interval": 10})),
+        ),
+        (
+            "fit of an unknown object",
+            Set("/creation/fit/object", json!("rope")),
+        ),
+        (
+            "fit released after the run",
+            Set("/creation/fit/release", json!(2)),
+        ),
+        (
+            "tool keyframes out of order",
+            Set("/tools/0/path/1/time", json!(0)),
+        ),
+        (
+            "gusts out of order",
+            Set(
+                "/features/0/Wind/gusts",
+                json!([{"time": 1, "velocity": [0, 0, 1]}, {"time": 0, "velocity": [0, 0, 1]}]),
+            ),
+        ),
     ]
 }
 
@@ -363,6 +490,7 @@ fn the_schema_catches_every_single_field_mistake_it_can_state() {
     let expected: Vec<&str> = check_only_mistakes().iter().map(|c| c.0).collect();
     let mut cases = world_and_material_mistakes();
     cases.extend(object_mistakes());
+    cases.extend(skin_creation_and_feature_mistakes());
     cases.extend(check_only_mistakes());
     for (name, edit) in &cases {
         let mut scene = base();
@@ -423,6 +551,25 @@ fn values_check_accepts_at_the_edges_pass_the_schema() {
         Set("/tools/0/shape/Plane/normal", json!([0, 0, -1e-100])),
         Set("/tools/0/role/Obstacle/damping", json!(0)),
         Set("/outputs/view", json!([0, 0, 1e-6])),
+        Set("/objects/1/skin/smoothness", json!(1)),
+        Set("/objects/1/skin/smoothness", json!(4)),
+        Set("/objects/1/skin/smoothing", json!(100)),
+        Set("/objects/1/skin/stiffness", json!(0)),
+        Set("/objects/1/skin/thickness", json!(0.125)),
+        Set(
+            "/objects/1/skin/primitive",
+            json!({"Square": {"half_side": 0}}),
+        ),
+        Set("/creation/interval", json!(1)),
+        Set("/creation/max_particles", json!(1)),
+        Set(
+            "/creation/stretching/max_normal_angle",
+            json!(std::f64::consts::PI),
+        ),
+        Set("/creation/growing/max_gap", json!(std::f64::consts::TAU)),
+        Set("/creation/growing/clearance", json!(1)),
+        Set("/creation/merging/distance", json!(0.999)),
+        Set("/creation/fit/release", json!(0)),
     ];
     for edit in &edges {
         let mut scene = base();

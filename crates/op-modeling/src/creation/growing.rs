@@ -39,6 +39,7 @@ use op_dynamics::particles::{ParticleDesc, Particles};
 pub struct GrowingParams {
     /// Neighbour radius, > 0. Default: 1.5 (the first ring of a hexagonal
     /// sheet, not the second at √3).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub radius: Real,
     /// Smallest neighbour count of a growing particle. Default: 0.
     pub min_neighbours: usize,
@@ -48,14 +49,17 @@ pub struct GrowingParams {
     /// Smallest angular gap that receives particles, in (0, 2π].
     /// Default: 100° (1.745 rad): the 60° gaps of a sheet, even distorted,
     /// do not; a missing neighbour's 120° gap does.
+    #[schemars(extend("exclusiveMinimum" = 0, "maximum" = std::f64::consts::TAU))]
     pub min_gap: Real,
     /// Largest angular gap that receives particles, in [`min_gap`, 2π].
     /// Default: 2π (edges grow too).
     ///
     /// [`min_gap`]: GrowingParams::min_gap
+    #[schemars(extend("exclusiveMinimum" = 0, "maximum" = std::f64::consts::TAU))]
     pub max_gap: Real,
     /// Smallest distance from a candidate to any particle or accepted
     /// candidate, in (0, 1]. Default: 0.7.
+    #[schemars(extend("exclusiveMinimum" = 0, "maximum" = 1))]
     pub clearance: Real,
 }
 

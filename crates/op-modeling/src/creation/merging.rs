@@ -42,6 +42,7 @@ use op_dynamics::Merge;
 #[serde(deny_unknown_fields, default)]
 pub struct MergingParams {
     /// Pairs closer than this merge, in (0, 1). Default: 0.3.
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 1))]
     pub distance: Real,
 }
 

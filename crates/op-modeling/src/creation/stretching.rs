@@ -50,12 +50,15 @@ use op_dynamics::particles::{ParticleDesc, Particles};
 #[serde(deny_unknown_fields, default)]
 pub struct StretchingParams {
     /// Smallest pair distance that opens a gap, > 0. Default: 2.0.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub d_min: Real,
     /// Largest pair distance considered, >= `d_min`. Default: 2.5.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub d_max: Real,
     /// Radius around the midpoint of the particles averaged for the new
     /// particle's position and frame, > `d_max / 2` (so the pair itself
     /// always counts). Default: 1.5.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub reach: Real,
     /// Only pairs whose two particles are at least this hot stretch
     /// (finite), or `None` for every pair. Default: `None`.
@@ -64,6 +67,7 @@ pub struct StretchingParams {
     /// Largest angle (radians) between the two particles' normals of a
     /// pair that stretches, in (0, pi]. Default: pi/2.
     #[serde(default = "right_angle")]
+    #[schemars(extend("exclusiveMinimum" = 0, "maximum" = std::f64::consts::PI))]
     pub max_normal_angle: Real,
 }
 

@@ -20,6 +20,7 @@ use crate::schema::Scene;
 pub struct SpeedClamp {
     /// The largest speed a particle keeps after a step, > 0 and finite.
     /// Required.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_speed: Real,
     /// Names of the objects it limits. Default: all.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -24,6 +24,7 @@ pub struct Wind {
     pub velocity: [Real; 3],
     /// Drag coefficient `c`: the force on a particle per unit of its speed
     /// relative to the air, > 0 and finite. Required.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub drag: Real,
     /// Gusts: keyframes of a velocity added to `velocity`, interpolated
     /// linearly between keyframes and held before the first and after the

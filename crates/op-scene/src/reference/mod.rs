@@ -89,9 +89,14 @@ only `opsim check` (and `opsim run`) applies:
   `noise` at most `spacing / 4`; a torus's `major > minor`; a sphere's `spacing` small enough
   for one particle; a spiral's `|curvature| * spacing <= 1`;
 - a force window's `end > start` and `ramp` at most half of it; `outputs.up` not parallel to
-  `outputs.view`; points files that exist and hold the right number of points; the rules
-  between features, tools, skins and creation settings and the world (heat settings for a
-  heater, plasticity needing `form`, bond memory needing bonds, ...).
+  `outputs.view`; points files that exist and hold the right number of points;
+- a skin's `radius` at least its `cell_size` and its `thickness` from half a cell to 0.9
+  `radius`; creation rules present (`stretching`, `growing` or `merging`), `d_max >= d_min`,
+  `reach > d_max / 2`, `max_neighbours >= min_neighbours`, `max_gap >= min_gap`; a fit's
+  object in the scene and its `release` before `world.duration`; tool keyframes and wind gusts
+  in strictly increasing time;
+- the rules between features, tools, skins and creation settings and the world (heat settings
+  for a heater, plasticity needing `form`, bond memory needing bonds, ...).
 
 ";
 

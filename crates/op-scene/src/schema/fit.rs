@@ -49,6 +49,7 @@ pub struct FitSettings {
     pub object: String,
     /// Scene time at which the seeds are freed and creation stops, finite,
     /// >= 0 and below `world.duration`. Required.
+    #[schemars(range(min = 0))]
     pub release: Real,
     /// Open data (seed 000 fig. 11): particles are created within
     /// `d_max / 2` spacings of a sample, so gaps up to the search range
