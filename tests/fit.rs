@@ -198,6 +198,11 @@ fn open_patch_keeps_a_wide_hole_and_fills_a_narrow_one() {
     let j = figures(&o);
     assert!(j["boundary_loops"].as_u64().unwrap() >= 2, "{j}");
     assert_eq!(j["euler_characteristic"], 0, "{j}");
+    assert_eq!(
+        (&j["pieces"], &j["closed"]),
+        (&1.into(), &false.into()),
+        "{j}"
+    );
     let back = read_point_set(&mesh).unwrap();
     assert_eq!(back.positions.len() as u64, j["vertices"].as_u64().unwrap());
     assert!(j["rms_distance"].as_f64().unwrap() < 0.05, "{j}");
@@ -216,6 +221,35 @@ fn open_patch_keeps_a_wide_hole_and_fills_a_narrow_one() {
     let j = figures(&o);
     assert_eq!(j["boundary_loops"], 1, "{j}");
     assert_eq!(j["euler_characteristic"], 1, "{j}");
+}
+
+/// Normals written as `0 0 0` (CGAL's "no normal") are no normals: the
+/// fit estimates them and closes the sphere as without normals; the JSON
+/// says so, with one piece, closed. Given normals are reported as given.
+#[test]
+fn zero_normals_are_estimated_and_the_figures_say_so() {
+    let dir = temp_dir("zero-normals");
+    let points = fibonacci_sphere(400, 1.0);
+    write_xyz(
+        &dir.join("zero.xyz"),
+        &points,
+        Some(&vec![Vec3::zeros(); points.len()]),
+    );
+    let o = opsim(&["fit", "zero.xyz", "--out", "zero.obj"], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    let j = figures(&o);
+    assert_eq!(j["normals"], "estimated", "{j}");
+    assert_eq!(j["euler_characteristic"], 2, "{j}");
+    assert_eq!(
+        (&j["pieces"], &j["closed"]),
+        (&1.into(), &true.into()),
+        "{j}"
+    );
+    let radial: Vec<Vec3> = points.iter().map(|p| p.coords.normalize()).collect();
+    write_xyz(&dir.join("given.xyz"), &points, Some(&radial));
+    let o = opsim(&["fit", "given.xyz", "--out", "given.obj"], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(figures(&o)["normals"], "given");
 }
 
 /// Bad input exits with code 2 and names the file (and the line for text).

@@ -52,9 +52,12 @@ pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
 
 /// The figures of a fit as one line of JSON, what `opsim fit` prints:
 /// `particles`, `vertices`, `faces`, `euler_characteristic`,
-/// `boundary_loops`, `rms_distance`, `max_distance` (samples to mesh),
-/// `spacing` and `thin_features` (`centre`, `samples`, `thickness`; largest
-/// first). A non-finite figure is `null`.
+/// `boundary_loops`, `pieces` (sets of triangles joined through shared
+/// vertices), `closed` (triangles and no boundary loop), `rms_distance`,
+/// `max_distance` (samples to mesh), `spacing`, `normals` (`"given"` by
+/// the file or `"estimated"`; zero normals count as none) and
+/// `thin_features` (`centre`, `samples`, `thickness`; largest first). A
+/// non-finite figure is `null`.
 pub fn figures_json(fit: &Fit) -> String {
     let number = |x: Real| {
         if x.is_finite() {
@@ -81,15 +84,18 @@ pub fn figures_json(fit: &Fit) -> String {
         })
         .collect();
     format!(
-        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"thin_features\": [{}]}}",
+        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"pieces\": {}, \"closed\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"normals\": \"{}\", \"thin_features\": [{}]}}",
         fit.particles,
         fit.mesh.vertices.len(),
         fit.mesh.faces.len(),
         fit.mesh.euler_characteristic,
         fit.mesh.boundary_loops,
+        fit.pieces(),
+        fit.closed(),
         number(fit.mesh.rms_distance),
         number(fit.mesh.max_distance),
         number(fit.spacing),
+        if fit.normals_given { "given" } else { "estimated" },
         thin.join(", ")
     )
 }

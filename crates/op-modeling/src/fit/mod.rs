@@ -303,6 +303,28 @@ pub struct Fit {
     /// (a rim turning within a spacing) the mesh may be open or joined
     /// there, and this says where to look (or to give a finer spacing).
     pub thin_features: Vec<ThinFeature>,
+    /// Whether the samples' normals came with them (`false`: estimated,
+    /// stage 2; a file whose normals include the zero vector has none).
+    pub normals_given: bool,
+}
+
+impl Fit {
+    /// The mesh's pieces: sets of triangles joined through shared
+    /// vertices ([`crate::triangulation::vertex_components`]).
+    pub fn pieces(&self) -> usize {
+        let mut roots: Vec<u32> = crate::triangulation::vertex_components(&self.mesh.faces)
+            .into_iter()
+            .flatten()
+            .collect();
+        roots.sort_unstable();
+        roots.dedup();
+        roots.len()
+    }
+
+    /// Whether the mesh is closed: it has triangles and no boundary loop.
+    pub fn closed(&self) -> bool {
+        !self.mesh.faces.is_empty() && self.mesh.boundary_loops == 0
+    }
 }
 
 impl FitParams {
@@ -472,6 +494,7 @@ pub fn fit_with_stages(
             particles: p.len(),
             mesh,
             thin_features,
+            normals_given: data.normals.is_some(),
         },
         stages.laps,
     ))

@@ -413,17 +413,13 @@ impl VertexColumns {
             if let Some(n) = self.normal {
                 let v = Vec3::new(row[n[0]], row[n[1]], row[n[2]]);
                 normals.push(unit(v, file, None).map_err(|_| {
-                    format_err(
-                        file,
-                        None,
-                        format!("vertex {k} has a zero or non-finite normal"),
-                    )
+                    format_err(file, None, format!("vertex {k} has a non-finite normal"))
                 })?);
             }
         }
         Ok(PointSet {
             positions,
-            normals: self.normal.map(|_| normals),
+            normals: self.normal.and_then(|_| super::given_normals(normals)),
         })
     }
 }
