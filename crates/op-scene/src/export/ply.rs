@@ -3,8 +3,10 @@
 //!
 //! Elements: `vertex` (`x y z nx ny nz`, float), `face` (`vertex_indices`,
 //! a list of `uchar` count and `int` indices, three per triangle) and
-//! `edge` (`vertex1 vertex2`, int) for line segments. The elements with no
-//! entry (no face or no edge) are still declared, with count 0.
+//! `edge` (`vertex1 vertex2`, int) for line segments. `face` is declared
+//! even with no entry (count 0); `edge` only when the mesh has segments
+//! (particles drawn as axes): readers that know no `edge` element (meshio;
+//! trimesh without scipy) then read every other file (issue 34).
 
 use std::io::Write;
 
@@ -97,7 +99,9 @@ fn model(mesh: &FrameMesh) -> Ply<Element> {
     }
     ply.header.elements.add(vertex);
     ply.header.elements.add(face);
-    ply.header.elements.add(edge);
+    if !mesh.lines.is_empty() {
+        ply.header.elements.add(edge);
+    }
     let vertices = mesh
         .vertices
         .iter()
@@ -125,7 +129,9 @@ fn model(mesh: &FrameMesh) -> Ply<Element> {
         .collect();
     ply.payload.insert("vertex".to_string(), vertices);
     ply.payload.insert("face".to_string(), faces);
-    ply.payload.insert("edge".to_string(), edges);
+    if !mesh.lines.is_empty() {
+        ply.payload.insert("edge".to_string(), edges);
+    }
     ply
 }
 
@@ -139,8 +145,8 @@ pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
 
 /// Binary little-endian PLY, one file per sequence and frame, in scene
 /// coordinates (z-up, as Blender's PLY importer takes them): vertices with
-/// normals (`x y z nx ny nz`, float), `face` (`vertex_indices`) and `edge`
-/// (`vertex1 vertex2`) elements.
+/// normals (`x y z nx ny nz`, float), `face` (`vertex_indices`) and, for
+/// line segments, `edge` (`vertex1 vertex2`) elements.
 #[derive(Debug)]
 pub struct PlyFormat;
 
@@ -192,5 +198,18 @@ mod tests {
             Property::ListInt(vec![0, 1, 2])
         );
         assert_eq!(ply.payload["edge"][0]["vertex2"], Property::Int(2));
+        // Without segments, no `edge` element.
+        let mut bytes = Vec::new();
+        write(
+            &FrameMesh {
+                lines: Vec::new(),
+                ..mesh
+            },
+            &mut bytes,
+        )
+        .unwrap();
+        let header = String::from_utf8_lossy(&bytes[..bytes.len().min(300)]);
+        assert!(header.contains("element face 1"), "{header}");
+        assert!(!header.contains("element edge"), "{header}");
     }
 }
