@@ -140,11 +140,11 @@ fn a_skin_is_written_without_particle_output() {
         .filter(|p| p.extension().is_some_and(|e| e == "obj"))
         .collect();
     assert_eq!(frames.len(), summary.frames);
-    assert!(out.join("frames/cloth_skin/cloth_skin.obj.series").is_file());
+    assert!(out
+        .join("frames/cloth_skin/cloth_skin.obj.series")
+        .is_file());
     for frame in &frames {
-        let skin = objects(frame)
-            .remove("cloth_skin")
-            .unwrap_or_default();
+        let skin = objects(frame).remove("cloth_skin").unwrap_or_default();
         assert!(skin.len() > 100, "a skin of {} vertices", skin.len());
     }
     let _ = std::fs::remove_dir_all(&out);

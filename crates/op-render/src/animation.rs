@@ -44,8 +44,14 @@ pub struct Animation {
 }
 
 /// Animates the frames `choice` picks from the run (or frame folder)
-/// `dir` ([module docs](self)); `frame_rate` is the run's frames per unit
-/// of scene time (one unit a second; `None`: [`DEFAULT_FRAME_RATE`]).
+/// `dir` as a GIF that loops forever: each frame drawn as
+/// [`super::render_run_frames`] draws one (the same camera, framing the
+/// whole run, and the frame number in the corner), quantized to its own
+/// palette of at most 256 colours (exact, else the `gif` crate's
+/// deterministic NeuQuant), shown for the scene time to the next frame
+/// ([`delays`]). `frame_rate` is the run's frames per unit of scene time,
+/// one unit a second (`None`: [`DEFAULT_FRAME_RATE`]);
+/// [`super::run_frame_rate`] reads it from the run's `summary.json`.
 ///
 /// # Errors
 /// As [`super::render_run_frames`]; [`RenderError::BadOption`] also for a
