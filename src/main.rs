@@ -10,8 +10,7 @@ use std::process::ExitCode;
 
 use anyhow::{anyhow, Context, Result};
 use clap::{Parser, Subcommand};
-use op_render::{self as render, FrameChoice, RenderOptions, Style};
-use op_scene::export::obj::scene_to_obj;
+use op_render::{FrameChoice, Style};
 use op_scene::export::FrameFormat;
 use op_scene::{BuiltScene, CheckpointEvery, RunError, RunOptions};
 
@@ -30,6 +29,10 @@ macro_rules! outln {
         }
     }};
 }
+
+mod render_cmd;
+
+use render_cmd::{demo_contact_sheet, render_command, RenderArgs};
 
 /// The default demo scene, embedded so `opsim` works from any directory.
 const DEMO_SCENE: &str = include_str!("../scenes/spiral.ron");
@@ -155,11 +158,14 @@ enum Command {
         #[arg(long)]
         markdown: bool,
     },
-    /// Render an OBJ frame, or a contact sheet of a run directory, to PNG.
+    /// Render an OBJ frame, or a contact sheet of a run directory, to PNG;
+    /// or animate a run directory's frames to GIF.
     Render {
         /// An .obj file, or a run directory (its frames/ are used).
         input: PathBuf,
-        /// Output PNG file.
+        /// Output file: `.png` for a picture (a frame, or a contact sheet of
+        /// a run), `.gif` for an animation of a run's frames at its frame
+        /// rate, looping.
         #[arg(long)]
         out: PathBuf,
         /// Drawing style: axes, discs, wireframe or shaded (faces; particles
@@ -172,11 +178,12 @@ enum Command {
         /// Picture height in pixels (per frame for a contact sheet).
         #[arg(long, default_value_t = 600)]
         height: u32,
-        /// Frames of a run directory: `N` (>= 1) frames chosen evenly for a
-        /// contact sheet, or `A:B:S` the frames numbered A to B every S
-        /// (`0:40:10`: 0, 10, 20, 30, 40).
-        #[arg(long, default_value = "9", value_parser = parse_frame_choice)]
-        frames: FrameChoice,
+        /// Frames of a run directory: `N` (>= 1) frames chosen evenly, or
+        /// `A:B:S` the frames numbered A to B every S (`0:40:10`: 0, 10,
+        /// 20, 30, 40). Default: 9 for a contact sheet, every frame for a
+        /// GIF.
+        #[arg(long, value_parser = parse_frame_choice)]
+        frames: Option<FrameChoice>,
         /// One frame of a run directory, by its number (the picture of
         /// `--frames K:K:1`), seen from the camera that frames the whole run.
         #[arg(long, conflicts_with = "frames")]
@@ -233,7 +240,8 @@ fn main() -> ExitCode {
 }
 
 /// `opsim` alone: runs the demo scene (`scenes/spiral.ron`) into
-/// `opsim-out/spiral` and draws its contact sheet.
+/// `opsim-out/spiral`, draws its contact sheet and animates it
+/// (`preview.gif`).
 fn demo() -> Result<(), Failure> {
     let scene = op_scene::parse_scene(
         DEMO_SCENE,
@@ -286,58 +294,17 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             frame,
             view,
             up,
-        }) => {
-            // A file is read as OBJ: say so for another kind of frame
-            // rather than find no vertices in it.
-            if input.is_file() && !is_obj(&input) {
-                return Err(anyhow!(
-                    "cannot render {}: render reads .obj files (a frame written with \
-                     --format obj, the default) or a run directory",
-                    input.display()
-                )
-                .into());
-            }
-            // The frames are y-up OBJ files of a z-up scene: directions
-            // given in scene coordinates are converted like the frames.
-            let view = view.or_else(|| render::run_view_axis(&input));
-            let up = up.or_else(|| default_up(render::run_up_axis(&input), view));
-            let opts = RenderOptions {
-                width,
-                height,
-                style,
-                view: view.map(scene_to_obj),
-                up: up.map(scene_to_obj),
-                ..Default::default()
-            };
-            let choice = match frame {
-                Some(k) => FrameChoice::Numbers {
-                    first: k,
-                    last: k,
-                    step: 1,
-                },
-                None => frames,
-            };
-            if input.is_file() && (frame.is_some() || frames != FrameChoice::Spread(9)) {
-                return Err(anyhow!(
-                    "cannot render {}: --frame and --frames choose frames of a run directory, \
-                     and this is one frame file",
-                    input.display()
-                )
-                .into());
-            }
-            let rendering = if input.is_dir() {
-                render::render_run_frames(&input, &opts, choice)
-            } else {
-                render::render_path(&input, &opts, 1)
-            }
-            .with_context(|| format!("cannot render {}", input.display()))?;
-            for note in &rendering.notes {
-                eprintln!("opsim: note: {note}");
-            }
-            render::save_png(&rendering.image, &out)?;
-            outln!("{}", out.display());
-            Ok(())
-        }
+        }) => render_command(RenderArgs {
+            input,
+            out,
+            style,
+            width,
+            height,
+            frames,
+            frame,
+            view,
+            up,
+        }),
     }
 }
 
@@ -370,50 +337,6 @@ fn run_command(args: RunArgs) -> Result<(), Failure> {
         resume: args.resume,
     };
     run_built(built, &opts, args.profile)
-}
-
-/// The up direction of a picture when none is given: the run's `up`
-/// (else +z), or +y (+z if the run's up is +y) when that is along the view
-/// direction `view`, so that `--view 0,0,-1` alone looks straight down
-/// with +y up.
-fn default_up(run_up: Option<[f64; 3]>, view: Option<[f64; 3]>) -> Option<[f64; 3]> {
-    let along = |a: [f64; 3], b: [f64; 3]| {
-        let c = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let n = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        n(c) <= 1e-6 * n(a) * n(b)
-    };
-    match (run_up, view) {
-        (up, Some(v)) if along(up.unwrap_or([0.0, 0.0, 1.0]), v) => {
-            [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-                .into_iter()
-                .find(|&u| !along(u, v))
-        }
-        (up, _) => up,
-    }
-}
-
-/// The demo's picture: a contact sheet of its run, `contact_sheet.png` in
-/// the run folder, seen from above (the demo spiral lies in the plane
-/// z = 0); prints its path.
-fn demo_contact_sheet(out: &Path) -> Result<(), Failure> {
-    let opts = RenderOptions {
-        width: 360,
-        height: 300,
-        style: render::Style::Discs,
-        view: Some(scene_to_obj([0.0, 0.0, -1.0])),
-        up: Some(scene_to_obj([0.0, 1.0, 0.0])),
-        ..Default::default()
-    };
-    let rendering = render::render_path(out, &opts, 9)
-        .with_context(|| format!("cannot render {}", out.display()))?;
-    let png = out.join("contact_sheet.png");
-    render::save_png(&rendering.image, &png)?;
-    outln!("contact sheet: {}", png.display());
-    Ok(())
 }
 
 /// Whether `path` names an OBJ file (extension `.obj`, any case): what

@@ -25,6 +25,12 @@ fn text(o: &Output) -> String {
     )
 }
 
+/// Whether `path` is a frame file, not a sequence's series file
+/// (`<stem>.obj.series`).
+fn is_frame_file(path: &Path) -> bool {
+    path.extension().is_none_or(|e| e != "series")
+}
+
 /// Every frame file of a run (`frames/<stem>/<stem>_00000.obj`, ...), in
 /// path order.
 fn frame_files(dir: &Path) -> Vec<PathBuf> {
@@ -37,16 +43,22 @@ fn frame_files(dir: &Path) -> Vec<PathBuf> {
             v.push(path);
         }
     }
+    v.retain(|p| is_frame_file(p));
     v.sort();
     v
 }
 
-/// The number of frames of a run: files per sequence folder, the same for
-/// every sequence.
+/// The number of frames of a run: frame files per sequence folder, the
+/// same for every sequence.
 fn frame_count(dir: &Path) -> usize {
     let counts: Vec<usize> = std::fs::read_dir(dir.join("frames"))
         .unwrap()
-        .map(|e| std::fs::read_dir(e.unwrap().path()).unwrap().count())
+        .map(|e| {
+            std::fs::read_dir(e.unwrap().path())
+                .unwrap()
+                .filter(|f| is_frame_file(&f.as_ref().unwrap().path()))
+                .count()
+        })
         .collect();
     assert!(counts.windows(2).all(|w| w[0] == w[1]), "{counts:?}");
     counts.first().copied().unwrap_or(0)
@@ -100,6 +112,87 @@ fn no_argument_runs_the_demo() {
         .filter(|p| i32::from(p.0[2]) > i32::from(p.0[0]) + 40)
         .count();
     assert!(drawn > 2000, "{drawn} particle pixels");
+    // And animates it: every frame, at the scene's 2 frames a second.
+    assert!(
+        text(&o).contains("preview: opsim-out/spiral/preview.gif"),
+        "{}",
+        text(&o)
+    );
+    let frames = gif_frames(&out.join("preview.gif"));
+    assert_eq!(frames.len() as u64, s["frames"].as_u64().unwrap());
+    assert!(frames.iter().all(|f| (f.0, f.1, f.2) == (360, 300, 50)));
+}
+
+/// The frames of a GIF file: width, height, delay (hundredths of a
+/// second) and RGBA pixels of each, after checking that it loops forever.
+fn gif_frames(path: &Path) -> Vec<(u16, u16, u16, Vec<u8>)> {
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::RGBA);
+    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut decoder = options.read_info(std::io::BufReader::new(file)).unwrap();
+    let mut frames = Vec::new();
+    while let Some(f) = decoder.read_next_frame().unwrap() {
+        frames.push((f.width, f.height, f.delay, f.buffer.to_vec()));
+    }
+    assert_eq!(decoder.repeat(), gif::Repeat::Infinite, "loops forever");
+    frames
+}
+
+/// `render RUN --out run.gif` animates every frame of the run at its frame
+/// rate (spiral: 2 frames a second, 50 hundredths each) from one camera,
+/// `--frames A:B:S` a choice (each frame shown for the scene time to the
+/// next); an output that is neither `.png` nor `.gif`, or a GIF of one
+/// frame file, exits 2 and writes nothing.
+#[test]
+fn render_animates_a_run_to_gif() {
+    let out = temp_dir("render-gif");
+    let o = run_scene(&repo().join("scenes/spiral.ron"), &out, &["--frames", "21"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let render = |name: &str, extra: &[&str]| {
+        let mut args = vec![
+            "render", ".", "--out", name, "--width", "160", "--height", "120",
+        ];
+        args.extend_from_slice(extra);
+        let o = opsim(&args, &out);
+        assert!(o.status.success(), "{extra:?}: {}", text(&o));
+        gif_frames(&out.join(name))
+    };
+    let all = render("run.gif", &[]);
+    assert_eq!(all.len(), 21, "every frame");
+    assert!(all.iter().all(|f| (f.0, f.1, f.2) == (160, 120, 50)));
+    let differing =
+        |a: &[u8], b: &[u8]| a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p != q).count();
+    assert!(
+        differing(&all[0].3, &all[20].3) > 300,
+        "the spiral is pulled open by frame 20"
+    );
+    assert!(
+        (1..21).all(|k| all[k].3 != all[k - 1].3),
+        "each frame differs from the one before (its number at least)"
+    );
+    let chosen = render("chosen.gif", &["--frames", "0:20:10"]);
+    assert_eq!(chosen.len(), 3);
+    assert!(chosen.iter().all(|f| f.2 == 500), "10 frames at 2 a second");
+    assert_eq!(chosen[2].3, all[20].3, "the same camera as the whole run's");
+    for (args, says) in [
+        (vec!["render", ".", "--out", "run.bmp"], ".png"),
+        (vec!["render", ".", "--out", "run"], ".gif"),
+        (
+            vec![
+                "render",
+                "frames/spiral/spiral_00000.obj",
+                "--out",
+                "one.gif",
+            ],
+            "run directory",
+        ),
+    ] {
+        let o = opsim(&args, &out);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o));
+        assert!(text(&o).contains(says), "{args:?}: {}", text(&o));
+    }
+    assert!(!out.join("run.bmp").exists() && !out.join("run").exists());
+    assert!(!out.join("one.gif").exists());
 }
 
 /// Mean picture row of the cloth's (blue) and the tool's (orange) pixels.

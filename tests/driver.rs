@@ -74,6 +74,7 @@ fn a_skinned_sheet_with_creation_heat_eraser_and_obstacle_runs_with_its_skin() {
     let mut frames: Vec<PathBuf> = std::fs::read_dir(out.join("frames/sheet_skin"))
         .unwrap()
         .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
         .collect();
     frames.sort();
     assert_eq!(frames.len(), summary.frames);
@@ -133,14 +134,17 @@ fn a_skin_is_written_without_particle_output() {
         ["cloth_skin"],
         "no particle sequence, one skin sequence"
     );
-    let frames = std::fs::read_dir(out.join("frames/cloth_skin"))
+    let frames: Vec<PathBuf> = std::fs::read_dir(out.join("frames/cloth_skin"))
         .unwrap()
-        .count();
-    assert_eq!(frames, summary.frames);
-    for e in std::fs::read_dir(out.join("frames/cloth_skin")).unwrap() {
-        let skin = objects(&e.unwrap().path())
-            .remove("cloth_skin")
-            .unwrap_or_default();
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
+        .collect();
+    assert_eq!(frames.len(), summary.frames);
+    assert!(out
+        .join("frames/cloth_skin/cloth_skin.obj.series")
+        .is_file());
+    for frame in &frames {
+        let skin = objects(frame).remove("cloth_skin").unwrap_or_default();
         assert!(skin.len() > 100, "a skin of {} vertices", skin.len());
     }
     let _ = std::fs::remove_dir_all(&out);

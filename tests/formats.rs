@@ -1,11 +1,13 @@
 //! `opsim run --format obj,ply,vtu`: binary PLY frame sequences
 //! and VTU particle state parse back with the crates that wrote them, with
-//! the counts of the OBJ frames and every per-particle attribute.
+//! the counts of the OBJ frames and every per-particle attribute; every
+//! sequence, in every format, has a series file listing exactly its frame
+//! files with their times (issue 34: ParaView time series of everything).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use op_test_support::fresh_path;
+use op_test_support::{fresh_path, temp_dir};
 use ply_rs_bw::ply::{DefaultElement, Property};
 use vtkio::model::{Attribute, DataSet, IOBuffer, Piece};
 
@@ -110,7 +112,8 @@ fn check_ply_frame(out: &Path, k: usize, particles: usize) {
     let p = ply(&path);
     assert_eq!(p.payload["vertex"].len(), v, "{}", path.display());
     assert_eq!(p.payload["face"].len(), f);
-    assert_eq!(p.payload["edge"].len(), l);
+    // No segments (discs): no `edge` element.
+    assert_eq!(p.payload.get("edge").map_or(0, Vec::len), l);
     assert_eq!(v, 7 * particles, "discs: 7 vertices per particle");
     let first_obj: Vec<f64> = std::fs::read_to_string(&obj)
         .unwrap()
@@ -238,4 +241,176 @@ fn vtu_alone_writes_no_mesh_frames_and_an_unknown_format_is_refused() {
         "{err}"
     );
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// The frame files of `stem` in `folder`: `<stem>_<digits>.<ext>`, sorted.
+fn frame_files_of(folder: &Path, stem: &str, ext: &str) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(folder)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| {
+            n.strip_prefix(stem)
+                .and_then(|r| r.strip_prefix('_'))
+                .and_then(|r| r.strip_suffix(ext))
+                .and_then(|r| r.strip_suffix('.'))
+                .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        })
+        .collect();
+    names.sort();
+    names
+}
+
+/// The files a series file lists, with their times, checked to increase.
+fn series_listing(path: &Path) -> Vec<(String, f64)> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let series: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(series["file-series-version"], "1.0");
+    let files: Vec<(String, f64)> = series["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            (
+                f["name"].as_str().unwrap().to_string(),
+                f["time"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    assert!(
+        files.windows(2).all(|w| w[0].1 < w[1].1),
+        "{}: times increase: {files:?}",
+        path.display()
+    );
+    files
+}
+
+/// A skinned scene with tools, its triangulation written too, run with
+/// `--format vtu,ply`: every sequence has a series file per format that
+/// writes it (`frames/<stem>/<stem>.ply.series`; `vtu/<stem>.vtu.series`
+/// for the skin, surface and tools, whose VTU files hold triangles and
+/// normals) listing exactly the frame files on disk at increasing times,
+/// and `summary.json` lists the series files. A rerun with another format
+/// replaces them.
+#[test]
+fn every_sequence_has_a_series_file_listing_its_frame_files() {
+    let dir = temp_dir("series");
+    let scene = dir.join("skinned_cut_surface.ron");
+    let text = std::fs::read_to_string(repo().join("tests/data/skinned_cut.ron")).unwrap();
+    let text = text.replace(
+        "outputs: (particles: Discs)",
+        "outputs: (particles: Discs, triangulation: true)",
+    );
+    assert!(text.contains("triangulation: true"));
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("run");
+    let run = |formats: &str, frames: &str| {
+        let o = opsim(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--frames",
+            frames,
+            "--format",
+            formats,
+            "--allow-breakup",
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_str::<serde_json::Value>(
+            &std::fs::read_to_string(out.join("summary.json")).unwrap(),
+        )
+        .unwrap()
+    };
+    let summary = run("vtu,ply", "3");
+    let rate = summary["frame_rate"].as_f64().unwrap();
+    let sequences = summary["files"]["sequences"].as_array().unwrap();
+    let kinds: Vec<&str> = sequences
+        .iter()
+        .map(|s| s["kind"].as_str().unwrap())
+        .collect();
+    for kind in ["particles", "skin", "surface", "tool"] {
+        assert!(kinds.contains(&kind), "a {kind} sequence: {kinds:?}");
+    }
+    let mut expected = Vec::new();
+    for s in sequences {
+        let stem = s["stem"].as_str().unwrap();
+        expected.push(format!("frames/{stem}/{stem}.ply.series"));
+        if s["kind"] != "particles" {
+            expected.push(format!("vtu/{stem}.vtu.series"));
+        }
+    }
+    expected.push("vtu/state.vtu.series".into());
+    let listed: Vec<String> = summary["files"]["series"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p.as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(listed, expected);
+
+    for rel in &listed {
+        let path = out.join(rel);
+        let folder = path.parent().unwrap();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let (stem, ext) = name
+            .strip_suffix(".series")
+            .and_then(|n| n.rsplit_once('.'))
+            .unwrap();
+        let files = series_listing(&path);
+        let names: Vec<String> = files.iter().map(|f| f.0.clone()).collect();
+        assert_eq!(names, frame_files_of(folder, stem, ext), "{rel}");
+        assert_eq!(files.len(), 3, "{rel}");
+        for (k, (_, t)) in files.iter().enumerate() {
+            assert!((t - k as f64 / rate).abs() < 1e-9, "{rel}: {t}");
+        }
+        if ext == "vtu" && stem != "state" {
+            for f in &names {
+                check_vtu_mesh(&folder.join(f));
+            }
+        }
+    }
+
+    // A rerun with PLY alone replaces every file of the first run.
+    let summary = run("ply", "2");
+    let vtu_left: Vec<_> = std::fs::read_dir(out.join("vtu"))
+        .map(|d| d.map(|e| e.unwrap().file_name()).collect())
+        .unwrap_or_default();
+    assert!(vtu_left.is_empty(), "{vtu_left:?}");
+    for rel in summary["files"]["series"].as_array().unwrap() {
+        let path = out.join(rel.as_str().unwrap());
+        assert_eq!(series_listing(&path).len(), 2, "{}", path.display());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A skin, surface or tool frame in VTU: triangles over its points, a unit
+/// normal per point.
+fn check_vtu_mesh(path: &Path) {
+    let vtk = vtkio::Vtk::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        panic!("not an unstructured grid");
+    };
+    let Piece::Inline(piece) = &pieces[0] else {
+        panic!("not inline");
+    };
+    let n = piece.num_points();
+    assert!(n > 0, "{}: no points", path.display());
+    assert!(
+        piece
+            .cells
+            .types
+            .iter()
+            .all(|t| *t == vtkio::model::CellType::Triangle),
+        "{}",
+        path.display()
+    );
+    assert!(!piece.cells.types.is_empty(), "{}", path.display());
+    let (normals, comps) = array(&piece.data.point, "normal");
+    assert_eq!(comps, 3);
+    let normals = floats(normals);
+    assert_eq!(normals.len(), 3 * n);
+    for c in normals.chunks(3) {
+        let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!((norm - 1.0).abs() < 1e-6, "{}: {c:?}", path.display());
+    }
 }

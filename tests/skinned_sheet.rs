@@ -75,6 +75,7 @@ fn last_frame(out: &Path, stem: &str) -> String {
     let mut frames: Vec<_> = std::fs::read_dir(out.join("frames").join(stem))
         .unwrap()
         .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
         .collect();
     frames.sort();
     std::fs::read_to_string(frames.last().unwrap()).unwrap()
@@ -317,6 +318,7 @@ fn shipped_skinned_scenes_keep_whole_skins_in_every_frame() {
             let mut frames: Vec<_> = std::fs::read_dir(&dir)
                 .unwrap()
                 .map(|e| e.unwrap().path())
+                .filter(|p| p.extension().is_some_and(|e| e == "obj"))
                 .collect();
             frames.sort();
             assert!(frames.len() > 30, "{name}");

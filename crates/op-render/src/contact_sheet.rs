@@ -5,8 +5,10 @@ use std::path::Path;
 use image::RgbImage;
 
 use super::error::RenderError;
-use super::run_dir::{frame_sets, read_frame};
-use super::{auto_camera, check_area, render_with_camera, RenderOptions, Rendering};
+use super::run_dir::{frame_sets, read_frame, FrameSet};
+use super::{
+    auto_camera, check_area, render_with_camera, CameraSpec, ObjData, RenderOptions, Rendering,
+};
 
 /// Renders a grid of at most `max_frames` frames chosen evenly (first and last
 /// included) from the frames of `dir`: its `*.obj` files (one frame each,
@@ -68,8 +70,12 @@ pub enum FrameChoice {
 }
 
 impl FrameChoice {
+    /// Every frame of the run (`opsim render RUN --out run.gif` without
+    /// `--frames`).
+    pub const ALL: FrameChoice = FrameChoice::Spread(usize::MAX);
+
     /// The indices into `files` (frame number or rank, and files) chosen.
-    fn indices<T>(&self, files: &[(Option<u64>, T)]) -> Result<Vec<usize>, RenderError> {
+    pub(crate) fn indices<T>(&self, files: &[(Option<u64>, T)]) -> Result<Vec<usize>, RenderError> {
         match *self {
             FrameChoice::Spread(0) => {
                 Err(RenderError::option("max_frames", "0; allowed: 1 or more"))
@@ -134,31 +140,7 @@ pub fn render_run_frames(
     let (cols, rows) = sheet_grid(chosen.len());
     let (w, h) = (opts.width as usize, opts.height as usize);
     check_area((cols * w) as u64, (rows * h) as u64)?;
-
-    let mut frames = Vec::with_capacity(chosen.len());
-    for &i in &chosen {
-        frames.push((i, read_frame(&files[i].1)?));
-    }
-    let spec = match opts.camera {
-        Some(spec) => spec,
-        None => {
-            if frames.iter().all(|(_, d)| d.vertex_count() == 0) {
-                return Err(RenderError::empty(format!(
-                    "the frames in {} have no vertices",
-                    dir.display()
-                )));
-            }
-            // Frame the whole run: the shown frames and up to
-            // `FRAMED_FRAMES` more spread over it.
-            let mut framed = Vec::new();
-            for i in choose(files.len(), FRAMED_FRAMES) {
-                if !chosen.contains(&i) {
-                    framed.push(read_frame(&files[i].1)?);
-                }
-            }
-            auto_camera(frames.iter().map(|(_, d)| d).chain(&framed), opts)
-        }
-    };
+    let (frames, spec) = read_chosen(dir, opts, &files, &chosen)?;
 
     let mut sheet = RgbImage::from_pixel(
         (cols * w) as u32,
@@ -179,7 +161,7 @@ pub fn render_run_frames(
         for (x, y, px) in r.image.enumerate_pixels() {
             sheet.put_pixel(x0 as u32 + x, y0 as u32 + y, *px);
         }
-        let label = files[*rank].0.unwrap_or(*rank as u64);
+        let label = frame_label(&files, *rank);
         draw_number(
             &mut sheet,
             label,
@@ -194,6 +176,48 @@ pub fn render_run_frames(
         image: sheet,
         notes,
     })
+}
+
+/// The frames at `chosen` (indices into `files`, the run `dir`'s frames),
+/// read, with the camera that shows them: `opts.camera`, or the camera
+/// that frames the whole run (the chosen frames and up to
+/// [`FRAMED_FRAMES`] more spread over it), so that pictures of different
+/// frames of a run compare.
+pub(crate) fn read_chosen(
+    dir: &Path,
+    opts: &RenderOptions,
+    files: &[FrameSet],
+    chosen: &[usize],
+) -> Result<(Vec<(usize, ObjData)>, CameraSpec), RenderError> {
+    let mut frames = Vec::with_capacity(chosen.len());
+    for &i in chosen {
+        frames.push((i, read_frame(&files[i].1)?));
+    }
+    let spec = match opts.camera {
+        Some(spec) => spec,
+        None => {
+            if frames.iter().all(|(_, d)| d.vertex_count() == 0) {
+                return Err(RenderError::empty(format!(
+                    "the frames in {} have no vertices",
+                    dir.display()
+                )));
+            }
+            let mut framed = Vec::new();
+            for i in choose(files.len(), FRAMED_FRAMES) {
+                if !chosen.contains(&i) {
+                    framed.push(read_frame(&files[i].1)?);
+                }
+            }
+            auto_camera(frames.iter().map(|(_, d)| d).chain(&framed), opts)
+        }
+    };
+    Ok((frames, spec))
+}
+
+/// The label of frame `rank` of `files`: the number in its file names,
+/// else its rank.
+pub(crate) fn frame_label(files: &[FrameSet], rank: usize) -> u64 {
+    files[rank].0.unwrap_or(rank as u64)
 }
 
 /// `min(m, n)` indices out of `0..n`, evenly spread, first and last included
@@ -211,7 +235,7 @@ fn choose(n: usize, m: usize) -> Vec<usize> {
 }
 
 /// Dark ink on a light background, light ink on a dark one.
-fn ink_for(bg: [u8; 3]) -> [u8; 3] {
+pub(crate) fn ink_for(bg: [u8; 3]) -> [u8; 3] {
     let luma = 0.299 * f64::from(bg[0]) + 0.587 * f64::from(bg[1]) + 0.114 * f64::from(bg[2]);
     if luma > 128.0 {
         [40, 40, 40]
@@ -257,7 +281,14 @@ const DIGITS: [[u8; 7]; 10] = [
 
 /// Draws the decimal `value` with its top-left corner at `(x, y)`, each font
 /// pixel `scale x scale`; clipped to the image.
-fn draw_number(img: &mut RgbImage, value: u64, x: usize, y: usize, scale: usize, ink: [u8; 3]) {
+pub(crate) fn draw_number(
+    img: &mut RgbImage,
+    value: u64,
+    x: usize,
+    y: usize,
+    scale: usize,
+    ink: [u8; 3],
+) {
     let text = value.to_string();
     for (k, ch) in text.bytes().enumerate() {
         let glyph = &DIGITS[usize::from(ch - b'0')];

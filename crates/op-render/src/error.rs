@@ -62,6 +62,15 @@ pub enum RenderError {
         /// What was given and what is allowed.
         message: String,
     },
+    /// The GIF encoder failed (an animation, [`super::render_run_animation`]).
+    #[error("{}: cannot encode GIF", path.display())]
+    EncodeGif {
+        /// The run directory animated.
+        path: PathBuf,
+        /// The encoder's error.
+        #[source]
+        source: gif::EncodingError,
+    },
     /// The PNG encoder failed for a reason other than I/O.
     #[error("{}: cannot encode PNG", path.display())]
     Encode {

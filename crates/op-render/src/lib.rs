@@ -8,6 +8,10 @@
 //!   directory, seen from one fixed camera so that motion shows;
 //! - [`render_path`]: either of those by what the path is, with the notes about
 //!   fallbacks (for the CLI to print);
+//! - [`render_run_frames`]: chosen frames of a run ([`FrameChoice`]), seen
+//!   from the camera that frames the whole run;
+//! - [`render_run_animation`]: an animated GIF of a run's frames, at its
+//!   frame rate, looping ([`save_gif`]);
 //! - [`save_png`]: atomic PNG writing.
 //!
 //! Everything is pure Rust and deterministic: the same input and options give
@@ -17,6 +21,7 @@
 
 #![warn(missing_docs)]
 
+mod animation;
 mod camera;
 mod contact_sheet;
 mod error;
@@ -27,12 +32,15 @@ mod styles;
 
 use std::path::Path;
 
+pub use animation::{
+    delays, render_run_animation, save_gif, Animation, DEFAULT_FRAME_RATE, MIN_DELAY_CS,
+};
 pub use camera::{CameraSpec, DEFAULT_AZIMUTH_DEG, DEFAULT_ELEVATION_DEG, DEFAULT_FOV_Y_DEG};
 pub use contact_sheet::{render_contact_sheet, render_run_frames, sheet_grid, FrameChoice};
 pub use error::RenderError;
 pub use image::RgbImage;
 pub use obj::{ObjData, ObjObject, MAX_OBJ_FILE_BYTES};
-pub use run_dir::{read_run_frame, run_up_axis, run_view_axis};
+pub use run_dir::{read_run_frame, run_frame_rate, run_up_axis, run_view_axis};
 pub use styles::Style;
 
 use camera::Camera;

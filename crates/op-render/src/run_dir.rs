@@ -69,13 +69,32 @@ pub fn run_view_axis(path: &Path) -> Option<[f64; 3]> {
     run_direction(path, "view")
 }
 
-/// The direction `key` of the first `summary.json` in `path` or up to three
+/// The frame rate (frames per unit of scene time) of the run that holds
+/// `path` (as [`run_up_axis`]): the `frame_rate` of its `summary.json`.
+/// `None` when there is none, or it is not finite and positive.
+pub fn run_frame_rate(path: &Path) -> Option<f64> {
+    run_summary(path, |v| {
+        v.get("frame_rate")?
+            .as_f64()
+            .filter(|r| r.is_finite() && *r > 0.0)
+    })
+}
+
+/// What `read` finds in the first `summary.json` in `path` or up to three
 /// folders above it.
-fn run_direction(path: &Path, key: &str) -> Option<[f64; 3]> {
+fn run_summary<T>(path: &Path, read: impl Fn(&serde_json::Value) -> Option<T>) -> Option<T> {
     let start = if path.is_dir() { path } else { path.parent()? };
     start.ancestors().take(4).find_map(|dir| {
         let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
         let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+        read(&v)
+    })
+}
+
+/// The direction `key` of the first `summary.json` in `path` or up to three
+/// folders above it.
+fn run_direction(path: &Path, key: &str) -> Option<[f64; 3]> {
+    run_summary(path, |v| {
         let up = v.get(key)?.as_array()?;
         let c: Vec<f64> = up.iter().filter_map(serde_json::Value::as_f64).collect();
         let up = <[f64; 3]>::try_from(c).ok()?;

@@ -197,6 +197,12 @@ pub struct FrameFiles {
     /// `vtu/state_<k:05>.vtu`, listed in `vtu/state.vtu.series`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub vtu_series: Option<String>,
+    /// Every series file (ParaView's file-series JSON: a sequence's files
+    /// with their scene times, `crate::export::series`), relative to the
+    /// output directory: `frames/<stem>/<stem>.<ext>.series` per sequence
+    /// and OBJ or PLY format, `vtu/<stem>.vtu.series` per skin, surface
+    /// and tool when VTU is written, then `vtu/state.vtu.series`.
+    pub series: Vec<String>,
 }
 
 /// Why a run stopped early.
@@ -908,6 +914,11 @@ fn frame_files(writer: &FrameWriter) -> FrameFiles {
             .series_files()
             .first()
             .map(|p| p.to_string_lossy().replace('\\', "/")),
+        series: writer
+            .all_series_files()
+            .iter()
+            .map(|p| p.to_string_lossy().replace('\\', "/"))
+            .collect(),
     }
 }
 

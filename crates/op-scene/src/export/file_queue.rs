@@ -10,14 +10,16 @@
 //! instead of filling the memory. A file that cannot be written stops the
 //! queue: the files before it are complete on disk, none after it is
 //! written, and the failure (with its frame) is returned by the next
-//! [`FileQueue::push`] or by [`FileQueue::finish`].
+//! [`FileQueue::push`] or by [`FileQueue::finish`]. Index files (the
+//! series files) are written atomically but not synced
+//! ([`super::replace_atomically`], [`FileQueue::push_index`]).
 
 use std::path::PathBuf;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
 
-use super::write_atomically;
+use super::{replace_atomically, write_atomically};
 
 /// The most files waiting to be written.
 const DEPTH: usize = 64;
@@ -33,8 +35,9 @@ pub struct WriteFailure {
     pub error: std::io::Error,
 }
 
-/// One file to write: its frame, path and bytes.
-type Job = (usize, PathBuf, Vec<u8>);
+/// One file to write: its frame, path, bytes and whether it is synced to
+/// disk.
+type Job = (usize, PathBuf, Vec<u8>, bool);
 
 /// The first failure of the writing thread, shared with the queue.
 type Failed = Arc<Mutex<Option<WriteFailure>>>;
@@ -60,15 +63,36 @@ impl FileQueue {
         path: PathBuf,
         bytes: Vec<u8>,
     ) -> Result<(), WriteFailure> {
+        self.send((frame, path, bytes, true))
+    }
+
+    /// [`FileQueue::push`] for an index file rewritten after every frame
+    /// (a series file): written atomically after the files queued before
+    /// it, not synced ([`super::replace_atomically`]).
+    ///
+    /// # Errors
+    ///
+    /// An earlier file's failure (nothing more is written after one).
+    pub fn push_index(
+        &mut self,
+        frame: usize,
+        path: PathBuf,
+        bytes: Vec<u8>,
+    ) -> Result<(), WriteFailure> {
+        self.send((frame, path, bytes, false))
+    }
+
+    /// Queues `job`, starting the writing thread on first use.
+    fn send(&mut self, job: Job) -> Result<(), WriteFailure> {
         self.check()?;
         let sender = match &self.sender {
             Some(s) => s,
             None => self.start()?,
         };
-        if let Err(lost) = sender.send((frame, path, bytes)) {
+        if let Err(lost) = sender.send(job) {
             // The thread ended: it records why before it does.
             self.check()?;
-            let (frame, path, _) = lost.0;
+            let (frame, path, _, _) = lost.0;
             return Err(WriteFailure {
                 frame,
                 path,
@@ -139,8 +163,13 @@ impl Drop for FileQueue {
 /// The writing thread: every job in order until the queue closes or a
 /// file fails.
 fn write_all(jobs: &Receiver<Job>, failed: &Failed) {
-    for (frame, path, bytes) in jobs {
-        if let Err(error) = write_atomically(&path, |w| w.write_all(&bytes)) {
+    for (frame, path, bytes, sync) in jobs {
+        let written = if sync {
+            write_atomically(&path, |w| w.write_all(&bytes))
+        } else {
+            replace_atomically(&path, |w| w.write_all(&bytes))
+        };
+        if let Err(error) = written {
             let mut slot = failed.lock().unwrap_or_else(PoisonError::into_inner);
             *slot = Some(WriteFailure { frame, path, error });
             return;

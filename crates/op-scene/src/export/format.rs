@@ -7,6 +7,12 @@
 //!
 //! Adding a format: write `export/<name>.rs` with a unit struct
 //! implementing [`FileFormat`] and add it to [`REGISTRY`].
+//!
+//! Every sequence of frame files comes with a series file listing its
+//! files and their scene times ([`super::series`], ParaView's file-series
+//! JSON): `frames/<stem>/<stem>.<extension>.series` for the
+//! [`Files::PerSequence`] formats, `<name>/state.<extension>.series` and
+//! `<name>/<stem>.<extension>.series` for the [`Files::State`] formats.
 
 use std::io::Write;
 
@@ -26,7 +32,11 @@ pub enum Files {
     /// `<name>/state_<k:05>.<extension>` (encoded by
     /// [`FileFormat::encode_state`]), listed with their times in the
     /// series file `<name>/state.<extension>.series` (ParaView's time series,
-    /// [`FileFormat::encode_series`]).
+    /// [`FileFormat::encode_series`]). A format that
+    /// [`FileFormat::writes_meshes_with_state`] also writes there every
+    /// skin, surface and tool, `<name>/<stem>_<k:05>.<extension>` (encoded
+    /// by [`FileFormat::encode_mesh`]), each with its series file
+    /// `<name>/<stem>.<extension>.series`.
     State,
 }
 
@@ -47,7 +57,16 @@ pub trait FileFormat: Sync + std::fmt::Debug {
     /// Its file layout.
     fn files(&self) -> Files;
 
-    /// Encodes one sequence's frame ([`Files::PerSequence`] formats).
+    /// Whether a [`Files::State`] format also writes the meshes of the
+    /// skins, surfaces and tools (not the particles: its state files hold
+    /// them) in its state folder, one sequence each with its series file.
+    /// Default: no.
+    fn writes_meshes_with_state(&self) -> bool {
+        false
+    }
+
+    /// Encodes one sequence's frame ([`Files::PerSequence`] formats, and
+    /// the meshes of [`FileFormat::writes_meshes_with_state`]).
     fn encode_mesh(&self, _mesh: &FrameMesh, _out: &mut dyn Write) -> std::io::Result<()> {
         Err(std::io::Error::other(format!(
             "{} writes no per-sequence files",
@@ -69,36 +88,55 @@ pub trait FileFormat: Sync + std::fmt::Debug {
         )))
     }
 
-    /// Encodes the series file of the state files written so far (file
-    /// name relative to the series file, scene time; [`Files::State`]
-    /// formats).
-    fn encode_series(
-        &self,
-        _files: &[(String, Real)],
-        _out: &mut dyn Write,
-    ) -> std::io::Result<()> {
-        Ok(())
+    /// Encodes the series file of one sequence's files written so far
+    /// (file name relative to the series file, scene time). Default:
+    /// ParaView's file-series JSON ([`super::series::write`]), which
+    /// ParaView opens as a time series whatever reader the files take.
+    fn encode_series(&self, files: &[(String, Real)], out: &mut dyn Write) -> std::io::Result<()> {
+        super::series::write(files, out)
     }
 
     /// Whether `file_name`, found in the folder of its files (a sequence
     /// folder of stem `stem`, or its state folder), is one it writes: the
     /// run removes those before it starts, and leaves every other file
-    /// alone.
+    /// alone. In a sequence folder: `<stem>_<digits>.<extension>` and
+    /// `<stem>.<extension>.series`; in the state folder the same with the
+    /// stem `state`, or any stem when the format
+    /// [`FileFormat::writes_meshes_with_state`].
     fn owns(&self, file_name: &str, stem: &str) -> bool {
+        let ext = self.extension();
         let numbered = |rest: &str| {
-            rest.strip_suffix(self.extension())
+            rest.strip_suffix(ext)
                 .and_then(|r| r.strip_suffix('.'))
                 .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
         };
-        match self.files() {
-            Files::PerSequence => file_name
+        let series = |stem: &str| {
+            file_name
                 .strip_prefix(stem)
-                .and_then(|r| r.strip_prefix('_'))
-                .is_some_and(numbered),
-            Files::State => {
-                file_name == format!("state.{}.series", self.extension())
-                    || file_name.strip_prefix("state_").is_some_and(numbered)
+                .and_then(|r| r.strip_prefix('.'))
+                .and_then(|r| r.strip_prefix(ext))
+                == Some(".series")
+        };
+        let of_stem = |stem: &str| {
+            series(stem)
+                || file_name
+                    .strip_prefix(stem)
+                    .and_then(|r| r.strip_prefix('_'))
+                    .is_some_and(numbered)
+        };
+        match self.files() {
+            Files::State if self.writes_meshes_with_state() => {
+                file_name
+                    .strip_suffix(".series")
+                    .and_then(|r| r.strip_suffix(ext))
+                    .and_then(|r| r.strip_suffix('.'))
+                    .is_some_and(|s| !s.is_empty())
+                    || file_name
+                        .rsplit_once('_')
+                        .is_some_and(|(s, rest)| !s.is_empty() && numbered(rest))
             }
+            Files::State => of_stem("state"),
+            Files::PerSequence => of_stem(stem),
         }
     }
 }
@@ -236,9 +274,16 @@ mod tests {
         assert!(!obj.owns("sheet_skin_00012.obj", "sheet"));
         assert!(!obj.owns("sheet_.obj", "sheet"));
         assert!(!obj.owns("notes.txt", "sheet"));
+        assert!(ply.owns("sheet.ply.series", "sheet"));
+        assert!(!ply.owns("sheet.obj.series", "sheet"));
+        assert!(!ply.owns("sheet_skin.ply.series", "sheet"));
         assert!(vtu.owns("state_00003.vtu", ""));
         assert!(vtu.owns("state.vtu.series", ""));
         assert!(!vtu.owns("state_x.vtu", ""));
+        assert!(vtu.owns("sheet_skin_00003.vtu", ""));
+        assert!(vtu.owns("tool_box.vtu.series", ""));
+        assert!(!vtu.owns(".vtu.series", ""));
+        assert!(!vtu.owns("notes.txt", ""));
         assert!(FrameFormat::OBJ < FrameFormat::VTU);
     }
 }

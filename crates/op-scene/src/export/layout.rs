@@ -1,13 +1,16 @@
 //! Where a run's frame files go: one sequence of files per thing of the
-//! scene, `frames/<stem>/<stem>_00000.obj` (and `.ply`), and the particle
+//! scene, `frames/<stem>/<stem>_00000.obj` (and `.ply`) with the series
+//! file `frames/<stem>/<stem>.obj.series` (`.ply.series`), and the particle
 //! state `vtu/state_00000.vtu` with its ParaView series file
-//! `vtu/state.vtu.series` (the layouts of [`super::format::Files`]).
+//! `vtu/state.vtu.series`, beside the skins, surfaces and tools as VTU,
+//! `vtu/<stem>_00000.vtu` with `vtu/<stem>.vtu.series` (the layouts of
+//! [`super::format::Files`]; the series files: [`super::series`]).
 
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::format::FrameFormat;
+use super::format::{Files, FrameFormat};
 
 /// What a sequence shows.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Serialize)]
@@ -39,10 +42,28 @@ pub struct Sequence {
 
 impl Sequence {
     /// The file of frame `k` in `format` under the output directory `out`:
-    /// `out/frames/<stem>/<stem>_<k:05>.<ext>`.
+    /// `out/frames/<stem>/<stem>_<k:05>.<ext>`, or in the state folder of a
+    /// [`Files::State`] format, `out/<name>/<stem>_<k:05>.<ext>`.
     pub fn path(&self, out: &Path, k: usize, format: FrameFormat) -> PathBuf {
-        self.folder(out)
+        self.folder_in(out, format)
             .join(format!("{}_{k:05}.{}", self.stem, format.extension()))
+    }
+
+    /// The series file listing its files in `format` with their times
+    /// ([`super::series`]): `out/frames/<stem>/<stem>.<ext>.series`, or
+    /// `out/<name>/<stem>.<ext>.series` for a [`Files::State`] format.
+    pub fn series_path(&self, out: &Path, format: FrameFormat) -> PathBuf {
+        self.folder_in(out, format)
+            .join(format!("{}.{}.series", self.stem, format.extension()))
+    }
+
+    /// The folder of its files in `format`.
+    fn folder_in(&self, out: &Path, format: FrameFormat) -> PathBuf {
+        if format.files() == Files::State {
+            state_folder(out, format)
+        } else {
+            self.folder(out)
+        }
     }
 
     /// The folder of its files: `out/frames/<stem>`.
@@ -129,6 +150,18 @@ mod tests {
         assert_eq!(
             s[0].path(Path::new("o"), 7, FrameFormat::PLY),
             Path::new("o/frames/sheet/sheet_00007.ply")
+        );
+        assert_eq!(
+            s[0].series_path(Path::new("o"), FrameFormat::PLY),
+            Path::new("o/frames/sheet/sheet.ply.series")
+        );
+        assert_eq!(
+            s[0].path(Path::new("o"), 7, FrameFormat::VTU),
+            Path::new("o/vtu/sheet_00007.vtu")
+        );
+        assert_eq!(
+            s[0].series_path(Path::new("o"), FrameFormat::VTU),
+            Path::new("o/vtu/sheet.vtu.series")
         );
     }
 

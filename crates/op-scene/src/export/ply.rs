@@ -5,8 +5,8 @@
 //! a list of `uchar` count and `int` indices, three per triangle) and
 //! `edge` (`vertex1 vertex2`, int) for line segments. `face` is declared
 //! even with no entry (count 0: a point cloud); `edge` only when the mesh
-//! has line segments, because readers that do not know it (trimesh
-//! without scipy among them) refuse a file that declares it.
+//! has line segments, because readers that do not know it (meshio,
+//! trimesh without scipy) refuse a file that declares it.
 
 use std::io::Write;
 
@@ -145,8 +145,8 @@ pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
 
 /// Binary little-endian PLY, one file per sequence and frame, in scene
 /// coordinates (z-up, as Blender's PLY importer takes them): vertices with
-/// normals (`x y z nx ny nz`, float), `face` (`vertex_indices`) and `edge`
-/// (`vertex1 vertex2`) elements.
+/// normals (`x y z nx ny nz`, float), `face` (`vertex_indices`) and, for
+/// line segments, `edge` (`vertex1 vertex2`) elements.
 #[derive(Debug)]
 pub struct PlyFormat;
 

@@ -15,17 +15,25 @@
 //!
 //! Objects are written in scene order, each with its original then its
 //! created particles. `vtu/state.vtu.series` lists the files with their
-//! scene times (ParaView's file-series format).
+//! scene times (ParaView's file-series format, [`super::series`]).
+//!
+//! Beside them, every skin, surface and tool of the frames (the meshes of
+//! [`super::FrameMesh`], also in scene coordinates) is a sequence of its
+//! own, `vtu/<stem>_00000.vtu` listed in `vtu/<stem>.vtu.series`: an
+//! unstructured grid of its triangles (and line segments, if any) with the
+//! point data `normal` (3, Float64: the skin's field gradient, the
+//! particle normals of a surface, the face normal of a tool), which
+//! ParaView uses to shade it smoothly.
 
 use std::io::Write;
 
 use op_dynamics::{ParticleType, World};
-use serde::Serialize;
 use vtkio::model::{
     Attribute, Attributes, ByteOrder, CellType, Cells, DataSet, UnstructuredGridPiece, Version,
     VertexNumbers, Vtk,
 };
 
+use super::geometry::FrameMesh;
 use crate::built_scene::BuiltObject;
 
 /// The VTK model of the particle state of `objects` in `world`.
@@ -108,38 +116,65 @@ pub fn write(
         .map_err(|e| std::io::Error::other(e.to_string()))
 }
 
-/// ParaView's `.series` file: the frame files and their times.
-#[derive(Serialize)]
-struct Series<'a> {
-    #[serde(rename = "file-series-version")]
-    version: &'static str,
-    files: Vec<SeriesFile<'a>>,
-}
-
-#[derive(Serialize)]
-struct SeriesFile<'a> {
-    name: &'a str,
-    time: f64,
-}
-
 /// Writes the `.series` JSON of `files` (name relative to the series file,
-/// scene time).
+/// scene time): [`super::series::write`].
 pub fn write_series(files: &[(String, f64)], w: &mut dyn Write) -> std::io::Result<()> {
-    let series = Series {
-        version: "1.0",
-        files: files
-            .iter()
-            .map(|(name, time)| SeriesFile { name, time: *time })
-            .collect(),
-    };
-    serde_json::to_writer_pretty(&mut *w, &series).map_err(std::io::Error::other)?;
-    writeln!(w)
+    super::series::write(files, w)
+}
+
+/// The VTK model of one frame mesh: its vertices, one triangle cell per
+/// triangle and one line cell per segment, and the point data `normal`.
+fn mesh_model(mesh: &FrameMesh) -> Vtk {
+    let points: Vec<f64> = mesh.vertices.iter().flat_map(|v| [v.x, v.y, v.z]).collect();
+    let normals: Vec<f64> = mesh.normals.iter().flat_map(|n| [n.x, n.y, n.z]).collect();
+    let mut connectivity = Vec::with_capacity(3 * mesh.triangles.len() + 2 * mesh.lines.len());
+    let mut offsets = Vec::with_capacity(mesh.triangles.len() + mesh.lines.len());
+    let mut types = Vec::with_capacity(offsets.capacity());
+    for t in &mesh.triangles {
+        connectivity.extend(t.map(u64::from));
+        offsets.push(connectivity.len() as u64);
+        types.push(CellType::Triangle);
+    }
+    for l in &mesh.lines {
+        connectivity.extend(l.map(u64::from));
+        offsets.push(connectivity.len() as u64);
+        types.push(CellType::Line);
+    }
+    Vtk {
+        version: Version::new_xml(1, 0),
+        title: mesh.name.clone(),
+        byte_order: ByteOrder::LittleEndian,
+        file_path: None,
+        data: DataSet::inline(UnstructuredGridPiece {
+            points: points.into(),
+            cells: Cells {
+                cell_verts: VertexNumbers::XML {
+                    connectivity,
+                    offsets,
+                },
+                types,
+            },
+            data: Attributes {
+                point: vec![Attribute::normals("normal").with_data(normals)],
+                cell: Vec::new(),
+            },
+        }),
+    }
+}
+
+/// Writes one frame mesh (a skin, surface or tool) as a VTU file.
+pub fn write_mesh(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
+    mesh_model(mesh)
+        .write_xml(w)
+        .map_err(|e| std::io::Error::other(e.to_string()))
 }
 
 /// VTK XML unstructured grid of every particle (one vertex cell each) with
 /// per-particle attributes, one file per frame, in scene coordinates,
 /// listed with their times in `vtu/state.vtu.series` (ParaView opens the
-/// series as a time series).
+/// series as a time series); and every skin, surface and tool mesh as a
+/// sequence `vtu/<stem>_<k:05>.vtu` of its own, listed in
+/// `vtu/<stem>.vtu.series`.
 #[derive(Debug)]
 pub struct VtuFormat;
 
@@ -166,7 +201,45 @@ impl super::format::FileFormat for VtuFormat {
         write(world, objects, title, out)
     }
 
-    fn encode_series(&self, files: &[(String, f64)], out: &mut dyn Write) -> std::io::Result<()> {
-        write_series(files, out)
+    fn writes_meshes_with_state(&self) -> bool {
+        true
+    }
+
+    fn encode_mesh(&self, mesh: &FrameMesh, out: &mut dyn Write) -> std::io::Result<()> {
+        write_mesh(mesh, out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use op_dynamics::Vec3;
+
+    /// A mesh reads back with its triangles, segments and normals.
+    #[test]
+    fn meshes_parse_back_with_cells_and_normals() {
+        let mesh = FrameMesh {
+            name: "m".into(),
+            vertices: vec![Vec3::zeros(), Vec3::x(), Vec3::new(0.0, 2.0, 3.0)],
+            normals: vec![Vec3::z(); 3],
+            triangles: vec![[0, 1, 2]],
+            lines: vec![[0, 2]],
+        };
+        let mut bytes = Vec::new();
+        write_mesh(&mesh, &mut bytes).unwrap();
+        let vtk = Vtk::parse_xml(bytes.as_slice()).unwrap();
+        let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+            panic!("not an unstructured grid");
+        };
+        let vtkio::model::Piece::Inline(piece) = &pieces[0] else {
+            panic!("not inline");
+        };
+        assert_eq!(piece.num_points(), 3);
+        assert_eq!(piece.cells.types, [CellType::Triangle, CellType::Line]);
+        let Attribute::DataArray(normal) = &piece.data.point[0] else {
+            panic!("no normals");
+        };
+        assert_eq!(normal.name, "normal");
+        assert_eq!(normal.data.len(), 9);
     }
 }

@@ -51,10 +51,12 @@ use crate::skins::ContactStats;
 /// The checkpoint's file name in the output directory.
 pub const FILE: &str = "checkpoint.bin";
 
-/// Version of the checkpoint's layout (this module's and op-dynamics'
-/// [`op_dynamics::checkpoint::STATE_VERSION`]): a file of another version
-/// is refused.
-pub const FORMAT: u32 = 1000 + op_dynamics::checkpoint::STATE_VERSION;
+/// Version of the checkpoint's layout (this module's, in the thousands,
+/// and op-dynamics' [`op_dynamics::checkpoint::STATE_VERSION`]): a file of
+/// another version is refused. This module's layout 2: the frame writer
+/// remembers the frames it listed in the series files
+/// ([`WriterState`]) instead of the state files' names.
+pub const FORMAT: u32 = 2000 + op_dynamics::checkpoint::STATE_VERSION;
 
 const MAGIC: &[u8] = b"opsim checkpoint\n";
 

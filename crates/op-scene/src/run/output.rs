@@ -10,10 +10,10 @@ use crate::export::{layout, Files, FrameFormat};
 /// folders, [`crate::export::FrameWriter::folders`]), refuses symbolic links where opsim
 /// writes, and removes the files a previous run left there (only the names
 /// opsim writes: `summary.json`, `metrics.csv`, `checkpoint.bin`, the sequence files
-/// `frames/<stem>/<stem>_<digits>.obj|ply` (and the emptied folders), the
-/// older layout's `frames/frame_*.obj`, `vtu/state_*.vtu`,
-/// `vtu/state.vtu.series` and opsim's temporary files), so frames of two
-/// runs never mix.
+/// `frames/<stem>/<stem>_<digits>.obj|ply` and `<stem>.obj|ply.series` (and
+/// the emptied folders), the older layout's `frames/frame_*.obj`,
+/// `vtu/*_<digits>.vtu`, `vtu/*.vtu.series` and opsim's temporary files:
+/// [`crate::export::FileFormat::owns`]), so frames of two runs never mix.
 pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunError> {
     prepare(out_dir, folders, false)
 }
