@@ -164,8 +164,8 @@ mod tests {
             ),
             (
                 "d.xyz",
-                "0 0 0 0 0 0\n",
-                "d.xyz:1: normal (0, 0, 0) is zero",
+                "0 0 0 0 inf 1\n",
+                "d.xyz:1: `inf` is not finite",
             ),
             (
                 "e.xyz",
