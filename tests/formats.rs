@@ -1,6 +1,7 @@
-//! `opsim run --format obj,ply,vtu`: binary PLY frame sequences
+//! `opsim run --format obj,ply,vtu,usd`: binary PLY frame sequences
 //! and VTU particle state parse back with the crates that wrote them, with
-//! the counts of the OBJ frames and every per-particle attribute.
+//! the counts of the OBJ frames and every per-particle attribute; the USD
+//! cache reads back with openusd, with the counts of the PLY frames.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -275,7 +276,7 @@ fn array_len(v: &openusd::sdf::Value) -> usize {
 /// its prims.
 #[test]
 fn usd_cache_holds_every_sequence_with_the_counts_of_the_ply_frames() {
-    use openusd::sdf::{path, Value};
+    use openusd::sdf::{path, AbstractData as _, Value};
     let out = fresh_path("usd");
     let frames = 4;
     let o = opsim(&[
@@ -295,9 +296,9 @@ fn usd_cache_holds_every_sequence_with_the_counts_of_the_ply_frames() {
         summary["files"]["formats"],
         serde_json::json!(["ply", "usd"])
     );
-    assert_eq!(summary["files"]["axes"]["usdc"], "z_up");
+    assert_eq!(summary["files"]["axes"]["usda"], "z_up");
     let usd = &summary["files"]["usd"];
-    assert_eq!(usd["file"], "usd/run.usdc");
+    assert_eq!(usd["file"], "usd/run.usda");
     assert_eq!(usd["default_prim"], "/Run");
     let sequences = summary["files"]["sequences"].as_array().unwrap();
     let prims = usd["prims"].as_array().unwrap();
@@ -307,9 +308,9 @@ fn usd_cache_holds_every_sequence_with_the_counts_of_the_ply_frames() {
         kinds.contains(&"particles") && kinds.contains(&"skin"),
         "{kinds:?}"
     );
-    let bytes = std::fs::read(out.join("usd/run.usdc")).unwrap();
-    assert!(bytes.starts_with(b"PXR-USDC"), "a binary crate file");
-    let layer = openusd::usdc::read_file(out.join("usd/run.usdc")).unwrap();
+    let bytes = std::fs::read(out.join("usd/run.usda")).unwrap();
+    assert!(bytes.starts_with(b"#usda 1.0"), "a USD text layer");
+    let layer = openusd::usda::read_file(out.join("usd/run.usda")).unwrap();
     let root = path("/").unwrap();
     let field = |p: &openusd::sdf::Path, f: &str| layer.get_field(p, f).unwrap().into_owned();
     assert_eq!(field(&root, "upAxis"), Value::Token("Z".into()));
@@ -332,12 +333,12 @@ fn usd_cache_holds_every_sequence_with_the_counts_of_the_ply_frames() {
         let at = prim["path"].as_str().unwrap();
         assert_eq!(prim["name"], seq["name"]);
         let ty = field(&path(at).unwrap(), "typeName");
-        let points = samples(&*layer, &format!("{at}.points"));
+        let points = samples(&layer, &format!("{at}.points"));
         assert_eq!(points.len(), frames, "{at}: one sample per frame");
         for (k, (t, v)) in points.iter().enumerate() {
             assert_eq!(*t, k as f64);
             let n = array_len(v);
-            let normals = &samples(&*layer, &format!("{at}.normals"))[k].1;
+            let normals = &samples(&layer, &format!("{at}.normals"))[k].1;
             assert_eq!(array_len(normals), n, "{at} frame {k}");
             if kind == "particles" {
                 assert_eq!(ty, Value::Token("Points".into()));
@@ -349,15 +350,15 @@ fn usd_cache_holds_every_sequence_with_the_counts_of_the_ply_frames() {
                     .unwrap();
                 assert_eq!(n as u64, object["particles"].as_u64().unwrap(), "{at}");
                 for attr in ["widths", "primvars:orientations"] {
-                    let s = &samples(&*layer, &format!("{at}.{attr}"))[k].1;
+                    let s = &samples(&layer, &format!("{at}.{attr}"))[k].1;
                     assert_eq!(array_len(s), n, "{at}.{attr} frame {k}");
                 }
             } else {
                 assert_eq!(ty, Value::Token("Mesh".into()));
                 let p = ply(&out.join(format!("frames/{stem}/{stem}_{k:05}.ply")));
                 assert_eq!(n, p.payload["vertex"].len(), "{at} frame {k}");
-                let counts = &samples(&*layer, &format!("{at}.faceVertexCounts"))[k].1;
-                let indices = &samples(&*layer, &format!("{at}.faceVertexIndices"))[k].1;
+                let counts = &samples(&layer, &format!("{at}.faceVertexCounts"))[k].1;
+                let indices = &samples(&layer, &format!("{at}.faceVertexIndices"))[k].1;
                 assert_eq!(array_len(counts), p.payload["face"].len(), "{at} frame {k}");
                 assert_eq!(array_len(indices), 3 * array_len(counts));
                 if kind == "skin" {

@@ -180,7 +180,7 @@ pub struct FrameFiles {
     pub formats: Vec<FrameFormat>,
     /// Axis convention per format (by extension): `"y_up"` for OBJ (scene
     /// `(x, y, z)` written as `(x, z, -y)`), `"z_up"` (scene coordinates)
-    /// for PLY, VTU and USD (`usdc`).
+    /// for PLY, VTU and USD (`usda`).
     pub axes: std::collections::BTreeMap<String, String>,
     /// One sequence per scene object's particles, skin, triangulation and
     /// tool: frame `k` of format `ext` is
@@ -198,7 +198,7 @@ pub struct FrameFiles {
 /// The USD cache of a run, as `summary.json` describes it.
 #[derive(Clone, Debug, Serialize, PartialEq)]
 pub struct UsdFile {
-    /// The file, relative to the output directory: `usd/run.usdc`.
+    /// The file, relative to the output directory: `usd/run.usda`.
     pub file: String,
     /// Its default prim, `/Run`, parent of every sequence's prim.
     pub default_prim: String,

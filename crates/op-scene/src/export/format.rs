@@ -259,8 +259,8 @@ mod tests {
         assert!(!vtu.owns("state_x.vtu", ""));
         assert!(FrameFormat::OBJ < FrameFormat::VTU);
         let usd = super::super::usd::UsdFormat;
-        assert!(usd.owns("run.usdc", ""));
-        assert!(!usd.owns("run.usda", ""));
-        assert!(!usd.owns("notes.usdc", ""));
+        assert!(usd.owns("run.usda", ""));
+        assert!(!usd.owns("run.usdc", ""));
+        assert!(!usd.owns("notes.usda", ""));
     }
 }

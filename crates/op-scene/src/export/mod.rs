@@ -14,7 +14,7 @@
 //!   also what sequence loaders (Blender add-ons, Houdini, ParaView) take;
 //! - `vtu/state_00000.vtu` and `vtu/state.vtu.series`: every particle
 //!   with its attributes ([`vtu`]);
-//! - `usd/run.usdc`: one file for the whole run, every sequence a prim
+//! - `usd/run.usda`: one file for the whole run, every sequence a prim
 //!   time-sampled at the frame rate ([`usd`]), written at each checkpoint
 //!   and at the end of the run ([`run_cache`]).
 //!
@@ -368,7 +368,7 @@ impl FrameWriter {
     }
 
     /// The files of the formats of one per run, relative to the output
-    /// directory (`usd/run.usdc`), with their formats.
+    /// directory (`usd/run.usda`), with their formats.
     pub fn run_files(&self) -> Vec<(FrameFormat, PathBuf)> {
         self.caches
             .iter()

@@ -1,4 +1,4 @@
-//! USD cache of a run (openusd): one binary crate layer `usd/run.usdc`
+//! USD cache of a run (openusd): one USD text layer `usd/run.usda`
 //! holding every sequence of the run ([`super::Sequence`]) as a prim
 //! under the default prim `/Run` (an `Xform`), time-sampled at the frame
 //! rate: frame `k` is time code `k`, at scene time `k / frame_rate`.
@@ -27,13 +27,22 @@
 //! The frames accumulate in memory and the file is written whole,
 //! atomically, at each checkpoint and at the end of the run; a resumed
 //! run reads it back ([`super::run_cache`]).
+//!
+//! Text, not the binary crate format: the crate writer of openusd 0.6
+//! (the last release that builds with rustc 1.95) stores a prim's list of
+//! children as a `token[]` array where USD expects a token vector, and
+//! Pixar's usd-core (26.11) refuses to open the file ("Invalid children
+//! found in primChildren field"). openusd 0.8 fixes it; with it, this
+//! format can write `.usdc` by changing its encoder and extension. The
+//! text writer prints each single-precision value as the shortest decimal
+//! of its double, so the values read back are those written.
 
 use std::io::Write;
 use std::path::Path;
 
 use openusd::gf;
 use openusd::sdf::{self, AbstractData, ChildrenKey, FieldKey, SpecType, Specifier, Value};
-use openusd::usdc::CrateWriter;
+use openusd::usda::TextWriter;
 
 use super::format::{FileFormat, Files};
 use super::geometry::FrameMesh;
@@ -313,15 +322,14 @@ impl RunCache for UsdCache {
     }
 
     fn encode(&self, out: &mut dyn Write) -> std::io::Result<()> {
-        let mut bytes = std::io::Cursor::new(Vec::new());
-        CrateWriter::write(&self.data, &mut bytes)
+        let text = TextWriter::write_to_string(&self.data)
             .map_err(|e| std::io::Error::other(format!("{e:#}")))?;
-        out.write_all(bytes.get_ref())
+        out.write_all(text.as_bytes())
     }
 
     fn resume(&mut self, file: &Path, last: usize) -> Result<(), String> {
         let what = file.display();
-        let read = openusd::usdc::read_file(file)
+        let read = openusd::usda::read_file(file)
             .map_err(|e| format!("cannot read the USD cache {what}: {e:#}"))?;
         let end = match read.try_field(&sdf::Path::abs_root(), FieldKey::EndTimeCode.as_str()) {
             Ok(Some(v)) => match v.as_ref() {
@@ -372,7 +380,7 @@ impl RunCache for UsdCache {
     }
 }
 
-/// One binary USD crate layer (`.usdc`) of the whole run: every sequence
+/// One USD text layer (`.usda`) of the whole run: every sequence
 /// as a time-sampled prim (module docs), in scene coordinates (z-up, and
 /// the stage says so).
 #[derive(Debug)]
@@ -384,7 +392,7 @@ impl FileFormat for UsdFormat {
     }
 
     fn extension(&self) -> &'static str {
-        "usdc"
+        "usda"
     }
 
     fn axes(&self) -> &'static str {
@@ -441,7 +449,7 @@ mod tests {
         }
         let dir = std::env::temp_dir().join(format!("op-usd-cache-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let file = dir.join("run.usdc");
+        let file = dir.join("run.usda");
         std::fs::write(&file, encode(&whole)).unwrap();
         let mut resumed = UsdCache::new(&s, 24.0);
         resumed.resume(&file, 1).unwrap();

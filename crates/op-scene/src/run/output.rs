@@ -12,7 +12,7 @@ use crate::export::{layout, Files, FrameFormat};
 /// opsim writes: `summary.json`, `metrics.csv`, `checkpoint.bin`, the sequence files
 /// `frames/<stem>/<stem>_<digits>.obj|ply` (and the emptied folders), the
 /// older layout's `frames/frame_*.obj`, `vtu/state_*.vtu`,
-/// `vtu/state.vtu.series`, `usd/run.usdc` and opsim's temporary files), so
+/// `vtu/state.vtu.series`, `usd/run.usda` and opsim's temporary files), so
 /// frames of two runs never mix.
 pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunError> {
     prepare(out_dir, folders, false)
