@@ -89,7 +89,8 @@ struct RunArgs {
     /// Frame file formats, comma-separated: obj (one y-up OBJ file per
     /// object and frame, for Blender and other OBJ readers), ply
     /// (binary PLY, z-up), vtu (particle state with attributes, for
-    /// ParaView).
+    /// ParaView), usd (one time-sampled USD file of the whole run,
+    /// usd/run.usda).
     #[arg(long, value_delimiter = ',', default_value = "obj", value_parser = parse_format)]
     format: Vec<FrameFormat>,
     /// When to write `checkpoint.bin` into the output directory (what

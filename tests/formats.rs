@@ -1,8 +1,9 @@
-//! `opsim run --format obj,ply,vtu`: binary PLY frame sequences
+//! `opsim run --format obj,ply,vtu,usd`: binary PLY frame sequences
 //! and VTU particle state parse back with the crates that wrote them, with
 //! the counts of the OBJ frames and every per-particle attribute; every
 //! sequence, in every format, has a series file listing exactly its frame
-//! files with their times (issue 34: ParaView time series of everything).
+//! files with their times (issue 34: ParaView time series of everything);
+//! the USD cache reads back with openusd, with the counts of the PLY frames.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -413,4 +414,133 @@ fn check_vtu_mesh(path: &Path) {
         let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
         assert!((norm - 1.0).abs() < 1e-6, "{}: {c:?}", path.display());
     }
+}
+
+/// The time samples of a USD attribute: time code and value.
+fn samples(
+    layer: &dyn openusd::sdf::AbstractData,
+    attribute: &str,
+) -> Vec<(f64, openusd::sdf::Value)> {
+    let path = openusd::sdf::path(attribute).unwrap();
+    match layer.get_field(&path, "timeSamples") {
+        Ok(v) => match v.into_owned() {
+            openusd::sdf::Value::TimeSamples(s) => s,
+            other => panic!("{attribute}: {other:?}"),
+        },
+        Err(e) => panic!("{attribute}: {e}"),
+    }
+}
+
+/// The length of an array value.
+fn array_len(v: &openusd::sdf::Value) -> usize {
+    use openusd::sdf::Value;
+    match v {
+        Value::Vec3fVec(a) => a.len(),
+        Value::IntVec(a) => a.len(),
+        Value::FloatVec(a) => a.len(),
+        Value::QuatfVec(a) => a.len(),
+        other => panic!("not an array: {other:?}"),
+    }
+}
+
+/// `--format ply,usd` on the skinned spiral hit by a ball: one USD file
+/// whose prims (one per sequence, under the default prim `/Run`) hold one
+/// time sample per frame, with the vertex and face counts of the PLY frames
+/// of the same run and one point per particle; the stage says z-up, one
+/// metre per unit and the frame rate; `summary.json` names the file and
+/// its prims.
+#[test]
+fn usd_cache_holds_every_sequence_with_the_counts_of_the_ply_frames() {
+    use openusd::sdf::{path, AbstractData as _, Value};
+    let out = fresh_path("usd");
+    let frames = 4;
+    let o = opsim(&[
+        "run",
+        "scenes/ball_vs_spiral.ron",
+        "--out",
+        out.to_str().unwrap(),
+        "--frames",
+        &frames.to_string(),
+        "--format",
+        "ply,usd",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        summary["files"]["formats"],
+        serde_json::json!(["ply", "usd"])
+    );
+    assert_eq!(summary["files"]["axes"]["usda"], "z_up");
+    let usd = &summary["files"]["usd"];
+    assert_eq!(usd["file"], "usd/run.usda");
+    assert_eq!(usd["default_prim"], "/Run");
+    let sequences = summary["files"]["sequences"].as_array().unwrap();
+    let prims = usd["prims"].as_array().unwrap();
+    assert_eq!(prims.len(), sequences.len());
+    let kinds: Vec<&str> = prims.iter().map(|p| p["kind"].as_str().unwrap()).collect();
+    assert!(
+        kinds.contains(&"particles") && kinds.contains(&"skin"),
+        "{kinds:?}"
+    );
+    let bytes = std::fs::read(out.join("usd/run.usda")).unwrap();
+    assert!(bytes.starts_with(b"#usda 1.0"), "a USD text layer");
+    let layer = openusd::usda::read_file(out.join("usd/run.usda")).unwrap();
+    let root = path("/").unwrap();
+    let field = |p: &openusd::sdf::Path, f: &str| layer.get_field(p, f).unwrap().into_owned();
+    assert_eq!(field(&root, "upAxis"), Value::Token("Z".into()));
+    assert_eq!(field(&root, "metersPerUnit"), Value::Double(1.0));
+    let rate = summary["frame_rate"].as_f64().unwrap();
+    assert_eq!(field(&root, "timeCodesPerSecond"), Value::Double(rate));
+    assert_eq!(field(&root, "framesPerSecond"), Value::Double(rate));
+    assert_eq!(field(&root, "startTimeCode"), Value::Double(0.0));
+    assert_eq!(
+        field(&root, "endTimeCode"),
+        Value::Double((frames - 1) as f64)
+    );
+    assert_eq!(field(&root, "defaultPrim"), Value::Token("Run".into()));
+    let Value::TokenVec(children) = field(&path("/Run").unwrap(), "primChildren") else {
+        panic!("/Run has children");
+    };
+    assert_eq!(children.len(), sequences.len());
+    for (seq, prim) in sequences.iter().zip(prims) {
+        let (stem, kind) = (seq["stem"].as_str().unwrap(), seq["kind"].as_str().unwrap());
+        let at = prim["path"].as_str().unwrap();
+        assert_eq!(prim["name"], seq["name"]);
+        let ty = field(&path(at).unwrap(), "typeName");
+        let points = samples(&layer, &format!("{at}.points"));
+        assert_eq!(points.len(), frames, "{at}: one sample per frame");
+        for (k, (t, v)) in points.iter().enumerate() {
+            assert_eq!(*t, k as f64);
+            let n = array_len(v);
+            let normals = &samples(&layer, &format!("{at}.normals"))[k].1;
+            assert_eq!(array_len(normals), n, "{at} frame {k}");
+            if kind == "particles" {
+                assert_eq!(ty, Value::Token("Points".into()));
+                let object = summary["objects"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .find(|o| o["name"] == seq["name"])
+                    .unwrap();
+                assert_eq!(n as u64, object["particles"].as_u64().unwrap(), "{at}");
+                for attr in ["widths", "primvars:orientations"] {
+                    let s = &samples(&layer, &format!("{at}.{attr}"))[k].1;
+                    assert_eq!(array_len(s), n, "{at}.{attr} frame {k}");
+                }
+            } else {
+                assert_eq!(ty, Value::Token("Mesh".into()));
+                let p = ply(&out.join(format!("frames/{stem}/{stem}_{k:05}.ply")));
+                assert_eq!(n, p.payload["vertex"].len(), "{at} frame {k}");
+                let counts = &samples(&layer, &format!("{at}.faceVertexCounts"))[k].1;
+                let indices = &samples(&layer, &format!("{at}.faceVertexIndices"))[k].1;
+                assert_eq!(array_len(counts), p.payload["face"].len(), "{at} frame {k}");
+                assert_eq!(array_len(indices), 3 * array_len(counts));
+                if kind == "skin" {
+                    assert!(array_len(counts) > 0, "{at} frame {k}: a skin has faces");
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
 }

@@ -191,12 +191,13 @@ fn killed_and_resumed(
 }
 
 /// A skinned, bonded, plastic, heated sheet with creation rules and an
-/// eraser (every stage at once), in all three formats.
+/// eraser (every stage at once), in all four formats (the USD cache, one
+/// file for the run, read back on every resume).
 #[test]
 fn a_skinned_scene_with_creation_and_erasers_resumes_bit_identically() {
     let (killed, resumed) = killed_and_resumed(
         "tests/data/skinned_cut.ron",
-        &["--format", "obj,ply,vtu", "--allow-breakup"],
+        &["--format", "obj,ply,vtu,usd", "--allow-breakup"],
         10,
         7,
         false,

@@ -185,9 +185,9 @@ pub struct Summary {
 pub struct FrameFiles {
     /// Formats written, e.g. `["obj", "ply"]`.
     pub formats: Vec<FrameFormat>,
-    /// Axis convention per format: `"y_up"` for OBJ (scene `(x, y, z)`
-    /// written as `(x, z, -y)`), `"z_up"` (scene coordinates) for PLY and
-    /// VTU.
+    /// Axis convention per format (by extension): `"y_up"` for OBJ (scene
+    /// `(x, y, z)` written as `(x, z, -y)`), `"z_up"` (scene coordinates)
+    /// for PLY, VTU and USD (`usda`).
     pub axes: std::collections::BTreeMap<String, String>,
     /// One sequence per scene object's particles, skin, triangulation and
     /// tool: frame `k` of format `ext` is
@@ -203,6 +203,33 @@ pub struct FrameFiles {
     /// and OBJ or PLY format, `vtu/<stem>.vtu.series` per skin, surface
     /// and tool when VTU is written, then `vtu/state.vtu.series`.
     pub series: Vec<String>,
+    /// The USD cache, when USD is written ([`crate::export::usd`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub usd: Option<UsdFile>,
+}
+
+/// The USD cache of a run, as `summary.json` describes it.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct UsdFile {
+    /// The file, relative to the output directory: `usd/run.usda`.
+    pub file: String,
+    /// Its default prim, `/Run`, parent of every sequence's prim.
+    pub default_prim: String,
+    /// The prim of each sequence (every scene object's particles, skin,
+    /// triangulation and tool), in the order of the sequences.
+    pub prims: Vec<UsdPrim>,
+}
+
+/// One sequence's prim in the USD cache.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct UsdPrim {
+    /// The sequence's name (the OBJ `o` name).
+    pub name: String,
+    /// What it shows.
+    pub kind: crate::export::SequenceKind,
+    /// The prim's path: `/Run/<name>` (a `Points` prim for particles, a
+    /// `Mesh` otherwise).
+    pub path: String,
 }
 
 /// Why a run stopped early.
@@ -372,6 +399,7 @@ fn run_here(
         &scene.skins,
         &scene.tools,
         &scene.outputs,
+        scene.frame_rate,
     )
     .with_sheet_gap(scene.sheet_gap());
     let checkpoint_path = opts.out_dir.join(checkpoint::FILE);
@@ -919,6 +947,24 @@ fn frame_files(writer: &FrameWriter) -> FrameFiles {
             .iter()
             .map(|p| p.to_string_lossy().replace('\\', "/"))
             .collect(),
+        usd: writer.run_files().first().map(|(_, p)| {
+            let root = format!("/{}", crate::export::usd::ROOT);
+            let names = crate::export::usd::prim_names(writer.sequences());
+            UsdFile {
+                file: p.to_string_lossy().replace('\\', "/"),
+                prims: writer
+                    .sequences()
+                    .iter()
+                    .zip(names)
+                    .map(|(s, n)| UsdPrim {
+                        name: s.name.clone(),
+                        kind: s.kind,
+                        path: format!("{root}/{n}"),
+                    })
+                    .collect(),
+                default_prim: root,
+            }
+        }),
     }
 }
 

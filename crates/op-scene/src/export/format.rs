@@ -1,5 +1,5 @@
 //! Frame file formats: one module per format (`obj.rs`, `ply.rs`,
-//! `vtu.rs`) behind the [`FileFormat`] trait, and one registry of them
+//! `vtu.rs`, `usd.rs`) behind the [`FileFormat`] trait, and one registry of them
 //! ([`REGISTRY`]). `opsim run --format NAME` and [`FrameFormat::named`] look
 //! a format up there by name; the frame writer asks it for its file
 //! layout ([`Files`]) and its bytes; the output directory's clean-up asks
@@ -19,6 +19,8 @@ use std::io::Write;
 use op_dynamics::{Real, World};
 
 use super::geometry::FrameMesh;
+use super::layout::Sequence;
+use super::run_cache::RunCache;
 use crate::built_scene::BuiltObject;
 
 /// How a format lays out its files under the output directory.
@@ -38,6 +40,12 @@ pub enum Files {
     /// by [`FileFormat::encode_mesh`]), each with its series file
     /// `<name>/<stem>.<extension>.series`.
     State,
+    /// One file for the whole run, `<name>/run.<extension>`, holding every
+    /// sequence over the frames (time-sampled): the format's
+    /// [`RunCache`] ([`FileFormat::run_cache`]) accumulates the frames and
+    /// encodes the file, written whenever a checkpoint is and at the end of
+    /// the run ([`super::run_cache`]).
+    Run,
 }
 
 /// A frame file format; see the [module docs](self).
@@ -96,8 +104,14 @@ pub trait FileFormat: Sync + std::fmt::Debug {
         super::series::write(files, out)
     }
 
+    /// The cache of a [`Files::Run`] format for a run of `sequences` at
+    /// `frame_rate` frames per unit of scene time. Default: none.
+    fn run_cache(&self, _sequences: &[Sequence], _frame_rate: Real) -> Option<Box<dyn RunCache>> {
+        None
+    }
+
     /// Whether `file_name`, found in the folder of its files (a sequence
-    /// folder of stem `stem`, or its state folder), is one it writes: the
+    /// folder of stem `stem`, or its state or run folder), is one it writes: the
     /// run removes those before it starts, and leaves every other file
     /// alone. In a sequence folder: `<stem>_<digits>.<extension>` and
     /// `<stem>.<extension>.series`; in the state folder the same with the
@@ -137,6 +151,7 @@ pub trait FileFormat: Sync + std::fmt::Debug {
             }
             Files::State => of_stem("state"),
             Files::PerSequence => of_stem(stem),
+            Files::Run => file_name == format!("run.{}", self.extension()),
         }
     }
 }
@@ -146,6 +161,7 @@ pub static REGISTRY: &[&dyn FileFormat] = &[
     &super::obj::ObjFormat,
     &super::ply::PlyFormat,
     &super::vtu::VtuFormat,
+    &super::usd::UsdFormat,
 ];
 
 /// A registered format, as chosen for a run: compared, ordered and
@@ -160,6 +176,8 @@ impl FrameFormat {
     pub const PLY: FrameFormat = FrameFormat(&super::ply::PlyFormat);
     /// VTK XML unstructured grids of the particles ([`super::vtu`]).
     pub const VTU: FrameFormat = FrameFormat(&super::vtu::VtuFormat);
+    /// One time-sampled USD file of the whole run ([`super::usd`]).
+    pub const USD: FrameFormat = FrameFormat(&super::usd::UsdFormat);
 
     /// Every registered format, in the order files are written.
     pub fn all() -> impl Iterator<Item = FrameFormat> {
@@ -258,7 +276,7 @@ mod tests {
     fn formats_are_found_by_name_and_own_their_files() {
         assert_eq!(FrameFormat::named(" PLY"), Ok(FrameFormat::PLY));
         let e = FrameFormat::named("stl").unwrap_err();
-        assert!(e.contains("obj, ply, vtu"), "{e}");
+        assert!(e.contains("obj, ply, vtu, usd"), "{e}");
         let names: Vec<&str> = FrameFormat::all().map(|f| f.name()).collect();
         let mut sorted = names.clone();
         sorted.dedup();
@@ -285,5 +303,9 @@ mod tests {
         assert!(!vtu.owns(".vtu.series", ""));
         assert!(!vtu.owns("notes.txt", ""));
         assert!(FrameFormat::OBJ < FrameFormat::VTU);
+        let usd = super::super::usd::UsdFormat;
+        assert!(usd.owns("run.usda", ""));
+        assert!(!usd.owns("run.usdc", ""));
+        assert!(!usd.owns("notes.usda", ""));
     }
 }

@@ -132,6 +132,13 @@ pub fn series_path(out: &Path, format: FrameFormat) -> PathBuf {
     state_folder(out, format).join(format!("state.{}.series", format.extension()))
 }
 
+/// A run format's one file ([`super::format::Files::Run`]):
+/// `out/<name>/run.<extension>` (`out/usd/run.usda`), in the same folder as
+/// a state format's files ([`state_folder`]).
+pub fn run_path(out: &Path, format: FrameFormat) -> PathBuf {
+    state_folder(out, format).join(format!("run.{}", format.extension()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

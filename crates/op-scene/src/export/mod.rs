@@ -1,5 +1,5 @@
 //! Frame files (README "Running scenes"): what a run writes per frame, in the formats
-//! asked for ([`FrameFormat`]: OBJ by default, binary PLY, VTU; each a
+//! asked for ([`FrameFormat`]: OBJ by default, binary PLY, VTU, USD; each a
 //! [`FileFormat`] of the [`format::REGISTRY`]).
 //!
 //! Layout under the output directory (see [`layout`]):
@@ -17,12 +17,15 @@
 //! - `vtu/state_00000.vtu` and `vtu/state.vtu.series`: every particle
 //!   with its attributes ([`vtu`]); beside them every skin, surface and
 //!   tool as VTU, `vtu/<stem>_00000.vtu` and `vtu/<stem>.vtu.series`, so
-//!   ParaView loads the whole scene from `vtu/` as time series.
+//!   ParaView loads the whole scene from `vtu/` as time series;
+//! - `usd/run.usda`: one file for the whole run, every sequence a prim
+//!   time-sampled at the frame rate ([`usd`]), written at each checkpoint
+//!   and at the end of the run ([`run_cache`]).
 //!
 //! Axes: scenes are z-up. OBJ files are written y-up (scene `(x, y, z)`
 //! as `(x, z, -y)`, see [`obj`]), the convention of OBJ and of Blender's
-//! OBJ importer, so frames import upright; PLY and VTU files hold scene
-//! coordinates (Blender's PLY importer and ParaView take z-up as is).
+//! OBJ importer, so frames import upright; PLY, VTU and USD files hold scene
+//! coordinates (the USD stage says `upAxis = "Z"`) (Blender's PLY importer and ParaView take z-up as is).
 //! `summary.json` names the formats, their axes and the sequences.
 //!
 //! Every file is written atomically (temporary file + rename,
@@ -45,7 +48,9 @@ pub mod geometry;
 pub mod layout;
 pub mod obj;
 pub mod ply;
+pub mod run_cache;
 pub mod series;
+pub mod usd;
 pub mod vtu;
 
 /// A sized writer over a `dyn Write`, for the format crates whose writers
@@ -176,6 +181,12 @@ pub struct FrameWriter {
     frames: Vec<(usize, Real)>,
     sheet_gap: SheetGap,
     files: FileQueue,
+    /// The caches of the formats of one file per run
+    /// ([`Files::Run`]), in `formats` order.
+    caches: Vec<(FrameFormat, Box<dyn run_cache::RunCache>)>,
+    /// The frames of the caches when their files were last handed to the
+    /// writing thread.
+    run_frames_written: Option<usize>,
     /// The skins written coarser than their cell size because they outgrew
     /// the polygonizer's grid: name, first frame, cell size, cell used.
     coarsened: Vec<(String, usize, Real, Real)>,
@@ -200,24 +211,53 @@ impl FrameWriter {
     }
 
     /// Puts back what [`FrameWriter::state`] returned, into a writer of the
-    /// same formats (the checkpoint's run hash covers them).
-    pub fn restore(&mut self, state: WriterState) -> Result<(), String> {
+    /// same formats (the checkpoint's run hash covers them), after frame
+    /// `last` (a checkpoint's): the files of one per run are read back up
+    /// to that frame ([`run_cache::RunCache::resume`]).
+    pub fn restore(&mut self, state: WriterState, last: usize) -> Result<(), String> {
         if state.frames.windows(2).any(|w| w[0].0 >= w[1].0) {
             return Err("the checkpoint's frames are out of order".into());
+        }
+        for (f, cache) in &mut self.caches {
+            cache.resume(&layout::run_path(&self.out, *f), last)?;
         }
         self.frames = state.frames;
         self.coarsened = state.coarsened;
         Ok(())
     }
 
-    /// Waits until every frame file handed to the writer is on disk (the
-    /// writing thread starts again with the next frame).
+    /// Waits until every frame file handed to the writer is on disk, the
+    /// files of one per run written with every frame so far (the writing
+    /// thread starts again with the next frame).
     ///
     /// # Errors
     ///
     /// The first file that could not be written.
     pub fn flush(&mut self) -> Result<(), WriteFailure> {
-        self.files.finish()
+        let runs = self.write_runs();
+        let files = self.files.finish();
+        runs.and(files)
+    }
+
+    /// Hands the file of each format of one per run, with the frames so
+    /// far, to the writing thread, unless it was handed with as many
+    /// frames already (a checkpoint after the last frame, then the end).
+    fn write_runs(&mut self) -> Result<(), WriteFailure> {
+        let frames = self.caches.first().map(|c| c.1.frames());
+        if frames == self.run_frames_written {
+            return Ok(());
+        }
+        self.run_frames_written = frames;
+        for (f, cache) in &self.caches {
+            let path = layout::run_path(&self.out, *f);
+            let frame = cache.frames().saturating_sub(1);
+            let mut bytes = Vec::new();
+            if let Err(error) = cache.encode(&mut bytes) {
+                return Err(WriteFailure { frame, path, error });
+            }
+            self.files.push(frame, path, bytes)?;
+        }
+        Ok(())
     }
 
     /// Warnings about what was written: each skin written coarser than its
@@ -238,7 +278,7 @@ impl FrameWriter {
     }
 
     /// The writer of a scene's frames under `out` in `formats` (duplicates
-    /// ignored): unless [`Outputs::particles`] is `None`, a particle
+    /// ignored), `frame_rate` frames per unit of scene time: unless [`Outputs::particles`] is `None`, a particle
     /// sequence per object; a skin sequence per skin; a surface sequence
     /// per object when [`Outputs::triangulation`] is set; a tool sequence
     /// per tool when any of these is written; in that order.
@@ -249,6 +289,7 @@ impl FrameWriter {
         skins: &[ObjectSkin],
         tools: &[Tool],
         outputs: &Outputs,
+        frame_rate: Real,
     ) -> Self {
         let mut named = Vec::new();
         let particles = outputs.particles != ParticleOutput::None;
@@ -289,6 +330,10 @@ impl FrameWriter {
         let mut formats = formats.to_vec();
         formats.sort();
         formats.dedup();
+        let caches = formats
+            .iter()
+            .filter_map(|f| Some((*f, f.format().run_cache(&sequences, frame_rate)?)))
+            .collect();
         FrameWriter {
             out: out.to_path_buf(),
             frames: Vec::new(),
@@ -297,6 +342,8 @@ impl FrameWriter {
             sources,
             sheet_gap: SheetGap::default(),
             files: FileQueue::default(),
+            caches,
+            run_frames_written: None,
             coarsened: Vec::new(),
         }
     }
@@ -330,6 +377,7 @@ impl FrameWriter {
     /// Whether a frame writes any file.
     pub fn writes_anything(&self) -> bool {
         self.formats_of(Files::State).next().is_some()
+            || !self.caches.is_empty()
             || (!self.sequences.is_empty() && self.formats_of(Files::PerSequence).next().is_some())
     }
 
@@ -376,6 +424,7 @@ impl FrameWriter {
             Files::State => {
                 format.format().writes_meshes_with_state() && seq.kind != SequenceKind::Particles
             }
+            Files::Run => false,
         }
     }
 
@@ -398,6 +447,15 @@ impl FrameWriter {
             .collect()
     }
 
+    /// The files of the formats of one per run, relative to the output
+    /// directory (`usd/run.usda`), with their formats.
+    pub fn run_files(&self) -> Vec<(FrameFormat, PathBuf)> {
+        self.caches
+            .iter()
+            .map(|(f, _)| (*f, layout::run_path(Path::new(""), *f)))
+            .collect()
+    }
+
     /// The folders the frames go to (created by the runner).
     pub fn folders(&self) -> Vec<PathBuf> {
         let mut dirs: Vec<PathBuf> = if self.writes_sequences() {
@@ -407,6 +465,7 @@ impl FrameWriter {
         };
         dirs.extend(
             self.formats_of(Files::State)
+                .chain(self.formats_of(Files::Run))
                 .map(|f| layout::state_folder(&self.out, f)),
         );
         dirs
@@ -444,6 +503,8 @@ impl FrameWriter {
         self.frames.retain(|&(j, _)| j < k);
         self.frames.push((k, time));
         let mut coarsened = Vec::new();
+        // The sequences' geometry for the caches of one file per run.
+        let mut cached = Vec::new();
         for (seq, source) in self.sequences.iter().zip(&self.sources) {
             let formats: Vec<FrameFormat> = self
                 .formats
@@ -451,8 +512,22 @@ impl FrameWriter {
                 .copied()
                 .filter(|&f| self.writes(seq, f))
                 .collect();
-            let Some(&first) = formats.first() else {
+            if let (Source::Particles(o), false) = (*source, self.caches.is_empty()) {
+                cached.push(run_cache::SequenceFrame::Particles {
+                    world,
+                    object: &objects[o],
+                    width: 2.0 * outputs.glyph_size * objects[o].rest_spacing,
+                });
+            }
+            let meshes_cached = !self.caches.is_empty() && !matches!(source, Source::Particles(_));
+            if formats.is_empty() && !meshes_cached {
                 continue;
+            }
+            // The file a skin's failure names.
+            let first = match (formats.first(), self.caches.first()) {
+                (Some(&f), _) => seq.path(&self.out, k, f),
+                (None, Some((f, _))) => layout::run_path(&self.out, *f),
+                (None, None) => PathBuf::new(),
             };
             let mesh = match *source {
                 Source::Particles(o) => geometry::object_geometry(world, &objects[o], outputs),
@@ -466,9 +541,9 @@ impl FrameWriter {
                     if h > skin.cell_size {
                         coarsened.push((skin.name.clone(), k, skin.cell_size, h));
                     }
-                    let mesh = skin.mesh_in(skins, skin_tools, world.time()).map_err(|e| {
-                        failure(seq.path(&self.out, k, first), std::io::Error::other(e))
-                    })?;
+                    let mesh = skin
+                        .mesh_in(skins, skin_tools, world.time())
+                        .map_err(|e| failure(first, std::io::Error::other(e)))?;
                     geometry::mesh_geometry(&skin.name, &mesh)
                 }
             };
@@ -488,6 +563,14 @@ impl FrameWriter {
                     .map_err(|e| failure(series.clone(), e))?;
                 self.files.push_index(k, series, bytes)?;
             }
+            if meshes_cached {
+                cached.push(run_cache::SequenceFrame::Mesh(mesh));
+            }
+        }
+        for (f, cache) in &mut self.caches {
+            cache
+                .add_frame(k, &cached)
+                .map_err(|e| failure(layout::run_path(&self.out, *f), e))?;
         }
         for c in coarsened {
             if !self.coarsened.iter().any(|d| d.0 == c.0) {
@@ -515,14 +598,16 @@ impl FrameWriter {
         Ok(())
     }
 
-    /// Waits until every frame file handed to the writer's thread is on
-    /// disk.
+    /// Writes the files of one per run with every frame so far and waits
+    /// until every frame file handed to the writer's thread is on disk.
     ///
     /// # Errors
     ///
     /// The first file that could not be written (the frames before its
     /// frame are complete).
     pub fn finish(&mut self) -> Result<(), WriteFailure> {
-        self.files.finish()
+        let runs = self.write_runs();
+        let files = self.files.finish();
+        runs.and(files)
     }
 }

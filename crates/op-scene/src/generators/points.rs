@@ -162,11 +162,7 @@ mod tests {
                 "0 0 0\n\n0 0 NaN\n",
                 "c.xyz:3: `NaN` is not finite",
             ),
-            (
-                "d.xyz",
-                "0 0 0 0 inf 1\n",
-                "d.xyz:1: `inf` is not finite",
-            ),
+            ("d.xyz", "0 0 0 0 inf 1\n", "d.xyz:1: `inf` is not finite"),
             (
                 "e.xyz",
                 "0 0 0 0 0 1\n1 1 1\n",

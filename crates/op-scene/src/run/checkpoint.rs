@@ -310,7 +310,9 @@ impl Checkpoint {
             skin.restore(state, scene.world.particles())
                 .map_err(|e| damaged(&e))?;
         }
-        run.writer.restore(self.writer).map_err(|e| damaged(&e))?;
+        run.writer
+            .restore(self.writer, self.frame)
+            .map_err(|e| damaged(&e))?;
         scene.objects = self.objects;
         scene.contact = self.contact;
         if let (Some(c), Some((next, released))) = (scene.creation.as_mut(), self.creation) {

@@ -12,8 +12,9 @@ use crate::export::{layout, Files, FrameFormat};
 /// opsim writes: `summary.json`, `metrics.csv`, `checkpoint.bin`, the sequence files
 /// `frames/<stem>/<stem>_<digits>.obj|ply` and `<stem>.obj|ply.series` (and
 /// the emptied folders), the older layout's `frames/frame_*.obj`,
-/// `vtu/*_<digits>.vtu`, `vtu/*.vtu.series` and opsim's temporary files:
-/// [`crate::export::FileFormat::owns`]), so frames of two runs never mix.
+/// `vtu/*_<digits>.vtu`, `vtu/*.vtu.series`, `usd/run.usda` and opsim's
+/// temporary files: [`crate::export::FileFormat::owns`]), so frames of two
+/// runs never mix.
 pub fn prepare_output(out_dir: &Path, folders: &[PathBuf]) -> Result<(), RunError> {
     prepare(out_dir, folders, false)
 }
@@ -30,7 +31,7 @@ fn prepare(out_dir: &Path, folders: &[PathBuf], resume: bool) -> Result<(), RunE
     fs::create_dir_all(out_dir).map_err(io(out_dir))?;
     let frames_dir = out_dir.join("frames");
     let state_dirs: Vec<(FrameFormat, PathBuf)> = FrameFormat::all()
-        .filter(|f| f.files() == Files::State)
+        .filter(|f| matches!(f.files(), Files::State | Files::Run))
         .map(|f| (f, layout::state_folder(out_dir, f)))
         .collect();
     let link = |p: &Path| {
