@@ -31,11 +31,13 @@ fn files_under(dir: &std::path::Path) -> Vec<PathBuf> {
 }
 
 /// FNV-1a over the run's frame files (every file under `frames/`, one per
-/// object and frame), each its path relative to `frames/` then its bytes,
-/// in path order; then the number of files.
+/// object and frame, less the sequences' `.series` index files, which list
+/// the frames' names and times), each its path relative to `frames/` then
+/// its bytes, in path order; then the number of files.
 fn frames_hash(out: &std::path::Path) -> String {
     let root = out.join("frames");
     let mut files = files_under(&root);
+    files.retain(|f| f.extension().is_none_or(|e| e != "series"));
     files.sort();
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for f in &files {
