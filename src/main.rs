@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use anyhow::{anyhow, Context, Result};
 use clap::{Parser, Subcommand};
-use op_render::{FrameChoice, Style};
+use op_render::FrameChoice;
 use op_scene::export::FrameFormat;
 use op_scene::{BuiltScene, CheckpointEvery, RunError, RunOptions};
 
@@ -161,47 +161,7 @@ enum Command {
     },
     /// Render an OBJ frame, or a contact sheet of a run directory, to PNG;
     /// or animate a run directory's frames to GIF.
-    Render {
-        /// An .obj file, or a run directory (its frames/ are used).
-        input: PathBuf,
-        /// Output file: `.png` for a picture (a frame, or a contact sheet of
-        /// a run), `.gif` for an animation of a run's frames at its frame
-        /// rate, looping.
-        #[arg(long)]
-        out: PathBuf,
-        /// Drawing style: axes, discs, wireframe or shaded (faces; particles
-        /// as discs when no object has faces).
-        #[arg(long, default_value = "shaded")]
-        style: Style,
-        /// Picture width in pixels (per frame for a contact sheet).
-        #[arg(long, default_value_t = 800)]
-        width: u32,
-        /// Picture height in pixels (per frame for a contact sheet).
-        #[arg(long, default_value_t = 600)]
-        height: u32,
-        /// Frames of a run directory: `N` (>= 1) frames chosen evenly, or
-        /// `A:B:S` the frames numbered A to B every S (`0:40:10`: 0, 10,
-        /// 20, 30, 40). Default: 9 for a contact sheet, every frame for a
-        /// GIF.
-        #[arg(long, value_parser = parse_frame_choice)]
-        frames: Option<FrameChoice>,
-        /// One frame of a run directory, by its number (the picture of
-        /// `--frames K:K:1`), seen from the camera that frames the whole run.
-        #[arg(long, conflicts_with = "frames")]
-        frame: Option<u64>,
-        /// Direction the camera looks along, `X,Y,Z` in scene coordinates
-        /// (z-up), e.g. `0,0,-1` from above. Default: the run's view (the
-        /// scene's `outputs.view`, from summary.json), else from the front
-        /// (-y side), 35 degrees to the right and 25 degrees above.
-        #[arg(long, value_parser = parse_direction, allow_hyphen_values = true)]
-        view: Option<[f64; 3]>,
-        /// Up direction of the picture, `X,Y,Z` in scene coordinates.
-        /// Default: the run's up (the scene's `outputs.up`, else against its
-        /// gravity, from summary.json), else +z; +y instead when that is
-        /// along the view (looking straight down or up).
-        #[arg(long, value_parser = parse_direction, allow_hyphen_values = true)]
-        up: Option<[f64; 3]>,
-    },
+    Render(RenderArgs),
 }
 
 /// An error with the exit code it maps to.
@@ -285,27 +245,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             }
             Ok(())
         }
-        Some(Command::Render {
-            input,
-            out,
-            style,
-            width,
-            height,
-            frames,
-            frame,
-            view,
-            up,
-        }) => render_command(RenderArgs {
-            input,
-            out,
-            style,
-            width,
-            height,
-            frames,
-            frame,
-            view,
-            up,
-        }),
+        Some(Command::Render(args)) => render_command(args),
     }
 }
 
@@ -397,7 +337,7 @@ fn run_fit(
 }
 
 /// `--view` and `--up`'s parser: `X,Y,Z`, finite and not all zero.
-fn parse_direction(text: &str) -> Result<[f64; 3], String> {
+pub(crate) fn parse_direction(text: &str) -> Result<[f64; 3], String> {
     let c: Vec<f64> = text
         .split(',')
         .map(|x| x.trim().parse::<f64>())
@@ -412,7 +352,7 @@ fn parse_direction(text: &str) -> Result<[f64; 3], String> {
 }
 
 /// `opsim render --frames`: `N` frames chosen evenly, or `A:B:S`.
-fn parse_frame_choice(text: &str) -> Result<FrameChoice, String> {
+pub(crate) fn parse_frame_choice(text: &str) -> Result<FrameChoice, String> {
     let expected = "expected a count N >= 1 or frame numbers A:B:S (first, last, step >= 1)";
     let parts: Vec<&str> = text.split(':').collect();
     let number = |t: &str| {

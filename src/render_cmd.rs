@@ -11,15 +11,46 @@ use op_scene::export::obj::scene_to_obj;
 use super::{is_obj, Failure};
 
 /// `opsim render`'s arguments.
+#[derive(clap::Args, Debug)]
 pub(crate) struct RenderArgs {
+    /// An .obj file, or a run directory (its frames/ are used).
     pub(crate) input: PathBuf,
+    /// Output file: `.png` for a picture (a frame, or a contact sheet of
+    /// a run), `.gif` for an animation of a run's frames at its frame
+    /// rate, looping.
+    #[arg(long)]
     pub(crate) out: PathBuf,
+    /// Drawing style: axes, discs, wireframe or shaded (faces; particles
+    /// as discs when no object has faces).
+    #[arg(long, default_value = "shaded")]
     pub(crate) style: Style,
+    /// Picture width in pixels (per frame for a contact sheet).
+    #[arg(long, default_value_t = 800)]
     pub(crate) width: u32,
+    /// Picture height in pixels (per frame for a contact sheet).
+    #[arg(long, default_value_t = 600)]
     pub(crate) height: u32,
+    /// Frames of a run directory: `N` (>= 1) frames chosen evenly, or
+    /// `A:B:S` the frames numbered A to B every S (`0:40:10`: 0, 10,
+    /// 20, 30, 40). Default: 9 for a contact sheet, every frame for a
+    /// GIF.
+    #[arg(long, value_parser = super::parse_frame_choice)]
     pub(crate) frames: Option<FrameChoice>,
+    /// One frame of a run directory, by its number (the picture of
+    /// `--frames K:K:1`), seen from the camera that frames the whole run.
+    #[arg(long, conflicts_with = "frames")]
     pub(crate) frame: Option<u64>,
+    /// Direction the camera looks along, `X,Y,Z` in scene coordinates
+    /// (z-up), e.g. `0,0,-1` from above. Default: the run's view (the
+    /// scene's `outputs.view`, from summary.json), else from the front
+    /// (-y side), 35 degrees to the right and 25 degrees above.
+    #[arg(long, value_parser = super::parse_direction, allow_hyphen_values = true)]
     pub(crate) view: Option<[f64; 3]>,
+    /// Up direction of the picture, `X,Y,Z` in scene coordinates.
+    /// Default: the run's up (the scene's `outputs.up`, else against its
+    /// gravity, from summary.json), else +z; +y instead when that is
+    /// along the view (looking straight down or up).
+    #[arg(long, value_parser = super::parse_direction, allow_hyphen_values = true)]
     pub(crate) up: Option<[f64; 3]>,
 }
 
