@@ -605,6 +605,10 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
         ),
     }
     outln!("  outputs: {}", scene.outputs_summary());
+    outln!(
+        "  work: {}",
+        work_line(&written.work_estimate(path.parent())?)
+    );
     // On the sample's particles (at most a bounded number per object).
     let health = op_scene::health::started_inside(built)
         .into_iter()
@@ -617,6 +621,38 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
         eprintln!("opsim: warning: {warning}");
     }
     Ok(())
+}
+
+/// `opsim check`'s line on the run's estimated work (what the work limits
+/// are checked against): steps, particles, pairs, and the skins' and
+/// triangulations' evaluations when the scene has them.
+fn work_line(e: &op_scene::WorkEstimate) -> String {
+    let mut line = format!(
+        "about {:.3e} steps of {:.0} particles and {:.3e} interacting pairs ({:.3e} pair-steps)",
+        e.steps,
+        e.particles,
+        e.pairs,
+        e.pair_steps()
+    );
+    for (what, n) in [
+        (
+            "skin field evaluations per frame",
+            e.skin_evaluations_per_frame,
+        ),
+        (
+            "contact field evaluations per step",
+            e.contact_evaluations_per_step,
+        ),
+        (
+            "triangulation pairs per frame",
+            e.triangulation_pairs_per_frame,
+        ),
+    ] {
+        if n > 0.0 {
+            line.push_str(&format!(", {n:.3e} {what}"));
+        }
+    }
+    line
 }
 
 /// `opsim check`'s lines on the slowest deformation mode and its critical

@@ -477,6 +477,7 @@ impl SpiralRecipe {
             creation: None,
             origin: String::new(),
             limits: Default::default(),
+            frames_override: None,
             expected_warnings: Vec::new(),
         }
     }

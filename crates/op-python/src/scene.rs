@@ -84,13 +84,13 @@ impl PyScene {
         })
     }
 
-    /// The scene for a run of `frames` frames (the duration cut to them,
-    /// as `opsim run --frames`), validated again when cut.
+    /// The scene for a run of `frames` frames (the duration set to them,
+    /// as `opsim run --frames`), validated again when that changes it.
     pub(crate) fn for_frames(&self, frames: Option<usize>) -> PyResult<Scene> {
         let mut scene = self.scene.clone();
         if let Some(n) = frames {
             let before = scene.world.duration;
-            scene.cut_to_frames(n);
+            scene.set_frames(n);
             if scene.world.duration != before {
                 scene
                     .validate(self.base_dir.as_deref())

@@ -43,5 +43,5 @@ pub use generators::{CurvatureLaw, Generator};
 pub use load::{build_scene_file, load_scene, load_scene_with, parse_scene, Format};
 pub use schema::{
     Damping, DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, ToolSpec,
-    WorkLimits, WorldSettings,
+    WorkEstimate, WorkLimits, WorldSettings,
 };

@@ -53,8 +53,8 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
 /// [`load_scene`] under the given work limits (kept in
 /// [`Scene::limits`], so building validates under them too). With
 /// `frames` (the runner's frame count override, at least 2), the duration
-/// is cut to those frames first, so the limits count the run that will
-/// actually be made.
+/// is set to those frames first ([`Scene::set_frames`]), so the limits
+/// count the run that will actually be made.
 pub fn load_scene_with(
     path: &Path,
     limits: crate::schema::WorkLimits,
@@ -65,24 +65,28 @@ pub fn load_scene_with(
     let mut scene = parse_unvalidated(&text, format, &path.display().to_string())?;
     scene.limits = limits;
     if let Some(n) = frames {
-        scene.cut_to_frames(n);
+        scene.set_frames(n);
     }
     scene.validate(path.parent())?;
     Ok(scene)
 }
 
 impl Scene {
-    /// Cuts the duration to the first `frames` frames (the runner's frame
-    /// count override, `opsim run --frames`) when that is shorter, so that
-    /// validation counts the work of the run that will be made. Fewer than
-    /// 2 frames leave the duration as it is.
-    pub fn cut_to_frames(&mut self, frames: usize) {
+    /// Sets the run's length to `frames` frames (the runner's frame count
+    /// override, `opsim run --frames`): the duration becomes `(frames - 1)
+    /// / frame_rate`, shorter or longer than the file's, so that
+    /// validation counts the work of the run that will be made (a longer
+    /// run is held to the frame and step limits like a longer
+    /// `world.duration`). Fewer than 2 frames leave the duration as it is
+    /// (frame 0 alone is written).
+    pub fn set_frames(&mut self, frames: usize) {
         if frames < 2 {
             return;
         }
         let d = (frames - 1) as op_dynamics::Real / self.world.frame_rate;
-        if d.is_finite() && d > 0.0 && d < self.world.duration {
+        if d.is_finite() && d > 0.0 {
             self.world.duration = d;
+            self.frames_override = Some(frames);
         }
     }
 }
@@ -248,6 +252,31 @@ mod tests {
         let json = serde_json::to_string(&s).unwrap();
         let back = parse_scene(&json, Format::Json, "<t.json>").unwrap();
         assert_eq!(back.objects, s.objects);
+    }
+
+    /// `--frames N` sets the run's length both ways, and a run made longer
+    /// than the limits allow is refused naming the flag (issue 38: five
+    /// million frames of a 161-frame scene used to start).
+    #[test]
+    fn frames_set_the_run_length_and_count_against_the_limits() {
+        let base = parse_scene(BASE, Format::Ron, "<t>").unwrap();
+        let rate = base.world.frame_rate;
+        for (frames, duration) in [(5, 4.0 / rate), (1_000, 999.0 / rate)] {
+            let mut s = base.clone();
+            s.set_frames(frames);
+            assert_eq!(s.world.duration, duration);
+            s.validate(None).unwrap();
+        }
+        let mut one = base.clone();
+        one.set_frames(1);
+        assert_eq!(one.world.duration, base.world.duration);
+        let mut long = base.clone();
+        long.set_frames(5_000_000);
+        let e = long.validate(None).unwrap_err().to_string();
+        assert!(e.contains("(set by --frames 5000000)"), "{e}");
+        assert!(e.contains("--no-work-limits"), "{e}");
+        long.limits = crate::schema::WorkLimits::unlimited();
+        long.validate(None).unwrap();
     }
 
     #[test]

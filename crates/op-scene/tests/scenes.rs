@@ -516,12 +516,14 @@ fn ron_and_json_versions_build_identical_worlds() {
         Scene {
             origin: String::new(),
             limits: Default::default(),
+            frames_override: None,
             expected_warnings: Vec::new(),
             ..from_json.clone()
         },
         Scene {
             origin: String::new(),
             limits: Default::default(),
+            frames_override: None,
             expected_warnings: Vec::new(),
             ..from_ron.clone()
         }

@@ -248,6 +248,7 @@ pub fn triangle_scene(p: Real) -> Scene {
         outputs: Default::default(),
         origin: "<triangle>".into(),
         limits: Default::default(),
+        frames_override: None,
         expected_warnings: Vec::new(),
     }
 }

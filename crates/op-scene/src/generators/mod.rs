@@ -418,10 +418,8 @@ impl Generator {
                 radius, spacing, ..
             } => shapes::sphere_count(*radius, *spacing) as usize,
             Generator::SolidBall {
-                radius,
-                spacing,
-                center,
-            } => solid::solid_ball(*radius, *spacing, center).len(),
+                radius, spacing, ..
+            } => solid::solid_ball_count(*radius, *spacing),
             Generator::TorusShell {
                 major,
                 minor,

@@ -48,11 +48,7 @@ pub(super) fn solid_ball(radius: Real, spacing: Real, center: &[Real; 3]) -> Gen
         for j in -cells..=cells {
             for k in -cells..=cells {
                 for b in &FCC_BASIS {
-                    let u = Vec3::new(
-                        (i as Real + b[0]) * edge,
-                        (j as Real + b[1]) * edge,
-                        (k as Real + b[2]) * edge,
-                    );
+                    let u = lattice_point([i, j, k], b, edge);
                     if u.norm_squared() <= bound {
                         let n = u.try_normalize(0.0).unwrap_or_else(Vec3::z);
                         positions.push(c + u);
@@ -68,6 +64,58 @@ pub(super) fn solid_ball(radius: Real, spacing: Real, center: &[Real; 3]) -> Gen
         normals,
         curvatures: vec![0.0; count],
     }
+}
+
+/// The lattice point of cell `cell` and basis point `b`, relative to the
+/// ball's centre, for a cube edge `edge`: the one expression
+/// [`solid_ball`] and [`solid_ball_count`] both test.
+fn lattice_point(cell: [i64; 3], b: &[Real; 3], edge: Real) -> Vec3 {
+    Vec3::new(
+        (cell[0] as Real + b[0]) * edge,
+        (cell[1] as Real + b[1]) * edge,
+        (cell[2] as Real + b[2]) * edge,
+    )
+}
+
+/// The number of particles [`solid_ball`] makes, counted without making
+/// them: per column of the lattice (a cell's `i`, `j` and a basis point),
+/// the points inside form one run of consecutive `k` (the distance grows
+/// with `|k + b_z|`), whose ends are found from the square root and then
+/// settled with [`solid_ball`]'s own test. Work `O((radius /
+/// spacing)²)`, memory `O(1)`: `opsim check` counts a ball of ten million
+/// particles without allocating them (issue 38).
+pub(crate) fn solid_ball_count(radius: Real, spacing: Real) -> usize {
+    let edge = spacing * 2f64.sqrt();
+    let cells = (radius / edge).ceil() as i64 + 1;
+    let bound = radius * radius * (1.0 + 1e-12);
+    let mut count = 0usize;
+    for i in -cells..=cells {
+        for j in -cells..=cells {
+            for b in &FCC_BASIS {
+                let inside = |k: i64| lattice_point([i, j, k], b, edge).norm_squared() <= bound;
+                let xy = lattice_point([i, j, 0], b, edge).norm_squared();
+                let h = (bound - xy).max(0.0).sqrt() / edge;
+                let mut hi = ((h - b[2]).floor() as i64).clamp(-cells - 1, cells);
+                while hi < cells && inside(hi + 1) {
+                    hi += 1;
+                }
+                while hi >= -cells && !inside(hi) {
+                    hi -= 1;
+                }
+                let mut lo = ((-h - b[2]).ceil() as i64).clamp(-cells, cells + 1);
+                while lo > -cells && inside(lo - 1) {
+                    lo -= 1;
+                }
+                while lo <= cells && !inside(lo) {
+                    lo += 1;
+                }
+                if hi >= lo {
+                    count += (hi - lo + 1) as usize;
+                }
+            }
+        }
+    }
+    count
 }
 
 #[cfg(test)]
@@ -99,6 +147,27 @@ mod tests {
             }
         }
         assert!(interior > 10);
+    }
+
+    #[test]
+    fn the_count_is_the_number_of_particles_made() {
+        // Radii on lattice shells (whole multiples of the spacing and of
+        // the cube edge), between them, and below one spacing.
+        let edge = 2f64.sqrt();
+        for (r, s) in [
+            (3.0, 1.0),
+            (5.0, 1.0),
+            (2.0, 0.25),
+            (2.0 * edge, 1.0),
+            (3.0f64.sqrt(), 1.0),
+            (4.37, 0.61),
+            (0.5, 1.0),
+            (1.0, 1.0),
+            (7.0, 0.7),
+        ] {
+            let made = solid_ball(r, s, &[0.3, -2.0, 5.0]).len();
+            assert_eq!(solid_ball_count(r, s), made, "radius {r}, spacing {s}");
+        }
     }
 
     #[test]

@@ -80,7 +80,12 @@ scene `opsim check` accepts. The rules that relate fields, or that JSON Schema c
 only `opsim check` (and `opsim run`) applies:
 
 - `world.dt` at most the frame interval `1 / world.frame_rate`; the work limits (steps,
-  particle-steps, frames, particles) from `dt`, `duration`, `frame_rate` and the generators;
+  particle-steps, frames, particles, objects, interacting pairs held and pair-steps, skin
+  field evaluations and triangulation pairs) from `dt`, `duration`, `frame_rate` (or
+  `opsim run --frames`), the generators (points files and lists from a sample of their
+  neighbourhoods), overlapping objects, the materials' cut-offs and bond radii, the skins'
+  radii and cell sizes and `outputs.triangulation_radius` (`opsim check` prints the
+  estimate);
 - a material's Lennard-Jones taper starting beyond `r0` (`cutoff (1 - taper) > r0`) and
   `n > m`; a cohesion cut-off at most 1000 `r0` and `1e-6 <= alpha r0² <= 1e6`;
 - an object's `material` a key of `materials` or a preset; object names unique; a force's or

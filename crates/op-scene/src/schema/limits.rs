@@ -43,10 +43,21 @@ pub struct WorkLimits {
     /// steps): particles packed far closer than their material's cut-off
     /// each interact with many neighbours, so particle-steps alone do not
     /// bound the work. Estimated per object from its generator's spacing
-    /// and dimension (chains 1, sheets and shells 2) and its material's
-    /// interaction range; points files and lists are not estimated.
+    /// and dimension (chains 1, sheets and shells 2, solids 3) and its
+    /// material's interaction range or bond radius, for points files and
+    /// lists from a sample of their particles' neighbourhoods, plus the
+    /// pairs between objects whose regions overlap. Skin field evaluations
+    /// and triangulation pairs over the run are held to the same limit.
     /// Default: [`PAIRS_PER_PARTICLE_STEP`] times `max_particle_steps`.
     pub max_pair_steps: Real,
+    /// Largest number of interacting pairs held at once (the neighbour
+    /// list, bonds, triangulations: about 20 to 40 bytes each), estimated
+    /// as for `max_pair_steps` and between objects whose regions overlap
+    /// too. Default: 2e8.
+    pub max_pairs: Real,
+    /// Largest number of objects. Default: 1e4 (a scene's checks compare
+    /// objects pairwise for overlaps).
+    pub max_objects: Real,
     /// Largest number of frames. Default: 1e6.
     pub max_frames: Real,
     /// Largest `creation.max_particles`. Default: 1e7.
@@ -59,6 +70,8 @@ impl Default for WorkLimits {
             max_steps: 1e8,
             max_particle_steps: 1e12,
             max_pair_steps: PAIRS_PER_PARTICLE_STEP * 1e12,
+            max_pairs: 2e8,
+            max_objects: 1e4,
             max_frames: 1e6,
             max_created: 1e7,
         }
@@ -81,6 +94,8 @@ impl WorkLimits {
             max_steps: Real::INFINITY,
             max_particle_steps: Real::INFINITY,
             max_pair_steps: Real::INFINITY,
+            max_pairs: Real::INFINITY,
+            max_objects: Real::INFINITY,
             max_frames: Real::INFINITY,
             max_created: Real::INFINITY,
         }

@@ -52,6 +52,7 @@
 
 pub(crate) mod checks;
 pub mod fit;
+mod footprint;
 pub mod limits;
 mod typed;
 pub(crate) mod validate;
@@ -59,6 +60,7 @@ pub(crate) mod work;
 
 pub use fit::FitSettings;
 pub use limits::WorkLimits;
+pub use work::WorkEstimate;
 
 pub use validate::{MAX_COHESION_ALPHA_R0_SQUARED, MAX_COHESION_CUTOFF_OVER_R0};
 use validate::{OBJECT_NAME_PATTERN, SCENE_NAME_PATTERN};
@@ -126,6 +128,11 @@ pub struct Scene {
     /// [`WorkLimits::default`].
     #[serde(skip)]
     pub limits: WorkLimits,
+    /// The frame count the runner was asked for (`opsim run --frames N`,
+    /// [`Scene::set_frames`]), which set `world.duration`: named in the
+    /// errors of a run too long. Not part of the file. Default: `None`.
+    #[serde(skip)]
+    pub frames_override: Option<usize>,
     /// The warnings the scene expects, from its file's header lines
     /// `// expect-warning: TEXT (why)` (the TEXT of each). A run whose
     /// object breaks into pieces is a divergence (exit 3) unless an

@@ -72,6 +72,7 @@ impl Scene {
             creation: None,
             origin: String::new(),
             limits: Default::default(),
+            frames_override: None,
             expected_warnings: Vec::new(),
         }
     }

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use op_dynamics::Real;
 
+use super::footprint::Footprint;
 use super::limits::{
     MAX_CONDUCTION_STEP, MAX_EXTENT_OVER_SPACING, MAX_ROTATION, MAX_SKIN_NODES_PER_AXIS,
 };
@@ -44,64 +45,12 @@ impl Scene {
         }
     }
 
-    /// Interacting pairs (each counted once) estimated from each lattice
-    /// generator's count, spacing and dimension and its material's
-    /// interaction range: a chain has `range / spacing` neighbours per
-    /// particle on each side, a hexagonal sheet or shell
-    /// `π range² / (0.866 spacing²)` within the range. Points files and
-    /// lists count one pair per particle.
-    pub(crate) fn estimated_pairs(&self) -> Real {
-        self.objects
-            .iter()
-            .map(|o| {
-                let range = self
-                    .materials
-                    .get(&o.material)
-                    .and_then(|m| m.prepare().ok())
-                    .map_or(0.0, |m| m.cutoff());
-                let (count, spacing, dim) = match &o.generator {
-                    Generator::Spiral { count, spacing, .. }
-                    | Generator::Chain { count, spacing, .. } => (*count as Real, *spacing, 1),
-                    Generator::HexSheet {
-                        nx, ny, spacing, ..
-                    } => ((nx * ny) as Real, *spacing, 2),
-                    Generator::SphereShell {
-                        radius, spacing, ..
-                    } => (
-                        4.0 * std::f64::consts::PI * (radius / spacing).powi(2),
-                        *spacing,
-                        2,
-                    ),
-                    Generator::TorusShell {
-                        major,
-                        minor,
-                        spacing,
-                        ..
-                    } => (
-                        4.0 * std::f64::consts::PI.powi(2) * major * minor / spacing.powi(2),
-                        *spacing,
-                        2,
-                    ),
-                    Generator::SolidBall {
-                        radius, spacing, ..
-                    } => (
-                        crate::generators::solid_ball_estimate(*radius, *spacing),
-                        *spacing,
-                        3,
-                    ),
-                    Generator::Points { .. } | Generator::List { .. } => return 0.0,
-                };
-                let ratio = range / spacing;
-                let per_particle = match dim {
-                    1 => ratio,
-                    2 => 0.5 * std::f64::consts::PI * ratio * ratio / 0.866,
-                    // Half the face-centred cubic packing's particles
-                    // within the range: 2/3 π ratio³ √2.
-                    _ => 2.0 / 3.0 * std::f64::consts::PI * ratio.powi(3) * 2f64.sqrt(),
-                };
-                count * per_particle.max(1.0)
-            })
-            .sum()
+    /// `" (set by --frames N)"` when the runner's frame count set
+    /// `world.duration` ([`Scene::set_frames`]), else nothing: what the
+    /// errors of a run too long add to the duration they name.
+    fn set_by_frames(&self) -> String {
+        self.frames_override
+            .map_or(String::new(), |n| format!(" (set by --frames {n})"))
     }
 
     /// Checks the run's size against [`Scene::limits`] and the lengths
@@ -148,25 +97,139 @@ impl Scene {
                 "world.frame_rate",
                 short(w.frame_rate),
                 &format!(
-                    "with world.duration = {} gives {} frames, more than the limit of {} {flag}",
+                    "with world.duration = {}{} gives {} frames, more than the limit of {} {flag}",
                     short(w.duration),
+                    self.set_by_frames(),
                     short(frames.round()),
                     short(lim.max_frames)
                 ),
             ));
         }
-        self.validate_run_size(total)?;
+        self.validate_run_size(total, base_dir)?;
         self.validate_heat_and_creation()?;
         self.validate_lengths(base_dir)
     }
 
-    /// The run's steps, particle-steps and pair-steps within
-    /// [`Scene::limits`]; `total` is the particle count.
-    fn validate_run_size(&self, total: usize) -> Result<(), SceneError> {
+    /// What the run is estimated to cost ([`WorkEstimate`]): its steps and
+    /// frames, its particles, the interacting pairs its objects hold
+    /// (within each object at its material's range, between objects whose
+    /// regions overlap at the scene's largest range:
+    /// [`super::footprint`]), its skins' field evaluations and its
+    /// triangulations' pairs. Points files are read.
+    ///
+    /// # Errors
+    ///
+    /// A points file that cannot be read.
+    pub fn work_estimate(&self, base_dir: Option<&Path>) -> Result<WorkEstimate, SceneError> {
+        let file = self.origin();
+        let w = &self.world;
+        let footprints = self
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(k, o)| {
+                let path = format!("{}.generator", object_path(k, &o.name));
+                Footprint::of(&o.generator, base_dir, file, &path)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        // Each material's range: its cut-off, or its bond radius (bonded
+        // pairs interact completely, however far); prepared once each.
+        let material_ranges: std::collections::HashMap<&str, Real> = self
+            .materials
+            .iter()
+            .map(|(name, m)| {
+                let range = m
+                    .prepare()
+                    .ok()
+                    .map_or(0.0, |m| m.cutoff().max(m.bonds().map_or(0.0, |b| b.radius)));
+                (name.as_str(), range)
+            })
+            .collect();
+        let ranges: Vec<Real> = self
+            .objects
+            .iter()
+            .map(|o| {
+                material_ranges
+                    .get(o.material.as_str())
+                    .copied()
+                    .unwrap_or(0.0)
+            })
+            .collect();
+        let largest = ranges.iter().copied().fold(0.0, Real::max);
+        let mut per_object: Vec<Real> = footprints
+            .iter()
+            .zip(&ranges)
+            .map(|(f, r)| f.own_pairs(*r))
+            .collect();
+        // Pairs between objects, each half to either side: quadratic in the
+        // objects (at most `max_objects`), skipped without a pair limit.
+        if self.limits.max_pairs.is_finite() || self.limits.max_pair_steps.is_finite() {
+            for a in 0..footprints.len() {
+                for b in a + 1..footprints.len() {
+                    let shared = footprints[a].pairs_with(&footprints[b], largest);
+                    per_object[a] += 0.5 * shared;
+                    per_object[b] += 0.5 * shared;
+                }
+            }
+        }
+        let (densest, pairs) = per_object
+            .iter()
+            .enumerate()
+            .fold((0, 0.0), |(k, total), (j, p)| {
+                (if *p > per_object[k] { j } else { k }, total + p)
+            });
+        let mut skin_per_frame = 0.0;
+        let mut contact_per_step = 0.0;
+        let mut triangulation = 0.0;
+        let skinned = self.objects.iter().filter(|o| o.skin.is_some()).count();
+        let contact = skinned >= 2 || (skinned >= 1 && !self.tools.is_empty());
+        for (o, f) in self.objects.iter().zip(&footprints) {
+            if let Some(skin) = &o.skin {
+                // Each primitive reaches the grid nodes within its support,
+                // at most every node of the object's grid.
+                let nodes = |reach: Real| {
+                    let own = (2.0 * reach / skin.cell_size).powi(3);
+                    let grid = ((2.0 * (f.radius() + reach)) / skin.cell_size + 3.0).powi(3);
+                    own.min(grid)
+                };
+                skin_per_frame += f.count * nodes(skin.reach());
+                if contact {
+                    contact_per_step += f.count * nodes(skin.radius);
+                }
+            }
+            if self.outputs.triangulation {
+                triangulation += f.own_pairs(self.outputs.triangulation_radius * f.spacing);
+            }
+        }
+        Ok(WorkEstimate {
+            frames: w.duration * w.frame_rate + 1.0,
+            steps: (w.settle + w.duration) / w.dt,
+            particles: footprints.iter().map(|f| f.count).sum(),
+            pairs,
+            densest: object_path(densest, &self.objects[densest].name),
+            skin_evaluations_per_frame: skin_per_frame,
+            contact_evaluations_per_step: contact_per_step,
+            triangulation_pairs_per_frame: triangulation,
+        })
+    }
+
+    /// The run's objects, steps, particle-steps, pairs, pair-steps and
+    /// field evaluations within [`Scene::limits`]; `total` is the particle
+    /// count.
+    fn validate_run_size(&self, total: usize, base_dir: Option<&Path>) -> Result<(), SceneError> {
         let file = self.origin();
         let w = &self.world;
         let lim = &self.limits;
         let flag = "(opsim --no-work-limits lifts this limit)";
+        let objects = self.objects.len() as Real;
+        if objects > lim.max_objects {
+            return Err(SceneError::value(
+                file,
+                "objects",
+                format!("{} objects", self.objects.len()),
+                &format!("must be at most {} {flag}", short(lim.max_objects)),
+            ));
+        }
         let steps = (w.settle + w.duration) / w.dt;
         if steps > lim.max_steps {
             return Err(SceneError::value(
@@ -174,8 +237,9 @@ impl Scene {
                 "world.dt",
                 short(w.dt),
                 &format!(
-                    "makes (world.settle + world.duration) / dt = {} steps, more than the limit \
-                     of {} {flag}",
+                    "makes (world.settle + world.duration{}) / dt = {} steps, more than the \
+                     limit of {} {flag}",
+                    self.set_by_frames(),
                     short(steps.ceil()),
                     short(lim.max_steps)
                 ),
@@ -186,7 +250,7 @@ impl Scene {
             return Err(SceneError::value(
                 file,
                 "world.duration",
-                short(w.duration),
+                format!("{}{}", short(w.duration), self.set_by_frames()),
                 &format!(
                     "makes {} steps of {total} particles, {} particle-steps, more than the \
                      limit of {} {flag}",
@@ -196,19 +260,68 @@ impl Scene {
                 ),
             ));
         }
-        let pair_steps = steps * self.estimated_pairs();
+        let e = self.work_estimate(base_dir)?;
+        let densely = "(particles packed closely for their material's cut-off or bond radius, \
+                       or objects overlapping)";
+        if e.pairs > lim.max_pairs {
+            return Err(SceneError::value(
+                file,
+                e.densest.clone(),
+                format!(
+                    "about {} interacting pairs in the scene",
+                    short(e.pairs.round())
+                ),
+                &format!(
+                    "the scene's objects hold at most {} pairs at once {densely}; this object \
+                     holds the most {flag}",
+                    short(lim.max_pairs)
+                ),
+            ));
+        }
+        let pair_steps = e.pair_steps();
         if pair_steps > lim.max_pair_steps {
             return Err(SceneError::value(
                 file,
                 "world.duration",
-                short(w.duration),
+                format!("{}{}", short(w.duration), self.set_by_frames()),
                 &format!(
-                    "makes {} steps of about {} interacting pairs (particles packed closely \
-                     for their material's cut-off), {} pair-steps, more than the limit of {} \
-                     {flag}",
+                    "makes {} steps of about {} interacting pairs {densely}, {} pair-steps, \
+                     more than the limit of {} {flag}",
                     short(steps.ceil()),
-                    short(self.estimated_pairs().round()),
+                    short(e.pairs.round()),
                     short(pair_steps),
+                    short(lim.max_pair_steps)
+                ),
+            ));
+        }
+        if e.triangulation_pairs_per_frame > lim.max_pairs {
+            return Err(SceneError::value(
+                file,
+                "outputs.triangulation_radius",
+                short(self.outputs.triangulation_radius),
+                &format!(
+                    "makes about {} triangulation pairs per frame, more than the limit of {} \
+                     pairs held at once {flag}",
+                    short(e.triangulation_pairs_per_frame.round()),
+                    short(lim.max_pairs)
+                ),
+            ));
+        }
+        let evaluations = e.field_evaluations();
+        if evaluations > lim.max_pair_steps {
+            let (field, value) = e.costliest_output(self);
+            return Err(SceneError::value(
+                file,
+                field,
+                value,
+                &format!(
+                    "makes about {} skin field evaluations and triangulation pairs over the \
+                     run ({} per frame in skins, {} per step in skin contact, {} per frame in \
+                     triangulations), more than the limit of {} {flag}",
+                    short(evaluations),
+                    short(e.skin_evaluations_per_frame),
+                    short(e.contact_evaluations_per_step),
+                    short(e.triangulation_pairs_per_frame),
                     short(lim.max_pair_steps)
                 ),
             ));
@@ -462,4 +575,76 @@ fn object_extent(
                 .sqrt()
         }
     })
+}
+
+/// What a scene's run is estimated to cost ([`Scene::work_estimate`]):
+/// what the work limits are checked against and `opsim check` prints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorkEstimate {
+    /// Frames written, frame 0 included.
+    pub frames: Real,
+    /// Time steps (settle phase and run; fixed-step schemes).
+    pub steps: Real,
+    /// Particles (lattice generators estimated from their size).
+    pub particles: Real,
+    /// Interacting pairs held at once: within each object at its
+    /// material's cut-off or bond radius, and between objects whose
+    /// regions come within the scene's largest such range.
+    pub pairs: Real,
+    /// The object with the most pairs (its own and its half of those
+    /// shared with objects it overlaps), as a field path.
+    pub densest: String,
+    /// Field evaluations of polygonizing the skins, per frame (each
+    /// primitive at the grid nodes within its support).
+    pub skin_evaluations_per_frame: Real,
+    /// Field evaluations of skin contact, per step (each primitive at the
+    /// nodes within its contact support; 0 without contact).
+    pub contact_evaluations_per_step: Real,
+    /// Pairs of the triangulations written with each frame (0 without).
+    pub triangulation_pairs_per_frame: Real,
+}
+
+impl WorkEstimate {
+    /// Pairs evaluated over the run: pairs times steps.
+    pub fn pair_steps(&self) -> Real {
+        self.pairs * self.steps
+    }
+
+    /// Skin field evaluations and triangulation pairs over the run.
+    pub fn field_evaluations(&self) -> Real {
+        self.frames * (self.skin_evaluations_per_frame + self.triangulation_pairs_per_frame)
+            + self.steps * self.contact_evaluations_per_step
+    }
+
+    /// The field and value that set the largest part of
+    /// [`WorkEstimate::field_evaluations`] in `scene`: a skin's cell size
+    /// or the triangulation radius.
+    fn costliest_output(&self, scene: &Scene) -> (String, String) {
+        let triangulation = self.frames * self.triangulation_pairs_per_frame;
+        if triangulation >= self.field_evaluations() - triangulation {
+            return (
+                "outputs.triangulation_radius".into(),
+                short(scene.outputs.triangulation_radius),
+            );
+        }
+        scene
+            .objects
+            .iter()
+            .enumerate()
+            .filter_map(|(k, o)| o.skin.as_ref().map(|s| (k, o, s)))
+            .max_by(|a, b| (a.2.reach() / a.2.cell_size).total_cmp(&(b.2.reach() / b.2.cell_size)))
+            .map_or_else(
+                || ("objects".into(), String::new()),
+                |(k, o, s)| {
+                    (
+                        format!("{}.skin", object_path(k, &o.name)),
+                        format!(
+                            "radius {}, cell_size {}",
+                            short(s.radius),
+                            short(s.cell_size)
+                        ),
+                    )
+                },
+            )
+    }
 }

@@ -1,0 +1,161 @@
+//! Every field that sets a run's work is in the work estimate (issue 38):
+//! the structural mutants that `opsim check` used to accept, or to take
+//! minutes and gigabytes over, are refused quickly with the field, the
+//! value and the flag that lifts the limit; the same scenes without the
+//! mutation pass, and `--no-work-limits` lifts each refusal.
+
+use op_scene::load::parse_unvalidated;
+use op_scene::{Format, Scene, WorkLimits};
+
+/// A scene of `objects` (RON object entries) with material `m` of `extra`
+/// settings and outputs `outputs`.
+fn scene(material: &str, objects: &[String], outputs: &str) -> String {
+    format!(
+        r#"(name: "work", world: (dt: 0.01, duration: 1),
+        materials: {{"m": ({material})}},
+        objects: [{}],
+        outputs: ({outputs}))"#,
+        objects.join(",\n")
+    )
+}
+
+fn parse(text: &str) -> Scene {
+    parse_unvalidated(text, Format::Ron, "<work.ron>").expect("parses")
+}
+
+/// The validation error of `text`, which must be refused by a work limit
+/// and pass without limits.
+fn refused(text: &str) -> String {
+    let s = parse(text);
+    let e = s.validate(None).expect_err("refused").to_string();
+    assert!(e.contains("--no-work-limits"), "{e}");
+    let mut unlimited = s;
+    unlimited.limits = WorkLimits::unlimited();
+    unlimited.validate(None).expect("valid without work limits");
+    e
+}
+
+fn chain(name: &str, count: usize, y: f64) -> String {
+    format!(
+        r#"(name: "{name}", material: "m", generator: Chain(count: {count}, spacing: 1, start: (0, {y}, 0)))"#
+    )
+}
+
+fn sheet(name: &str, n: usize) -> String {
+    format!(r#"(name: "{name}", material: "m", generator: HexSheet(nx: {n}, ny: {n}, spacing: 1))"#)
+}
+
+/// A bond radius far beyond the spacing bonds every particle with
+/// thousands: a 2-particle object next to a 40,000-particle sheet used to
+/// take 6 GB before an allocation abort.
+#[test]
+fn a_bond_radius_counts_as_the_range() {
+    let objects = [chain("pair", 2, 0.5), sheet("big", 200)];
+    let ok = scene("bonds: (radius: 1.2)", &objects, "");
+    parse(&ok).validate(None).unwrap();
+    let e = refused(&scene("bonds: (radius: 100)", &objects, ""));
+    assert!(e.contains("interacting pairs"), "{e}");
+}
+
+/// A thousand chains on top of each other each pass a per-object
+/// estimate; together they hold a thousand times more pairs.
+#[test]
+fn overlapping_objects_count_their_shared_pairs() {
+    let apart: Vec<String> = (0..30)
+        .map(|k| chain(&format!("c{k}"), 100, 10.0 * k as f64))
+        .collect();
+    let text = scene("", &apart, "");
+    let spread = parse(&text);
+    spread.validate(None).unwrap();
+    let together: Vec<String> = (0..1000)
+        .map(|k| chain(&format!("c{k}"), 1000, 1e-3 * k as f64))
+        .collect();
+    let s = parse(&scene("", &together, ""));
+    let alone = s.work_estimate(None).unwrap().pairs;
+    assert!(alone > 1e8, "{alone}");
+    let e = s.validate(None).unwrap_err().to_string();
+    assert!(e.contains("interacting pairs"), "{e}");
+    // Apart, the same chains hold their own pairs only.
+    let apart: Vec<String> = (0..1000)
+        .map(|k| chain(&format!("c{k}"), 1000, 100.0 * k as f64))
+        .collect();
+    let pairs = parse(&scene("", &apart, ""))
+        .work_estimate(None)
+        .unwrap()
+        .pairs;
+    assert!(pairs < 1e7, "{pairs}");
+}
+
+/// A list of particles on one point is a cloud of N² pairs, counted from a
+/// sample of its neighbourhoods.
+#[test]
+fn a_list_on_one_point_is_counted_dense() {
+    let particles = vec!["(position: (1, 2, 3))"; 50_000].join(", ");
+    let list =
+        format!(r#"(name: "heap", material: "m", generator: List(particles: [{particles}]))"#);
+    let e = refused(&scene("", &[list], ""));
+    assert!(e.contains("objects[0] \"heap\""), "{e}");
+}
+
+/// A skin whose support covers the object many times over samples its
+/// field at millions of nodes per frame from every primitive.
+#[test]
+fn a_skin_radius_counts_its_field_evaluations() {
+    let skinned = |radius: f64| {
+        format!(
+            r#"(name: "s", material: "m", generator: HexSheet(nx: 20, ny: 20, spacing: 1),
+            skin: Some((primitive: Point, radius: {radius}, cell_size: 0.2)))"#
+        )
+    };
+    let mut ok = parse(&scene("", &[skinned(1.2)], ""));
+    ok.world.duration = 100.0;
+    ok.validate(None).unwrap();
+    let text = scene("", &[skinned(20.0)], "").replace("duration: 1", "duration: 100");
+    let e = refused(&text);
+    assert!(e.contains("skin field evaluations"), "{e}");
+    assert!(e.contains("objects[0] \"s\".skin"), "{e}");
+}
+
+/// A triangulation radius of 1e308 rest spacings pairs every particle of
+/// an object with every other at each frame.
+#[test]
+fn a_triangulation_radius_counts_its_pairs() {
+    let objects = [sheet("s", 300)];
+    let with = |radius: &str| {
+        scene(
+            "",
+            &objects,
+            &format!("triangulation: true, triangulation_radius: {radius}"),
+        )
+        .replace("duration: 1", "duration: 100")
+    };
+    parse(&with("1.7")).validate(None).unwrap();
+    let e = refused(&with("1e308"));
+    assert!(e.contains("outputs.triangulation_radius"), "{e}");
+}
+
+/// More objects than the limit are refused before anything compares them
+/// pairwise.
+#[test]
+fn objects_are_counted_against_a_limit() {
+    let many: Vec<String> = (0..10_001)
+        .map(|k| chain(&format!("c{k}"), 1, 10.0 * k as f64))
+        .collect();
+    let e = refused(&scene("", &many, ""));
+    assert!(e.contains("10001 objects"), "{e}");
+}
+
+/// A solid ball of nine million particles is counted without making
+/// them.
+#[test]
+fn a_large_solid_ball_is_counted_not_built() {
+    let ball = r#"(name: "b", material: "m", generator: SolidBall(radius: 115, spacing: 1))"#;
+    let mut s = parse(&scene("", &[ball.to_string()], ""));
+    s.limits = WorkLimits::unlimited();
+    let counts = s.validate(None).unwrap();
+    let estimate = 4.0 / 3.0 * std::f64::consts::PI * 115f64.powi(3) * 2f64.sqrt();
+    assert!(
+        (counts[0] as f64 / estimate - 1.0).abs() < 0.01,
+        "{counts:?}"
+    );
+}
