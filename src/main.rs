@@ -147,7 +147,8 @@ enum Command {
         open: bool,
         /// Relaxation time after the samples are released (in time units
         /// of a unit spacing): smooths noisy samples, moving the surface
-        /// off them. Default: 0 (the surface interpolates the samples).
+        /// off them. At most 100 (20,000 relaxation steps). Default: 0 (the
+        /// surface interpolates the samples).
         #[arg(long, default_value_t = 0.0)]
         relax: f64,
     },
@@ -300,6 +301,15 @@ fn run_fit(
         return Err(anyhow!(
             "--out {}: the fitted mesh is written as Wavefront OBJ: give a path ending in .obj",
             out.display()
+        )
+        .into());
+    }
+    let most = op_modeling::fit::MAX_RELAX_TIME;
+    if !(0.0..=most).contains(&relax) {
+        return Err(anyhow!(
+            "--relax {relax}: must be between 0 and {most} (time units of a unit spacing; a \
+             relaxation of 10 already moves the surface off the samples by a fraction of a \
+             spacing)"
         )
         .into());
     }

@@ -178,3 +178,32 @@ fn the_stable_step_of_a_skinned_scene_counts_its_contact() {
         let _ = std::fs::remove_dir_all(path.parent().unwrap());
     }
 }
+
+/// An adaptive scene whose tolerances no step can meet (1e-300) used to
+/// crawl at `dt_min` to its end (hours); it now stops as diverged after a
+/// thousand forced steps, exit 3, its frame 0 written and the summary
+/// saying why (issue 38).
+#[test]
+fn unmeetable_tolerances_exit_3() {
+    let dir = std::env::temp_dir().join(format!("opsim-explosions-tol-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("strict.ron");
+    std::fs::write(
+        &scene,
+        r#"(name: "strict", world: (dt: 0.01, duration: 2, frame_rate: 10,
+            integrator: Adaptive((rtol: 1e-300, atol_position: 1e-300, atol_velocity: 1e-300,
+                atol_angle: 1e-300, atol_angular_velocity: 1e-300))),
+        materials: {"m": (coplanarity: 10)},
+        objects: [(name: "s", material: "m",
+            generator: HexSheet(nx: 6, ny: 6, spacing: 1, noise: 0.1))])"#,
+    )
+    .unwrap();
+    let (o, summary) = run(&scene, &[]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert_eq!(summary["diverged"], true, "{summary}");
+    assert_eq!(summary["frames"], 1, "{summary}");
+    let why = summary["divergence"].as_str().unwrap_or_default();
+    assert!(why.contains("no step meets these tolerances"), "{why}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

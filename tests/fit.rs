@@ -268,6 +268,12 @@ fn bad_files_exit_2_naming_the_file() {
     let o = opsim(&["fit", "ok.xyz", "--out", "m.obj", "--spacing", "0"], &dir);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("spacing"), "{}", text(&o));
+    // A relaxation of 1e4 used to run for hours (issue 38).
+    for relax in ["1e4", "1e308", "NaN"] {
+        let o = opsim(&["fit", "ok.xyz", "--out", "m.obj", "--relax", relax], &dir);
+        assert_eq!(o.status.code(), Some(2), "{relax}: {}", text(&o));
+        assert!(text(&o).contains("--relax"), "{}", text(&o));
+    }
     // The mesh is OBJ: another extension is refused before the fit, not
     // written as OBJ text under the wrong name.
     let o = opsim(&["fit", "ok.xyz", "--out", "m.ply"], &dir);

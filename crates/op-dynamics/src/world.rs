@@ -45,6 +45,11 @@ pub enum WorldError {
     },
 }
 
+/// Adaptive steps in a row that may be forced through at `dt_min` with
+/// their error above the tolerance before the run stops as diverged
+/// ([`crate::integrators::StepInfo::tolerance_met`]).
+pub const MAX_FORCED_STEPS: u32 = 1000;
+
 /// A run that blew up: the step, time and (when one is to blame) particle
 /// where it was detected, and what was wrong. The one divergence of the
 /// workspace: the world's checks (non-finite state, speed limit) and the
@@ -298,6 +303,12 @@ pub struct World {
     /// Effects of the world's own stages since [`World::take_effects`].
     effects: Effects,
     steps: u64,
+    /// Steps this world may take before it stops as diverged
+    /// ([`World::set_step_budget`]). Default: unbounded.
+    step_budget: u64,
+    /// Adaptive steps forced through at `dt_min` in a row (tolerance not
+    /// met; [`MAX_FORCED_STEPS`]).
+    forced_in_a_row: u32,
     dt_next: Real,
     report: StepReport,
     /// Seconds per stage (by name, in the order first run) summed over
@@ -378,6 +389,8 @@ impl World {
             prev_positions: particles.positions().to_vec(),
             time: 0.0,
             effects: Effects::default(),
+            step_budget: u64::MAX,
+            forced_in_a_row: 0,
             steps: 0,
             dt_next: params.dt,
             report: StepReport::default(),
@@ -665,6 +678,10 @@ impl World {
         report.force_evaluations = info.force_evaluations;
         self.time += info.dt_taken;
         self.steps += 1;
+        self.forced_in_a_row = match info.tolerance_met() {
+            true => 0,
+            false => self.forced_in_a_row.saturating_add(1),
+        };
         if !clipped || info.dt_taken < dt {
             self.dt_next = info.dt_next;
         }
@@ -678,7 +695,9 @@ impl World {
         self.effects.merge(effects);
 
         let clock = std::time::Instant::now();
-        let check = self.check_divergence();
+        let check = self
+            .check_divergence()
+            .and_then(|()| self.check_progress(&info));
         report
             .seconds
             .push(("check", clock.elapsed().as_secs_f64()));
@@ -691,6 +710,47 @@ impl World {
         self.report = report;
         check?;
         Ok(&self.report)
+    }
+
+    /// A run that cannot make progress within its means is stopped like a
+    /// divergence: more steps than [`World::set_step_budget`] allows (an
+    /// adaptive step collapsing toward `dt_min`), or [`MAX_FORCED_STEPS`]
+    /// adaptive steps in a row forced through at `dt_min` with the error
+    /// above the tolerance (tolerances no step can meet: the run would
+    /// crawl at `dt_min` to its end).
+    fn check_progress(&self, info: &crate::integrators::StepInfo) -> Result<(), Divergence> {
+        let stop = |reason: String| Divergence {
+            step: self.steps,
+            time: self.time,
+            particle: None,
+            reason,
+        };
+        if self.steps > self.step_budget {
+            return Err(stop(format!(
+                "{} steps, more than the run's budget of {} (its work limit; the last step was \
+                 {:.3e}): the step collapsed",
+                self.steps, self.step_budget, info.dt_taken
+            )));
+        }
+        if self.forced_in_a_row >= MAX_FORCED_STEPS {
+            return Err(stop(format!(
+                "{} adaptive steps in a row were forced through at dt_min = {:.3e} with the error \
+                 above the tolerance (error norm {:.3e}): no step meets these tolerances; raise \
+                 the tolerances or dt_min",
+                self.forced_in_a_row,
+                info.dt_taken,
+                info.error_norm.unwrap_or(Real::NAN)
+            )));
+        }
+        Ok(())
+    }
+
+    /// Stops the run as diverged once it has taken more than `steps` steps
+    /// in all ([`World::steps`]): the runner sets the budget its work
+    /// limits allow, so that an adaptive step collapsing toward `dt_min`
+    /// ends the run instead of running past its estimated work.
+    pub fn set_step_budget(&mut self, steps: u64) {
+        self.step_budget = steps;
     }
 
     fn check_divergence(&self) -> Result<(), Divergence> {

@@ -325,3 +325,42 @@ fn divergence_is_reported() {
     assert!(err.step >= 1);
     assert!(err.to_string().contains("particle"));
 }
+
+/// A run that cannot progress stops as diverged: past its step budget, and
+/// when the adaptive scheme forces step after step through at `dt_min`
+/// because no step meets tolerances of 1e-300.
+#[test]
+fn runs_that_cannot_progress_stop() {
+    let pair = || {
+        let mut p = Particles::new();
+        p.push(op_dynamics::ParticleDesc::at(Point3::origin()))
+            .unwrap();
+        p.push(op_dynamics::ParticleDesc::at(Point3::new(0.9, 0.0, 0.0)))
+            .unwrap();
+        p
+    };
+    let params = WorldParams {
+        dt: 0.01,
+        ..Default::default()
+    };
+    let mut w = World::new(pair(), &[spacing_material()], params.clone()).unwrap();
+    w.set_step_budget(5);
+    for _ in 0..5 {
+        w.step().unwrap();
+    }
+    let err = w.step().unwrap_err();
+    assert_eq!(err.step, 6);
+    assert!(err.to_string().contains("budget of 5"), "{err}");
+
+    let strict = WorldParams {
+        scheme: Scheme::Adaptive(op_dynamics::integrators::AdaptiveParams::with_tolerance(
+            1e-300,
+        )),
+        ..params
+    };
+    let mut w = World::new(pair(), &[spacing_material()], strict).unwrap();
+    let err = w.advance_to(1.0).unwrap_err();
+    assert!(err.to_string().contains("no step meets"), "{err}");
+    assert!(err.step >= u64::from(op_dynamics::world::MAX_FORCED_STEPS));
+    assert!(err.time < 1e-3, "{err}");
+}

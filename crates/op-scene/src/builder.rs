@@ -130,6 +130,7 @@ impl Scene {
         let (tools, skin_tool_params, all_tools) = self.tool_params();
         let mut world =
             self.make_world(placed.particles, &used, &counts, &placed.offsets, &tools)?;
+        world.set_step_budget(self.step_budget(counts.iter().sum()));
         let objects = placed.objects;
         let file = self.origin();
         let install = crate::features::InstallContext {

@@ -342,8 +342,17 @@ impl FitParams {
         if !(self.d_max.is_finite() && self.d_max >= self.d_min) {
             return bad("d_max", self.d_max, "must be finite and >= d_min");
         }
-        if !(self.relax_time.is_finite() && self.relax_time >= 0.0) {
-            return bad("relax_time", self.relax_time, "must be finite and >= 0");
+        if !(self.relax_time.is_finite() && (0.0..=MAX_RELAX_TIME).contains(&self.relax_time)) {
+            return bad(
+                "relax_time",
+                self.relax_time,
+                &format!(
+                    "must be finite, >= 0 and at most {MAX_RELAX_TIME} ({} relaxation steps of \
+                     every particle; a relaxation of 10 already moves the surface off the \
+                     samples by a fraction of a spacing)",
+                    MAX_RELAX_TIME / STEP
+                ),
+            );
         }
         if !(self.triangulation_radius.is_finite() && self.triangulation_radius > 0.0) {
             return bad(
@@ -361,6 +370,12 @@ impl FitParams {
         Ok(())
     }
 }
+
+/// Longest relaxation after release ([`FitParams::relax_time`], in
+/// unit-spacing time units): `100 / STEP` = 20,000 steps of the whole
+/// set, which bounds the relaxation's work with [`MAX_PARTICLES`]; longer
+/// ones used to run for hours (`opsim fit --relax 1e4`, issue 38).
+pub const MAX_RELAX_TIME: Real = 100.0;
 
 /// Largest number of particles of a fit: the distinct samples, the
 /// particles the spacing would need (estimated as the distinct samples

@@ -45,6 +45,24 @@ impl Scene {
         }
     }
 
+    /// The most steps a run of `particles` particles may take within the
+    /// work limits (`max_steps`, and `max_particle_steps / particles`):
+    /// the world's step budget ([`op_dynamics::World::set_step_budget`]),
+    /// which stops an adaptive run whose step collapses toward `dt_min`
+    /// as diverged instead of letting it run past its work. Unbounded
+    /// without work limits.
+    pub(crate) fn step_budget(&self, particles: usize) -> u64 {
+        let lim = &self.limits;
+        let steps = lim
+            .max_steps
+            .min(lim.max_particle_steps / particles.max(1) as Real);
+        if steps.is_finite() {
+            steps as u64
+        } else {
+            u64::MAX
+        }
+    }
+
     /// `" (set by --frames N)"` when the runner's frame count set
     /// `world.duration` ([`Scene::set_frames`]), else nothing: what the
     /// errors of a run too long add to the duration they name.
