@@ -51,6 +51,8 @@ const CHECK_MEMORY_KB: u64 = 1 << 20;
 const RUN_BOUND: Duration = Duration::from_secs(90);
 /// The particle-step budget of each run (as in `tests/fuzz_scenes.rs`).
 const BUDGET: &str = "1e7";
+/// Largest size of the copies of a duplicated object, as JSON text.
+const DUPLICATES_BYTES: usize = 32 << 20;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -111,8 +113,14 @@ fn mutate(scene: &mut Value, others: &[(String, Value)], rng: &mut Rng) -> Strin
     let k = rng.below(n);
     match rng.below(7) {
         0 => {
-            let copies = [2, 5, 50, 1000][rng.below(4)];
+            let wanted = [2, 5, 50, 1000][rng.below(4)];
             let original = objects(scene)[k].clone();
+            // At most DUPLICATES_BYTES of copies: a list of 100,000
+            // particles copied a thousand times would take this test
+            // tens of gigabytes as JSON values (and the scene file is
+            // refused beyond 256 MiB anyway).
+            let size = serde_json::to_string(&original).map_or(1, |t| t.len().max(1));
+            let copies = wanted.min((DUPLICATES_BYTES / size).max(1));
             let name = original["name"].as_str().unwrap_or("o").to_string();
             for c in 0..copies {
                 let mut copy = original.clone();

@@ -419,13 +419,7 @@ impl FrameWriter {
     /// [`FileFormat::writes_meshes_with_state`] writes the skins, surfaces
     /// and tools (its state files hold the particles).
     fn writes(&self, seq: &Sequence, format: FrameFormat) -> bool {
-        match format.files() {
-            Files::PerSequence => true,
-            Files::State => {
-                format.format().writes_meshes_with_state() && seq.kind != SequenceKind::Particles
-            }
-            Files::Run => false,
-        }
+        writes(seq, format)
     }
 
     /// The files of sequence `seq` in `format` written so far with their
@@ -502,57 +496,54 @@ impl FrameWriter {
         // from it on.
         self.frames.retain(|&(j, _)| j < k);
         self.frames.push((k, time));
+        // Each sequence's geometry and encoded files, made in parallel (the
+        // sequences are independent; the skins polygonize in parallel
+        // themselves), then handed to the writer and the caches in the
+        // sequences' order: the same files and bytes at any thread count.
+        let caching = !self.caches.is_empty();
+        // The file a skin's failure names when no frame file has it.
+        let cache_file = self
+            .caches
+            .first()
+            .map(|(f, _)| layout::run_path(&self.out, *f));
+        let inputs = FrameInputs {
+            world,
+            objects,
+            skins,
+            skin_tools,
+            tools,
+            outputs,
+        };
+        let prepared: Vec<Result<Option<PreparedSequence>, WriteFailure>> = {
+            use rayon::prelude::*;
+            let (out, formats, sheet_gap) = (&self.out, &self.formats, &self.sheet_gap);
+            self.sequences
+                .par_iter()
+                .zip(&self.sources)
+                .map(|(seq, source)| {
+                    let cache = cache_file.as_deref();
+                    prepare_sequence(seq, *source, k, out, formats, sheet_gap, cache, &inputs)
+                })
+                .collect()
+        };
         let mut coarsened = Vec::new();
         // The sequences' geometry for the caches of one file per run.
         let mut cached = Vec::new();
-        for (seq, source) in self.sequences.iter().zip(&self.sources) {
-            let formats: Vec<FrameFormat> = self
-                .formats
-                .iter()
-                .copied()
-                .filter(|&f| self.writes(seq, f))
-                .collect();
-            if let (Source::Particles(o), false) = (*source, self.caches.is_empty()) {
+        for ((seq, source), prepared) in self.sequences.iter().zip(&self.sources).zip(prepared) {
+            if let (Source::Particles(o), true) = (*source, caching) {
                 cached.push(run_cache::SequenceFrame::Particles {
                     world,
                     object: &objects[o],
                     width: 2.0 * outputs.glyph_size * objects[o].rest_spacing,
                 });
             }
-            let meshes_cached = !self.caches.is_empty() && !matches!(source, Source::Particles(_));
-            if formats.is_empty() && !meshes_cached {
+            let Some(p) = prepared? else {
                 continue;
+            };
+            if let Some((name, cell, export)) = p.coarsened {
+                coarsened.push((name, k, cell, export));
             }
-            // The file a skin's failure names.
-            let first = match (formats.first(), self.caches.first()) {
-                (Some(&f), _) => seq.path(&self.out, k, f),
-                (None, Some((f, _))) => layout::run_path(&self.out, *f),
-                (None, None) => PathBuf::new(),
-            };
-            let mesh = match *source {
-                Source::Particles(o) => geometry::object_geometry(world, &objects[o], outputs),
-                Source::Surface(o) => {
-                    geometry::surface_geometry(world, &objects[o], outputs, self.sheet_gap)
-                }
-                Source::Tool(t) => geometry::tool_geometry(t, &tools[t], world.time()),
-                Source::Skin(s) => {
-                    let skin = &skins[s];
-                    let h = skin.export_cell_size();
-                    if h > skin.cell_size {
-                        coarsened.push((skin.name.clone(), k, skin.cell_size, h));
-                    }
-                    let mesh = skin
-                        .mesh_in(skins, skin_tools, world.time())
-                        .map_err(|e| failure(first, std::io::Error::other(e)))?;
-                    geometry::mesh_geometry(&skin.name, &mesh)
-                }
-            };
-            for f in formats {
-                let path = seq.path(&self.out, k, f);
-                let mut bytes = Vec::new();
-                f.format()
-                    .encode_mesh(&mesh, &mut bytes)
-                    .map_err(|e| failure(path.clone(), e))?;
+            for (f, path, bytes) in p.files {
                 self.files.push(k, path, bytes)?;
                 // After the frame's file: on disk, the series lists only
                 // files already there.
@@ -563,7 +554,7 @@ impl FrameWriter {
                     .map_err(|e| failure(series.clone(), e))?;
                 self.files.push_index(k, series, bytes)?;
             }
-            if meshes_cached {
+            if let Some(mesh) = p.mesh {
                 cached.push(run_cache::SequenceFrame::Mesh(mesh));
             }
         }
@@ -610,4 +601,115 @@ impl FrameWriter {
         let files = self.files.finish();
         runs.and(files)
     }
+}
+
+/// Whether `format` writes sequence `seq` with the frames: every
+/// per-sequence format, and the state formats that carry meshes for the
+/// sequences that are not particles.
+fn writes(seq: &Sequence, format: FrameFormat) -> bool {
+    match format.files() {
+        Files::PerSequence => true,
+        Files::State => {
+            format.format().writes_meshes_with_state() && seq.kind != SequenceKind::Particles
+        }
+        Files::Run => false,
+    }
+}
+
+/// What a frame is made from ([`FrameWriter::write_frame`]'s arguments).
+struct FrameInputs<'a> {
+    world: &'a World,
+    objects: &'a [BuiltObject],
+    skins: &'a [ObjectSkin],
+    skin_tools: &'a [SkinTool],
+    tools: &'a [Tool],
+    outputs: &'a Outputs,
+}
+
+/// One sequence's part of a frame, made on any thread.
+struct PreparedSequence {
+    /// The frame file of each format that writes the sequence, encoded.
+    files: Vec<(FrameFormat, PathBuf, Vec<u8>)>,
+    /// The geometry for the caches of one file per run (meshes only).
+    mesh: Option<FrameMesh>,
+    /// A skin exported coarser than its cell size: its name, cell size and
+    /// export cell size.
+    coarsened: Option<(String, Real, Real)>,
+}
+
+/// Sequence `seq` (from `source`) of frame `k`: its geometry and its frame
+/// files encoded in each of `formats` that writes it (`None` when nothing
+/// is written and no cache wants its mesh); `cache_file` is the first file
+/// of one per run when the run writes one (it then wants the meshes).
+#[allow(clippy::too_many_arguments)]
+fn prepare_sequence(
+    seq: &Sequence,
+    source: Source,
+    k: usize,
+    out: &Path,
+    formats: &[FrameFormat],
+    sheet_gap: &SheetGap,
+    cache_file: Option<&Path>,
+    inputs: &FrameInputs,
+) -> Result<Option<PreparedSequence>, WriteFailure> {
+    let failure = |path: PathBuf, error| WriteFailure {
+        frame: k,
+        path,
+        error,
+    };
+    let FrameInputs {
+        world,
+        objects,
+        skins,
+        skin_tools,
+        tools,
+        outputs,
+    } = *inputs;
+    let formats: Vec<FrameFormat> = formats
+        .iter()
+        .copied()
+        .filter(|&f| writes(seq, f))
+        .collect();
+    let meshes_cached = cache_file.is_some() && !matches!(source, Source::Particles(_));
+    if formats.is_empty() && !meshes_cached {
+        return Ok(None);
+    }
+    // The file a skin's failure names: its first frame file, or the run
+    // file of the first cache.
+    let first = match (formats.first(), cache_file) {
+        (Some(&f), _) => seq.path(out, k, f),
+        (None, Some(run)) => run.to_path_buf(),
+        (None, None) => PathBuf::new(),
+    };
+    let mut coarsened = None;
+    let mesh = match source {
+        Source::Particles(o) => geometry::object_geometry(world, &objects[o], outputs),
+        Source::Surface(o) => geometry::surface_geometry(world, &objects[o], outputs, *sheet_gap),
+        Source::Tool(t) => geometry::tool_geometry(t, &tools[t], world.time()),
+        Source::Skin(s) => {
+            let skin = &skins[s];
+            let h = skin.export_cell_size();
+            if h > skin.cell_size {
+                coarsened = Some((skin.name.clone(), skin.cell_size, h));
+            }
+            let mesh = skin
+                .mesh_in(skins, skin_tools, world.time())
+                .map_err(|e| failure(first, std::io::Error::other(e)))?;
+            geometry::mesh_geometry(&skin.name, &mesh)
+        }
+    };
+    let mut files = Vec::with_capacity(formats.len());
+    for f in formats {
+        let path = seq.path(out, k, f);
+        let mut bytes = Vec::new();
+        f.format()
+            .encode_mesh(&mesh, &mut bytes)
+            .map_err(|e| failure(path.clone(), e))?;
+        files.push((f, path, bytes));
+    }
+    Ok(Some(PreparedSequence {
+        files,
+        mesh: meshes_cached.then_some(mesh),
+        coarsened,
+    }))
 }
