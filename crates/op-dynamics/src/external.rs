@@ -258,6 +258,7 @@ impl Contributor for ExternalAccumulator {
             .par_iter_mut()
             .zip(out.torques.par_iter_mut())
             .enumerate()
+            .with_min_len(crate::MIN_PARALLEL_LEN)
             .for_each(|(i, (f, tq))| {
                 let (fe, te) = self.get(ids[i]);
                 *f += fe;
@@ -318,6 +319,7 @@ impl Contributor for UniformField<'_> {
             .par_iter_mut()
             .zip(out.torques.par_iter_mut())
             .enumerate()
+            .with_min_len(crate::MIN_PARALLEL_LEN)
             .for_each(|(i, (f, tq))| {
                 let b = if self.cold_drag { b0 + drag(i) } else { b0 };
                 *f += a.masses[i] * g - b * s.velocities[i];

@@ -236,6 +236,7 @@ pub(crate) fn advance(
         let ambient = params.ambient;
         temperatures
             .par_iter_mut()
+            .with_min_len(crate::MIN_PARALLEL_LEN)
             .for_each(|temp| *temp = ambient + (*temp - ambient) * decay);
     }
 }
@@ -261,10 +262,14 @@ fn conduct(
     list.sources_into(sources);
     let targets = list.neighbours();
     weights.resize(targets.len(), 0.0);
-    weights.par_iter_mut().enumerate().for_each(|(k, w)| {
-        let r = (positions[targets[k] as usize] - positions[sources[k] as usize]).norm();
-        *w = (1.0 - r / cutoff).max(0.0);
-    });
+    weights
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(crate::MIN_PARALLEL_LEN)
+        .for_each(|(k, w)| {
+            let r = (positions[targets[k] as usize] - positions[sources[k] as usize]).norm();
+            *w = (1.0 - r / cutoff).max(0.0);
+        });
     let (sources, weights) = (&*sources, &*weights);
     // Σ_j w_ij (T_j - T_i) for particle i at temperatures `t`.
     let flow = |i: usize, t: &[Real]| -> Real {
@@ -281,6 +286,7 @@ fn conduct(
     };
     let degree = (0..n)
         .into_par_iter()
+        .with_min_len(crate::MIN_PARALLEL_LEN)
         .map(|i| {
             list.incoming(i)
                 .iter()
@@ -296,6 +302,7 @@ fn conduct(
         let old = &*temperatures;
         next.par_iter_mut()
             .enumerate()
+            .with_min_len(crate::MIN_PARALLEL_LEN)
             .for_each(|(i, out)| *out = old[i] + h * c * flow(i, old));
         temperatures.copy_from_slice(next);
     }

@@ -246,15 +246,19 @@ pub(crate) fn apply(
     {
         let p = &*particles;
         let list = &*list;
-        updated.par_iter_mut().enumerate().for_each(|(i, out)| {
-            let kappa = p.curvatures()[i];
-            let plastic = materials[p.materials()[i] as usize].plasticity();
-            *out = match plastic {
-                Some(rule) => current_curvature(p, materials, list, i, bonds)
-                    .map_or(kappa, |hat| rule.relax(kappa, hat, dt)),
-                None => kappa,
-            };
-        });
+        updated
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(crate::MIN_PARALLEL_LEN)
+            .for_each(|(i, out)| {
+                let kappa = p.curvatures()[i];
+                let plastic = materials[p.materials()[i] as usize].plasticity();
+                *out = match plastic {
+                    Some(rule) => current_curvature(p, materials, list, i, bonds)
+                        .map_or(kappa, |hat| rule.relax(kappa, hat, dt)),
+                    None => kappa,
+                };
+            });
     }
     let mut changed = false;
     for (i, &k) in updated.iter().enumerate() {
