@@ -167,12 +167,7 @@ impl Footprint {
 
     /// The footprint of given positions (at least one).
     fn cloud(positions: Vec<Point3>) -> Footprint {
-        let mut lo = Vec3::repeat(Real::INFINITY);
-        let mut hi = Vec3::repeat(Real::NEG_INFINITY);
-        for p in &positions {
-            lo = lo.inf(&p.coords);
-            hi = hi.sup(&p.coords);
-        }
+        let (lo, hi) = bounds(&positions);
         let spacing = nearest_spacing(&positions);
         Footprint {
             count: positions.len() as Real,
@@ -251,27 +246,14 @@ pub(crate) fn sampled_neighbours(positions: &[Point3], range: Real) -> Real {
     let mut sampled = 0usize;
     for (i, p) in positions.iter().enumerate().step_by(stride) {
         sampled += 1;
-        let c = grid.cell_of(p);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let cell = [
-                        c[0].saturating_add(dx),
-                        c[1].saturating_add(dy),
-                        c[2].saturating_add(dz),
-                    ];
-                    let members = grid.members(cell);
-                    if members.len() > DENSE_CELL {
-                        total += members.len();
-                    } else {
-                        total += members
-                            .iter()
-                            .filter(|&&j| {
-                                j as usize != i && (positions[j as usize] - p).norm() <= range
-                            })
-                            .count();
-                    }
-                }
+        for members in grid.around(p) {
+            if members.len() > DENSE_CELL {
+                total += members.len();
+            } else {
+                total += members
+                    .iter()
+                    .filter(|&&j| j as usize != i && (positions[j as usize] - p).norm() <= range)
+                    .count();
             }
         }
     }
@@ -285,12 +267,7 @@ fn nearest_spacing(positions: &[Point3]) -> Real {
     if positions.len() < 2 {
         return 1.0;
     }
-    let lo = positions
-        .iter()
-        .fold(Vec3::repeat(Real::INFINITY), |a, p| a.inf(&p.coords));
-    let hi = positions
-        .iter()
-        .fold(Vec3::repeat(Real::NEG_INFINITY), |a, p| a.sup(&p.coords));
+    let (lo, hi) = bounds(positions);
     // Cells sized for about one particle each in the bounding box's
     // volume (its largest sides for flat and thin sets).
     let sides = hi - lo;
@@ -307,24 +284,14 @@ fn nearest_spacing(positions: &[Point3]) -> Real {
         found.clear();
         let mut dense = 0;
         for (i, p) in positions.iter().enumerate().step_by(stride) {
-            let c = grid.cell_of(p);
             let mut best = Real::INFINITY;
             let mut crowded = false;
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let members = grid.members([
-                            c[0].saturating_add(dx),
-                            c[1].saturating_add(dy),
-                            c[2].saturating_add(dz),
-                        ]);
-                        crowded |= members.len() > DENSE_CELL;
-                        for &j in members.iter().take(DENSE_CELL) {
-                            let d = (positions[j as usize] - p).norm();
-                            if j as usize != i && d > 0.0 && d < best {
-                                best = d;
-                            }
-                        }
+            for members in grid.around(p) {
+                crowded |= members.len() > DENSE_CELL;
+                for &j in members.iter().take(DENSE_CELL) {
+                    let d = (positions[j as usize] - p).norm();
+                    if j as usize != i && d > 0.0 && d < best {
+                        best = d;
                     }
                 }
             }
@@ -359,6 +326,18 @@ fn nearest_spacing(positions: &[Point3]) -> Real {
         .min(largest)
 }
 
+/// The corners of the axis-aligned box of `positions` (infinite and
+/// reversed when there are none).
+fn bounds(positions: &[Point3]) -> (Vec3, Vec3) {
+    positions.iter().fold(
+        (
+            Vec3::repeat(Real::INFINITY),
+            Vec3::repeat(Real::NEG_INFINITY),
+        ),
+        |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)),
+    )
+}
+
 /// Particles sorted by grid cell, for counting neighbourhoods.
 struct Grid {
     size: Real,
@@ -389,6 +368,16 @@ impl Grid {
     /// share a cell, which only overcounts).
     fn cell_of(&self, p: &Point3) -> [i64; 3] {
         [0, 1, 2].map(|c| (p[c] / self.size).floor() as i64)
+    }
+
+    /// The particles of the 27 cells around `p`'s (its own included), cell
+    /// by cell.
+    fn around(&self, p: &Point3) -> impl Iterator<Item = &[u32]> + '_ {
+        let c = self.cell_of(p);
+        (0..27).map(move |k: i64| {
+            let d = [k / 9 - 1, (k / 3) % 3 - 1, k % 3 - 1];
+            self.members([0, 1, 2].map(|a| c[a].saturating_add(d[a])))
+        })
     }
 
     /// The particles in `cell`.

@@ -132,7 +132,7 @@ impl Scene {
     /// frames, its particles, the interacting pairs its objects hold
     /// (within each object at its material's range, between objects whose
     /// regions overlap at the scene's largest range:
-    /// [`super::footprint`]), its skins' field evaluations and its
+    /// `schema::footprint`), its skins' field evaluations and its
     /// triangulations' pairs. Points files are read.
     ///
     /// # Errors
