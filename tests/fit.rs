@@ -662,3 +662,48 @@ fn random_open_saddle_keeps_its_hole_at_the_default_spacing() {
 fn random_open_saddle_5000_samples() {
     random_samples_fit_with_the_right_topology(Shape::HoledSaddle, 5000);
 }
+
+/// Through the CLI: 5,000 random samples of the torus with 250 (5%)
+/// outliers uniform in its bounding box. Every outlier grew a closed
+/// bubble of its own before they were dropped (without dropping: 17
+/// pieces, χ 32); now one closed piece of χ 0, and the JSON counts the
+/// dropped samples: at least the outliers farther than 2 spacings from
+/// the torus (those must go; one within a spacing is a sample as far as
+/// its neighbours can tell), at most the 250 outliers (no sample of the
+/// torus). The noise estimate of these exact samples is near 0 (below
+/// 1e-4 of the diagonal).
+#[test]
+fn uniform_outliers_are_dropped_and_the_torus_closes() {
+    let dir = temp_dir("outliers");
+    let mut points = Shape::Torus.sample(5000, 17).positions;
+    let mut rng = op_test_support::Rng::new(7);
+    let outliers: Vec<Point3> = (0..250)
+        .map(|_| {
+            Point3::new(
+                rng.uniform(-1.4, 1.4),
+                rng.uniform(-1.4, 1.4),
+                rng.uniform(-0.4, 0.4),
+            )
+        })
+        .collect();
+    points.extend(&outliers);
+    write_xyz(&dir.join("torus.xyz"), &points, None);
+    let o = opsim(&["fit", "torus.xyz", "--out", "torus.obj"], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    let j = figures(&o);
+    assert_eq!(
+        (&j["euler_characteristic"], &j["pieces"], &j["closed"]),
+        (&0.into(), &1.into(), &true.into()),
+        "{j}"
+    );
+    let h = j["spacing"].as_f64().unwrap();
+    let far = outliers
+        .iter()
+        .filter(|p| Shape::Torus.distance(p) > 2.0 * h)
+        .count();
+    let dropped = j["dropped_outliers"].as_u64().unwrap() as usize;
+    assert!(far > 100 && (far..=250).contains(&dropped), "{far}: {j}");
+    let diagonal = (2.0f64 * 2.8 * 2.8 + 0.8 * 0.8).sqrt();
+    let noise = j["noise_estimate"].as_f64().unwrap();
+    assert!((0.0..1e-4 * diagonal).contains(&noise), "{j}");
+}

@@ -25,7 +25,8 @@ pub struct PyFit {
     faces: Py<PyAny>,
     /// The figures `opsim fit` prints, as a dict: `particles`, `vertices`
     /// and `faces` (counts), `euler_characteristic`, `boundary_loops`,
-    /// `rms_distance`, `max_distance` (samples to mesh), `spacing`,
+    /// `pieces`, `closed`, `rms_distance`, `max_distance` (samples to
+    /// mesh), `spacing`, `normals`, `dropped_outliers`, `noise_estimate`,
     /// `thin_features`.
     #[pyo3(get)]
     figures: Py<PyAny>,

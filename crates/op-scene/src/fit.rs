@@ -55,9 +55,11 @@ pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
 /// `boundary_loops`, `pieces` (sets of triangles joined through shared
 /// vertices), `closed` (triangles and no boundary loop), `rms_distance`,
 /// `max_distance` (samples to mesh), `spacing`, `normals` (`"given"` by
-/// the file or `"estimated"`; zero normals count as none) and
-/// `thin_features` (`centre`, `samples`, `thickness`; largest first). A
-/// non-finite figure is `null`.
+/// the file or `"estimated"`; zero normals count as none),
+/// `dropped_outliers` (samples dropped as outliers before seeding),
+/// `noise_estimate` (the samples' estimated noise, a standard deviation in
+/// their units, like `spacing`) and `thin_features` (`centre`, `samples`,
+/// `thickness`; largest first). A non-finite figure is `null`.
 pub fn figures_json(fit: &Fit) -> String {
     let number = |x: Real| {
         if x.is_finite() {
@@ -84,7 +86,7 @@ pub fn figures_json(fit: &Fit) -> String {
         })
         .collect();
     format!(
-        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"pieces\": {}, \"closed\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"normals\": \"{}\", \"thin_features\": [{}]}}",
+        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"pieces\": {}, \"closed\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"normals\": \"{}\", \"dropped_outliers\": {}, \"noise_estimate\": {}, \"thin_features\": [{}]}}",
         fit.particles,
         fit.mesh.vertices.len(),
         fit.mesh.faces.len(),
@@ -96,6 +98,8 @@ pub fn figures_json(fit: &Fit) -> String {
         number(fit.mesh.max_distance),
         number(fit.spacing),
         if fit.normals_given { "given" } else { "estimated" },
+        fit.dropped_outliers,
+        number(fit.noise_estimate),
         thin.join(", ")
     )
 }
