@@ -637,8 +637,14 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
 /// are checked against): steps, particles, pairs, and the skins' and
 /// triangulations' evaluations when the scene has them.
 fn work_line(e: &op_scene::WorkEstimate) -> String {
+    let created = if e.created > 0.0 {
+        format!(" (up to {:.0} with creation)", e.particles + e.created)
+    } else {
+        String::new()
+    };
     let mut line = format!(
-        "about {:.3e} steps of {:.0} particles and {:.3e} interacting pairs ({:.3e} pair-steps)",
+        "about {:.3e} steps of {:.0} particles{created} and {:.3e} interacting pairs ({:.3e} \
+         pair-steps)",
         e.steps,
         e.particles,
         e.pairs,

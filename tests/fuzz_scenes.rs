@@ -146,7 +146,7 @@ fn mutate(text: &str, json: bool, rng: &mut Rng) -> (String, String) {
 
 /// Runs `opsim run` on `scene` into `out` with the time bound.
 fn run(scene: &Path, out: &Path) -> (Outcome, String, f64) {
-    let (outcome, msg, secs, _) = fuzz_support::opsim(
+    let r = fuzz_support::opsim(
         &[
             "run",
             scene.to_str().unwrap(),
@@ -161,7 +161,7 @@ fn run(scene: &Path, out: &Path) -> (Outcome, String, f64) {
         ],
         TIME_BOUND,
     );
-    (outcome, msg, secs)
+    (r.outcome, r.stderr, r.wall)
 }
 
 #[test]

@@ -16,11 +16,26 @@ pub enum Outcome {
     Timeout,
 }
 
+/// What one `opsim` process did.
+pub struct Run {
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Its standard error (at most 1 MiB).
+    pub stderr: String,
+    /// Wall-clock seconds.
+    pub wall: f64,
+    /// CPU seconds of all its threads, user and system: the work it did,
+    /// which a loaded machine does not inflate as it does the wall time.
+    pub cpu: f64,
+    /// Peak resident memory, KiB.
+    pub peak_kb: u64,
+}
+
 /// Runs `opsim` with `args` under the wall-clock `bound` (killed beyond
-/// it). Returns how it ended, its standard error (at most 1 MiB), its wall
-/// seconds and its peak resident memory in KiB (sampled every 20 ms from
-/// `/proc`; 0 where that does not exist).
-pub fn opsim(args: &[&str], bound: Duration) -> (Outcome, String, f64, u64) {
+/// it). Memory (`VmHWM` of `/proc/PID/status`) and CPU time (`utime` and
+/// `stime` of `/proc/PID/stat`, in the kernel's 100 Hz user ticks) are
+/// sampled every 20 ms; both read 0 where `/proc` does not exist.
+pub fn opsim(args: &[&str], bound: Duration) -> Run {
     let start = Instant::now();
     let mut child = Command::new(env!("CARGO_BIN_EXE_opsim"))
         .args(args)
@@ -38,19 +53,11 @@ pub fn opsim(args: &[&str], bound: Duration) -> (Outcome, String, f64, u64) {
             .read_to_string(&mut s);
         s
     });
-    let status = format!("/proc/{}/status", child.id());
-    let mut peak = 0;
+    let proc_dir = PathBuf::from(format!("/proc/{}", child.id()));
+    let (mut peak_kb, mut ticks) = (0, 0);
     let outcome = loop {
-        // VmHWM: the peak resident set so far.
-        if let Ok(s) = std::fs::read_to_string(&status) {
-            if let Some(kb) = s
-                .lines()
-                .find_map(|l| l.strip_prefix("VmHWM:"))
-                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
-            {
-                peak = peak.max(kb);
-            }
-        }
+        peak_kb = peak_kb.max(peak_resident_kb(&proc_dir).unwrap_or(0));
+        ticks = ticks.max(cpu_ticks(&proc_dir).unwrap_or(0));
         if let Some(status) = child.try_wait().unwrap() {
             break Outcome::Exit(status.code().unwrap_or(-1));
         }
@@ -61,8 +68,32 @@ pub fn opsim(args: &[&str], bound: Duration) -> (Outcome, String, f64, u64) {
         }
         std::thread::sleep(Duration::from_millis(20));
     };
-    let msg = reader.join().unwrap_or_default();
-    (outcome, msg, start.elapsed().as_secs_f64(), peak)
+    Run {
+        outcome,
+        stderr: reader.join().unwrap_or_default(),
+        wall: start.elapsed().as_secs_f64(),
+        cpu: ticks as f64 / 100.0,
+        peak_kb,
+    }
+}
+
+/// `VmHWM`, the peak resident set so far, of the process at `proc_dir`.
+fn peak_resident_kb(proc_dir: &Path) -> Option<u64> {
+    let s = std::fs::read_to_string(proc_dir.join("status")).ok()?;
+    s.lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+}
+
+/// User plus system time of the process at `proc_dir`, all its threads, in
+/// clock ticks (fields 14 and 15 of `stat`, counted after the command name,
+/// which may hold spaces and ends at the last parenthesis).
+fn cpu_ticks(proc_dir: &Path) -> Option<u64> {
+    let s = std::fs::read_to_string(proc_dir.join("stat")).ok()?;
+    let mut fields = s[s.rfind(')')? + 1..].split_whitespace().skip(11);
+    let user: u64 = fields.next()?.parse().ok()?;
+    let system: u64 = fields.next()?.parse().ok()?;
+    Some(user + system)
 }
 
 /// Files under `out` holding a non-finite number: a `null` value in

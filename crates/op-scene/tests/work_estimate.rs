@@ -159,3 +159,39 @@ fn a_large_solid_ball_is_counted_not_built() {
         "{counts:?}"
     );
 }
+
+/// Creation rules may add particles up to `creation.max_particles`: the
+/// run's particle-steps count that many, not only the particles it starts
+/// with (a three-frame run of a sphere pushed into a torus, with a
+/// velocity and a long settle, ran past 90 s under a particle-step budget
+/// it was checked against with its 363 starting particles).
+#[test]
+fn created_particles_count_up_to_their_cap() {
+    let text = |cap: usize| {
+        format!(
+            r#"(name: "work", world: (dt: 0.01, duration: 1),
+            materials: {{"m": ()}},
+            objects: [{}],
+            creation: Some((stretching: Some((d_min: 1.6, d_max: 2.5)), max_particles: {cap})))"#,
+            chain("c", 10, 0.0)
+        )
+    };
+    let limited = |cap: usize| {
+        let mut s = parse(&text(cap));
+        s.limits.max_particle_steps = 5e4;
+        s
+    };
+    // 100 steps of up to 1,000 particles; of up to 100.
+    let e = limited(1000).validate(None).expect_err("refused").to_string();
+    assert!(e.contains("up to 1000 particles"), "{e}");
+    limited(100).validate(None).expect("within the budget");
+    let estimate = limited(1000).work_estimate(None).unwrap();
+    assert_eq!((estimate.particles, estimate.created), (10.0, 990.0));
+    // Without a rule that creates, the cap adds nothing.
+    let merging_only = text(1000).replace(
+        "stretching: Some((d_min: 1.6, d_max: 2.5))",
+        "merging: Some((distance: 0.3))",
+    );
+    let e = parse(&merging_only).work_estimate(None).unwrap();
+    assert_eq!(e.created, 0.0);
+}

@@ -26,6 +26,7 @@ use crate::error::SceneError;
 use crate::schema::checks;
 
 pub use points::resolve;
+pub(crate) use shapes::{sphere_count, torus_estimate};
 pub(crate) use solid::solid_ball_estimate;
 
 /// Largest number of particles a scene may generate (all objects

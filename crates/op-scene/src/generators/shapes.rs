@@ -216,7 +216,7 @@ pub(super) fn hex_sheet(p: &HexSheet<'_>) -> Generated {
 
 /// Particle count of a sphere shell: area over the area per particle of a
 /// hexagonal lattice, `4πR² / (√3/2 h²)`, rounded.
-pub(super) fn sphere_count(radius: Real, spacing: Real) -> Real {
+pub(crate) fn sphere_count(radius: Real, spacing: Real) -> Real {
     (4.0 * PI * radius * radius * 2.0 / (3f64.sqrt() * spacing * spacing)).round()
 }
 
@@ -260,7 +260,7 @@ pub(super) fn torus_rings(major: Real, minor: Real, spacing: Real) -> Vec<(Real,
 /// Upper estimate of the particle count of a torus shell (before building
 /// its rings): the area `4π² R r` over the hexagonal area per particle,
 /// plus three per ring.
-pub(super) fn torus_estimate(major: Real, minor: Real, spacing: Real) -> Real {
+pub(crate) fn torus_estimate(major: Real, minor: Real, spacing: Real) -> Real {
     let area = 4.0 * PI * PI * major * minor;
     let rings = 2.0 * PI * minor / (spacing * 3f64.sqrt() / 2.0) + 4.0;
     area * 2.0 / (3f64.sqrt() * spacing * spacing) + 3.0 * rings + rings

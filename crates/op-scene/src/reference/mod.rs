@@ -84,8 +84,8 @@ only `opsim check` (and `opsim run`) applies:
   field evaluations and triangulation pairs) from `dt`, `duration`, `frame_rate` (or
   `opsim run --frames`), the generators (points files and lists from a sample of their
   neighbourhoods), overlapping objects, the materials' cut-offs and bond radii, the skins'
-  radii and cell sizes and `outputs.triangulation_radius` (`opsim check` prints the
-  estimate);
+  radii and cell sizes, `outputs.triangulation_radius` and, when a creation rule creates,
+  `creation.max_particles` (`opsim check` prints the estimate);
 - a material's Lennard-Jones taper starting beyond `r0` (`cutoff (1 - taper) > r0`) and
   `n > m`; a cohesion cut-off at most 1000 `r0` and `1e-6 <= alpha r0² <= 1e6`;
 - an object's `material` a key of `materials` or a preset; object names unique; a force's or

@@ -77,7 +77,6 @@ impl Footprint {
             spacing,
             shape: Shape::Lattice { dim },
         };
-        let pi = std::f64::consts::PI;
         Ok(match g {
             Generator::Spiral {
                 count,
@@ -128,7 +127,7 @@ impl Footprint {
                 center,
                 ..
             } => lattice(
-                4.0 * pi * (radius / spacing).powi(2),
+                crate::generators::sphere_count(*radius, *spacing),
                 v(center),
                 Vec3::repeat(*radius),
                 *spacing,
@@ -141,7 +140,7 @@ impl Footprint {
                 center,
                 axis,
             } => lattice(
-                4.0 * pi * pi * major * minor / spacing.powi(2),
+                crate::generators::torus_estimate(*major, *minor, *spacing),
                 v(center),
                 disc(major + minor, axis).add_scalar(*minor),
                 *spacing,

@@ -71,6 +71,16 @@ impl Scene {
             .map_or(String::new(), |n| format!(" (set by --frames {n})"))
     }
 
+    /// The most particles the creation rules may add to a scene of
+    /// `particles`: up to `creation.max_particles` in all when a rule
+    /// creates (stretching or growing; merging only removes), else none.
+    pub(crate) fn creation_headroom(&self, particles: Real) -> Real {
+        self.creation
+            .as_ref()
+            .filter(|c| c.stretching.is_some() || c.growing.is_some())
+            .map_or(0.0, |c| (c.max_particles as Real - particles).max(0.0))
+    }
+
     /// Checks the run's size against [`Scene::limits`] and the lengths
     /// against the scene's length scale; `total` is the particle count.
     pub(crate) fn validate_work(
@@ -196,6 +206,11 @@ impl Scene {
             .fold((0, 0.0), |(k, total), (j, p)| {
                 (if *p > per_object[k] { j } else { k }, total + p)
             });
+        let particles: Real = footprints.iter().map(|f| f.count).sum();
+        let created = self.creation_headroom(particles);
+        // Created particles fill in at the spacing of those around them:
+        // each counted at the scene's mean pairs per particle.
+        let pairs = pairs * (1.0 + created / particles.max(1.0));
         let mut skin_per_frame = 0.0;
         let mut contact_per_step = 0.0;
         let mut triangulation = 0.0;
@@ -222,7 +237,8 @@ impl Scene {
         Ok(WorkEstimate {
             frames: w.duration * w.frame_rate + 1.0,
             steps: (w.settle + w.duration) / w.dt,
-            particles: footprints.iter().map(|f| f.count).sum(),
+            particles,
+            created,
             pairs,
             densest: object_path(densest, &self.objects[densest].name),
             skin_evaluations_per_frame: skin_per_frame,
@@ -263,15 +279,24 @@ impl Scene {
                 ),
             ));
         }
-        let particle_steps = steps * total as Real;
+        let created = self.creation_headroom(total as Real);
+        let particle_steps = steps * (total as Real + created);
         if particle_steps > lim.max_particle_steps {
+            let particles = if created > 0.0 {
+                format!(
+                    "up to {} particles ({total} and those creation.max_particles allows)",
+                    short(total as Real + created)
+                )
+            } else {
+                format!("{total} particles")
+            };
             return Err(SceneError::value(
                 file,
                 "world.duration",
                 format!("{}{}", short(w.duration), self.set_by_frames()),
                 &format!(
-                    "makes {} steps of {total} particles, {} particle-steps, more than the \
-                     limit of {} {flag}",
+                    "makes {} steps of {particles}, {} particle-steps, more than the limit of \
+                     {} {flag}",
                     short(steps.ceil()),
                     short(particle_steps),
                     short(lim.max_particle_steps)
@@ -603,11 +628,16 @@ pub struct WorkEstimate {
     pub frames: Real,
     /// Time steps (settle phase and run; fixed-step schemes).
     pub steps: Real,
-    /// Particles (lattice generators estimated from their size).
+    /// Particles at the start (lattice generators estimated from their
+    /// size).
     pub particles: Real,
+    /// Particles the creation rules may add at most, up to
+    /// `creation.max_particles` in all (0 without a rule that creates).
+    pub created: Real,
     /// Interacting pairs held at once: within each object at its
     /// material's cut-off or bond radius, and between objects whose
-    /// regions come within the scene's largest such range.
+    /// regions come within the scene's largest such range; created
+    /// particles at the scene's mean pairs per particle.
     pub pairs: Real,
     /// The object with the most pairs (its own and its half of those
     /// shared with objects it overlaps), as a field path.
