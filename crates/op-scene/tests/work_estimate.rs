@@ -182,7 +182,10 @@ fn created_particles_count_up_to_their_cap() {
         s
     };
     // 100 steps of up to 1,000 particles; of up to 100.
-    let e = limited(1000).validate(None).expect_err("refused").to_string();
+    let e = limited(1000)
+        .validate(None)
+        .expect_err("refused")
+        .to_string();
     assert!(e.contains("up to 1000 particles"), "{e}");
     limited(100).validate(None).expect("within the budget");
     let estimate = limited(1000).work_estimate(None).unwrap();
