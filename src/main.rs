@@ -512,8 +512,10 @@ fn print_profile(s: &op_scene::Summary) {
 }
 
 /// Particle-steps `opsim check` spends at most on finding the slowest mode
-/// of a scene that does not ask for it (a few seconds).
-const CHECK_MODE_WORK: f64 = 1e8;
+/// of a scene that does not ask for it: a few seconds at the microsecond a
+/// particle-step of a small scene takes (a step's own cost dominates below
+/// a few dozen particles), so that check stays quick.
+const CHECK_MODE_WORK: f64 = 4e6;
 
 /// What `opsim check` adds to the line of an object made by a `HexSheet`
 /// that is not square within 5%: its extent, and the `ny` that would make
@@ -542,7 +544,7 @@ fn sheet_note(g: &op_scene::Generator) -> String {
 /// checked as it runs, with the numbers of the rule (or refused).
 fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
     let written = op_scene::load_scene_with(path, limits, None)?;
-    let counts = written.validate(path.parent())?;
+    let counts = written.particle_counts(path.parent())?;
     // The slowest mode and its critical damping, for any scene small
     // enough; a scene that asks for them runs with them (or cannot run).
     let mut as_critical = written.clone();

@@ -145,8 +145,8 @@ fn mutate(text: &str, json: bool, rng: &mut Rng) -> (String, String) {
 }
 
 /// Runs `opsim run` on `scene` into `out` with the time bound.
-fn run(scene: &Path, out: &Path) -> (Outcome, String, f64) {
-    let r = fuzz_support::opsim(
+fn run(scene: &Path, out: &Path) -> fuzz_support::Run {
+    fuzz_support::opsim(
         &[
             "run",
             scene.to_str().unwrap(),
@@ -160,8 +160,7 @@ fn run(scene: &Path, out: &Path) -> (Outcome, String, f64) {
             BUDGET,
         ],
         TIME_BOUND,
-    );
-    (r.outcome, r.stderr, r.wall)
+    )
 }
 
 #[test]
@@ -195,7 +194,8 @@ fn mutated_scenes_exit_cleanly_in_bounded_time_with_finite_outputs() {
                 std::fs::create_dir_all(&work).unwrap();
                 let file = work.join(scene.file_name().unwrap());
                 std::fs::write(&file, text).unwrap();
-                let (outcome, msg, secs) = run(&file, &work.join("out"));
+                let r = run(&file, &work.join("out"));
+                let (outcome, msg, secs) = (r.outcome, r.stderr, r.wall);
                 let name = format!("mutant {k} of {} ({what})", scene.display());
                 {
                     let mut sl = slowest.lock().unwrap();
@@ -207,7 +207,9 @@ fn mutated_scenes_exit_cleanly_in_bounded_time_with_finite_outputs() {
                 if std::env::var_os("OPSIM_FUZZ_VERBOSE").is_some() {
                     let first = msg.lines().last().unwrap_or("");
                     eprintln!(
-                        "{name}: {outcome:?} {secs:.1} s: {}",
+                        "{name}: {outcome:?} {secs:.1} s ({:.1} s of CPU, {} KiB): {}",
+                        r.cpu,
+                        r.peak_kb,
                         first.chars().take(300).collect::<String>()
                     );
                 }

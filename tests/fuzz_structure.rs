@@ -49,7 +49,8 @@ use serde_json::{json, Value};
 const CHECK_BOUND: Duration = Duration::from_secs(5);
 /// Peak memory bound of `opsim check` on one mutant, KiB (1 GiB).
 const CHECK_MEMORY_KB: u64 = 1 << 20;
-/// Wall-clock bound of one mutant's three-frame run.
+/// Bound of one mutant's three-frame run (one thread), in CPU seconds;
+/// killed at three times it in wall time.
 const RUN_BOUND: Duration = Duration::from_secs(90);
 /// The particle-step budget of each run (as in `tests/fuzz_scenes.rs`).
 const BUDGET: &str = "1e7";
@@ -236,18 +237,38 @@ struct Tally {
     failures: Vec<String>,
 }
 
-/// Not in CI yet: mutants with a thousand duplicated objects take minutes
-/// each to run, so 40 mutants took half an hour on the 2-core machine. Run
-/// it with `cargo test --profile ci --test fuzz_structure -- --ignored
-/// --nocapture`.
+/// A few hundred mutants run with the tests (`OPSIM_FUZZ_STRUCT_CI_MUTANTS`,
+/// default 200, seed 2026): about a minute on the 2-core machine.
 #[test]
-#[ignore = "minutes per mutant with a thousand duplicated objects; run by hand"]
 fn structural_mutants_are_checked_and_run_within_bounds() {
-    let count: usize = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_MUTANTS", 40);
-    let seed: u64 = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_SEED", 5);
+    let count = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_CI_MUTANTS", 200);
+    fuzz(count, 2026);
+}
+
+/// The long run, by hand: `OPSIM_FUZZ_STRUCT_MUTANTS` (default 2,000) and
+/// `OPSIM_FUZZ_STRUCT_SEED` (default 5): `cargo test --profile ci --test
+/// fuzz_structure -- --ignored --nocapture`.
+#[test]
+#[ignore = "an hour on the 2-core machine; run by hand"]
+fn many_structural_mutants() {
+    let count = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_MUTANTS", 2000);
+    let seed = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_SEED", 5);
+    fuzz(count, seed);
+}
+
+/// Makes, checks and runs `count` mutants from `seed` on two workers,
+/// prints the counts by class and fails on any failure found.
+fn fuzz(count: usize, seed: u64) {
     let verbose = std::env::var_os("OPSIM_FUZZ_VERBOSE").is_some();
+    // Where to keep the mutants of the classes worth a look (all but
+    // "ran", the refusals by check and run's refusals of a budget or an
+    // unstable step), as m<k>.json.
+    let keep = std::env::var_os("OPSIM_FUZZ_KEEP").map(PathBuf::from);
     let scenes = scenes();
-    let root = std::env::temp_dir().join(format!("opsim-fuzz-structure-{}", std::process::id()));
+    let root = std::env::temp_dir().join(format!(
+        "opsim-fuzz-structure-{}-{seed}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&root);
     std::fs::create_dir_all(&root).unwrap();
     let next = AtomicUsize::new(0);
@@ -273,6 +294,18 @@ fn structural_mutants_are_checked_and_run_within_bounds() {
                 let (class, failure) = try_mutant(&file, &work.join("out"));
                 if verbose {
                     eprintln!("{label}: {class}");
+                }
+                let usual = matches!(
+                    class,
+                    "ran"
+                        | "refused by check"
+                        | "over the run's budget"
+                        | "unstable step"
+                        | "too long for 3 frames"
+                );
+                if let (Some(keep), false) = (&keep, usual) {
+                    let _ = std::fs::create_dir_all(keep);
+                    let _ = std::fs::copy(&file, keep.join(format!("m{k}.json")));
                 }
                 let mut t = tally.lock().unwrap();
                 *t.counts.entry(class).or_default() += 1;
@@ -342,7 +375,7 @@ fn try_mutant(file: &Path, out: &Path) -> (&'static str, Option<String>) {
         "--max-particle-steps",
         BUDGET,
     ];
-    let run = opsim(&args, RUN_BOUND);
+    let run = opsim(&args, RUN_BOUND * 3);
     let msg = run.stderr;
     if panicked(&msg) {
         return ("run panic", Some(format!("run panicked: {}", short(&msg))));
@@ -354,11 +387,22 @@ fn try_mutant(file: &Path, out: &Path) -> (&'static str, Option<String>) {
             Some(format!("non-finite values in {bad:?}")),
         );
     }
+    if matches!(run.outcome, Outcome::Timeout) || run.cpu > RUN_BOUND.as_secs_f64() {
+        let took = format!("ran {:.0} s of CPU, {:.0} s wall", run.cpu, run.wall);
+        return ("run unbounded", Some(took));
+    }
     match run.outcome {
         Outcome::Exit(0) => ("ran", None),
+        // The run's particle-step budget, which check did not apply.
+        Outcome::Exit(2) if msg.contains("--no-work-limits") => ("over the run's budget", None),
+        // A step beyond the stable step, which check warns of and run
+        // refuses.
+        Outcome::Exit(2) if msg.contains("--allow-unstable-step") => ("unstable step", None),
+        // A field that needs a longer run than three frames.
+        Outcome::Exit(2) if msg.contains("(set by --frames") => ("too long for 3 frames", None),
+        // A start check accepted that ended in a bad-input error.
         Outcome::Exit(2) => ("refused by run", None),
         Outcome::Exit(3) => ("diverged", None),
-        Outcome::Timeout => ("run unbounded", Some(format!("ran past {:.0} s", run.wall))),
-        Outcome::Exit(c) => ("run failed", Some(format!("exit {c}: {}", short(&msg)))),
+        other => ("run failed", Some(format!("{other:?}: {}", short(&msg)))),
     }
 }

@@ -25,8 +25,9 @@
 /// job and waits for a pool thread at every call, even over ten particles:
 /// a 10-particle world's force evaluation then spent most of its time in
 /// futex waits (the uniform field's loop; `opsim check` of a small scene
-/// took 8 s on a loaded machine, 1 s of it computing).
-pub(crate) const MIN_PARALLEL_LEN: usize = 1024;
+/// took 8 s on a loaded machine, 1 s of it computing). Public for the
+/// per-particle loops of the crates above (tools, features).
+pub const MIN_PARALLEL_LEN: usize = 1024;
 
 pub mod bond_memory;
 pub mod bonds;

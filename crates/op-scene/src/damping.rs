@@ -193,6 +193,26 @@ pub enum ModeError {
     },
 }
 
+/// The work of one mode analysis of `particles` particles over `basis`,
+/// in particle-steps (what a time step of one particle costs, about a
+/// microsecond): see [`mode_work_of`].
+fn mode_work(basis: Basis, particles: usize) -> Real {
+    mode_work_of(basis.per_particle() * particles, particles)
+}
+
+/// The work of one mode analysis of `dof` degrees of freedom over
+/// `particles` particles, in particle-steps: the Hessian's central
+/// differences (two force evaluations of every particle per degree of
+/// freedom) and its dense eigen-decomposition, counted as `dof³ / 250`:
+/// nalgebra's `SymmetricEigen` of a 600-square matrix took 0.24 s (1.1 ns
+/// per `dof³`) on a diagonally dominant test matrix and about four times
+/// that per pass on a settled scene's Hessian, against a microsecond per
+/// particle-step.
+fn mode_work_of(dof: usize, particles: usize) -> Real {
+    let dof = dof.min(MAX_DEGREES_OF_FREEDOM) as Real;
+    2.0 * dof * particles as Real + dof.powi(3) / 250.0
+}
+
 /// The slowest deformation mode of `world` at its current state over
 /// `basis` (free spins left out, see [`crate::modes::modes`]).
 ///
@@ -454,7 +474,7 @@ pub fn resolve_within(
     }
     // At least 3 degrees of freedom per particle: refuse a scene too large
     // before building it.
-    let particles: usize = scene.validate(base_dir)?.iter().sum();
+    let particles: usize = scene.particle_counts(base_dir)?.iter().sum();
     if 3 * particles > MAX_DEGREES_OF_FREEDOM {
         return Err(fail(
             ModeError::TooLarge {
@@ -470,7 +490,9 @@ pub fn resolve_within(
     numeric.world.angular_damping = 0.0;
     let start = first_guess(&numeric, base_dir)?.map_err(|e| fail(e.to_string()))?;
     let mut last = start.clone();
-    let mut work = 0.0;
+    // The first guess's analysis, at the most degrees of freedom a particle
+    // has.
+    let mut work = mode_work_of(6 * particles, particles);
     let found = converge(|omega, stretch| {
         let guess = SlowestMode {
             omega1: omega.unwrap_or(start.omega1),
@@ -492,6 +514,13 @@ pub fn resolve_within(
             .settle()
             .map_err(|e| fail(format!("while settling to find the slowest mode: {e}")))?;
         let basis = basis_of(&probe, built.world());
+        work += mode_work(basis, built.world().particles().len());
+        if work > max_particle_steps {
+            return Err(fail(format!(
+                "measuring the slowest mode again would take more than {} particle-steps",
+                crate::error::short(max_particle_steps)
+            )));
+        }
         match slowest_mode(built.world_mut(), basis) {
             Ok(mode) => {
                 let omega1 = mode.omega1;

@@ -310,6 +310,7 @@ impl Tool {
         let shape = self.shape.as_ref();
         temperatures
             .par_iter_mut()
+            .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
             .enumerate()
             .for_each(|(i, temp)| {
                 let x = positions[i].coords;
@@ -378,6 +379,7 @@ impl Tool {
                 forces
                     .par_iter_mut()
                     .zip(energies.par_iter_mut())
+                    .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
                     .enumerate()
                     .for_each(|(i, (f, e))| {
                         if !self.acts_on(a.objects[i]) {
@@ -501,6 +503,7 @@ impl Tools {
         let mut trapped: Vec<u32> = particles
             .positions()
             .par_iter()
+            .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
             .enumerate()
             .filter_map(|(slot, x)| {
                 let x = x.coords;

@@ -129,7 +129,9 @@ impl Contributor for WindForce {
         let w = self.air(input.t);
         let objects = input.attributes.objects;
         let v = input.state.velocities;
-        out.forces.par_iter_mut().enumerate().for_each(|(i, f)| {
+        let forces = out.forces.par_iter_mut();
+        let forces = forces.with_min_len(op_dynamics::MIN_PARALLEL_LEN);
+        forces.enumerate().for_each(|(i, f)| {
             if self.objects.get(objects[i] as usize) == Some(&true) {
                 *f += self.drag * (w - v[i]);
             }

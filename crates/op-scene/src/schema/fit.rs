@@ -92,7 +92,8 @@ impl FitSettings {
                 "creation.fit.release",
                 self.release,
                 &format!(
-                    "must be finite, >= 0 and below world.duration = {duration} (the seeds are released during the run)"
+                    "must be finite, >= 0 and below world.duration = {duration}{} (the seeds are released during the run)",
+                    scene.set_by_frames()
                 ),
             ));
         }

@@ -1,17 +1,21 @@
 //! Where each object's particles lie and how densely: the part of the work
 //! estimate ([`super::work`]) that counts interacting pairs, within an
-//! object and between objects that overlap (issue 38 items 1 and 2).
+//! object and between objects that overlap.
 //!
 //! A lattice generator is counted analytically from its count, spacing and
 //! dimension; a points file or a list from a bounded sample of its
 //! particles' neighbourhoods ([`sampled_neighbours`]), so a list of a
 //! hundred thousand particles on one point is seen as the dense cloud it
-//! is. Each object also has a bounding ball, and two objects whose balls
+//! is. Each object also has a bounding box, and two objects whose boxes
 //! come within the interaction range of each other are counted as
 //! overlapping: a particle of one sees the other's particles as densely as
-//! the other's own do.
+//! the other's own do. Objects made by the same points file share one
+//! footprint, read and sampled once ([`Footprints`]).
 
+use std::cell::RefCell;
+use std::collections::HashMap;
 use std::path::Path;
+use std::rc::Rc;
 
 use op_dynamics::{Point3, Real, Vec3};
 
@@ -28,6 +32,7 @@ pub const NEIGHBOURHOOD_SAMPLE: usize = 512;
 const DENSE_CELL: usize = 64;
 
 /// Where an object's particles lie and how densely.
+#[derive(Clone)]
 pub(crate) struct Footprint {
     /// Particles.
     pub count: Real,
@@ -42,6 +47,7 @@ pub(crate) struct Footprint {
 }
 
 /// How an object's particles fill its region.
+#[derive(Clone)]
 enum Shape {
     /// A lattice of `dim` dimensions (curve 1, surface 2, solid 3) at the
     /// footprint's spacing.
@@ -204,28 +210,133 @@ impl Footprint {
         n.min(self.count - 1.0).max(0.0)
     }
 
-    /// The object's own pairs within `range`, at least one per particle
-    /// (the particle's own work).
-    pub fn own_pairs(&self, range: Real) -> Real {
-        self.count * (0.5 * self.neighbours(range)).max(1.0)
+    /// Whether this object's box comes within `range` of `other`'s along
+    /// every axis (a NaN gap counts as apart).
+    pub fn near(&self, other: &Footprint, range: Real) -> bool {
+        (0..3).all(|c| {
+            let gap = (self.lo[c] - other.hi[c]).max(other.lo[c] - self.hi[c]);
+            gap <= range
+        })
     }
 
-    /// Pairs within `range` between this object and `other`: none when
-    /// their boxes are farther apart than `range` along some axis,
+    /// Pairs within `range` between this object and `other`, given
+    /// `neighbours = [self.neighbours(range), other.neighbours(range)]`
+    /// (counted once per object by the caller, not once per pair of
+    /// objects): none when their boxes are farther apart than `range`,
     /// otherwise as if each particle of the denser side saw the other
     /// object as densely as its own particles do (at most every particle
     /// of one with every particle of the other).
-    pub fn pairs_with(&self, other: &Footprint, range: Real) -> Real {
-        let apart = (0..3).any(|c| {
-            let gap = (self.lo[c] - other.hi[c]).max(other.lo[c] - self.hi[c]);
-            gap.is_nan() || gap > range
-        });
-        if apart {
+    pub fn pairs_with(&self, other: &Footprint, range: Real, neighbours: [Real; 2]) -> Real {
+        if !self.near(other, range) {
             return 0.0;
         }
-        (self.count * other.neighbours(range))
-            .min(other.count * self.neighbours(range))
+        (self.count * neighbours[1])
+            .min(other.count * neighbours[0])
             .min(self.count * other.count)
+    }
+}
+
+/// Pairs of objects whose boxes come within `range` of each other, each
+/// pair once as `(a, b)` with `a < b`: a sweep along x over the boxes
+/// sorted by their lower x, `O(n log n)` plus the pairs it finds.
+pub(crate) fn near_pairs<F: std::ops::Deref<Target = Footprint>>(
+    footprints: &[F],
+    range: Real,
+) -> Vec<(usize, usize)> {
+    let mut order: Vec<usize> = (0..footprints.len()).collect();
+    order.sort_by(|&a, &b| footprints[a].lo.x.total_cmp(&footprints[b].lo.x));
+    let mut found = Vec::new();
+    for (i, &a) in order.iter().enumerate() {
+        let reach = footprints[a].hi.x + range;
+        for &b in &order[i + 1..] {
+            // Sorted by lower x: every later box starts beyond the reach.
+            if footprints[b].lo.x > reach {
+                break;
+            }
+            if footprints[a].near(&footprints[b], range) {
+                found.push((a.min(b), a.max(b)));
+            }
+        }
+    }
+    found.sort_unstable();
+    found
+}
+
+/// The footprints of a scene's objects, in their order: objects made by
+/// the same points file share one (the file read and its neighbourhoods
+/// sampled once, however many objects name it), and each footprint's
+/// neighbour counts are kept per range.
+pub(crate) struct Footprints {
+    footprints: Vec<Rc<Footprint>>,
+    /// For each object, the first object with the same footprint.
+    first: Vec<usize>,
+    /// Neighbour counts by first object and range (its bits).
+    counted: RefCell<HashMap<(usize, u64), Real>>,
+}
+
+impl Footprints {
+    /// The footprints of `objects` (generators with their field paths) of
+    /// scene `file`, points files relative to `base_dir`.
+    pub fn of<'a>(
+        objects: impl Iterator<Item = (&'a Generator, String)>,
+        base_dir: Option<&Path>,
+        file: &str,
+    ) -> Result<Footprints, SceneError> {
+        let mut footprints: Vec<Rc<Footprint>> = Vec::new();
+        let mut first = Vec::new();
+        let mut by_path: HashMap<&Path, usize> = HashMap::new();
+        for (k, (g, path)) in objects.enumerate() {
+            if let Generator::Points { path: points } = g {
+                if let Some(&j) = by_path.get(points.as_path()) {
+                    footprints.push(footprints[j].clone());
+                    first.push(j);
+                    continue;
+                }
+                by_path.insert(points.as_path(), k);
+            }
+            footprints.push(Rc::new(Footprint::of(g, base_dir, file, &path)?));
+            first.push(k);
+        }
+        Ok(Footprints {
+            footprints,
+            first,
+            counted: RefCell::new(HashMap::new()),
+        })
+    }
+
+    /// Every object's footprint, in order.
+    pub fn iter(&self) -> impl Iterator<Item = &Footprint> {
+        self.footprints.iter().map(|f| &**f)
+    }
+
+    /// [`Footprint::neighbours`] of object `k` at `range`, counted once
+    /// per footprint and range.
+    pub fn neighbours(&self, k: usize, range: Real) -> Real {
+        let key = (self.first[k], range.to_bits());
+        if let Some(n) = self.counted.borrow().get(&key) {
+            return *n;
+        }
+        let n = self.footprints[k].neighbours(range);
+        self.counted.borrow_mut().insert(key, n);
+        n
+    }
+
+    /// Object `k`'s own pairs within `range`, at least one per particle
+    /// (the particle's own work).
+    pub fn own_pairs(&self, k: usize, range: Real) -> Real {
+        self.footprints[k].count * (0.5 * self.neighbours(k, range)).max(1.0)
+    }
+
+    /// Pairs within `range` between objects `a` and `b`
+    /// ([`Footprint::pairs_with`]).
+    pub fn pairs_between(&self, a: usize, b: usize, range: Real) -> Real {
+        let counts = [self.neighbours(a, range), self.neighbours(b, range)];
+        self.footprints[a].pairs_with(&self.footprints[b], range, counts)
+    }
+
+    /// Pairs of objects whose boxes come within `range` ([`near_pairs`]).
+    pub fn near_pairs(&self, range: Real) -> Vec<(usize, usize)> {
+        near_pairs(&self.footprints, range)
     }
 }
 
@@ -406,6 +517,15 @@ mod tests {
         assert!((nearest_spacing(&p) - 0.5).abs() < 1e-12);
     }
 
+    /// The footprints of a scene of one object.
+    fn alone(f: Footprint) -> Footprints {
+        Footprints {
+            footprints: vec![Rc::new(f)],
+            first: vec![0],
+            counted: RefCell::new(HashMap::new()),
+        }
+    }
+
     #[test]
     fn a_cloud_on_one_point_is_counted_whole_and_fast() {
         let p = vec![Point3::new(1.0, 2.0, 3.0); 100_000];
@@ -413,7 +533,7 @@ mod tests {
         assert!(n >= 99_999.0, "{n}");
         let f = Footprint::cloud(p);
         assert_eq!(f.neighbours(1.0), 99_999.0);
-        assert!(f.own_pairs(1.0) > 4e9);
+        assert!(alone(f).own_pairs(0, 1.0) > 4e9);
     }
 
     #[test]
@@ -454,8 +574,11 @@ mod tests {
         let a = Footprint::of(&chain(0.0), None, "t", "a").unwrap();
         let b = Footprint::of(&chain(0.1), None, "t", "b").unwrap();
         let far = Footprint::of(&chain(1e3), None, "t", "c").unwrap();
-        assert_eq!(a.pairs_with(&b, 2.5), 100.0 * 5.0);
-        assert_eq!(a.pairs_with(&far, 2.5), 0.0);
-        assert_eq!(a.own_pairs(2.5), 250.0);
+        let near = |f: &Footprint, g: &Footprint| [f.neighbours(2.5), g.neighbours(2.5)];
+        assert_eq!(a.pairs_with(&b, 2.5, near(&a, &b)), 100.0 * 5.0);
+        assert_eq!(a.pairs_with(&far, 2.5, near(&a, &far)), 0.0);
+        let all = [&a, &far, &b];
+        assert_eq!(near_pairs(&all, 2.5), vec![(0, 2)]);
+        assert_eq!(alone(a).own_pairs(0, 2.5), 250.0);
     }
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use op_dynamics::Real;
 
-use super::footprint::Footprint;
+use super::footprint::Footprints;
 use super::limits::{
     MAX_CONDUCTION_STEP, MAX_EXTENT_OVER_SPACING, MAX_ROTATION, MAX_SKIN_NODES_PER_AXIS,
 };
@@ -66,9 +66,29 @@ impl Scene {
     /// `" (set by --frames N)"` when the runner's frame count set
     /// `world.duration` ([`Scene::set_frames`]), else nothing: what the
     /// errors of a run too long add to the duration they name.
-    fn set_by_frames(&self) -> String {
+    pub(crate) fn set_by_frames(&self) -> String {
         self.frames_override
             .map_or(String::new(), |n| format!(" (set by --frames {n})"))
+    }
+
+    /// The particles each object's generator makes, in order: its
+    /// generator checked and counted (points files read), the rest of the
+    /// scene not validated; what a caller that has validated the scene
+    /// needs of it without a second validation.
+    ///
+    /// # Errors
+    ///
+    /// A generator's errors ([`Generator::count`]).
+    pub fn particle_counts(&self, base_dir: Option<&Path>) -> Result<Vec<usize>, SceneError> {
+        let file = self.origin();
+        self.objects
+            .iter()
+            .enumerate()
+            .map(|(k, o)| {
+                let path = format!("{}.generator", object_path(k, &o.name));
+                o.generator.count(base_dir, file, &path)
+            })
+            .collect()
     }
 
     /// The most particles the creation rules may add to a scene of
@@ -151,15 +171,11 @@ impl Scene {
     pub fn work_estimate(&self, base_dir: Option<&Path>) -> Result<WorkEstimate, SceneError> {
         let file = self.origin();
         let w = &self.world;
-        let footprints = self
-            .objects
-            .iter()
-            .enumerate()
-            .map(|(k, o)| {
-                let path = format!("{}.generator", object_path(k, &o.name));
-                Footprint::of(&o.generator, base_dir, file, &path)
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let generators = self.objects.iter().enumerate().map(|(k, o)| {
+            let path = format!("{}.generator", object_path(k, &o.name));
+            (&o.generator, path)
+        });
+        let footprints = Footprints::of(generators, base_dir, file)?;
         // Each material's range: its cut-off, or its bond radius (bonded
         // pairs interact completely, however far); prepared once each.
         let material_ranges: std::collections::HashMap<&str, Real> = self
@@ -184,20 +200,21 @@ impl Scene {
             })
             .collect();
         let largest = ranges.iter().copied().fold(0.0, Real::max);
-        let mut per_object: Vec<Real> = footprints
+        let mut per_object: Vec<Real> = ranges
             .iter()
-            .zip(&ranges)
-            .map(|(f, r)| f.own_pairs(*r))
+            .enumerate()
+            .map(|(k, r)| footprints.own_pairs(k, *r))
             .collect();
-        // Pairs between objects, each half to either side: quadratic in the
-        // objects (at most `max_objects`), skipped without a pair limit.
+        // Pairs between objects whose boxes come within the largest range,
+        // each half to either side. Each object's neighbours at that range
+        // are counted once per footprint (a cloud's from its sample); the
+        // objects that overlap are found by a sweep, whose cost grows with the pairs of
+        // objects it finds: skipped without a pair limit.
         if self.limits.max_pairs.is_finite() || self.limits.max_pair_steps.is_finite() {
-            for a in 0..footprints.len() {
-                for b in a + 1..footprints.len() {
-                    let shared = footprints[a].pairs_with(&footprints[b], largest);
-                    per_object[a] += 0.5 * shared;
-                    per_object[b] += 0.5 * shared;
-                }
+            for (a, b) in footprints.near_pairs(largest) {
+                let shared = footprints.pairs_between(a, b, largest);
+                per_object[a] += 0.5 * shared;
+                per_object[b] += 0.5 * shared;
             }
         }
         let (densest, pairs) = per_object
@@ -216,7 +233,7 @@ impl Scene {
         let mut triangulation = 0.0;
         let skinned = self.objects.iter().filter(|o| o.skin.is_some()).count();
         let contact = skinned >= 2 || (skinned >= 1 && !self.tools.is_empty());
-        for (o, f) in self.objects.iter().zip(&footprints) {
+        for (k, (o, f)) in self.objects.iter().zip(footprints.iter()).enumerate() {
             if let Some(skin) = &o.skin {
                 // Each primitive reaches the grid nodes within its support,
                 // at most every node of the object's grid.
@@ -231,7 +248,8 @@ impl Scene {
                 }
             }
             if self.outputs.triangulation {
-                triangulation += f.own_pairs(self.outputs.triangulation_radius * f.spacing);
+                triangulation +=
+                    footprints.own_pairs(k, self.outputs.triangulation_radius * f.spacing);
             }
         }
         Ok(WorkEstimate {
