@@ -1,4 +1,4 @@
-//! Prompt recovery without hand tuning (issue 35; seed 002 §5,
+//! Prompt recovery without hand tuning (seed 002 §5,
 //! `op_scene::damping`): a user's 14-particle spirals, written with the
 //! shape-memory recipe's fixed damping and schedule, end short of their
 //! shape; the same files with `linear_damping: "Critical"` in place of their
@@ -11,7 +11,7 @@ use std::process::Command;
 use serde_json::Value;
 
 /// The user's scenes (`tests/data/`) and, per scene, what the fixed
-/// recipe leaves at the end (measured, ci profile; issue 35 quotes 0.016
+/// recipe leaves at the end (measured, ci profile; the user reported 0.016
 /// and 0.024 for a quadratic and a geometric law).
 const SCENES: [(&str, f64); 3] = [
     ("user_spiral_14_quadratic", 0.0218),

@@ -2,7 +2,7 @@
 //! and VTU particle state parse back with the crates that wrote them, with
 //! the counts of the OBJ frames and every per-particle attribute; every
 //! sequence, in every format, has a series file listing exactly its frame
-//! files with their times (issue 34: ParaView time series of everything);
+//! files with their times (ParaView time series of everything);
 //! the USD cache reads back with openusd, with the counts of the PLY frames.
 
 use std::path::{Path, PathBuf};

@@ -210,7 +210,7 @@ fn recovery_is_not_tuned_to_one_case() {
 /// (error at least 0.5 spacings) and recover below 0.01 within the same
 /// window, 20 periods `1/ω1` after the release, in their plane bit for bit
 /// (a chain's torsion costs no energy: an out-of-plane round-off of 1e-16,
-/// which a tip normal opposite to the body axis used to get, grew to a
+/// such as a tip normal opposite to the body axis would get, grows to a
 /// twisted tip 0.26 out of the plane and a final error of 0.14 for the
 /// geometric law at 14 particles). With the fixed recipe the 20-particle
 /// spirals end about one spacing away.

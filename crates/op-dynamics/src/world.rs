@@ -1,29 +1,30 @@
 //! The world: particles, materials, the enabled interaction kernel, the
 //! neighbour list, external actions and the integrator, stepped in time.
 
-use rayon::prelude::*;
-
 use crate::bonds::Bonds;
-use crate::contributors::Contributor;
 use crate::diagnostics::{self, Diagnostics};
 use crate::driver::Effects;
 use crate::error::ParamError;
 use crate::external::ExternalAccumulator;
-use crate::flags::Flags;
 use crate::forces::{ForceModel, ForceScratch, Kernel};
 use crate::integrators::Integrator;
 use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
-use crate::neighbours::{copy_positions, spatial_order, NeighbourList};
-use crate::particles::{ParticleType, Particles};
+use crate::neighbours::NeighbourList;
+use crate::particles::Particles;
 use crate::tooling::ToolSet;
 
 mod after_step;
+mod config;
+mod divergence;
 mod editing;
 mod params;
 mod pipeline;
 mod state;
+mod step;
 pub use after_step::{AfterStep, AfterStepContext};
+use config::{neighbour_radius_check, Config};
+pub use divergence::{Divergence, MAX_FORCED_STEPS};
 pub use editing::Merge;
 pub use params::{DivergenceParams, NeighbourParams, WorldParams, MAX_SKIN};
 
@@ -43,44 +44,6 @@ pub enum WorldError {
         /// The name.
         name: String,
     },
-}
-
-/// Adaptive steps in a row that may be forced through at `dt_min` with
-/// their error above the tolerance before the run stops as diverged
-/// ([`crate::integrators::StepInfo::tolerance_met`]).
-pub const MAX_FORCED_STEPS: u32 = 1000;
-
-/// A run that blew up: the step, time and (when one is to blame) particle
-/// where it was detected, and what was wrong. The one divergence of the
-/// workspace: the world's checks (non-finite state, speed limit) and the
-/// runner's (runaway energy, energy gain, explosion beyond the scene's
-/// bounds) all report it, in one format:
-/// `simulation diverged at step N (t = T): particle P: reason`.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub struct Divergence {
-    /// Index of the step that produced the bad state (1-based).
-    pub step: u64,
-    /// Simulation time after that step.
-    pub time: Real,
-    /// Stable id of the first bad particle, when one is to blame (the
-    /// energy gain of a whole scene has none).
-    pub particle: Option<u32>,
-    /// What was wrong.
-    pub reason: String,
-}
-
-impl std::fmt::Display for Divergence {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "simulation diverged at step {} (t = {}): ",
-            self.step, self.time
-        )?;
-        if let Some(p) = self.particle {
-            write!(f, "particle {p}: ")?;
-        }
-        f.write_str(&self.reason)
-    }
 }
 
 /// The stages every step has, around the after-step stages
@@ -124,152 +87,6 @@ impl StepReport {
             .map(|(_, t)| t)
             .sum()
     }
-}
-
-/// True when some pair of particles does not interact completely (several
-/// objects, several standard types, or two hinges), so the typing repulsion
-/// of seed 002 §5 can act and its cut-off counts for the neighbour radius.
-fn may_repel(p: &Particles) -> bool {
-    let objects = p.objects();
-    if objects.iter().any(|&o| Some(&o) != objects.first()) {
-        return true;
-    }
-    let kinds = p.kinds();
-    let hinges = kinds.iter().filter(|k| **k == ParticleType::Hinge).count();
-    let mut standard = kinds.iter().filter(|k| **k != ParticleType::Hinge);
-    let first = standard.next();
-    hinges >= 2 || standard.any(|k| Some(k) != first)
-}
-
-/// What the particle set and the materials enable (fixed when the world is
-/// built, recomputed when particles are inserted or removed).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Config {
-    kernel: Kernel,
-    /// Largest cut-off among the enabled terms of the materials in use.
-    cutoff: Real,
-    friction: bool,
-    /// Some material in use weakens with heat.
-    heated: bool,
-    has_fixed: bool,
-    repulsion: bool,
-    /// Some material in use has plasticity of its remembered curvature.
-    plastic: bool,
-    /// Some material in use has a bond memory (it turns the particles).
-    memory: bool,
-    /// Some material in use has a bond memory that flows.
-    memory_flows: bool,
-}
-
-impl Config {
-    /// The configuration of `particles` with these (prepared) materials;
-    /// every particle's material index must exist.
-    fn of(particles: &Particles, prepared: &[PreparedMaterial]) -> Config {
-        let used: Vec<&PreparedMaterial> = {
-            let mut seen = vec![false; prepared.len()];
-            particles
-                .materials()
-                .iter()
-                .for_each(|&m| seen[m as usize] = true);
-            prepared
-                .iter()
-                .zip(seen)
-                .filter(|(_, s)| *s)
-                .map(|(m, _)| m)
-                .collect()
-        };
-        // Bond-governed pairs of one object that are not bonded repel.
-        let repulsion = may_repel(particles) || used.iter().any(|m| m.bonds().is_some());
-        let cutoff = used
-            .iter()
-            .map(|m| {
-                let c = m.spacing_cutoff().max(m.orientation_cutoff());
-                if repulsion {
-                    c.max(m.repulsion_cutoff())
-                } else {
-                    c
-                }
-            })
-            .fold(0.0, Real::max);
-        let friction = used.iter().any(|m| m.friction() > 0.0);
-        let heated = used.iter().any(|m| m.heat_response().is_some());
-        let oriented = used.iter().any(|m| m.has_orientation_terms());
-        let kernel = if cutoff <= 0.0 || particles.len() < 2 {
-            Kernel::None
-        } else if oriented || friction {
-            Kernel::Oriented
-        } else {
-            Kernel::Spacing
-        };
-        Config {
-            kernel,
-            cutoff,
-            friction,
-            heated,
-            has_fixed: particles
-                .flags()
-                .iter()
-                .any(|f| f.contains(Flags::FIXED_POSITION) || f.contains(Flags::FIXED_ORIENTATION)),
-            repulsion,
-            plastic: used.iter().any(|m| m.plasticity().is_some()),
-            memory: used.iter().any(|m| m.bond_memory().is_some()),
-            memory_flows: used
-                .iter()
-                .any(|m| m.bond_memory().is_some_and(|b| b.flow.is_some())),
-        }
-    }
-
-    /// The neighbour list this configuration needs (none without a kernel).
-    ///
-    /// Cannot fail once [`neighbour_radius_check`] accepted every material:
-    /// the configuration's cut-off is one of theirs.
-    fn neighbour_list(&self, params: &NeighbourParams) -> Option<NeighbourList> {
-        (self.kernel != Kernel::None)
-            .then(|| NeighbourList::new(params.backend, self.cutoff, self.cutoff * params.skin))
-    }
-}
-
-impl World {
-    /// Takes the kernel and the flags of `config` (what the materials in
-    /// use enable), after its particles changed ([`World::insert_particles`]
-    /// and the other edits) or were restored from a checkpoint; the
-    /// neighbour list is the caller's.
-    fn apply_config(&mut self, config: &Config) {
-        self.model.kernel = config.kernel;
-        self.model.friction = config.friction;
-        self.model.heated = config.heated;
-        self.model.memory = config.memory;
-        self.model.has_fixed = config.has_fixed;
-        self.repulsion = config.repulsion;
-        self.plastic = config.plastic;
-        self.memory_flows = config.memory_flows;
-    }
-}
-
-/// Checks that every material's cut-off with the skin gives a neighbour
-/// list (a finite radius `cutoff * (1 + skin)`), so that no later choice of
-/// the materials in use (particles inserted by [`World::insert_particles`]
-/// included) can meet an impossible list.
-fn neighbour_radius_check(
-    prepared: &[PreparedMaterial],
-    params: &NeighbourParams,
-) -> Result<(), ParamError> {
-    for (k, m) in prepared.iter().enumerate() {
-        let cutoff = m.cutoff();
-        if NeighbourList::try_new(params.backend, cutoff, cutoff * params.skin).is_err() {
-            return Err(ParamError::Invalid {
-                field: format!("materials[{k}]"),
-                message: format!(
-                    "cut-off {cutoff} with neighbours.skin {}: the neighbour radius \
-                     cutoff * (1 + skin) = {} is not a finite number; lower the cut-offs \
-                     (spacing, weight, repulsion) or the skin",
-                    params.skin,
-                    cutoff + cutoff * params.skin
-                ),
-            });
-        }
-    }
-    Ok(())
 }
 
 /// An oriented particle world.
@@ -534,274 +351,11 @@ impl World {
     /// position) to particle `id`, held constant during the next step and
     /// then cleared (the "pending forces" contributor,
     /// [`crate::contributors`]). To act over a longer interval, pass a
-    /// [`Contributor`] to [`World::advance_to_with`] instead.
+    /// [`Contributor`](crate::contributors::Contributor) to
+    /// [`World::advance_to_with`] instead.
     pub fn add_external_force(&mut self, id: u32, force: Vec3, torque: Vec3) {
         self.may_rotate |= torque != Vec3::zeros();
         self.accumulator.add(id, force, torque);
-    }
-
-    /// Advances by one step: the configured `dt`, or the adaptive
-    /// controller's suggestion (at most `dt`).
-    ///
-    /// Stages, in order: (1) re-sort particles in spatial order when the
-    /// neighbour list is about to be rebuilt; (2) integrate, each force
-    /// evaluation updating the neighbour list (list-only rebuild when a
-    /// stage moved particles past the skin bound), running the pair kernel
-    /// and gathering per particle, adding external actions; (3) clear the
-    /// pending external forces; (4) advance the temperatures
-    /// ([`crate::heat`], when the world has heat); (5) break the bonds
-    /// stretched beyond their break length ([`crate::bonds`]); (6) with
-    /// plastic materials only, flow the remembered offsets of bond memories
-    /// ([`crate::bond_memory`]) and update the remembered curvatures
-    /// ([`crate::plasticity`]; the neighbour list is brought up to date for
-    /// the new positions first); (7) erasers remove particles; (8) check
-    /// for divergence (the oscillation measure is computed on demand from
-    /// the positions before and after the step).
-    ///
-    /// A world of more than 1024 particles takes the step on a thread of
-    /// the current rayon pool (the calling thread waits), so that the
-    /// step's parallel passes fork and join by work stealing.
-    pub fn step(&mut self) -> Result<&StepReport, Divergence> {
-        let dt = self.dt_next.min(self.params.dt);
-        let n = self.particles.len();
-        on_pool(n, || self.step_by(dt, false, &[]).map(|_| ()))?;
-        Ok(&self.report)
-    }
-
-    /// Advances until `t_end`, landing on it exactly: the last step is
-    /// shortened (a shortened step does not change the adaptive
-    /// controller's suggestion for the next one).
-    pub fn advance_to(&mut self, t_end: Real) -> Result<(), Divergence> {
-        self.advance_to_with(t_end, &[])
-    }
-
-    /// [`World::advance_to`] with `extra` contributors acting in every force
-    /// evaluation of the interval (after the pending forces, before the
-    /// force windows; [`crate::contributors`]): an explicit coupling
-    /// evaluated once per interval (op-scene's skin contact) acts over all
-    /// of it, also when an adaptive scheme takes several steps. Cached
-    /// forces are dropped when the interval ends if some of them was
-    /// active: the next interval's contributions differ. The steps run on
-    /// a pool thread as [`World::step`]'s do.
-    pub fn advance_to_with(
-        &mut self,
-        t_end: Real,
-        extra: &[&dyn Contributor],
-    ) -> Result<(), Divergence> {
-        if extra.iter().any(|c| c.is_active() && c.adds_torque()) {
-            self.may_rotate = true;
-        }
-        let active = extra.iter().any(|c| c.is_active());
-        let n = self.particles.len();
-        on_pool(n, || self.advance_steps(t_end, extra, active))
-    }
-
-    /// The steps of [`World::advance_to_with`] (on a pool thread).
-    fn advance_steps(
-        &mut self,
-        t_end: Real,
-        extra: &[&dyn Contributor],
-        active: bool,
-    ) -> Result<(), Divergence> {
-        loop {
-            let remaining = t_end - self.time;
-            if remaining <= 1e-12 * self.params.dt {
-                if active {
-                    self.integrator.invalidate_forces();
-                }
-                return Ok(());
-            }
-            let h = self.dt_next.min(self.params.dt);
-            // A step within 1e-6 of the remaining time takes all of it, so
-            // round-off in the accumulated time never leaves a sliver step.
-            if remaining <= h * (1.0 + 1e-6) {
-                self.step_by(remaining, true, extra)?;
-                if self.time < t_end && self.report.dt == remaining {
-                    // Land exactly despite round-off in `time + dt`.
-                    self.time = t_end;
-                }
-            } else {
-                self.step_by(h, false, extra)?;
-            }
-        }
-    }
-
-    fn step_by(
-        &mut self,
-        dt: Real,
-        clipped: bool,
-        extra: &[&dyn Contributor],
-    ) -> Result<&StepReport, Divergence> {
-        // The last report's buffer, to time this step's stages in.
-        let mut seconds = std::mem::take(&mut self.report.seconds);
-        seconds.clear();
-        let mut report = StepReport {
-            seconds,
-            ..StepReport::default()
-        };
-        let clock = std::time::Instant::now();
-        if let Some(list) = self.model.neighbours.as_mut() {
-            if self.params.neighbours.reorder && list.rebuild_due(self.particles.positions()) {
-                let order = spatial_order(self.particles.positions(), list.cutoff() + list.skin());
-                self.particles.permute(&order);
-                list.rebuild(self.particles.positions());
-                self.integrator.permute(&order);
-                report.reordered = true;
-            }
-        }
-        copy_positions(&mut self.prev_positions, self.particles.positions());
-        report
-            .seconds
-            .push(("reorder", clock.elapsed().as_secs_f64()));
-
-        let clock = std::time::Instant::now();
-        let neighbour_before = self.model.scratch.neighbour_seconds;
-        // Spacing-only worlds that nothing set spinning never rotate.
-        let rotating = self.model.kernel == Kernel::Oriented || self.may_rotate;
-        self.integrator.set_translation_only(!rotating);
-        let (state, bodies, attributes) = self.particles.split();
-        let mut ctx =
-            self.model
-                .context(attributes, &self.params.external, &self.accumulator, extra);
-        ctx.step_start = Some(self.time);
-        let info = self
-            .integrator
-            .step(&mut ctx, &bodies, self.time, dt, state);
-        let neighbour_seconds = self.model.scratch.neighbour_seconds - neighbour_before;
-        report.seconds.push(("neighbours", neighbour_seconds));
-        report.seconds.push((
-            "integrate",
-            clock.elapsed().as_secs_f64() - neighbour_seconds,
-        ));
-        report.dt = info.dt_taken;
-        report.rejected = info.rejected;
-        report.force_evaluations = info.force_evaluations;
-        self.time += info.dt_taken;
-        self.steps += 1;
-        self.forced_in_a_row = match info.tolerance_met() {
-            true => 0,
-            false => self.forced_in_a_row.saturating_add(1),
-        };
-        if !clipped || info.dt_taken < dt {
-            self.dt_next = info.dt_next;
-        }
-        if self.accumulator.is_active() {
-            self.accumulator.clear();
-            self.integrator.invalidate_forces();
-        }
-        // The after-step stages, in order; their effects applied once and
-        // kept for the driver.
-        let effects = self.run_after_step_stages(info.dt_taken, &mut report);
-        self.effects.merge(effects);
-
-        let clock = std::time::Instant::now();
-        let check = self
-            .check_divergence()
-            .and_then(|()| self.check_progress(&info));
-        report
-            .seconds
-            .push(("check", clock.elapsed().as_secs_f64()));
-        for &(name, s) in &report.seconds {
-            match self.stage_seconds.iter_mut().find(|(n, _)| *n == name) {
-                Some(total) => total.1 += s,
-                None => self.stage_seconds.push((name, s)),
-            }
-        }
-        self.report = report;
-        check?;
-        Ok(&self.report)
-    }
-
-    /// A run that cannot make progress within its means is stopped like a
-    /// divergence: more steps than [`World::set_step_budget`] allows (an
-    /// adaptive step collapsing toward `dt_min`), or [`MAX_FORCED_STEPS`]
-    /// adaptive steps in a row forced through at `dt_min` with the error
-    /// above the tolerance (tolerances no step can meet: the run would
-    /// crawl at `dt_min` to its end).
-    fn check_progress(&self, info: &crate::integrators::StepInfo) -> Result<(), Divergence> {
-        let stop = |reason: String| Divergence {
-            step: self.steps,
-            time: self.time,
-            particle: None,
-            reason,
-        };
-        if self.steps > self.step_budget {
-            return Err(stop(format!(
-                "{} steps, more than the run's budget of {} (its work limit; the last step was \
-                 {:.3e}): the step collapsed",
-                self.steps, self.step_budget, info.dt_taken
-            )));
-        }
-        if self.forced_in_a_row >= MAX_FORCED_STEPS {
-            return Err(stop(format!(
-                "{} adaptive steps in a row were forced through at dt_min = {:.3e} with the error \
-                 above the tolerance (error norm {:.3e}): no step meets these tolerances; raise \
-                 the tolerances or dt_min",
-                self.forced_in_a_row,
-                info.dt_taken,
-                info.error_norm.unwrap_or(Real::NAN)
-            )));
-        }
-        Ok(())
-    }
-
-    /// Stops the run as diverged once it has taken more than `steps` steps
-    /// in all ([`World::steps`]): the runner sets the budget its work
-    /// limits allow, so that an adaptive step collapsing toward `dt_min`
-    /// ends the run instead of running past its estimated work.
-    pub fn set_step_budget(&mut self, steps: u64) {
-        self.step_budget = steps;
-    }
-
-    fn check_divergence(&self) -> Result<(), Divergence> {
-        let p = &self.particles;
-        let vmax2 = self.params.divergence.max_speed.powi(2);
-        // Without torques (spacing kernel, no pending torque) and without
-        // initial spin, orientations cannot change: skip reading them.
-        let rotating = self.model.kernel == Kernel::Oriented || self.may_rotate;
-        let check = |i: usize| {
-            let finite = p.positions()[i].iter().all(|c| c.is_finite())
-                && p.velocities()[i].iter().all(|c| c.is_finite())
-                && (!rotating
-                    || (p.angular_velocities()[i].iter().all(|c| c.is_finite())
-                        && p.orientations()[i].coords.iter().all(|c| c.is_finite())));
-            if !finite {
-                Some((
-                    i,
-                    "non-finite position, velocity or orientation".to_string(),
-                ))
-            } else if p.velocities()[i].norm_squared() > vmax2 {
-                Some((
-                    i,
-                    format!(
-                        "speed {:.3e} exceeds divergence.max_speed = {:.3e}",
-                        p.velocities()[i].norm(),
-                        self.params.divergence.max_speed
-                    ),
-                ))
-            } else {
-                None
-            }
-        };
-        // In parallel over fixed chunks, each scanned in slot order; the
-        // first chunk with a bad slot reports it: the same report at any
-        // thread count.
-        const CHUNK: usize = 4096;
-        let n = p.len();
-        let bad = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| (c * CHUNK..((c + 1) * CHUNK).min(n)).find_map(check))
-            .find_first(Option::is_some)
-            .flatten();
-        match bad {
-            None => Ok(()),
-            Some((i, reason)) => Err(Divergence {
-                step: self.steps,
-                time: self.time,
-                particle: Some(p.ids()[i]),
-                reason,
-            }),
-        }
     }
 
     /// Evaluates forces, torques and potential energy at the current state
@@ -831,32 +385,4 @@ impl World {
     pub fn force_evaluations(&self) -> u64 {
         self.model.scratch.evaluations
     }
-}
-
-/// Runs `f`, the steps of a world of `n` particles, on a thread of the
-/// current rayon pool: on the calling thread when it is one (inside
-/// [`rayon::ThreadPool::install`]), else on one of the global pool's
-/// threads while the caller waits. A step has several parallel passes
-/// (the neighbour list's motion check, the integrator's kick and drift,
-/// the pair passes, the divergence check): entered from a pool thread,
-/// each fork-join hands its work to the other threads by work stealing;
-/// entered from outside the pool, each one injects a job, wakes a pool
-/// thread and puts the caller to sleep until it is done, two thread
-/// wake-ups per pass. Worlds of one accumulation block (fewer than
-/// [`crate::forces::SPLIT_MIN`] particles, so also one integrator chunk,
-/// [`crate::integrators::per_particle::CHUNK`]) have no parallel pass and stay on the
-/// caller's thread. Same work, same bits: only the thread that runs the
-/// serial parts changes.
-///
-/// Measured (the performance report's spacing child, 97,556 particles, 10
-/// steps, 3 interleaved pairs against the caller's thread): 1 thread 0.49
-/// against 0.51 s, 2 threads 0.26-0.29 s either way. It costs memory: what
-/// the steps allocate comes from the pool thread's malloc arena, not the
-/// caller's, and peak memory was 10% higher at 1 thread (133 against 120
-/// MB) and 4% at 2.
-fn on_pool<R: Send>(n: usize, f: impl FnOnce() -> R + Send) -> R {
-    if n < crate::forces::SPLIT_MIN || rayon::current_thread_index().is_some() {
-        return f();
-    }
-    rayon::scope(|_| f())
 }

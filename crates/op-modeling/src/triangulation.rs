@@ -42,9 +42,9 @@
 //! normals (each the normal of the plane fitted to the particle and its
 //! neighbours within the radius, turned to the particle's side): the
 //! surface the positions sample. A sliver standing across the surface is
-//! across both. On `scenes/fig_12_plastic_memory.ron` the exported shell
-//! closed in 41 of 101 frames with the particle normals alone, 61 with the
-//! fitted ones too.
+//! across both. On `scenes/fig_12_plastic_memory.ron` the particle normals
+//! alone close the exported shell in 41 of 101 frames, the fitted ones too
+//! in 61.
 //!
 //! **Inside** means `|x - c|^2 < R^2 (1 - 1e-9)`. A particle *on* the
 //! sphere (within a relative `1e-9` of `R^2`: co-circular particles, as in a

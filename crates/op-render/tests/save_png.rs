@@ -12,7 +12,7 @@ fn a_link_at_the_old_temporary_name_is_not_written_through() {
     std::fs::create_dir_all(&dir).unwrap();
     let victim = dir.join("victim.txt");
     std::fs::write(&victim, "keep me").unwrap();
-    // The name the writer used to take, `.<name>.tmp-<pid>`.
+    // A predictable temporary name, `.<name>.tmp-<pid>`, planted as a link.
     let planted = dir.join(format!(".out.png.tmp-{}", std::process::id()));
     std::os::unix::fs::symlink(&victim, &planted).unwrap();
     let out = dir.join("out.png");

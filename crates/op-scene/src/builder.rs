@@ -7,10 +7,8 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use op_dynamics::neighbours::{search, PairList};
 use op_dynamics::{
-    Flags, ForceWindow, Material, NeighbourBackend, ParticleDesc, Particles, Point3, Real, Vec3,
-    World,
+    Flags, ForceWindow, Material, ParticleDesc, Particles, Point3, Real, Vec3, World,
 };
 use op_modeling::{Role, Tool, ToolParams};
 
@@ -23,6 +21,11 @@ use crate::generators::Generated;
 use crate::schema::validate::object_path;
 use crate::schema::{ObjectSpec, Override, Scene};
 use crate::skins::{ContactStats, ObjectSkin, SkinTool};
+
+mod rest_spacing;
+mod velocities;
+pub(crate) use rest_spacing::rest_spacing;
+use velocities::add_velocities;
 
 impl Scene {
     /// Validates the scene ([`Scene::validate`]; points files relative to
@@ -605,93 +608,6 @@ fn particle(
     d.curvature = curvature;
     d
 }
-
-/// Adds the object's per-particle initial velocities
-/// ([`crate::schema::Velocities`]) to `descs`.
-fn add_velocities(
-    o: &ObjectSpec,
-    descs: &mut [ParticleDesc],
-    base_dir: Option<&Path>,
-    file: &str,
-    path: &str,
-) -> Result<(), SceneError> {
-    use crate::schema::Velocities;
-    let at = format!("{path}.velocities.File");
-    match &o.velocities {
-        None => {}
-        Some(Velocities::File(p)) => {
-            let v = crate::generators::read_velocities(base_dir, p, file, &at)?;
-            if v.len() != descs.len() {
-                return Err(SceneError::invalid(
-                    file,
-                    at,
-                    format!(
-                        "holds {} velocities; the generator made {} particles",
-                        v.len(),
-                        descs.len()
-                    ),
-                ));
-            }
-            for (d, v) in descs.iter_mut().zip(v) {
-                d.velocity += v;
-            }
-        }
-        Some(Velocities::Temperature { t, seed }) => {
-            let masses: Vec<Real> = descs.iter().map(|d| d.mass).collect();
-            for (d, v) in descs.iter_mut().zip(thermal_velocities(&masses, *t, *seed)) {
-                d.velocity += v;
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Maxwell-Boltzmann velocities at temperature `t` for particles of these
-/// masses (`k_B = 1`), from `seed`: net momentum removed, then scaled to a
-/// kinetic temperature of exactly `t` over `3N - 3` degrees of freedom
-/// (zero for a single particle).
-pub(crate) fn thermal_velocities(masses: &[Real], t: Real, seed: u64) -> Vec<Vec3> {
-    let mut state = seed ^ 0x9E37_79B9_7F4A_7C15;
-    let mut uniform = || {
-        // splitmix64
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        ((z >> 11) as Real + 0.5) / (1u64 << 53) as Real
-    };
-    let mut normal = || {
-        let (u, v) = (uniform(), uniform());
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    };
-    let mut v: Vec<Vec3> = masses
-        .iter()
-        .map(|&m| Vec3::new(normal(), normal(), normal()) * (t / m).sqrt())
-        .collect();
-    let n = masses.len();
-    let mass: Real = masses.iter().sum();
-    let momentum = masses
-        .iter()
-        .zip(&v)
-        .fold(Vec3::zeros(), |s, (&m, v)| s + v * m);
-    let drift = momentum / mass;
-    v.iter_mut().for_each(|x| *x -= drift);
-    let dof = 3.0 * n as Real - 3.0;
-    let twice_kinetic: Real = masses
-        .iter()
-        .zip(&v)
-        .map(|(&m, v)| m * v.norm_squared())
-        .sum();
-    let scale = if dof > 0.0 && twice_kinetic > 0.0 {
-        (t * dof / twice_kinetic).sqrt()
-    } else {
-        0.0
-    };
-    v.iter_mut().for_each(|x| *x *= scale);
-    v
-}
-
 /// Applies one override to the selected particles.
 fn apply(ov: &Override, descs: &mut [ParticleDesc]) {
     let set = |flags: &mut Flags, flag: Flags, on: Option<bool>| match on {
@@ -716,93 +632,5 @@ fn apply(ov: &Override, descs: &mut [ParticleDesc]) {
         if let Some(m) = ov.mass {
             d.mass = m;
         }
-    }
-}
-
-/// Mean nearest-neighbour distance of `positions`, or the pair `(i, j)` of
-/// the first particle found to coincide with another. A single particle
-/// gets `nominal` (or 1).
-///
-/// Radius searches start at 1.5 `nominal` (or a quarter of the bounding
-/// box's largest side over `√n` when there is none) and double while more
-/// than a few particles have no neighbour; the remaining ones are found by
-/// brute force.
-pub(crate) fn rest_spacing(
-    positions: &[Point3],
-    nominal: Option<Real>,
-) -> Result<Real, (usize, usize)> {
-    let n = positions.len();
-    if n < 2 {
-        return Ok(nominal.unwrap_or(1.0));
-    }
-    let mut radius = match nominal {
-        Some(s) => 1.5 * s,
-        None => {
-            let (mut lo, mut hi) = (positions[0].coords, positions[0].coords);
-            for p in positions {
-                lo = lo.inf(&p.coords);
-                hi = hi.sup(&p.coords);
-            }
-            0.25 * (hi - lo).max() / (n as Real).sqrt()
-        }
-    };
-    let mut best = vec![(Real::INFINITY, usize::MAX); n];
-    let mut list = PairList::new();
-    for _ in 0..64 {
-        search(NeighbourBackend::CellList, positions, radius, &mut list);
-        for (i, j) in list.iter_pairs() {
-            let d = (positions[j] - positions[i]).norm();
-            if d < best[i].0 {
-                best[i] = (d, j);
-            }
-            if d < best[j].0 {
-                best[j] = (d, i);
-            }
-        }
-        let missing = best.iter().filter(|b| b.0.is_infinite()).count();
-        if missing == 0 {
-            break;
-        }
-        if missing.saturating_mul(n) <= 20_000_000 || !radius.is_finite() || radius <= 0.0 {
-            for i in 0..n {
-                if best[i].0.is_infinite() {
-                    for j in (0..n).filter(|&j| j != i) {
-                        let d = (positions[j] - positions[i]).norm();
-                        if d < best[i].0 {
-                            best[i] = (d, j);
-                        }
-                    }
-                }
-            }
-            break;
-        }
-        radius *= 2.0;
-    }
-    if let Some((i, b)) = best.iter().enumerate().find(|(_, b)| b.0 <= 0.0) {
-        return Err((i, b.1));
-    }
-    Ok(best.iter().map(|b| b.0).sum::<Real>() / n as Real)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rest_spacing_of_a_line_and_outliers() {
-        let line: Vec<Point3> = (0..10)
-            .map(|i| Point3::new(i as Real * 0.5, 0.0, 0.0))
-            .collect();
-        assert!((rest_spacing(&line, Some(0.5)).unwrap() - 0.5).abs() < 1e-12);
-        assert!((rest_spacing(&line, None).unwrap() - 0.5).abs() < 1e-12);
-        // A far outlier: found by brute force, not by growing the radius.
-        let mut pts = line.clone();
-        pts.push(Point3::new(1000.0, 0.0, 0.0));
-        let m = rest_spacing(&pts, Some(0.5)).unwrap();
-        let expected = (10.0 * 0.5 + (1000.0 - 4.5)) / 11.0;
-        assert!((m - expected).abs() < 1e-9, "{m} vs {expected}");
-        assert_eq!(rest_spacing(&[Point3::origin()], Some(0.3)).unwrap(), 0.3);
-        let same = vec![Point3::new(1.0, 1.0, 1.0); 3];
-        assert!(rest_spacing(&same, None).is_err());
     }
 }

@@ -536,8 +536,8 @@ mod tests {
     }
 
     /// A PLY whose header declares fewer rows than its data holds is
-    /// refused (it used to be fitted on the header's count, the rest
-    /// ignored), in ascii and in binary, and elements after the vertices
+    /// refused (not fitted on the header's count with the rest ignored),
+    /// in ascii and in binary, and elements after the vertices
     /// are read, not mistaken for extra data.
     #[test]
     fn ply_data_beyond_the_header_counts_is_refused() {

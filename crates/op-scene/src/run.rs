@@ -4,28 +4,30 @@
 //! a bad frame: frames already on disk stay valid and the summary says
 //! `diverged: true`.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use op_dynamics::diagnostics::rest_shape_rms;
 use op_dynamics::{Point3, Real};
-use serde::Serialize;
 
 use crate::built_scene::{BuiltObject, BuiltScene};
-use crate::error::short;
-use crate::export::{write_atomically, FrameFormat, FrameWriter, Sequence};
-use crate::health::{energy_floor, Health, ObjectFindings, ENERGY_GAIN_WARNING};
-use crate::skins::ContactStats;
+use crate::export::{write_atomically, FrameFormat, FrameWriter};
+use crate::health::{energy_floor, Health};
 
 pub mod checkpoint;
 mod energy_watch;
+mod metrics;
 mod output;
+mod summary;
+mod tally;
 pub use checkpoint::CheckpointEvery;
 use checkpoint::{Carried, Checkpoint};
 use energy_watch::EnergyWatch;
+use metrics::Metrics;
 pub use output::prepare_output;
+pub use summary::{FrameFiles, ObjectSummary, Summary, UsdFile, UsdPrim};
+use tally::{Frame, Tally};
 
 /// How to run a scene.
 #[derive(Clone, Debug, Default)]
@@ -61,176 +63,6 @@ pub const RUNNER_STAGES: [&str; 6] = [
     "build",
     "estimate",
 ];
-
-/// Per-object figures of a run.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct ObjectSummary {
-    /// Object name.
-    pub name: String,
-    /// Number of particles at the end of the run (created ones included).
-    pub particles: usize,
-    /// Rest shape error at the last frame: RMS distance to the rest shape
-    /// after the best rigid alignment (Kabsch), divided by the object's
-    /// mean rest spacing. Measured over the object's original particles
-    /// (particles added by the creation rules have no rest position; see
-    /// [`crate::creation`]).
-    pub rest_shape_error_final: Real,
-    /// Largest rest shape error over the frames.
-    pub rest_shape_error_max: Real,
-    /// Particles the creation rules added to the object over the run.
-    pub created: usize,
-    /// Connected components of the object's particles at the last frame,
-    /// two particles joined when closer than its material's interaction
-    /// range (see [`crate::health`]); absent when the material has none.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub pieces: Option<usize>,
-    /// Largest bond stretch seen: the largest ratio of current to rest
-    /// distance over the object's rest neighbour pairs, over the frames
-    /// (see [`crate::health`]).
-    pub bond_stretch_max: Real,
-    /// Highest temperature of any of its particles over the frames, when
-    /// the scene has `world.heat` (seed 000 §6, §8).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub temperature_max: Option<Real>,
-}
-
-/// What `summary.json` holds.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct Summary {
-    /// Scene name.
-    pub scene: String,
-    /// Steps taken.
-    pub steps: u64,
-    /// Scene time reached (from frame 0, after the settle phase).
-    pub sim_time: Real,
-    /// Duration of the settle phase simulated before frame 0 (its steps
-    /// count in `steps`).
-    pub settle: Real,
-    /// Wall-clock seconds of the run, the scene's making included
-    /// ([`BuiltScene::setup_seconds`]).
-    pub wall_seconds: f64,
-    /// True when the run stopped because it diverged.
-    pub diverged: bool,
-    /// The divergence message, when it diverged (its step and time are the
-    /// world's, settle phase included).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub divergence: Option<String>,
-    /// What a user should know before trusting the frames: an object that
-    /// broke into pieces, left the scene's bounds, a passive scene that
-    /// gained energy, a step above the estimated stable step (see
-    /// [`crate::health`]). Also printed by `opsim run`. A finding the
-    /// scene's header expects is under `expected` instead.
-    pub warnings: Vec<String>,
-    /// The findings the scene's header expects (`// expect-warning: TEXT`,
-    /// [`crate::Scene::expected_warnings`]), such as the tear of a tearing
-    /// scene: what the scene is meant to do, so `opsim run` prints them as
-    /// `expected:` lines, not as warnings. A breakup accepted by `opsim run
-    /// --allow-breakup` alone stays a warning.
-    pub expected: Vec<String>,
-    /// Why the run stopped early other than by diverging (an output that
-    /// could not be written, a skin that could not be polygonized), when
-    /// it did.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub failure: Option<String>,
-    /// Seconds spent per stage over the run: the scene's making (`build`,
-    /// `estimate`: [`BuiltScene::setup_seconds`]), the world's own stages
-    /// (integrate, neighbours, reorder, check, heat, bonds, plasticity,
-    /// erase: those it has), the scene's stages ([`crate::stages`]: fit,
-    /// creation, contact, skin), then the runner's `prepare` (output
-    /// folders, checks before the first step), `measure` (energies, rest
-    /// shape errors, health) and `export` (frames, with their polygonized
-    /// skins and triangulations). `opsim run --profile` prints them.
-    pub stages: std::collections::BTreeMap<String, f64>,
-    /// Frames written.
-    pub frames: usize,
-    /// Frames per unit of scene time (the scene's `world.frame_rate`):
-    /// frame `k` is at scene time `k / frame_rate`.
-    pub frame_rate: Real,
-    /// The scene's up direction in scene coordinates: `outputs.up` when
-    /// given, else against gravity, or `+z` in a scene without gravity.
-    /// Scenes are z-up by convention.
-    pub up: [Real; 3],
-    /// The direction the scene's pictures look along (`outputs.view`), in
-    /// scene coordinates, when the scene gives one.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub view: Option<[Real; 3]>,
-    /// The frame files: formats, axis conventions and sequences.
-    pub files: FrameFiles,
-    /// Rayon threads used.
-    pub threads: usize,
-    /// What the scene computes: [`BuiltScene::stages`] (the world's
-    /// kernel, terms and external actions, then skin, polygonize, contact
-    /// when used).
-    pub enabled: Vec<String>,
-    /// Contact figures, for scenes with implicit contact (two or more
-    /// skinned objects; see [`crate::skins`]).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub contact: Option<ContactStats>,
-    /// Bonds broken over the run (settle phase included), for scenes with
-    /// bonded materials (op-dynamics `bonds`; seed 000 fig. 12c tearing).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub bonds_broken: Option<u64>,
-    /// What `linear_damping: "Critical"` resolved to, when the scene asked
-    /// for it ([`crate::damping::CriticalDamping`]: the slowest mode, the
-    /// damping, settle phase and duration run).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub critical_damping: Option<crate::damping::CriticalDamping>,
-    /// Per-object figures.
-    pub objects: Vec<ObjectSummary>,
-}
-
-/// The frame files of a run, as `summary.json` describes them for the
-/// tools that read them (the Blender add-on, `opsim render`).
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct FrameFiles {
-    /// Formats written, e.g. `["obj", "ply"]`.
-    pub formats: Vec<FrameFormat>,
-    /// Axis convention per format (by extension): `"y_up"` for OBJ (scene
-    /// `(x, y, z)` written as `(x, z, -y)`), `"z_up"` (scene coordinates)
-    /// for PLY, VTU and USD (`usda`).
-    pub axes: std::collections::BTreeMap<String, String>,
-    /// One sequence per scene object's particles, skin, triangulation and
-    /// tool: frame `k` of format `ext` is
-    /// `frames/<stem>/<stem>_<k:05>.<ext>`.
-    pub sequences: Vec<Sequence>,
-    /// The particle state files, when VTU is written:
-    /// `vtu/state_<k:05>.vtu`, listed in `vtu/state.vtu.series`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub vtu_series: Option<String>,
-    /// Every series file (ParaView's file-series JSON: a sequence's files
-    /// with their scene times, `crate::export::series`), relative to the
-    /// output directory: `frames/<stem>/<stem>.<ext>.series` per sequence
-    /// and OBJ or PLY format, `vtu/<stem>.vtu.series` per skin, surface
-    /// and tool when VTU is written, then `vtu/state.vtu.series`.
-    pub series: Vec<String>,
-    /// The USD cache, when USD is written ([`crate::export::usd`]).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub usd: Option<UsdFile>,
-}
-
-/// The USD cache of a run, as `summary.json` describes it.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct UsdFile {
-    /// The file, relative to the output directory: `usd/run.usda`.
-    pub file: String,
-    /// Its default prim, `/Run`, parent of every sequence's prim.
-    pub default_prim: String,
-    /// The prim of each sequence (every scene object's particles, skin,
-    /// triangulation and tool), in the order of the sequences.
-    pub prims: Vec<UsdPrim>,
-}
-
-/// One sequence's prim in the USD cache.
-#[derive(Clone, Debug, Serialize, PartialEq)]
-pub struct UsdPrim {
-    /// The sequence's name (the OBJ `o` name).
-    pub name: String,
-    /// What it shows.
-    pub kind: crate::export::SequenceKind,
-    /// The prim's path: `/Run/<name>` (a `Points` prim for particles, a
-    /// `Mesh` otherwise).
-    pub path: String,
-}
 
 /// Why a run stopped early.
 #[derive(Debug, thiserror::Error)]
@@ -300,44 +132,6 @@ pub fn rest_shape_error(scene: &BuiltScene, object: &BuiltObject) -> Real {
         .filter_map(|(&id, r)| p.slot_of(id).map(|s| (*r, p.positions()[s])))
         .unzip();
     rest_shape_rms(&rest, &current) / object.rest_spacing.max(Real::MIN_POSITIVE)
-}
-
-/// `metrics.csv`, kept in memory and written atomically (like the frames)
-/// at most every few seconds of wall time and at the end, so the file on
-/// disk is always whole.
-struct Metrics {
-    path: PathBuf,
-    text: String,
-    saved: Instant,
-}
-
-impl Metrics {
-    const HEADER: &'static str =
-        "frame,time,kinetic,potential,total,oscillation,max_speed,wall_seconds\n";
-    /// Seconds between two saves during a run.
-    const SAVE_INTERVAL: f64 = 5.0;
-
-    fn new(path: PathBuf) -> Self {
-        Metrics {
-            path,
-            text: Self::HEADER.to_string(),
-            saved: Instant::now(),
-        }
-    }
-
-    fn push(&mut self, row: std::fmt::Arguments) -> Result<(), RunError> {
-        use std::fmt::Write as _;
-        let _ = writeln!(self.text, "{row}");
-        if self.saved.elapsed().as_secs_f64() > Self::SAVE_INTERVAL {
-            self.save()?;
-        }
-        Ok(())
-    }
-
-    fn save(&mut self) -> Result<(), RunError> {
-        self.saved = Instant::now();
-        write_atomically(&self.path, |w| w.write_all(self.text.as_bytes())).map_err(io(&self.path))
-    }
 }
 
 /// Runs `scene`, writing into `opts.out_dir`; `on_frame(k, total)` is
@@ -623,373 +417,6 @@ impl Run {
     }
 }
 
-/// One frame to take: its index and time, the run's wall seconds so far,
-/// where it goes.
-struct Frame<'a> {
-    k: usize,
-    t: Real,
-    wall: f64,
-    writer: &'a mut FrameWriter,
-    metrics: Option<&'a mut Metrics>,
-}
-
-/// What a run accumulates over its frames: per-object rest-shape errors and
-/// temperatures, frames written, the stage timings of the runner, and how
-/// it ended.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct Tally {
-    max_err: Vec<Real>,
-    last_err: Vec<Real>,
-    /// The world has heat: track each object's hottest particle.
-    heat: bool,
-    hottest: Vec<Real>,
-    written: usize,
-    measure_seconds: f64,
-    export_seconds: f64,
-    /// Checkpoints written ([`checkpoint`]).
-    checkpoint_seconds: f64,
-    /// The output folders prepared and the scene checked before its first
-    /// step.
-    prepare_seconds: f64,
-    /// The run settles the scene before frame 0.
-    settles: bool,
-    divergence: Option<String>,
-    #[serde(skip)]
-    failure: Option<RunError>,
-}
-
-impl Tally {
-    fn new(scene: &BuiltScene) -> Self {
-        let n = scene.objects.len();
-        Tally {
-            max_err: vec![0.0; n],
-            last_err: vec![0.0; n],
-            heat: scene.world.params().heat.is_some(),
-            hottest: vec![Real::NEG_INFINITY; n],
-            written: 0,
-            measure_seconds: 0.0,
-            export_seconds: 0.0,
-            checkpoint_seconds: 0.0,
-            prepare_seconds: 0.0,
-            settles: false,
-            divergence: None,
-            failure: None,
-        }
-    }
-
-    /// Advances to the frame, checks it, measures and writes it. Returns
-    /// whether the run goes on.
-    fn frame(
-        &mut self,
-        scene: &mut BuiltScene,
-        health: &mut Health,
-        watch: &mut EnergyWatch,
-        frame: Frame<'_>,
-    ) -> bool {
-        // Frame 0 poses the skins on the settled particles.
-        let t = if frame.k == 0 {
-            scene.world.time()
-        } else {
-            frame.t
-        };
-        if let Err(d) = scene.advance_to(t) {
-            // A stage's failure ends the run as a divergence does (exit 3):
-            // the state it left cannot be continued.
-            self.divergence = Some(d.to_string());
-            return false;
-        }
-        let measuring = Instant::now();
-        let d = scene.world.diagnostics();
-        // Frame 0 is the end of the settle phase: what went wrong there
-        // went wrong while settling.
-        let when = if frame.k == 0 && self.settles {
-            "while settling: "
-        } else {
-            ""
-        };
-        if let Some(d) = watch
-            .check(scene, &d)
-            .err()
-            .or_else(|| health.observe(scene))
-            .or_else(|| crate::health::unwritable(scene))
-        {
-            self.divergence = Some(format!("{when}{d}"));
-            return false;
-        }
-        self.measure(scene);
-        self.measure_seconds += measuring.elapsed().as_secs_f64();
-        let exporting = Instant::now();
-        if frame.writer.writes_anything() {
-            if let Err(f) = frame.writer.write_frame(
-                frame.k,
-                scene.scene_time(),
-                &scene.world,
-                &scene.objects,
-                &scene.skins,
-                &scene.skin_tools,
-                &scene.tools,
-                &scene.outputs,
-            ) {
-                self.write_failed(f);
-                return false;
-            }
-        }
-        self.written += 1;
-        self.export_seconds += exporting.elapsed().as_secs_f64();
-        if let Some(m) = frame.metrics {
-            let kinetic = d.kinetic_translational + d.kinetic_rotational;
-            if let Err(e) = m.push(format_args!(
-                "{},{},{kinetic},{},{},{},{},{}",
-                frame.k,
-                scene.scene_time(),
-                d.potential,
-                d.total,
-                d.oscillation,
-                d.max_speed,
-                frame.wall
-            )) {
-                self.failure = Some(e);
-                return false;
-            }
-        }
-        true
-    }
-
-    /// The health findings at the end of the run: its warnings (energy
-    /// gained without input, the health report's, accepted breakups) go
-    /// into `warnings`, and a breakup the scene does not expect ends the
-    /// run as a divergence. After a divergence the state is the blown-up
-    /// one: its pieces and escape say nothing the divergence does not.
-    fn conclude(
-        &mut self,
-        scene: &BuiltScene,
-        health: &Health,
-        watch: &EnergyWatch,
-        warnings: &mut Vec<String>,
-    ) -> Vec<ObjectFindings> {
-        if watch.gain_seen > ENERGY_GAIN_WARNING {
-            warnings.push(format!(
-                "the scene gained energy without input: the total energy rose {} times its \
-                 energy scale above the lowest earlier frame (a step too large for the \
-                 stiffness, or particles started on top of each other)",
-                short(watch.gain_seen)
-            ));
-        }
-        let (findings, health_warnings, breakups) = health.finish(scene);
-        if self.divergence.is_some() {
-            return findings;
-        }
-        warnings.extend(health_warnings);
-        let (accepted, unexpected): (Vec<String>, Vec<String>) =
-            breakups.into_iter().partition(|b| scene.accepts_breakup(b));
-        warnings.extend(accepted);
-        if let Some(first) = unexpected.first() {
-            self.divergence = Some(format!(
-                "{first}; the scene does not expect it (a scene that tears on purpose says so \
-                 in its header, `// expect-warning: {}`; `opsim run --allow-breakup` accepts \
-                 any breakup)",
-                first.split(" (").next().unwrap_or(first)
-            ));
-        }
-        findings
-    }
-
-    /// Each object's rest-shape error and hottest particle at this frame.
-    fn measure(&mut self, scene: &BuiltScene) {
-        for (o, obj) in scene.objects.iter().enumerate() {
-            let e = rest_shape_error(scene, obj);
-            self.last_err[o] = e;
-            self.max_err[o] = Real::max(self.max_err[o], e);
-            if self.heat {
-                let p = scene.world.particles();
-                self.hottest[o] = obj
-                    .all_ids()
-                    .filter_map(|id| p.slot_of(id))
-                    .map(|s| p.temperatures()[s])
-                    .fold(self.hottest[o], Real::max);
-            }
-        }
-    }
-
-    /// A frame file that could not be written ends the run: the frames
-    /// before its frame are the ones written.
-    fn write_failed(&mut self, f: crate::export::WriteFailure) {
-        self.written = self.written.min(f.frame);
-        self.failure.get_or_insert(io(&f.path)(f.error));
-    }
-
-    /// The run's summary (`summary.json`).
-    fn summary(
-        &self,
-        scene: &BuiltScene,
-        writer: &FrameWriter,
-        findings: Vec<ObjectFindings>,
-        warnings: Vec<String>,
-        (wall, carried): (f64, &Carried),
-    ) -> Summary {
-        let (expected, warnings) = warnings.into_iter().partition(|w| scene.expects(w));
-        Summary {
-            scene: scene.name.clone(),
-            steps: scene.world.steps(),
-            sim_time: scene.scene_time(),
-            settle: if scene.settled { scene.settle } else { 0.0 },
-            wall_seconds: carried.wall_seconds
-                + carried.setup_seconds
-                + wall
-                + scene.setup_seconds.iter().map(|(_, t)| t).sum::<f64>(),
-            diverged: self.divergence.is_some(),
-            divergence: self.divergence.clone(),
-            warnings,
-            expected,
-            failure: self.failure.as_ref().map(error_chain),
-            stages: self.stage_table(scene, carried),
-            frames: self.written,
-            frame_rate: scene.frame_rate,
-            up: scene.outputs.up.unwrap_or_else(|| up_direction(scene)),
-            view: scene.outputs.view,
-            files: frame_files(writer),
-            threads: rayon::current_num_threads(),
-            enabled: scene.stages(),
-            contact: scene.has_contact().then_some(scene.contact),
-            bonds_broken: scene.world.bonds().map(|b| b.broken()),
-            critical_damping: scene.critical_damping.clone(),
-            objects: self.objects(scene, findings),
-        }
-    }
-
-    /// Seconds per stage so far (the summary's `stages`): the scene's and
-    /// the runner's, plus those `carried` over from the run this one
-    /// resumed.
-    fn stage_table(&self, scene: &BuiltScene, carried: &Carried) -> BTreeMap<String, f64> {
-        let mut table = carried.stages.clone();
-        let now = scene.timings().into_iter().chain(
-            // `build` and `estimate` come with the scene's timings.
-            RUNNER_STAGES[..4].iter().map(|s| s.to_string()).zip([
-                self.prepare_seconds,
-                self.measure_seconds,
-                self.export_seconds,
-                self.checkpoint_seconds,
-            ]),
-        );
-        for (name, seconds) in now {
-            if name == "checkpoint" && seconds == 0.0 {
-                continue;
-            }
-            *table.entry(name).or_insert(0.0) += seconds;
-        }
-        table
-    }
-
-    /// A copy of the tally for a checkpoint: everything but a failure
-    /// (checkpoints are taken only while the run goes well).
-    fn snapshot(&self) -> Tally {
-        Tally {
-            max_err: self.max_err.clone(),
-            last_err: self.last_err.clone(),
-            heat: self.heat,
-            hottest: self.hottest.clone(),
-            written: self.written,
-            measure_seconds: self.measure_seconds,
-            export_seconds: self.export_seconds,
-            checkpoint_seconds: self.checkpoint_seconds,
-            prepare_seconds: self.prepare_seconds,
-            settles: self.settles,
-            divergence: self.divergence.clone(),
-            failure: None,
-        }
-    }
-
-    /// The per-object figures of the summary.
-    fn objects(&self, scene: &BuiltScene, findings: Vec<ObjectFindings>) -> Vec<ObjectSummary> {
-        scene
-            .objects
-            .iter()
-            .zip(findings)
-            .enumerate()
-            .map(|(o, (obj, found))| ObjectSummary {
-                name: obj.name.clone(),
-                particles: obj
-                    .all_ids()
-                    .filter(|&id| scene.world.particles().slot_of(id).is_some())
-                    .count(),
-                rest_shape_error_final: self.last_err[o],
-                rest_shape_error_max: self.max_err[o],
-                created: obj.created.len(),
-                pieces: found.pieces,
-                bond_stretch_max: found.bond_stretch_max,
-                temperature_max: (self.heat && self.hottest[o].is_finite())
-                    .then_some(self.hottest[o]),
-            })
-            .collect()
-    }
-}
-
-/// The frame files a writer wrote (the summary's `files`).
-fn frame_files(writer: &FrameWriter) -> FrameFiles {
-    FrameFiles {
-        formats: writer.formats().to_vec(),
-        axes: writer
-            .formats()
-            .iter()
-            .map(|f| (f.extension().to_string(), f.axes().to_string()))
-            .collect(),
-        sequences: if writer.writes_sequences() {
-            writer.sequences().to_vec()
-        } else {
-            Vec::new()
-        },
-        vtu_series: writer
-            .series_files()
-            .first()
-            .map(|p| p.to_string_lossy().replace('\\', "/")),
-        series: writer
-            .all_series_files()
-            .iter()
-            .map(|p| p.to_string_lossy().replace('\\', "/"))
-            .collect(),
-        usd: writer.run_files().first().map(|(_, p)| {
-            let root = format!("/{}", crate::export::usd::ROOT);
-            let names = crate::export::usd::prim_names(writer.sequences());
-            UsdFile {
-                file: p.to_string_lossy().replace('\\', "/"),
-                prims: writer
-                    .sequences()
-                    .iter()
-                    .zip(names)
-                    .map(|(s, n)| UsdPrim {
-                        name: s.name.clone(),
-                        kind: s.kind,
-                        path: format!("{root}/{n}"),
-                    })
-                    .collect(),
-                default_prim: root,
-            }
-        }),
-    }
-}
-
-/// The scene's up direction: against gravity, `+z` without gravity.
-fn up_direction(scene: &BuiltScene) -> [Real; 3] {
-    let g = scene.world.params().external.gravity();
-    match (-g).try_normalize(0.0) {
-        // `+ 0.0` turns the `-0.0` of a negated zero into `0`.
-        Some(u) if u.iter().all(|c| c.is_finite()) => u.map(|c| c + 0.0).into(),
-        _ => [0.0, 0.0, 1.0],
-    }
-}
-
-/// An error and its sources, `: `-separated (one line for the summary).
-fn error_chain(e: &RunError) -> String {
-    let mut text = e.to_string();
-    let mut source = std::error::Error::source(e);
-    while let Some(s) = source {
-        text.push_str(": ");
-        text.push_str(&s.to_string());
-        source = s.source();
-    }
-    text
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1006,8 +433,7 @@ mod tests {
         // The check compares frames: two per second over 8 s. The gain
         // comes in bursts (e.g. +1.0 between t = 6 and 6.5 against a
         // threshold of 0.17) whose timing moves with round-off, so frames a
-        // second apart caught it or not depending on the last bits
-        // (renormalizing velocity Verlet's quaternions made it miss).
+        // second apart catch it or not depending on the last bits.
         built.frame_rate = 2.0;
         let opts = RunOptions {
             out_dir: dir.clone(),
@@ -1025,9 +451,9 @@ mod tests {
         // Chain with rest curvature 100/r0 under explicit Euler, which gains
         // energy on every conservative problem (its amplification factor
         // exceeds 1), damping off: bounded over the run, so only the energy
-        // check sees it. (Under velocity Verlet the chain used to gain
-        // energy by bursts as its pairs passed through coincidence; the
-        // normalized terms now fade out there and it does not.)
+        // check sees it. (Under velocity Verlet the chain does not gain
+        // energy: the normalized terms fade out where its pairs pass
+        // through coincidence.)
         let mut scene = tight_curvature();
         scene.world.integrator = op_dynamics::Scheme::ExplicitEuler;
         scene.world.linear_damping = 0.0.into();

@@ -355,6 +355,14 @@ fn skin_creation_and_feature_mistakes() -> Vec<Case> {
 /// tolerance): what docs/scenes.md lists under "What the JSON Schema
 /// checks and what only `opsim check` checks".
 fn check_only_mistakes() -> Vec<Case> {
+    let mut cases = check_only_scene_mistakes();
+    cases.extend(check_only_creation_and_tool_mistakes());
+    cases
+}
+
+/// The check-only mistakes of the world, materials, objects, forces,
+/// outputs and skins.
+fn check_only_scene_mistakes() -> Vec<Case> {
     vec![
         ("dt above the frame interval", Set("/world/dt", json!(0.2))),
         (
@@ -418,6 +426,12 @@ fn check_only_mistakes() -> Vec<Case> {
             "skin thickness below half a cell",
             Set("/objects/1/skin/thickness", json!(0.1)),
         ),
+    ]
+}
+
+/// The check-only mistakes of the creation rules, tools and features.
+fn check_only_creation_and_tool_mistakes() -> Vec<Case> {
+    vec![
         (
             "d_max below d_min",
             Set("/creation/stretching/d_max", json!(1.5)),

@@ -92,8 +92,8 @@
 //!    Möbius band across a thin rim) dropped so that the cut is filled as
 //!    a hole. Pinched vertices (two fans
 //!    meeting at a point) are split, and pieces with fewer vertices than
-//!    [`FitParams::neighbours`] dropped. Before the chance-gap width, 9
-//!    chance holes stayed open on 5,000 random samples of the saddle
+//!    [`FitParams::neighbours`] dropped. Without the chance-gap width, 9
+//!    chance holes stay open on 5,000 random samples of the saddle
 //!    (widths 3.7-5.6 spacings; its real hole: 29).
 //!
 //! **Limits** (measured before the hole pass and the k-nearest spacing
@@ -105,8 +105,8 @@
 //! 0.003 (RMS) of the mesh. With 0.08 one hole remains (χ = 0): a quad of
 //! particles with sides 1.75-1.9 h and diagonals 2.6 h, which neither rule
 //! opens (sides below `d_min`, diagonals beyond `d_max`, 90° corners below
-//! the growing rule's 100° `min_gap`). Until the triangulation radius was
-//! raised from 1.7 to `d_min` (2.0), 0.08-0.1 all left 2-6 such holes
+//! the growing rule's 100° `min_gap`). With a triangulation radius of 1.7
+//! instead of `d_min` (2.0), 0.08-0.1 all leave 2-6 such holes
 //! (χ -4 to -2), with diagonals between 1.7 and 2.0. Samples spread
 //! unevenly (a blob along 260 Fibonacci directions, nearest samples
 //! 1.5-1.9 h apart, `tests/fit.rs`) are filled (972 particles, sample RMS
@@ -149,6 +149,8 @@ mod noise;
 mod normals;
 mod outliers;
 pub(crate) use normals::covariance;
+mod params;
+mod relaxation;
 mod rounds;
 pub mod shapes;
 mod spacing;
@@ -160,13 +162,7 @@ use std::borrow::Cow;
 use std::collections::HashSet;
 use std::time::Instant;
 
-use crate::creation::{CreationParams, GrowingParams, StretchingParams};
-use op_dynamics::interactions::spacing::Spacing;
-use op_dynamics::interactions::CohesionParams;
-use op_dynamics::{
-    ExternalParams, Flags, Material, ParamError, ParticleDesc, Particles, Point3, Real, Scheme,
-    Vec3, World, WorldError, WorldParams,
-};
+use op_dynamics::{ParamError, Point3, Real, Vec3, WorldError};
 
 use input::median_of;
 use input::Input;
@@ -174,6 +170,10 @@ pub use mesh::{point_triangle_distance, sample_distances, SurfaceMesh};
 pub use neighbourhood::DataNeighbourhood;
 pub use normals::estimate_normals;
 use normals::{curve_like_share, knn_normals};
+pub use params::FitParams;
+pub(crate) use relaxation::at_rest;
+pub use relaxation::release;
+use relaxation::{advance, Relaxation};
 pub use spacing::median_nearest_distance;
 use spacing::{first_ring_mean, nearest_distances, Knn};
 pub use thin::ThinFeature;
@@ -187,75 +187,6 @@ pub struct PointSet {
     pub positions: Vec<Point3>,
     /// Unit normals, one per position, or `None` when there are none.
     pub normals: Option<Vec<Vec3>>,
-}
-
-/// Settings of [`fit`]; lengths in units of the spacing unless said.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FitParams {
-    /// Sample spacing `h` (absolute length, > 0), or `None` for the median
-    /// nearest-sample distance. [`fit`] refuses one above the diagonal of
-    /// the samples' bounding box, or so small that the surface would need
-    /// more than [`MAX_PARTICLES`] particles ([`FitError::Spacing`] gives
-    /// the range). Default: `None`.
-    pub spacing: Option<Real>,
-    /// Open data: stretching only, holes wider than `d_max` stay. Default:
-    /// false (closed data).
-    pub open: bool,
-    /// Stretching range `[d_min, d_max]` (the search range). Default:
-    /// 2.0 and 2.5 (seed 000 §7).
-    pub d_min: Real,
-    /// See `d_min`.
-    pub d_max: Real,
-    /// Largest number of creation rounds. Default: 20.
-    pub max_rounds: usize,
-    /// Relaxation time after release (unit-spacing time units, >= 0).
-    /// Default: 0: the fit interpolates the samples (seed 000 §7, "surface
-    /// interpolation"); give a time for noisy samples, which the release
-    /// smooths (the paper's reason for it) at the price of leaving the
-    /// data. Measured on 5,000 random samples of the shapes of [`shapes`]
-    /// (exact, no noise) at 0, 0.3 and 1: the same topology; sample-to-mesh
-    /// RMS 7e-5, 2e-4, 6.8e-4 on the ellipsoid (growing with the time, 2e-3
-    /// at 3); median smallest angle 38°, 40°, 45° but triangles under 20°
-    /// 10%, 10%, 17%; time 0.6, 1.4, 3.2 s. On the 26,002 vertices of a
-    /// scanned armadillo, 0 against 1: RMS 0.0032 against 0.30 (spacing
-    /// 1.31), 1.9% against 15% of triangles under 20°, 3.2 s against 19 s.
-    pub relax_time: Real,
-    /// Mutual-neighbour radius of the triangulation, > 0; keep it at
-    /// least `d_min`. Default: 2.0 (the default `d_min`): a pair closer
-    /// than `d_min` is no gap for the stretching rule, so nothing is
-    /// created between them and the triangulation must bridge them. With
-    /// the 1.7 of sheets, holes whose diagonals fall between 1.7 and
-    /// `d_min` (quads of sides 1.1-1.7 with 90° corners, which the growing
-    /// rule's 100° `min_gap` does not fill either) stayed open.
-    pub triangulation_radius: Real,
-    /// Number of nearest samples whose PCA gives a sample's normal when
-    /// the file has none (Hoppe et al. 1992), >= 3. Default: 12.
-    pub neighbours: usize,
-    /// Drop outlier samples before seeding (stage 0, [`Fit::dropped_outliers`]).
-    /// Default: true.
-    pub drop_outliers: bool,
-    /// Closed data: holes left after the relaxation narrower than this
-    /// (in spacings; width `4 area / perimeter`) are closed by the final
-    /// pass. Open data close those narrower than `d_max` instead.
-    /// Default: 8.
-    pub max_hole: Real,
-}
-
-impl Default for FitParams {
-    fn default() -> Self {
-        FitParams {
-            spacing: None,
-            open: false,
-            d_min: 2.0,
-            d_max: 2.5,
-            max_rounds: 20,
-            relax_time: 0.0,
-            triangulation_radius: 2.0,
-            neighbours: 12,
-            drop_outliers: true,
-            max_hole: 8.0,
-        }
-    }
 }
 
 /// A fit could not be made.
@@ -354,54 +285,10 @@ impl Fit {
     }
 }
 
-impl FitParams {
-    /// Checks every field.
-    pub fn validate(&self) -> Result<(), FitError> {
-        let bad = |f: &str, v: Real, m: &str| Err(FitError::Input(format!("{f} = {v}: {m}")));
-        if let Some(h) = self.spacing {
-            if !(h.is_finite() && h > 0.0) {
-                return bad("spacing", h, "must be finite and > 0");
-            }
-        }
-        if !(self.d_min.is_finite() && self.d_min > 0.0) {
-            return bad("d_min", self.d_min, "must be finite and > 0");
-        }
-        if !(self.d_max.is_finite() && self.d_max >= self.d_min) {
-            return bad("d_max", self.d_max, "must be finite and >= d_min");
-        }
-        if !(self.relax_time.is_finite() && (0.0..=MAX_RELAX_TIME).contains(&self.relax_time)) {
-            return bad(
-                "relax_time",
-                self.relax_time,
-                &format!(
-                    "must be finite, >= 0 and at most {MAX_RELAX_TIME} ({} relaxation steps of \
-                     every particle; a relaxation of 10 already moves the surface off the \
-                     samples by a fraction of a spacing)",
-                    MAX_RELAX_TIME / STEP
-                ),
-            );
-        }
-        if !(self.triangulation_radius.is_finite() && self.triangulation_radius > 0.0) {
-            return bad(
-                "triangulation_radius",
-                self.triangulation_radius,
-                "must be finite and > 0",
-            );
-        }
-        if !(self.max_hole.is_finite() && self.max_hole >= 0.0) {
-            return bad("max_hole", self.max_hole, "must be finite and >= 0");
-        }
-        if self.neighbours < 3 {
-            return bad("neighbours", self.neighbours as Real, "must be >= 3");
-        }
-        Ok(())
-    }
-}
-
 /// Longest relaxation after release ([`FitParams::relax_time`], in
 /// unit-spacing time units): `100 / STEP` = 20,000 steps of the whole
-/// set, which bounds the relaxation's work with [`MAX_PARTICLES`]; longer
-/// ones used to run for hours (`opsim fit --relax 1e4`, issue 38).
+/// set, which bounds the relaxation's work with [`MAX_PARTICLES`] (an
+/// unbounded one, such as `opsim fit --relax 1e4`, would run for hours).
 pub const MAX_RELAX_TIME: Real = 100.0;
 
 /// Largest number of particles of a fit: the distinct samples, the
@@ -419,7 +306,7 @@ pub const MAX_PARTICLES: usize = 1_000_000;
 /// tolerance 1e-4 for steps 2e-3, 5e-3 and 1e-2; at 2e-2 the largest ones
 /// grew by 65% and the mesh lost its topology (χ -1, one hole). Half the
 /// step that still matched: the relaxation costs 2.5 times fewer force
-/// evaluations than at the 2e-3 used before.
+/// evaluations than at 2e-3.
 const STEP: Real = 5e-3;
 
 /// Distance (in spacings) within which samples are merged, and below which
@@ -673,112 +560,6 @@ fn seed_normals(
     })
 }
 
-/// The material and world of a fit's particles at unit spacing: cohesion
-/// at the rest distance `rest` and co-circularity (module docs, stage 4).
-struct Relaxation {
-    rest: Real,
-    cutoff: Real,
-    material: Material,
-    params: WorldParams,
-}
-
-impl Relaxation {
-    fn new(rest: Real) -> Self {
-        // At least `rest + 0.45`: the taper (from 0.9 cutoff) must start
-        // beyond the maximum attraction, about `rest + 0.3` for the default
-        // `alpha` whatever `rest` (a rest of 0.83 spacings, from the
-        // 6th-neighbour spacing on samples along a curve, failed with
-        // `1.5 rest`).
-        let cutoff = (1.5 * rest).max(rest + 0.45);
-        let material = Material {
-            spacing: Some(Spacing::Cohesion(CohesionParams {
-                r0: rest,
-                cutoff: Some(cutoff),
-                ..CohesionParams::default()
-            })),
-            cocircularity: 5.0,
-            ..Material::empty()
-        };
-        let world_params = WorldParams {
-            scheme: Scheme::VelocityVerlet,
-            dt: STEP,
-            external: ExternalParams {
-                linear_damping: 2.0,
-                angular_damping: 0.2,
-                ..ExternalParams::default()
-            },
-            ..WorldParams::default()
-        };
-        Relaxation {
-            rest,
-            cutoff,
-            material,
-            params: world_params,
-        }
-    }
-
-    /// A world of the seeds, fixed in position and orientation.
-    fn seed_world(&self, seeds: &[Point3], normals: &[Vec3]) -> Result<World, WorldError> {
-        let mut particles = Particles::new();
-        for (p, nrm) in seeds.iter().zip(normals) {
-            let mut d = ParticleDesc::at(*p).with_normal(*nrm);
-            d.flags = Flags::FIXED_POSITION.union(Flags::FIXED_ORIENTATION);
-            particles.push(d)?;
-        }
-        World::new(
-            particles,
-            std::slice::from_ref(&self.material),
-            self.params.clone(),
-        )
-    }
-
-    /// Rounds of the creation rules near the data, each followed by a
-    /// short relaxation of the new particles (seed 000 §7), until a round
-    /// creates nothing or [`FitParams::max_rounds`].
-    fn fill(
-        &self,
-        world: &mut World,
-        params: &FitParams,
-        seeds: &[Point3],
-        seed_normals: &[Vec3],
-    ) -> Result<(), FitError> {
-        let rest = self.rest;
-        let mut creation = CreationParams::new(rest);
-        creation.stretching = Some(StretchingParams {
-            d_min: params.d_min,
-            d_max: params.d_max,
-            reach: (0.6 * params.d_max).max(1.5),
-            ..StretchingParams::default()
-        });
-        if !params.open {
-            creation.growing = Some(GrowingParams {
-                max_gap: 170f64.to_radians(),
-                ..GrowingParams::default()
-            });
-        }
-        creation.max_particles = (20 * seeds.len() + 1000).min(MAX_PARTICLES);
-        let near = DataNeighbourhood::new(seeds, seed_normals, rest, params.d_max, params.open);
-        for _ in 0..params.max_rounds {
-            let mut descs = creation.candidates(world.particles())?;
-            descs.retain(|d| near.contains(&d.position));
-            if descs.is_empty() {
-                break;
-            }
-            let new = world.insert_particles(&descs)?;
-            rounds::relax_new(
-                world,
-                &new,
-                0.1,
-                self.cutoff,
-                0.5 * rest,
-                &self.material,
-                &self.params,
-            )?;
-        }
-        Ok(())
-    }
-}
-
 /// Closes the mesh's holes narrower than the open-surface threshold
 /// (`holes.rs`): `d_max` or the widest gap random sampling leaves by
 /// chance for open data, [`FitParams::max_hole`] spacings for closed data.
@@ -839,50 +620,6 @@ impl Stages {
 fn default_spacing(distinct: &[Point3]) -> Real {
     let knn = Knn::new(distinct, 6);
     0.8 * median_of(knn.distances_to(knn.k()))
-}
-
-/// Releases the seeds (seed 000 §7): the particles with the given ids are
-/// removed and inserted again with their fixed flags cleared, at rest, in
-/// the order given (op-dynamics fixes a particle's flags when it is
-/// inserted). Returns their new ids, in the order of `ids`.
-///
-/// # Errors
-/// An id that names no live particle (nothing is changed then).
-pub fn release(world: &mut World, ids: &[u32]) -> Result<Vec<u32>, WorldError> {
-    let p = world.particles();
-    let mut descs = Vec::with_capacity(ids.len());
-    for &id in ids {
-        let Some(s) = p.slot_of(id) else {
-            return Err(WorldError::from(ParamError::Invalid {
-                field: "ids".into(),
-                message: format!("particle id {id} does not exist"),
-            }));
-        };
-        let mut d = at_rest(p, s);
-        d.flags.remove(Flags::FIXED_POSITION);
-        d.flags.remove(Flags::FIXED_ORIENTATION);
-        descs.push(d);
-    }
-    world.remove_particles(ids)?;
-    world.insert_particles(&descs)
-}
-
-/// The particle in `slot` at rest: its place, frame and attributes, no
-/// velocity and the default temperature (as the fit's particles are).
-pub(crate) fn at_rest(p: &Particles, slot: usize) -> ParticleDesc {
-    let fresh = ParticleDesc::at(p.positions()[slot]);
-    ParticleDesc {
-        velocity: fresh.velocity,
-        angular_velocity: fresh.angular_velocity,
-        temperature: fresh.temperature,
-        ..p.desc(slot)
-    }
-}
-
-/// Advances `world` by `t` (a divergence is an error).
-fn advance(world: &mut World, t: Real) -> Result<(), FitError> {
-    let end = world.time() + t;
-    Ok(world.advance_to(end)?)
 }
 
 #[cfg(test)]

@@ -269,6 +269,13 @@ impl Scene {
     /// field evaluations within [`Scene::limits`]; `total` is the particle
     /// count.
     fn validate_run_size(&self, total: usize, base_dir: Option<&Path>) -> Result<(), SceneError> {
+        let steps = self.validate_step_work(total)?;
+        self.validate_pair_work(steps, base_dir)
+    }
+
+    /// The run's objects, steps and particle-steps within
+    /// [`Scene::limits`] (`total` particles); returns the steps.
+    fn validate_step_work(&self, total: usize) -> Result<Real, SceneError> {
         let file = self.origin();
         let w = &self.world;
         let lim = &self.limits;
@@ -321,6 +328,16 @@ impl Scene {
                 ),
             ));
         }
+        Ok(steps)
+    }
+
+    /// The run's pairs, pair-steps, triangulation pairs and field
+    /// evaluations within [`Scene::limits`], over `steps` steps.
+    fn validate_pair_work(&self, steps: Real, base_dir: Option<&Path>) -> Result<(), SceneError> {
+        let file = self.origin();
+        let w = &self.world;
+        let lim = &self.limits;
+        let flag = "(opsim --no-work-limits lifts this limit)";
         let e = self.work_estimate(base_dir)?;
         let densely = "(particles packed closely for their material's cut-off or bond radius, \
                        or objects overlapping)";
