@@ -203,11 +203,11 @@ fn mode_work(basis: Basis, particles: usize) -> Real {
 /// The work of one mode analysis of `dof` degrees of freedom over
 /// `particles` particles, in particle-steps: the Hessian's central
 /// differences (two force evaluations of every particle per degree of
-/// freedom) and its dense eigen-decomposition, counted as `dof³ / 250`:
-/// nalgebra's `SymmetricEigen` of a 600-square matrix took 0.24 s (1.1 ns
-/// per `dof³`) on a diagonally dominant test matrix and about four times
-/// that per pass on a settled scene's Hessian, against a microsecond per
-/// particle-step.
+/// freedom) and its dense eigen-decomposition, counted as `dof³ / 250`
+/// particle-steps, on the high side: nalgebra's `SymmetricEigen` of a
+/// 600-square test matrix took 0.24 s (1.1 ns per `dof³`), and each mode
+/// pass of a 100-particle scene's `opsim check` about twice that, Hessian
+/// included, against a microsecond per particle-step.
 fn mode_work_of(dof: usize, particles: usize) -> Real {
     let dof = dof.min(MAX_DEGREES_OF_FREEDOM) as Real;
     2.0 * dof * particles as Real + dof.powi(3) / 250.0

@@ -208,8 +208,8 @@ impl Scene {
         // Pairs between objects whose boxes come within the largest range,
         // each half to either side. Each object's neighbours at that range
         // are counted once per footprint (a cloud's from its sample); the
-        // objects that overlap are found by a sweep, whose cost grows with the pairs of
-        // objects it finds: skipped without a pair limit.
+        // objects that overlap are found by a sweep, whose cost grows with
+        // the pairs of objects it finds: skipped without a pair limit.
         if self.limits.max_pairs.is_finite() || self.limits.max_pair_steps.is_finite() {
             for (a, b) in footprints.near_pairs(largest) {
                 let shared = footprints.pairs_between(a, b, largest);
