@@ -242,7 +242,7 @@ struct Tally {
 #[test]
 fn structural_mutants_are_checked_and_run_within_bounds() {
     let count = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_CI_MUTANTS", 200);
-    fuzz(count, 2026);
+    fuzz(0..count, 2026);
 }
 
 /// The long run, by hand: `OPSIM_FUZZ_STRUCT_MUTANTS` (default 2,000) and
@@ -253,12 +253,14 @@ fn structural_mutants_are_checked_and_run_within_bounds() {
 fn many_structural_mutants() {
     let count = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_MUTANTS", 2000);
     let seed = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_SEED", 5);
-    fuzz(count, seed);
+    // To go on with a run stopped part way: the first mutant to make.
+    let first = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_FIRST", 0);
+    fuzz(first..count, seed);
 }
 
-/// Makes, checks and runs `count` mutants from `seed` on two workers,
+/// Makes, checks and runs mutants `range` from `seed` on two workers,
 /// prints the counts by class and fails on any failure found.
-fn fuzz(count: usize, seed: u64) {
+fn fuzz(range: std::ops::Range<usize>, seed: u64) {
     let verbose = std::env::var_os("OPSIM_FUZZ_VERBOSE").is_some();
     // Where to keep the mutants of the classes worth a look (all but
     // "ran", the refusals by check and run's refusals of a budget or an
@@ -271,13 +273,13 @@ fn fuzz(count: usize, seed: u64) {
     ));
     let _ = std::fs::remove_dir_all(&root);
     std::fs::create_dir_all(&root).unwrap();
-    let next = AtomicUsize::new(0);
+    let next = AtomicUsize::new(range.start);
     let tally = Mutex::new(Tally::default());
     std::thread::scope(|s| {
         for _ in 0..2 {
             s.spawn(|| loop {
                 let k = next.fetch_add(1, Ordering::Relaxed);
-                if k >= count {
+                if k >= range.end {
                     break;
                 }
                 let mut rng = Rng::new(seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
@@ -320,7 +322,7 @@ fn fuzz(count: usize, seed: u64) {
     let _ = std::fs::remove_dir_all(&root);
     let t = tally.into_inner().unwrap();
     eprintln!(
-        "structural fuzz: {count} mutants (seed {seed}): {:?}",
+        "structural fuzz: mutants {range:?} (seed {seed}): {:?}",
         t.counts
     );
     assert!(t.failures.is_empty(), "{}", t.failures.join("\n"));

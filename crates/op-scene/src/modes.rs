@@ -222,8 +222,15 @@ pub fn modes(world: &mut World, basis: Basis, leave_out_inert: bool) -> Modes {
         let p = nalgebra::DMatrix::<Real>::identity(dofs.len(), dofs.len()) - q * q.transpose();
         hess = &p * hess * &p;
     }
-    let eig = nalgebra::SymmetricEigen::new(hess);
-    let (omega2, shapes) = sorted_modes(&eig, rigid.as_ref(), &dofs);
+    // Every degree of freedom left out as inert (a particle whose spins
+    // nothing resists and that no force moves): no mode; nalgebra refuses
+    // the empty matrix.
+    let (omega2, shapes) = if dofs.is_empty() {
+        (Vec::new(), Vec::new())
+    } else {
+        let eig = nalgebra::SymmetricEigen::new(hess);
+        sorted_modes(&eig, rigid.as_ref(), &dofs)
+    };
     Modes {
         basis,
         rigid: rigid.as_ref().map_or(0, |q| q.ncols()),
@@ -591,6 +598,21 @@ mod tests {
             m.omega2
         );
         assert_eq!(m.moved_inertia(0), (Some(2.0), None));
+    }
+
+    /// Two fixed particles too far apart to interact: every degree of
+    /// freedom is left out as inert and there is no mode (nalgebra's
+    /// eigen-decomposition panics on the empty matrix that would remain).
+    #[test]
+    fn fixed_particles_far_apart_have_no_mode() {
+        let mut w = world(
+            r#"(name: "far", world: (dt: 0.001),
+                materials: {"lj": (spacing: LennardJones((epsilon: 10, r0: 1, cutoff: 1.5)))},
+                objects: [(name: "p", material: "lj", generator: Chain(count: 2, spacing: 10),
+                           overrides: [(particles: All, fixed_position: Some(true))])])"#,
+        );
+        let m = modes(&mut w, Basis::Spatial, true);
+        assert!(m.dofs.is_empty() && m.omega2.is_empty(), "{:?}", m.omega2);
     }
 
     /// The spatial modes of the settled seed spiral hold its planar ones:
