@@ -29,7 +29,9 @@
 //! `OPSIM_FUZZ_STRUCT_MUTANTS=2000 OPSIM_FUZZ_STRUCT_SEED=11 cargo test
 //! --profile ci --test fuzz_structure -- --ignored --nocapture`, with
 //! `OPSIM_FUZZ_VERBOSE=1` to print each mutant's class and
-//! `OPSIM_FUZZ_KEEP=DIR` to keep the mutants of the unusual classes.
+//! `OPSIM_FUZZ_KEEP=DIR` to keep the mutants of the unusual classes;
+//! `OPSIM_FUZZ_DUMP=DIR` with `OPSIM_FUZZ_STRUCT_FIRST=K` and
+//! `OPSIM_FUZZ_STRUCT_MUTANTS=K+1` writes mutant K without running it.
 
 mod fuzz_support;
 
@@ -266,6 +268,9 @@ fn fuzz(range: std::ops::Range<usize>, seed: u64) {
     // "ran", the refusals by check and run's refusals of a budget or an
     // unstable step), as m<k>.json.
     let keep = std::env::var_os("OPSIM_FUZZ_KEEP").map(PathBuf::from);
+    // Where to write every mutant, as m<k>.json, without checking or
+    // running it (to look at one mutant of a long run).
+    let dump = std::env::var_os("OPSIM_FUZZ_DUMP").map(PathBuf::from);
     let scenes = scenes();
     let root = std::env::temp_dir().join(format!(
         "opsim-fuzz-structure-{}-{seed}",
@@ -293,6 +298,13 @@ fn fuzz(range: std::ops::Range<usize>, seed: u64) {
                 std::fs::create_dir_all(&work).unwrap();
                 let file = work.join("scene.json");
                 std::fs::write(&file, serde_json::to_vec(&scene).unwrap()).unwrap();
+                if let Some(dump) = &dump {
+                    let _ = std::fs::create_dir_all(dump);
+                    std::fs::copy(&file, dump.join(format!("m{k}.json"))).unwrap();
+                    eprintln!("{label}: written");
+                    let _ = std::fs::remove_dir_all(&work);
+                    continue;
+                }
                 let (class, failure) = try_mutant(&file, &work.join("out"));
                 if verbose {
                     eprintln!("{label}: {class}");

@@ -304,6 +304,11 @@ impl Footprints {
         })
     }
 
+    /// Object `k`'s footprint.
+    pub fn get(&self, k: usize) -> &Footprint {
+        &self.footprints[k]
+    }
+
     /// Every object's footprint, in order.
     pub fn iter(&self) -> impl Iterator<Item = &Footprint> {
         self.footprints.iter().map(|f| &**f)
@@ -324,7 +329,13 @@ impl Footprints {
     /// Object `k`'s own pairs within `range`, at least one per particle
     /// (the particle's own work).
     pub fn own_pairs(&self, k: usize, range: Real) -> Real {
-        self.footprints[k].count * (0.5 * self.neighbours(k, range)).max(1.0)
+        self.pairs_within(k, range).max(self.footprints[k].count)
+    }
+
+    /// Object `k`'s own pairs within `range`: half its particles'
+    /// neighbours.
+    pub fn pairs_within(&self, k: usize, range: Real) -> Real {
+        0.5 * self.footprints[k].count * self.neighbours(k, range)
     }
 
     /// Pairs within `range` between objects `a` and `b`

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use op_dynamics::Real;
 
-use super::footprint::Footprints;
+use super::footprint::{near_pairs, Footprint, Footprints};
 use super::limits::{
     MAX_CONDUCTION_STEP, MAX_EXTENT_OVER_SPACING, MAX_ROTATION, MAX_SKIN_NODES_PER_AXIS,
 };
@@ -176,34 +176,45 @@ impl Scene {
             (&o.generator, path)
         });
         let footprints = Footprints::of(generators, base_dir, file)?;
-        // Each material's range: its cut-off, or its bond radius (bonded
-        // pairs interact completely, however far); prepared once each.
-        let material_ranges: std::collections::HashMap<&str, Real> = self
+        // Each material's cut-off and bond radius (0 without bonds),
+        // prepared once each: the neighbour pairs within the cut-off and
+        // the bonds within the bond radius are evaluated every step, each
+        // its own list (a bonded pair interacts completely, however far).
+        let material_ranges: std::collections::HashMap<&str, (Real, Real)> = self
             .materials
             .iter()
             .map(|(name, m)| {
-                let range = m
-                    .prepare()
-                    .ok()
-                    .map_or(0.0, |m| m.cutoff().max(m.bonds().map_or(0.0, |b| b.radius)));
-                (name.as_str(), range)
+                let ranges = m.prepare().ok().map_or((0.0, 0.0), |m| {
+                    (m.cutoff(), m.bonds().map_or(0.0, |b| b.radius))
+                });
+                (name.as_str(), ranges)
             })
             .collect();
-        let ranges: Vec<Real> = self
+        let ranges: Vec<(Real, Real)> = self
             .objects
             .iter()
             .map(|o| {
                 material_ranges
                     .get(o.material.as_str())
                     .copied()
-                    .unwrap_or(0.0)
+                    .unwrap_or((0.0, 0.0))
             })
             .collect();
-        let largest = ranges.iter().copied().fold(0.0, Real::max);
+        // Bonds join particles of one object, but the search that finds
+        // them when the world is built sees every object's particles
+        // within the bond radius: objects meet within the largest range.
+        let largest = ranges.iter().map(|r| r.0.max(r.1)).fold(0.0, Real::max);
         let mut per_object: Vec<Real> = ranges
             .iter()
             .enumerate()
-            .map(|(k, r)| footprints.own_pairs(k, *r))
+            .map(|(k, &(cutoff, bond_radius))| {
+                let bonds = if bond_radius > 0.0 {
+                    footprints.pairs_within(k, bond_radius)
+                } else {
+                    0.0
+                };
+                footprints.own_pairs(k, cutoff) + bonds
+            })
             .collect();
         // Pairs between objects whose boxes come within the largest range,
         // each half to either side. Each object's neighbours at that range
@@ -228,33 +239,20 @@ impl Scene {
         // Created particles fill in at the spacing of those around them:
         // each counted at the scene's mean pairs per particle.
         let pairs = pairs * (1.0 + created / particles.max(1.0));
-        let mut skin_per_frame = 0.0;
-        let mut contact_per_step = 0.0;
+        let frames = w.duration * w.frame_rate + 1.0;
+        let steps = (w.settle + w.duration) / w.dt;
+        let (skin_per_frame, contact_per_step, costliest_skin) =
+            self.skin_work(&footprints, frames, steps);
         let mut triangulation = 0.0;
-        let skinned = self.objects.iter().filter(|o| o.skin.is_some()).count();
-        let contact = skinned >= 2 || (skinned >= 1 && !self.tools.is_empty());
-        for (k, (o, f)) in self.objects.iter().zip(footprints.iter()).enumerate() {
-            if let Some(skin) = &o.skin {
-                // Each primitive reaches the grid nodes within its support,
-                // at most every node of the object's grid.
-                let nodes = |reach: Real| {
-                    let own = (2.0 * reach / skin.cell_size).powi(3);
-                    let grid = ((2.0 * (f.radius() + reach)) / skin.cell_size + 3.0).powi(3);
-                    own.min(grid)
-                };
-                skin_per_frame += f.count * nodes(skin.reach());
-                if contact {
-                    contact_per_step += f.count * nodes(skin.radius);
-                }
-            }
-            if self.outputs.triangulation {
+        if self.outputs.triangulation {
+            for (k, f) in footprints.iter().enumerate() {
                 triangulation +=
                     footprints.own_pairs(k, self.outputs.triangulation_radius * f.spacing);
             }
         }
         Ok(WorkEstimate {
-            frames: w.duration * w.frame_rate + 1.0,
-            steps: (w.settle + w.duration) / w.dt,
+            frames,
+            steps,
             particles,
             created,
             pairs,
@@ -262,7 +260,81 @@ impl Scene {
             skin_evaluations_per_frame: skin_per_frame,
             contact_evaluations_per_step: contact_per_step,
             triangulation_pairs_per_frame: triangulation,
+            costliest_skin,
         })
+    }
+
+    /// Field evaluations of the skins: polygonizing them, per frame, and
+    /// their contact, per step. Each primitive reaches the grid nodes
+    /// within its support (at most every node of its object's grid); in
+    /// contact it is evaluated once for each partner its object meets: the
+    /// tools, and the skinned objects whose supports overlap it at the
+    /// start, at least one (objects apart at the start meet later).
+    /// Also returns the object whose skin costs the most over the run
+    /// (`frames` and `steps`), with its skin's radius and cell size and
+    /// the other skins it overlaps (for the error that names it).
+    fn skin_work(
+        &self,
+        footprints: &Footprints,
+        frames: Real,
+        steps: Real,
+    ) -> (Real, Real, Option<(String, String)>) {
+        let skinned: Vec<(usize, &SkinSpec)> = self
+            .objects
+            .iter()
+            .enumerate()
+            .filter_map(|(k, o)| o.skin.as_ref().map(|s| (k, s)))
+            .collect();
+        let contact = skinned.len() >= 2 || (!skinned.is_empty() && !self.tools.is_empty());
+        // Skinned objects whose supports overlap: boxes within both radii.
+        let mut partners = vec![self.tools.len() as Real; skinned.len()];
+        if contact {
+            let boxes: Vec<&Footprint> = skinned.iter().map(|(k, _)| footprints.get(*k)).collect();
+            let largest = skinned.iter().map(|(_, s)| s.radius).fold(0.0, Real::max);
+            for (a, b) in near_pairs(&boxes, 2.0 * largest) {
+                partners[a] += 1.0;
+                partners[b] += 1.0;
+            }
+        }
+        let mut per_frame = 0.0;
+        let mut per_step = 0.0;
+        let mut costliest = (Real::NEG_INFINITY, None);
+        for (&(k, skin), partners) in skinned.iter().zip(partners) {
+            let f = footprints.get(k);
+            let nodes = |reach: Real| {
+                let own = (2.0 * reach / skin.cell_size).powi(3);
+                let grid = ((2.0 * (f.radius() + reach)) / skin.cell_size + 3.0).powi(3);
+                own.min(grid)
+            };
+            let frame = f.count * nodes(skin.reach());
+            let step = if contact {
+                f.count * nodes(skin.radius) * partners.max(1.0)
+            } else {
+                0.0
+            };
+            per_frame += frame;
+            per_step += step;
+            let cost = frames * frame + steps * step;
+            if cost > costliest.0 {
+                let skins = partners - self.tools.len() as Real;
+                let overlapping = if skins > 0.0 {
+                    format!(", overlapping {} other skin(s) at the start", short(skins))
+                } else {
+                    String::new()
+                };
+                let o = &self.objects[k];
+                let value = format!(
+                    "radius {}, cell_size {}{overlapping}",
+                    short(skin.radius),
+                    short(skin.cell_size)
+                );
+                costliest = (
+                    cost,
+                    Some((format!("{}.skin", object_path(k, &o.name)), value)),
+                );
+            }
+        }
+        (per_frame, per_step, costliest.1)
     }
 
     /// The run's objects, steps, particle-steps, pairs, pair-steps and
@@ -685,6 +757,10 @@ pub struct WorkEstimate {
     pub contact_evaluations_per_step: Real,
     /// Pairs of the triangulations written with each frame (0 without).
     pub triangulation_pairs_per_frame: Real,
+    /// The skin that costs the most field evaluations over the run, as its
+    /// field path and what sets its cost (its radius and cell size, the
+    /// other skins it overlaps); `None` without skins.
+    pub costliest_skin: Option<(String, String)>,
 }
 
 impl WorkEstimate {
@@ -710,24 +786,8 @@ impl WorkEstimate {
                 short(scene.outputs.triangulation_radius),
             );
         }
-        scene
-            .objects
-            .iter()
-            .enumerate()
-            .filter_map(|(k, o)| o.skin.as_ref().map(|s| (k, o, s)))
-            .max_by(|a, b| (a.2.reach() / a.2.cell_size).total_cmp(&(b.2.reach() / b.2.cell_size)))
-            .map_or_else(
-                || ("objects".into(), String::new()),
-                |(k, o, s)| {
-                    (
-                        format!("{}.skin", object_path(k, &o.name)),
-                        format!(
-                            "radius {}, cell_size {}",
-                            short(s.radius),
-                            short(s.cell_size)
-                        ),
-                    )
-                },
-            )
+        self.costliest_skin
+            .clone()
+            .unwrap_or_else(|| ("objects".into(), String::new()))
     }
 }
