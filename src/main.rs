@@ -543,7 +543,7 @@ fn sheet_note(g: &op_scene::Generator) -> String {
 /// scene is small enough. A scene with `linear_damping: "Critical"` is
 /// checked as it runs, with the numbers of the rule (or refused).
 fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
-    let written = op_scene::load_scene_with(path, limits, None)?;
+    let (written, estimate) = op_scene::load_scene_estimated(path, limits, None)?;
     let counts = written.particle_counts(path.parent())?;
     // The slowest mode and its critical damping, for any scene small
     // enough; a scene that asks for them runs with them (or cannot run).
@@ -617,10 +617,7 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
         ),
     }
     outln!("  outputs: {}", scene.outputs_summary());
-    outln!(
-        "  work: {}",
-        work_line(&written.work_estimate(path.parent())?)
-    );
+    outln!("  work: {}", work_line(&estimate));
     // On the sample's particles (at most a bounded number per object).
     let health = op_scene::health::started_inside(built)
         .into_iter()

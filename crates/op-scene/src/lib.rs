@@ -40,7 +40,9 @@ pub mod schema;
 
 pub use error::SceneError;
 pub use generators::{CurvatureLaw, Generator};
-pub use load::{build_scene_file, load_scene, load_scene_with, parse_scene, Format};
+pub use load::{
+    build_scene_file, load_scene, load_scene_estimated, load_scene_with, parse_scene, Format,
+};
 pub use schema::{
     Damping, DivergenceSettings, ForceSpec, ObjectSpec, Override, Scene, Selection, ToolSpec,
     WorkEstimate, WorkLimits, WorldSettings,

@@ -60,6 +60,21 @@ pub fn load_scene_with(
     limits: crate::schema::WorkLimits,
     frames: Option<usize>,
 ) -> Result<Scene, SceneError> {
+    load_scene_estimated(path, limits, frames).map(|(scene, _)| scene)
+}
+
+/// [`load_scene_with`], also returning the work estimate validation
+/// checked ([`Scene::validate_estimated`]), so that a caller that prints
+/// it does not read the scene's points files again.
+///
+/// # Errors
+///
+/// As [`load_scene`].
+pub fn load_scene_estimated(
+    path: &Path,
+    limits: crate::schema::WorkLimits,
+    frames: Option<usize>,
+) -> Result<(Scene, crate::WorkEstimate), SceneError> {
     let format = Format::from_path(path)?;
     let text = read_text_file(path, MAX_SCENE_FILE_BYTES)?;
     let mut scene = parse_unvalidated(&text, format, &path.display().to_string())?;
@@ -67,8 +82,8 @@ pub fn load_scene_with(
     if let Some(n) = frames {
         scene.set_frames(n);
     }
-    scene.validate(path.parent())?;
-    Ok(scene)
+    let (_, estimate) = scene.validate_estimated(path.parent())?;
+    Ok((scene, estimate))
 }
 
 impl Scene {

@@ -9,7 +9,7 @@ use op_dynamics::interactions::Spacing;
 use op_dynamics::{Material, Real};
 
 use super::checks::{self, direction, finite, finite3, non_negative, positive, positive3};
-use super::{ForceSpec, ObjectSpec, Scene, ToolSpec, WorldSettings};
+use super::{ForceSpec, ObjectSpec, Scene, ToolSpec, WorkEstimate, WorldSettings};
 use crate::error::{short, SceneError};
 use crate::generators::MAX_PARTICLES;
 
@@ -88,6 +88,20 @@ impl Scene {
     /// `objects[1] "sheet".generator.HexSheet.spacing`), the value and what
     /// is allowed. Returns the number of particles of each object.
     pub fn validate(&self, base_dir: Option<&Path>) -> Result<Vec<usize>, SceneError> {
+        self.validate_estimated(base_dir).map(|(counts, _)| counts)
+    }
+
+    /// [`Scene::validate`], also returning the work estimate it checked
+    /// against the limits ([`Scene::work_estimate`], made once: points
+    /// files are read for it).
+    ///
+    /// # Errors
+    ///
+    /// As [`Scene::validate`].
+    pub fn validate_estimated(
+        &self,
+        base_dir: Option<&Path>,
+    ) -> Result<(Vec<usize>, WorkEstimate), SceneError> {
         let file = self.origin();
         self.validate_header(file)?;
         for (name, m) in &self.materials {
@@ -131,7 +145,7 @@ impl Scene {
         for (k, f) in self.forces.iter().enumerate() {
             self.validate_force(k, f, &counts)?;
         }
-        self.validate_work(total, base_dir)?;
+        let estimate = self.validate_work(total, base_dir)?;
         for (k, t) in self.tools.iter().enumerate() {
             self.validate_tool(k, t)?;
         }
@@ -156,7 +170,7 @@ impl Scene {
                 fit.validate(self, c, file)?;
             }
         }
-        Ok(counts)
+        Ok((counts, estimate))
     }
 
     fn validate_tool(&self, k: usize, t: &ToolSpec) -> Result<(), SceneError> {

@@ -2,7 +2,9 @@
 //! [`super::limits`]): steps, frames, heat sub-steps, created particles,
 //! skin grids, and every length relative to the scene's length scale.
 
-use std::path::Path;
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 
 use op_dynamics::Real;
 
@@ -103,11 +105,12 @@ impl Scene {
 
     /// Checks the run's size against [`Scene::limits`] and the lengths
     /// against the scene's length scale; `total` is the particle count.
+    /// Returns the work estimate checked.
     pub(crate) fn validate_work(
         &self,
         total: usize,
         base_dir: Option<&Path>,
-    ) -> Result<(), SceneError> {
+    ) -> Result<WorkEstimate, SceneError> {
         let file = self.origin();
         let w = &self.world;
         let lim = &self.limits;
@@ -153,9 +156,10 @@ impl Scene {
                 ),
             ));
         }
-        self.validate_run_size(total, base_dir)?;
+        let estimate = self.validate_run_size(total, base_dir)?;
         self.validate_heat_and_creation()?;
-        self.validate_lengths(base_dir)
+        self.validate_lengths(base_dir)?;
+        Ok(estimate)
     }
 
     /// What the run is estimated to cost ([`WorkEstimate`]): its steps and
@@ -180,7 +184,7 @@ impl Scene {
         // prepared once each: the neighbour pairs within the cut-off and
         // the bonds within the bond radius are evaluated every step, each
         // its own list (a bonded pair interacts completely, however far).
-        let material_ranges: std::collections::HashMap<&str, (Real, Real)> = self
+        let material_ranges: HashMap<&str, (Real, Real)> = self
             .materials
             .iter()
             .map(|(name, m)| {
@@ -340,7 +344,11 @@ impl Scene {
     /// The run's objects, steps, particle-steps, pairs, pair-steps and
     /// field evaluations within [`Scene::limits`]; `total` is the particle
     /// count.
-    fn validate_run_size(&self, total: usize, base_dir: Option<&Path>) -> Result<(), SceneError> {
+    fn validate_run_size(
+        &self,
+        total: usize,
+        base_dir: Option<&Path>,
+    ) -> Result<WorkEstimate, SceneError> {
         let steps = self.validate_step_work(total)?;
         self.validate_pair_work(steps, base_dir)
     }
@@ -405,7 +413,11 @@ impl Scene {
 
     /// The run's pairs, pair-steps, triangulation pairs and field
     /// evaluations within [`Scene::limits`], over `steps` steps.
-    fn validate_pair_work(&self, steps: Real, base_dir: Option<&Path>) -> Result<(), SceneError> {
+    fn validate_pair_work(
+        &self,
+        steps: Real,
+        base_dir: Option<&Path>,
+    ) -> Result<WorkEstimate, SceneError> {
         let file = self.origin();
         let w = &self.world;
         let lim = &self.limits;
@@ -476,7 +488,7 @@ impl Scene {
                 ),
             ));
         }
-        Ok(())
+        Ok(e)
     }
 
     /// Heat conduction per step and the creation rules' limits.
@@ -548,7 +560,12 @@ impl Scene {
             short(MAX_EXTENT_OVER_SPACING),
             short(scale)
         );
-        let bound = LengthBound { file, max, allowed };
+        let bound = LengthBound {
+            file,
+            max,
+            allowed,
+            extents: RefCell::new(HashMap::new()),
+        };
         for (k, o) in self.objects.iter().enumerate() {
             bound.object(k, o, base_dir)?;
         }
@@ -563,6 +580,9 @@ impl Scene {
 /// what a coordinate beyond it is told (`allowed`), in scene `file`.
 struct LengthBound<'a> {
     file: &'a str,
+    /// The extent of each points file read so far: objects made by the
+    /// same file read it once.
+    extents: RefCell<HashMap<PathBuf, Real>>,
     max: Real,
     allowed: String,
 }
@@ -589,7 +609,21 @@ impl LengthBound<'_> {
         let (file, max) = (self.file, self.max);
         let path = object_path(k, &o.name);
         self.generator_positions(&path, &o.generator)?;
-        let extent = object_extent(&o.generator, base_dir, file, &format!("{path}.generator"))?;
+        let extent = match &o.generator {
+            Generator::Points { path: points } => {
+                let known = self.extents.borrow().get(points).copied();
+                match known {
+                    Some(extent) => extent,
+                    None => {
+                        let field = format!("{path}.generator");
+                        let extent = object_extent(&o.generator, base_dir, file, &field)?;
+                        self.extents.borrow_mut().insert(points.clone(), extent);
+                        extent
+                    }
+                }
+            }
+            g => object_extent(g, base_dir, file, &format!("{path}.generator"))?,
+        };
         if extent > max {
             return Err(SceneError::value(
                 file,
