@@ -35,7 +35,7 @@ use crate::particles::Particles;
 /// Version of the layout of [`WorldState`]: bumped whenever a field of it,
 /// or of the types it holds, changes, so that a checkpoint of another
 /// layout is refused instead of misread.
-pub const STATE_VERSION: u32 = 1;
+pub const STATE_VERSION: u32 = 2;
 
 /// Encodes `value` (postcard).
 pub fn encode<T: Serialize>(value: &T) -> Vec<u8> {
@@ -99,6 +99,9 @@ pub struct WorldState {
     pub(crate) steps: u64,
     pub(crate) dt_next: Real,
     pub(crate) may_rotate: bool,
+    /// Adaptive steps forced through at `dt_min` in a row
+    /// ([`crate::world::divergence::MAX_FORCED_STEPS`]).
+    pub(crate) forced_in_a_row: u32,
 }
 
 impl WorldState {

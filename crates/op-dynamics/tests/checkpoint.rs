@@ -109,3 +109,31 @@ fn a_state_of_another_world_is_refused() {
     other.restore(state).expect("same materials and parameters");
     assert_eq!(bits(&other), bits(&verlet));
 }
+
+/// The adaptive scheme's count of steps forced through at `dt_min` in a
+/// row is part of the state: a world restored part way through such a
+/// run stops as diverged at the same step as the uninterrupted one, not
+/// [`op_dynamics::world::MAX_FORCED_STEPS`] steps after its restore.
+#[test]
+fn a_restored_world_keeps_its_count_of_forced_steps() {
+    let mut rng = Rng::new(7);
+    let p = noisy_sheet(&mut rng, 4, 4, 0.1);
+    let strict = Scheme::Adaptive(AdaptiveParams::with_tolerance(1e-300));
+    let mut original = world(&p, spacing_material(), strict);
+    let forced = op_dynamics::world::MAX_FORCED_STEPS / 2;
+    for _ in 0..forced {
+        original.step().unwrap();
+    }
+    let saved: WorldState = decode(&encode(&original.state())).unwrap();
+    let mut restored = world(&p, spacing_material(), strict);
+    restored.restore(saved).unwrap();
+    let stop = |w: &mut World| loop {
+        if let Err(e) = w.step() {
+            assert!(e.to_string().contains("no step meets"), "{e}");
+            return e.step;
+        }
+    };
+    let at = stop(&mut original);
+    assert!(at > u64::from(forced), "{at}");
+    assert_eq!(at, stop(&mut restored));
+}

@@ -26,6 +26,7 @@ impl World {
             steps: self.steps,
             dt_next: self.dt_next,
             may_rotate: self.may_rotate,
+            forced_in_a_row: self.forced_in_a_row,
         }
     }
 
@@ -119,6 +120,7 @@ impl World {
         self.steps = state.steps;
         self.dt_next = state.dt_next;
         self.may_rotate = state.may_rotate;
+        self.forced_in_a_row = state.forced_in_a_row;
         self.effects = Default::default();
         self.sync_built_in_stages();
         Ok(())
