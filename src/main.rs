@@ -602,6 +602,11 @@ fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
         )
     });
     match (e.dt_max, e.recommended()) {
+        _ if e.no_stable_step() => outln!(
+            "  stable step: none for {:?}: {}",
+            p.scheme,
+            op_scene::stability::StepEstimate::NO_STABLE_STEP
+        ),
         (Some(max), Some(recommended)) => outln!(
             "  stable step: recommended at most {recommended:.3e} ({} of the edge of stability), \
              edge {max:.3e} for {:?} (stiffest mode ω² = {:.3e} 1/time², object {:?}{contact})",

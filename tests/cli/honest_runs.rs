@@ -157,6 +157,35 @@ fn a_step_above_the_stable_step_is_reported() {
     );
 }
 
+/// Explicit Euler without damping has no stable step: `check`, its
+/// warning and `run`'s refusal say so in words and name the remedy, not
+/// "recommended at most 0".
+#[test]
+fn explicit_euler_without_damping_is_told_it_has_no_stable_step() {
+    let dir = temp_dir("no-stable-step");
+    let spiral = std::fs::read_to_string(repo().join("scenes/spiral.ron")).unwrap();
+    let undamped = spiral
+        .replace("integrator: VelocityVerlet", "integrator: ExplicitEuler")
+        .replace("linear_damping: 0.3", "linear_damping: 0");
+    assert!(undamped.contains("ExplicitEuler") && undamped.contains("linear_damping: 0,"));
+    let path = scene_file(&dir, "euler.ron", &undamped);
+    let o = opsim(&["check", path.to_str().unwrap()], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("stable step: none for ExplicitEuler"),
+        "{}",
+        text(&o)
+    );
+    assert!(!text(&o).contains("recommended at most 0"), "{}", text(&o));
+    let o = run_scene(&path, &dir.join("out"), &["--frames", "2"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("is not stable") && text(&o).contains("world.linear_damping > 0"),
+        "{}",
+        text(&o)
+    );
+}
+
 /// An object pulled apart is not a silent success: the run ends with exit
 /// 3 after writing every frame, the summary names its pieces and says how
 /// to accept it; `--allow-breakup` makes it a printed warning.

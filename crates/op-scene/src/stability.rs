@@ -147,6 +147,17 @@ impl StepEstimate {
         self.dt_max.map(|m| m * RECOMMENDED_FRACTION)
     }
 
+    /// Whether no step is stable: explicit Euler without damping, whose
+    /// edge `c / ω²` is 0 when the damping rate `c` is.
+    pub fn no_stable_step(&self) -> bool {
+        self.dt_max == Some(0.0)
+    }
+
+    /// Why no step is stable, in words ([`StepEstimate::no_stable_step`]).
+    pub const NO_STABLE_STEP: &'static str = "explicit Euler grows every undamped oscillation \
+        at any step (its edge of stability is c / ω², c the linear damping rate, here 0): give \
+        world.linear_damping > 0 or use another scheme";
+
     /// Whether `dt` is beyond the estimated edge of stability
     /// ([`StepEstimate::dt_max`]): `opsim run` refuses it unless asked.
     pub fn beyond_edge(&self, dt: Real) -> bool {
@@ -161,6 +172,13 @@ impl StepEstimate {
     /// refuse such a step with this message.
     pub fn refusal(&self, dt: Real, origin: &str, override_hint: &str) -> Option<String> {
         self.beyond_edge(dt).then(|| {
+            if self.no_stable_step() {
+                return format!(
+                    "{origin}: world.dt = {dt} is not stable: {}; or run it anyway with \
+                     {override_hint}",
+                    Self::NO_STABLE_STEP
+                );
+            }
             format!(
                 "{origin}: world.dt = {dt} is beyond the estimated edge of stability {:.3e} \
                  ({} recommended; see `opsim check`): reduce dt, use the Adaptive scheme, or \
@@ -175,6 +193,13 @@ impl StepEstimate {
     /// The warning for a step `dt` above [`StepEstimate::recommended`].
     pub fn warning(&self, dt: Real, scheme: &Scheme) -> Option<String> {
         let (max, recommended) = (self.dt_max?, self.recommended()?);
+        if self.no_stable_step() {
+            return Some(format!(
+                "world.dt = {}: no step is stable for {scheme:?} here: {}",
+                short(dt),
+                Self::NO_STABLE_STEP
+            ));
+        }
         (dt > recommended).then(|| {
             format!(
                 "world.dt = {} exceeds the recommended step {} ({RECOMMENDED_FRACTION} of the \
