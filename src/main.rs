@@ -512,10 +512,15 @@ fn print_profile(s: &op_scene::Summary) {
 }
 
 /// Particle-steps `opsim check` spends at most on finding the slowest mode
-/// of a scene that does not ask for it: a few seconds at the microsecond a
-/// particle-step of a small scene takes (a step's own cost dominates below
-/// a few dozen particles), so that check stays quick.
-const CHECK_MODE_WORK: f64 = 4e6;
+/// of a scene that does not ask for it, each pair's evaluation counted as
+/// one (`op_scene::damping::resolve_within`), so that check stays within
+/// seconds. Measured with `/usr/bin/time opsim check` on this project's
+/// 2-core machine: a particle-step of the shipped figures' searches costs
+/// about 0.2 µs and a pair 35-50 ns, the densest (`fig_06_weld`: 2.2e6
+/// particle-steps and 2.1e7 pair-steps) taking 1.1 s; a cohesion pair
+/// inside the start of its material's table (exact quadrature of the
+/// energy) about 150 ns: 3e7 of them about 4.5 s.
+const CHECK_MODE_WORK: f64 = 3e7;
 
 /// What `opsim check` adds to the line of an object made by a `HexSheet`
 /// that is not square within 5%: its extent, and the `ny` that would make

@@ -157,6 +157,33 @@ fn a_step_above_the_stable_step_is_reported() {
     );
 }
 
+/// The slowest-mode search of `check` counts the pairs it evaluates, not
+/// only its particles: the ten-times-larger spiral's material on a patch
+/// of points ten times closer than its rest spacing (every pair deep
+/// inside its cohesion table's start, whose energy takes a quadrature)
+/// took check 13 s of settling; the search now stops on its work before
+/// it settles, and says why.
+#[test]
+fn the_slowest_mode_search_counts_its_pairs() {
+    let dir = temp_dir("mode-pairs");
+    let spiral = std::fs::read_to_string(repo().join("scenes/spiral_x10.ron")).unwrap();
+    let patch = repo().join("scenes/data/patch.xyz");
+    let dense = spiral.replace(
+        "Spiral(count: 10, spacing: 10, curvature_start: 0.025, curvature_end: 0.085)",
+        &format!("Points(path: {:?})", patch.to_str().unwrap()),
+    );
+    assert!(dense.contains("patch.xyz"));
+    let path = scene_file(&dir, "dense.ron", &dense);
+    let o = opsim(&["check", path.to_str().unwrap()], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("slowest mode: not found: settling to find the slowest mode would take")
+            && text(&o).contains("each pair's evaluation counted as one"),
+        "{}",
+        text(&o)
+    );
+}
+
 /// Explicit Euler without damping has no stable step: `check`, its
 /// warning and `run`'s refusal say so in words and name the remedy, not
 /// "recommended at most 0".

@@ -488,7 +488,8 @@ pub fn resolve_within(
     let mut numeric = scene.clone();
     numeric.world.linear_damping = Damping::Value(0.0);
     numeric.world.angular_damping = 0.0;
-    let start = first_guess(&numeric, base_dir)?.map_err(|e| fail(e.to_string()))?;
+    let (start, pairs) = first_guess(&numeric, base_dir)?;
+    let start = start.map_err(|e| fail(e.to_string()))?;
     let mut last = start.clone();
     // The first guess's analysis, at the most degrees of freedom a particle
     // has.
@@ -502,11 +503,14 @@ pub fn resolve_within(
         let mut probe = apply(&numeric, &c);
         probe.world.settle *= stretch;
         let mut built = probe.build_world(base_dir, None)?;
-        work +=
-            (probe.world.settle / probe.world.dt).ceil() * built.world().particles().len() as Real;
+        // Each step updates every particle and evaluates every pair (those
+        // of the first guess's state): each counts as a particle-step.
+        let interactions = (built.world().particles().len() + pairs) as Real;
+        work += (probe.world.settle / probe.world.dt).ceil() * interactions;
         if work > max_particle_steps {
             return Err(fail(format!(
-                "settling to find the slowest mode would take more than {} particle-steps",
+                "settling to find the slowest mode would take more than {} particle-steps \
+                 (each pair's evaluation counted as one)",
                 crate::error::short(max_particle_steps)
             )));
         }
@@ -546,30 +550,37 @@ pub fn resolve_within(
 /// first `ω²` in ascending order that is not zero, taken by magnitude (a
 /// state not at rest has negative ones), with the masses it moves. The
 /// first settle's damping and time.
+/// Also returns the pairs the world evaluates at that state (its
+/// neighbour list's and its bonds, built by the analysis's force
+/// evaluations).
 fn first_guess(
     scene: &Scene,
     base_dir: Option<&std::path::Path>,
-) -> Result<Result<SlowestMode, ModeError>, SceneError> {
+) -> Result<(Result<SlowestMode, ModeError>, usize), SceneError> {
     let mut built = scene.build_world(base_dir, None)?;
     let basis = basis_of(scene, built.world());
     let dof = basis.per_particle() * built.world().particles().len();
     if dof > MAX_DEGREES_OF_FREEDOM {
-        return Ok(Err(ModeError::TooLarge {
+        let too_large = ModeError::TooLarge {
             dof,
             max: MAX_DEGREES_OF_FREEDOM,
-        }));
+        };
+        return Ok((Err(too_large), 0));
     }
     let mut m = modes(built.world_mut(), basis, true);
+    let w = built.world();
+    let pairs =
+        w.neighbours().map_or(0, |n| n.pairs().num_pairs()) + w.bonds().map_or(0, |b| b.len());
     let largest = m.omega2.iter().fold(0.0, |a: Real, l| a.max(l.abs()));
     let Some(k) = m.omega2.iter().position(|l| l.abs() > ZERO * largest) else {
-        return Ok(Err(ModeError::NoMode));
+        return Ok((Err(ModeError::NoMode), pairs));
     };
     m.omega2.drain(..k);
     m.shapes.drain(..k);
     for l in &mut m.omega2 {
         *l = l.abs();
     }
-    Ok(slowest_of(&m, mean_moment(built.world())))
+    Ok((slowest_of(&m, mean_moment(built.world())), pairs))
 }
 
 #[cfg(test)]
