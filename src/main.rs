@@ -513,8 +513,8 @@ fn print_profile(s: &op_scene::Summary) {
 
 /// Particle-steps `opsim check` spends at most on finding the slowest mode
 /// of a scene that does not ask for it, each pair's evaluation counted as
-/// one (`op_scene::damping::resolve_within`), so that check stays within
-/// seconds. Measured with `/usr/bin/time opsim check` on this project's
+/// one and each step's fixed cost as 50 (`op_scene::damping::resolve_within`),
+/// so that check stays within seconds. Measured with `/usr/bin/time opsim check` on this project's
 /// 2-core machine: a particle-step of the shipped figures' searches costs
 /// about 0.2 µs and a pair 35-50 ns, the densest (`fig_06_weld`: 2.2e6
 /// particle-steps and 2.1e7 pair-steps) taking 1.1 s; a cohesion pair

@@ -182,6 +182,24 @@ fn the_slowest_mode_search_counts_its_pairs() {
         "{}",
         text(&o)
     );
+    // A step's fixed cost counts too: the 8-particle chain of extreme
+    // tight curvature thrown with a 40-unit settle spent 5.8 s in check's
+    // search with its 24 particles and pairs a step counted alone.
+    let chain = std::fs::read_to_string(repo().join("scenes/extreme/tight_curvature.ron"))
+        .unwrap()
+        .replace(
+            "angular_damping: 0.05,",
+            "angular_damping: 0.05, settle: 40,",
+        )
+        .replace(
+            "overrides: [(curvature: 100)]",
+            "velocity: (37, 0, -7), overrides: [(curvature: 100)]",
+        );
+    assert!(chain.contains("settle: 40") && chain.contains("velocity: (37"));
+    let path = scene_file(&dir, "thrown.ron", &chain);
+    let o = opsim(&["check", path.to_str().unwrap()], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("each step as 50 more"), "{}", text(&o));
 }
 
 /// Explicit Euler without damping has no stable step: `check`, its

@@ -193,6 +193,13 @@ pub enum ModeError {
     },
 }
 
+/// What a step of the trial settles costs besides its particles and
+/// pairs, in particle-steps: an 8-particle chain of 16 pairs
+/// (`scenes/extreme/tight_curvature.ron`) steps in about 4.6 µs on this
+/// project's 2-core machine, some fifty times a pair's 47 ns in the
+/// densest shipped search (`fig_06_weld`).
+const STEP_WORK: usize = 50;
+
 /// The work of one mode analysis of `particles` particles over `basis`,
 /// in particle-steps (what a time step of one particle costs, about a
 /// microsecond): see [`mode_work_of`].
@@ -438,8 +445,10 @@ pub fn resolve(
     resolve_within(scene, base_dir, scene.limits.max_particle_steps)
 }
 
-/// [`resolve`] with its trial settles limited to `max_particle_steps`
-/// particle-steps in all (`opsim check` gives it a few seconds' worth).
+/// [`resolve`] with its trial settles and mode analyses limited to
+/// `max_particle_steps` particle-steps in all, each pair a step evaluates
+/// counted as one and each step as 50 more (its fixed cost; `opsim check`
+/// gives it a few seconds' worth).
 ///
 /// # Errors
 ///
@@ -504,13 +513,14 @@ pub fn resolve_within(
         probe.world.settle *= stretch;
         let mut built = probe.build_world(base_dir, None)?;
         // Each step updates every particle and evaluates every pair (those
-        // of the first guess's state): each counts as a particle-step.
-        let interactions = (built.world().particles().len() + pairs) as Real;
+        // of the first guess's state), each counted as a particle-step,
+        // and costs STEP_WORK more whatever its size.
+        let interactions = (built.world().particles().len() + pairs + STEP_WORK) as Real;
         work += (probe.world.settle / probe.world.dt).ceil() * interactions;
         if work > max_particle_steps {
             return Err(fail(format!(
                 "settling to find the slowest mode would take more than {} particle-steps \
-                 (each pair's evaluation counted as one)",
+                 (each pair's evaluation counted as one, each step as {STEP_WORK} more)",
                 crate::error::short(max_particle_steps)
             )));
         }

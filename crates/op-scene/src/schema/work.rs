@@ -290,9 +290,11 @@ impl Scene {
             .filter_map(|(k, o)| o.skin.as_ref().map(|s| (k, s)))
             .collect();
         let contact = skinned.len() >= 2 || (!skinned.is_empty() && !self.tools.is_empty());
-        // Skinned objects whose supports overlap: boxes within both radii.
+        // Skinned objects whose supports overlap: boxes within both radii
+        // (a sweep whose cost grows with the pairs it finds: skipped
+        // without a pair limit, like the pairs between objects).
         let mut partners = vec![self.tools.len() as Real; skinned.len()];
-        if contact {
+        if contact && self.limits.max_pair_steps.is_finite() {
             let boxes: Vec<&Footprint> = skinned.iter().map(|(k, _)| footprints.get(*k)).collect();
             let largest = skinned.iter().map(|(_, s)| s.radius).fold(0.0, Real::max);
             for (a, b) in near_pairs(&boxes, 2.0 * largest) {
