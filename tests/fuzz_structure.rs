@@ -251,7 +251,7 @@ fn structural_mutants_are_checked_and_run_within_bounds() {
 /// `OPSIM_FUZZ_STRUCT_SEED` (default 5): `cargo test --profile ci --test
 /// fuzz_structure -- --ignored --nocapture`.
 #[test]
-#[ignore = "an hour on the 2-core machine; run by hand"]
+#[ignore = "about 9 minutes on the 2-core machine; run by hand"]
 fn many_structural_mutants() {
     let count = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_MUTANTS", 2000);
     let seed = fuzz_support::env_or("OPSIM_FUZZ_STRUCT_SEED", 5);

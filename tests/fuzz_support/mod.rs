@@ -47,10 +47,12 @@ pub fn opsim(args: &[&str], bound: Duration) -> Run {
     let stderr = child.stderr.take().unwrap();
     let reader = std::thread::spawn(move || {
         use std::io::Read;
+        // The first MiB is kept; the rest is read and dropped, so that a
+        // long message is not cut off by a closed pipe.
+        let mut stderr = std::io::BufReader::new(stderr);
         let mut s = String::new();
-        let _ = std::io::BufReader::new(stderr)
-            .take(1 << 20)
-            .read_to_string(&mut s);
+        let _ = (&mut stderr).take(1 << 20).read_to_string(&mut s);
+        let _ = std::io::copy(&mut stderr, &mut std::io::sink());
         s
     });
     let proc_dir = PathBuf::from(format!("/proc/{}", child.id()));

@@ -129,6 +129,30 @@ pub fn elide(text: &str) -> String {
     format!("{head}...{tail} ({n} characters)")
 }
 
+/// Most names a message lists; the rest are counted.
+pub const MAX_LISTED: usize = 20;
+
+/// `names` for a message: quoted, each [`elide`]d, comma separated, at
+/// most [`MAX_LISTED`] of them and then how many more; `none` without
+/// any. (A scene of a thousand objects named with 5,000 characters each
+/// made a 5 MB message.)
+pub fn quoted_list<'a>(names: impl IntoIterator<Item = &'a str>) -> String {
+    let mut listed = Vec::new();
+    let mut more = 0usize;
+    for name in names {
+        if listed.len() < MAX_LISTED {
+            listed.push(format!("{:?}", elide(name)));
+        } else {
+            more += 1;
+        }
+    }
+    match (listed.is_empty(), more) {
+        (true, _) => "none".into(),
+        (false, 0) => listed.join(", "),
+        (false, n) => format!("{} and {n} more", listed.join(", ")),
+    }
+}
+
 /// `" "` before a message that starts with `= value`, `": "` otherwise.
 fn separator(message: &str) -> &'static str {
     if message.starts_with("= ") {

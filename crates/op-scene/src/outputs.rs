@@ -89,14 +89,14 @@ impl crate::Scene {
         if o.triangulation {
             parts.push("triangulations (<object>_surface)".into());
         }
-        let skinned: Vec<String> = self
+        let mut skinned = self
             .objects
             .iter()
             .filter(|ob| ob.skin.is_some())
-            .map(|ob| format!("{:?}", crate::input::excerpt(&ob.name)))
-            .collect();
-        if !skinned.is_empty() {
-            parts.push(format!("skins of {}", skinned.join(", ")));
+            .map(|ob| ob.name.as_str())
+            .peekable();
+        if skinned.peek().is_some() {
+            parts.push(format!("skins of {}", crate::error::quoted_list(skinned)));
         }
         parts.join(", ")
     }

@@ -254,3 +254,30 @@ fn bonds_count_besides_the_neighbour_pairs() {
     let per_particle = (bonded - unbonded) / 900.0;
     assert!(per_particle > 2.0 && per_particle < 3.5, "{per_particle}");
 }
+
+/// A message that lists the scene's objects lists a few, each name
+/// elided, and counts the rest: a force on an unknown object in a scene
+/// of a thousand objects named with 5,000 characters each wrote a 5 MB
+/// message (and a reader that stopped at a megabyte killed the process
+/// with its pipe).
+#[test]
+fn messages_list_a_few_object_names_elided() {
+    let long = "y".repeat(5000);
+    let objects: Vec<String> = (0..1000)
+        .map(|k| chain(&format!("{long}_{k}"), 2, k as f64 * 10.0))
+        .collect();
+    let text = scene("", &objects, "").replace(
+        "objects: [",
+        r#"forces: [(object: "chain", force: (1, 0, 0))], objects: ["#,
+    );
+    let e = parse(&text)
+        .validate(None)
+        .expect_err("refused")
+        .to_string();
+    assert!(e.contains("unknown object (defined objects: "), "{e}");
+    assert!(
+        e.contains("(5002 characters)") && e.contains("and 980 more"),
+        "{e}"
+    );
+    assert!(e.len() < 4000, "{} bytes", e.len());
+}

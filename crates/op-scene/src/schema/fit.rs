@@ -73,16 +73,12 @@ impl FitSettings {
         file: &str,
     ) -> Result<(), SceneError> {
         if !scene.objects.iter().any(|o| o.name == self.object) {
-            let names: Vec<String> = scene
-                .objects
-                .iter()
-                .map(|o| format!("{:?}", o.name))
-                .collect();
+            let names = crate::error::quoted_list(scene.objects.iter().map(|o| o.name.as_str()));
             return Err(SceneError::value(
                 file,
                 "creation.fit.object",
-                format!("{:?}", self.object),
-                &format!("unknown object (defined objects: {})", names.join(", ")),
+                format!("{:?}", crate::error::elide(&self.object)),
+                &format!("unknown object (defined objects: {names})"),
             ));
         }
         let duration = scene.world.duration;

@@ -18,14 +18,10 @@ pub(crate) fn object_path(k: usize, name: &str) -> String {
     format!("objects[{k}] {name:?}")
 }
 
-/// Names quoted and comma separated, for "defined: ..." lists.
+/// Names quoted and comma separated, for "defined: ..." lists
+/// ([`crate::error::quoted_list`]: elided, at most a few).
 fn quoted<'a>(names: impl Iterator<Item = &'a String>) -> String {
-    let v: Vec<String> = names.map(|n| format!("{n:?}")).collect();
-    if v.is_empty() {
-        "none".into()
-    } else {
-        v.join(", ")
-    }
+    crate::error::quoted_list(names.map(String::as_str))
 }
 
 /// Cohesion tables and integration panels grow with `cutoff / r0` and
