@@ -548,8 +548,7 @@ fn sheet_note(g: &op_scene::Generator) -> String {
 /// scene is small enough. A scene with `linear_damping: "Critical"` is
 /// checked as it runs, with the numbers of the rule (or refused).
 fn check(path: &Path, limits: op_scene::WorkLimits) -> Result<(), Failure> {
-    let (written, estimate) = op_scene::load_scene_estimated(path, limits, None)?;
-    let counts = written.particle_counts(path.parent())?;
+    let (written, counts, estimate) = op_scene::load_scene_estimated(path, limits, None)?;
     // The slowest mode and its critical damping, for any scene small
     // enough; a scene that asks for them runs with them (or cannot run).
     let mut as_critical = written.clone();

@@ -60,12 +60,13 @@ pub fn load_scene_with(
     limits: crate::schema::WorkLimits,
     frames: Option<usize>,
 ) -> Result<Scene, SceneError> {
-    load_scene_estimated(path, limits, frames).map(|(scene, _)| scene)
+    load_scene_estimated(path, limits, frames).map(|(scene, _, _)| scene)
 }
 
-/// [`load_scene_with`], also returning the work estimate validation
-/// checked ([`Scene::validate_estimated`]), so that a caller that prints
-/// it does not read the scene's points files again.
+/// [`load_scene_with`], also returning what validation found
+/// ([`Scene::validate_estimated`]): each object's particle count and the
+/// work estimate, so that a caller that prints them does not read the
+/// scene's points files again.
 ///
 /// # Errors
 ///
@@ -74,7 +75,7 @@ pub fn load_scene_estimated(
     path: &Path,
     limits: crate::schema::WorkLimits,
     frames: Option<usize>,
-) -> Result<(Scene, crate::WorkEstimate), SceneError> {
+) -> Result<(Scene, Vec<usize>, crate::WorkEstimate), SceneError> {
     let format = Format::from_path(path)?;
     let text = read_text_file(path, MAX_SCENE_FILE_BYTES)?;
     let mut scene = parse_unvalidated(&text, format, &path.display().to_string())?;
@@ -82,8 +83,8 @@ pub fn load_scene_estimated(
     if let Some(n) = frames {
         scene.set_frames(n);
     }
-    let (_, estimate) = scene.validate_estimated(path.parent())?;
-    Ok((scene, estimate))
+    let (counts, estimate) = scene.validate_estimated(path.parent())?;
+    Ok((scene, counts, estimate))
 }
 
 impl Scene {
