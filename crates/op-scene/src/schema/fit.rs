@@ -77,7 +77,7 @@ impl FitSettings {
             return Err(SceneError::value(
                 file,
                 "creation.fit.object",
-                format!("{:?}", crate::error::elide(&self.object)),
+                format!("{:?}", self.object),
                 &format!("unknown object (defined objects: {names})"),
             ));
         }
