@@ -59,13 +59,25 @@ pub struct Reactions {
 }
 
 impl Reactions {
+    /// Reactions already summed per particle (in increasing particle id),
+    /// from `samples` samples or nodes in contact.
+    pub(crate) fn from_parts(reactions: Vec<Reaction>, samples: usize, total_force: Vec3) -> Self {
+        Reactions {
+            reactions,
+            samples_in_contact: samples,
+            total_force,
+            max_depth: 0.0,
+        }
+    }
+
     /// Per-particle reactions, in increasing particle id.
     pub fn reactions(&self) -> &[Reaction] {
         &self.reactions
     }
 
-    /// Number of samples in contact (inside the collider, or on the
-    /// contact surface of [`crate::implicit_contact`]).
+    /// Number of samples in contact: inside the collider, or, for two
+    /// skins ([`crate::ContactPair::reactions`]), edges of the contact
+    /// energy's lattice with a positive integral.
     pub fn samples_in_contact(&self) -> usize {
         self.samples_in_contact
     }
@@ -212,9 +224,8 @@ impl<F: ScalarField + ?Sized> ScalarField for ClippedField<'_, F> {
 
 /// Serial accumulator of sample reactions into per-particle (force,
 /// torque) pairs, shared among primitives by field share (module doc).
-/// Shared with [`crate::implicit_contact`].
 #[derive(Default)]
-pub(crate) struct ReactionAccumulator {
+struct ReactionAccumulator {
     per_particle: BTreeMap<u32, (Vec3, Vec3)>,
     shares: Vec<(usize, Real)>,
     samples: usize,
@@ -225,7 +236,7 @@ impl ReactionAccumulator {
     /// Shares `force`, acting at `p`, among the primitives of `field` with
     /// a positive field at `p`; returns false (and adds nothing) when there
     /// are none.
-    pub(crate) fn add(&mut self, field: &Field, p: &Point3, force: Vec3) -> bool {
+    fn add(&mut self, field: &Field, p: &Point3, force: Vec3) -> bool {
         self.shares.clear();
         field.for_each_near(p, |i, prim| {
             let f = prim.field(p);
@@ -251,7 +262,7 @@ impl ReactionAccumulator {
     }
 
     /// The accumulated reactions, in increasing particle id.
-    pub(crate) fn finish(self) -> Reactions {
+    fn finish(self) -> Reactions {
         Reactions {
             reactions: self
                 .per_particle

@@ -19,44 +19,42 @@
 //! object, a [`ScalarField`], so [`crate::polygonize_field`] exports the
 //! deformed skin.
 //!
-//! **Reaction.** The contact surface `e_A = e_B > 0` is sampled on a grid
-//! of cubic cells over the intersection of the two objects' support boxes:
-//! every grid edge along which `e_A - e_B` changes sign is searched to
-//! `1e-12` of its length (Illinois regula falsi), and the crossing is a
-//! sample when the common excess `e = e_A = e_B` is positive there. A
+//! **Reaction.** The reactions on both objects' particles are the
+//! gradient of one contact energy, `k ∫ max(0, min(e_A, e_B)) dV` (module
+//! `energy`): where the skins meet flat its pressure is Gascuel's, the
+//! stiffness `k` times the excess removed on the contact surface
+//! `e_A = e_B`. It is integrated along the edges of a lattice of cubic
+//! cells anchored at the skins' mean particle position, so the forces sum
+//! to zero; each particle's force and torque come from its primitives'
+//! field gradients at the quadrature points.
+//!
+//! **Contact surface.** [`ContactPair::contact_surface`] samples the
+//! surface `e_A = e_B > 0` itself, for display and measurement: every
+//! edge of a grid of cubic cells along which `e_A - e_B` changes sign is
+//! searched to `1e-12` of its length (Illinois regula falsi), and the
+//! crossing is a sample when the common excess there is positive. A
 //! crossing on an edge along axis `k` stands for the area `h^2 |n_k|`
-//! (`h` the cell size, `n` the unit contact normal): summed over the
-//! three axes this is, on average, the surface area, so the total
-//! reaction does not depend on `h` (unlike the per-sample stiffness of
-//! [`crate::contact`]). The contact normal is `n = (grad e_B - grad e_A)
-//! / |...|`, pointing out of A into B. The
-//! pressure is `stiffness * e` (the removed excess, `e_B` for A and `e_A`
-//! for B, equal on the surface); the sample's reaction `stiffness * e *
-//! area * n` pushes B along `+n` and A along `-n`, equal and opposite.
-//! Each object's share is distributed among its primitives by their share
-//! of that object's field at the sample, and acts on their particles as a
-//! force and a torque about the particle's position, exactly as in
-//! [`crate::contact`]: over both objects, forces and torques about any
-//! point sum to zero up to round-off.
+//! (`h` the cell size, `n = (grad e_B - grad e_A) / |...|` the unit
+//! contact normal, out of A into B): summed over the three axes this is,
+//! on average, the surface area.
 //!
 //! Only the blocks of the grid that both objects' primitives reach are
-//! sampled (the narrow band, module `band`). Grid nodes and edge searches run
-//! in parallel with ordered collects;
-//! reactions are accumulated serially in edge order: the same bits for any
-//! thread count. Contact regions thinner than a cell, whose crossing edges
-//! have no endpoint inside either object, may be missed.
+//! sampled (the narrow band, module `band`), in parallel, with ordered
+//! sums: the same bits for any thread count. Contact regions thinner
+//! than a cell may be missed.
 
 use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Point3, Real, Vec3, World};
 use rayon::prelude::*;
 
-use crate::contact::{ReactionAccumulator, Reactions};
+use crate::contact::Reactions;
 use crate::error::PolygonizeError;
 use crate::field::{Field, ScalarField, ValueGradient};
 use crate::kernel::ISO;
 use crate::polygonize::blocks::Grid;
 
 mod band;
+mod energy;
 
 /// The optional bulge of Gascuel's propagation region (Gascuel 1993).
 ///
@@ -213,12 +211,15 @@ pub struct ContactSample {
     pub area: Real,
 }
 
-/// The reactions of one pair evaluation: on A, on B, and the samples.
+/// The reactions of one pair evaluation: on A, on B, and the contact
+/// energy they derive from.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PairReactions {
     a: Reactions,
     b: Reactions,
-    samples: Vec<ContactSample>,
+    energy: Real,
+    edges_in_contact: usize,
+    peak: Option<(Point3, Real)>,
 }
 
 impl PairReactions {
@@ -232,9 +233,23 @@ impl PairReactions {
         &self.b
     }
 
-    /// The contact samples, in grid edge order.
-    pub fn samples(&self) -> &[ContactSample] {
-        &self.samples
+    /// The contact energy whose gradient the reactions are
+    /// ([`ContactPair::energy`]).
+    pub fn energy(&self) -> Real {
+        self.energy
+    }
+
+    /// Edges of the energy's lattice with a positive integral (module
+    /// `energy`).
+    pub fn edges_in_contact(&self) -> usize {
+        self.edges_in_contact
+    }
+
+    /// The quadrature point of largest common excess `min(e_A, e_B)`, and
+    /// that excess: the deepest point of the interpenetration found.
+    /// `None` without contact.
+    pub fn peak(&self) -> Option<(Point3, Real)> {
+        self.peak
     }
 
     /// Adds the reactions on both objects to `world` for its next step
@@ -295,35 +310,67 @@ impl<'a> ContactPair<'a> {
         }
     }
 
-    /// Samples the contact surface and computes the reactions on both
-    /// objects (module doc). No overlap gives empty reactions. Errors (the
-    /// sampling grid's, as for polygonization): a cell size that is not
-    /// finite and > 0, or more than `max_nodes_per_axis` nodes along an
-    /// axis of the intersection of the two support boxes.
+    /// The reactions on both objects: the gradient of the contact energy
+    /// (module doc and module `energy`), with `params.stiffness` as `k` and
+    /// `params.cell_size` as the lattice's cell. No overlap gives empty
+    /// reactions. Errors (the lattice's, as for polygonization): a cell
+    /// size that is not finite and > 0, a skin at a non-finite position,
+    /// or more than `max_nodes_per_axis` nodes along an axis of the
+    /// intersection of the two support boxes.
     pub fn reactions(
         &self,
         params: &ImplicitContactParams,
     ) -> Result<PairReactions, PolygonizeError> {
+        let Some(grid) = self.lattice(params)? else {
+            return Ok(PairReactions::default());
+        };
+        let sweep = energy::sweep(&grid, self.a, self.b, params.stiffness, true);
+        let (energy, edges_in_contact, peak) = (sweep.energy, sweep.edges, sweep.peak);
+        let (a, b) = energy::reactions(self.a, self.b, sweep);
+        Ok(PairReactions {
+            a,
+            b,
+            energy,
+            edges_in_contact,
+            peak,
+        })
+    }
+
+    /// The contact energy `k ∫ max(0, min(e_A, e_B)) dV` on the lattice of
+    /// [`ContactPair::reactions`] (whose reactions are its exact
+    /// gradient); 0 without overlap. Errors as for the reactions.
+    pub fn energy(&self, params: &ImplicitContactParams) -> Result<Real, PolygonizeError> {
+        Ok(match self.lattice(params)? {
+            Some(grid) => energy::sweep(&grid, self.a, self.b, params.stiffness, false).energy,
+            None => 0.0,
+        })
+    }
+
+    /// The contact energy's lattice (module `energy`), after checking the
+    /// cell size.
+    fn lattice(&self, params: &ImplicitContactParams) -> Result<Option<Grid>, PolygonizeError> {
+        let h = params.cell_size;
+        if !(h.is_finite() && h > 0.0) {
+            return Err(PolygonizeError::InvalidCellSize(h));
+        }
+        energy::lattice(self.a, self.b, h, params.max_nodes_per_axis)
+    }
+
+    /// Samples of the contact surface `e_A = e_B > 0` (module doc) on a
+    /// grid of cell `cell_size`, in grid edge order; empty without
+    /// overlap. Errors as for the reactions.
+    pub fn contact_surface(
+        &self,
+        params: &ImplicitContactParams,
+    ) -> Result<Vec<ContactSample>, PolygonizeError> {
         let h = params.cell_size;
         if !(h.is_finite() && h > 0.0) {
             return Err(PolygonizeError::InvalidCellSize(h));
         }
         let Some(grid) = self.sampling_grid(h, params.max_nodes_per_axis)? else {
-            return Ok(PairReactions::default());
+            return Ok(Vec::new());
         };
-        let samples = self.samples(&grid, &band::crossing_edges(&grid, self.a, self.b));
-        let mut acc_a = ReactionAccumulator::default();
-        let mut acc_b = ReactionAccumulator::default();
-        for s in &samples {
-            let force = s.normal * (params.stiffness * s.excess * s.area);
-            acc_a.add(self.a, &s.position, -force);
-            acc_b.add(self.b, &s.position, force);
-        }
-        Ok(PairReactions {
-            a: acc_a.finish(),
-            b: acc_b.finish(),
-            samples,
-        })
+        Ok(self.samples(&grid, &band::crossing_edges(&grid, self.a, self.b)))
     }
 
     /// The sampling grid of cell size `h` over the intersection of the two
@@ -414,20 +461,33 @@ const BRACKET: Real = 1e-12;
 /// [`ContactPair::sample_on_edge`]) until the bracket is narrower than
 /// [`BRACKET`], at most 48 evaluations inside it.
 fn crossing(phi: impl Fn(Real) -> Real) -> (Real, Real) {
+    let (f0, f1) = (phi(0.0), phi(1.0));
+    crossing_from(phi, f0, f1)
+}
+
+/// [`crossing`] from the end values `f0 = phi(0)` and `f1 = phi(1)`,
+/// already known.
+fn crossing_from(phi: impl Fn(Real) -> Real, f0: Real, f1: Real) -> (Real, Real) {
+    crossing_to(phi, f0, f1, BRACKET)
+}
+
+/// [`crossing_from`] to a bracket narrower than `bracket` instead of
+/// [`BRACKET`].
+fn crossing_to(phi: impl Fn(Real) -> Real, f0: Real, f1: Real, bracket: Real) -> (Real, Real) {
     let (mut t0, mut t1) = (0.0, 1.0);
-    let (mut f0, mut f1) = (phi(0.0), phi(1.0));
+    let (mut f0, mut f1) = (f0, f1);
     let positive0 = f0 > 0.0;
     let bracketed = (f1 > 0.0) != positive0;
     // Which end the previous step replaced (0 or 1; 2: none yet).
     let mut replaced = 2;
     for _ in 0..48 {
-        if t1 - t0 <= BRACKET {
+        if t1 - t0 <= bracket {
             break;
         }
         // The secant point, kept half a bracket width inside the ends: a
         // converged estimate next to one end then lands just past the
         // root and closes the bracket from the other side.
-        let inset = 0.5 * BRACKET;
+        let inset = 0.5 * bracket;
         let secant = (t0 * f1 - t1 * f0) / (f1 - f0);
         let t = if bracketed && secant.is_finite() {
             secant.clamp(t0 + inset, t1 - inset)

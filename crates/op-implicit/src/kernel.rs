@@ -48,6 +48,16 @@ pub fn derivative_sq(s: Real) -> Real {
     -22.0 / 9.0 + s * (34.0 / 9.0 - s * (12.0 / 9.0))
 }
 
+/// `d^2f/ds^2` for `s = (d/R)^2`: `34/9 - 24/9 s` for `s < 1`, else 0
+/// (`f` is C1, not C2, at the support's boundary).
+#[inline]
+pub fn second_derivative_sq(s: Real) -> Real {
+    if s >= 1.0 {
+        return 0.0;
+    }
+    34.0 / 9.0 - s * (24.0 / 9.0)
+}
+
 /// `f(d)` for support radius `radius` (see the module doc).
 #[inline]
 pub fn value(d: Real, radius: Real) -> Real {

@@ -23,8 +23,9 @@
 //!   1993): [`ContactPair::deformed_a`] / [`ContactPair::deformed_b`]
 //!   are the deformed fields (exact contact surface, optional
 //!   propagation-region [`Bulge`]), polygonized with [`polygonize_field`];
-//!   [`ContactPair::reactions`] gives equal and opposite reactions on both
-//!   objects' particles, applied with [`PairReactions::apply`].
+//!   [`ContactPair::reactions`] gives both objects' particles the forces
+//!   and torques of one contact energy ([`ContactPair::energy`]; they sum
+//!   to zero), applied with [`PairReactions::apply`].
 #![warn(missing_docs)]
 
 pub mod contact;

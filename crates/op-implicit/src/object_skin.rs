@@ -2,7 +2,7 @@
 //! each skinned object carries an [`ObjectSkin`] (the skin contact acts on
 //! and, when smoother, the one shown), obstacle tools meet skins as
 //! [`SkinTool`]s, and [`contact_step`] computes the reactions of every
-//! pair of skins (Gascuel's exact contact surface, no bulge) and of every
+//! pair of skins (the gradient of Gascuel's contact energy) and of every
 //! skin against the tools it meets, once per interval, as a force
 //! contributor ([`op_dynamics::contributors`]). The stages that run them
 //! are in [`crate::skin_stages`].
@@ -11,9 +11,9 @@
 //! `total_impulse` is the sum over steps of `|F| dt`, `F` the total contact
 //! force on the second object of each pair (summed over pairs);
 //! `max_penetration` is the largest overlap of the two undeformed skins
-//! over all contact samples and steps, in units of `r0` (the smaller rest
-//! spacing of the pair): at a sample of the contact surface with common
-//! excess `e`, the overlap thickness along the normal is, to first order,
+//! over all steps, in units of `r0` (the smaller rest spacing of the
+//! pair): at the deepest quadrature point of the contact energy, of common
+//! excess `e = min(e_A, e_B)`, the overlap thickness along the normal is, to first order,
 //! `e / |grad f_A| + e / |grad f_B|` (how deep each undeformed skin reaches
 //! past the contact surface, summed).
 
@@ -400,16 +400,14 @@ pub fn contact_step(
                     b: b.name.clone(),
                     source,
                 })?;
-            if r.samples().is_empty() {
+            let Some((deepest, excess)) = r.peak() else {
                 continue;
-            }
+            };
             let r0 = a.rest_spacing.min(b.rest_spacing).max(Real::MIN_POSITIVE);
-            for s in r.samples() {
-                let ga = fa.value_and_gradient(&s.position).1.norm();
-                let gb = fb.value_and_gradient(&s.position).1.norm();
-                let depth = s.excess / ga.max(1e-12) + s.excess / gb.max(1e-12);
-                stats.max_penetration = stats.max_penetration.max(depth / r0);
-            }
+            let ga = fa.value_and_gradient(&deepest).1.norm();
+            let gb = fb.value_and_gradient(&deepest).1.norm();
+            let depth = excess / ga.max(1e-12) + excess / gb.max(1e-12);
+            stats.max_penetration = stats.max_penetration.max(depth / r0);
             stats.total_impulse += r.b().total_force().norm() * dt;
             r.add_to(held);
         }

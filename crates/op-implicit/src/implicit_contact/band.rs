@@ -21,7 +21,9 @@
 //! values may differ in their last bits, so an edge whose end lies on the
 //! contact surface to round-off may be listed by one and not the other.)
 //! A pair whose supports' boxes overlap but whose primitives meet in a
-//! small region costs that region.
+//! small region costs that region. The contact energy's edges
+//! ([`overlap_edges`]) are found the same way, with another test of the
+//! edge's ends: both excesses positive at an end.
 
 use op_dynamics::{Point3, Real};
 use rayon::prelude::*;
@@ -87,10 +89,37 @@ fn crossed((ea, eb): (Real, Real), (fa, fb): (Real, Real)) -> bool {
     (ea > eb) != (fa > fb) && ea.max(eb).max(fa).max(fb) > 0.0
 }
 
+/// Whether both excesses are positive at an end of the edge between nodes
+/// of excesses `(ea, eb)` and `(fa, fb)`: where the interpenetration
+/// region can reach the edge (a field monotone along it is positive
+/// somewhere on it only if it is at an end).
+#[inline]
+fn overlapped((ea, eb): (Real, Real), (fa, fb): (Real, Real)) -> bool {
+    ea.max(fa) > 0.0 && eb.max(fb) > 0.0
+}
+
 /// The edges `(node, axis)` of `grid` that can hold a sample of the
 /// contact surface of `a` and `b` (module docs), in increasing node and
 /// axis: nodes are evaluated only in the blocks both objects reach.
 pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
+    edges_where(grid, a, b, crossed)
+}
+
+/// The edges `(node, axis)` of `grid` that the interpenetration region of
+/// `a` and `b` can reach ([`overlapped`]), in increasing node and axis:
+/// the edges of the contact energy's line integrals.
+pub(super) fn overlap_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
+    edges_where(grid, a, b, overlapped)
+}
+
+/// The edges of `grid` whose ends' excesses pass `test`, evaluated in the
+/// blocks both objects reach (module docs), in increasing node and axis.
+fn edges_where(
+    grid: &Grid,
+    a: &Field,
+    b: &Field,
+    test: fn((Real, Real), (Real, Real)) -> bool,
+) -> Vec<(usize, usize)> {
     let (in_a, in_b) = (reached(grid, a.spheres()), reached(grid, b.spheres()));
     let active: Vec<usize> = (0..in_a.len()).filter(|&k| in_a[k] && in_b[k]).collect();
     if active.is_empty() {
@@ -107,7 +136,7 @@ pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, u
             let Some((vb, _)) = sample_unless_below(b, grid, &lists_b, block, ISO, arch) else {
                 return Vec::new();
             };
-            block_edges(grid, &va, &vb, block)
+            block_edges(grid, &va, &vb, block, test)
         })
         .collect();
     edges.sort_unstable();
@@ -115,9 +144,16 @@ pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, u
     edges
 }
 
-/// The crossed edges between the nodes of block `block` and its far
-/// layer, from both fields' values there (`fa`, `fb`, x fastest).
-fn block_edges(grid: &Grid, fa: &[Real], fb: &[Real], block: usize) -> Vec<(usize, usize)> {
+/// The edges between the nodes of block `block` and its far layer whose
+/// ends pass `test`, from both fields' values there (`fa`, `fb`, x
+/// fastest).
+fn block_edges(
+    grid: &Grid,
+    fa: &[Real],
+    fb: &[Real],
+    block: usize,
+    test: fn((Real, Real), (Real, Real)) -> bool,
+) -> Vec<(usize, usize)> {
     let block = grid.block(block);
     let (start, nodes) = (block.start, block.nodes());
     let local = |[x, y, z]: [usize; 3]| x + nodes[0] * (y + nodes[1] * z);
@@ -133,7 +169,7 @@ fn block_edges(grid: &Grid, fa: &[Real], fb: &[Real], block: usize) -> Vec<(usiz
                     }
                     let mut next = here;
                     next[k] += 1;
-                    if crossed(excess[local(here)], excess[local(next)]) {
+                    if test(excess[local(here)], excess[local(next)]) {
                         let [x, y, z] = [0, 1, 2].map(|j| start[j] + here[j]);
                         edges.push((x + grid.dims[0] * (y + grid.dims[1] * z), k));
                     }
