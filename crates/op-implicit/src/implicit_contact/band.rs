@@ -102,23 +102,28 @@ fn overlapped((ea, eb): (Real, Real), (fa, fb): (Real, Real)) -> bool {
 /// contact surface of `a` and `b` (module docs), in increasing node and
 /// axis: nodes are evaluated only in the blocks both objects reach.
 pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
-    edges_where(grid, a, b, crossed)
+    edges_where(grid, a, b, crossed, false)
 }
 
 /// The edges `(node, axis)` of `grid` that the interpenetration region of
 /// `a` and `b` can reach ([`overlapped`]), in increasing node and axis:
-/// the edges of the contact energy's line integrals.
+/// the edges of the contact energy's line integrals. A block where A's
+/// splatted field is nowhere above the iso value has none, and B's field
+/// is not splatted there.
 pub(super) fn overlap_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
-    edges_where(grid, a, b, overlapped)
+    edges_where(grid, a, b, overlapped, true)
 }
 
 /// The edges of `grid` whose ends' excesses pass `test`, evaluated in the
-/// blocks both objects reach (module docs), in increasing node and axis.
+/// blocks both objects reach (module docs), in increasing node and axis;
+/// with `a_inside_somewhere`, only in blocks where a node of A is above
+/// the iso value (`test` passes no edge elsewhere).
 fn edges_where(
     grid: &Grid,
     a: &Field,
     b: &Field,
-    test: fn((Real, Real), (Real, Real)) -> bool,
+    test: impl Fn((Real, Real), (Real, Real)) -> bool + Sync + Copy,
+    a_inside_somewhere: bool,
 ) -> Vec<(usize, usize)> {
     let (in_a, in_b) = (reached(grid, a.spheres()), reached(grid, b.spheres()));
     let active: Vec<usize> = (0..in_a.len()).filter(|&k| in_a[k] && in_b[k]).collect();
@@ -133,6 +138,9 @@ fn edges_where(
             let Some((va, _)) = sample_unless_below(a, grid, &lists_a, block, ISO, arch) else {
                 return Vec::new();
             };
+            if a_inside_somewhere && va.iter().all(|&v| v <= ISO) {
+                return Vec::new();
+            }
             let Some((vb, _)) = sample_unless_below(b, grid, &lists_b, block, ISO, arch) else {
                 return Vec::new();
             };
@@ -152,7 +160,7 @@ fn block_edges(
     fa: &[Real],
     fb: &[Real],
     block: usize,
-    test: fn((Real, Real), (Real, Real)) -> bool,
+    test: impl Fn((Real, Real), (Real, Real)) -> bool,
 ) -> Vec<(usize, usize)> {
     let block = grid.block(block);
     let (start, nodes) = (block.start, block.nodes());
