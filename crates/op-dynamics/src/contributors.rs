@@ -17,8 +17,8 @@
 //!    wind), in the order registered;
 //! 5. the contributors the caller passes for the interval
 //!    ([`crate::World::advance_to_with`]; the driver passes its stages',
-//!    e.g. op-scene's skin contact reactions, computed once per interval
-//!    and acting over all of it);
+//!    e.g. op-implicit's skin contact, evaluated on the state at every
+//!    force evaluation);
 //! 6. the force windows ([`crate::external::ForceWindows`]);
 //!
 //! and finally fixed particles get zero force or torque. Each particle's
@@ -107,6 +107,16 @@ pub trait Contributor: Sync {
     /// velocities. Default: 0.
     fn speed_allowance(&self) -> Real {
         0.0
+    }
+
+    /// Whether its contribution is a function of the evaluated state and
+    /// time alone, the same whichever interval of
+    /// [`crate::World::advance_to_with`] evaluates it (op-implicit's skin
+    /// contact, evaluated at every force evaluation): the forces cached at
+    /// an interval's end stay valid for the next one. Default: false (a
+    /// contribution computed once per interval and held over it).
+    fn follows_state(&self) -> bool {
+        false
     }
 
     /// Adds its forces, torques and energies at `input`'s state to `out`.

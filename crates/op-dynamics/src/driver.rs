@@ -14,10 +14,12 @@
 //!    and drops those of merged ones;
 //! 2. the interval's end is the earliest [`Stage::horizon`] (and the
 //!    target time);
-//! 3. every due [`Phase::Forces`] stage runs: it computes the forces it
-//!    adds over the interval (an explicit coupling, such as skin contact,
-//!    evaluated once per interval) and offers them as a force
-//!    [`Contributor`] ([`Stage::contributor`]);
+//! 3. every due [`Phase::Forces`] stage runs: it prepares the forces it
+//!    adds over the interval and offers them as a force [`Contributor`]
+//!    ([`Stage::contributor`]): computed once for the interval and held
+//!    (an explicit coupling), or evaluated on the state at every force
+//!    evaluation ([`Contributor::follows_state`]; op-implicit's skin
+//!    contact), whose time counts as the stage's;
 //! 4. the world advances to the interval's end with the stages'
 //!    contributors acting in every force evaluation
 //!    ([`World::advance_to_with`], landing on it exactly; the contributors'
@@ -353,12 +355,21 @@ impl<C> Driver<C> {
                 self.seconds[k] += clock.elapsed().as_secs_f64();
                 world.apply_effects(&e);
             }
-            // 4. The world's steps, with the stages' contributors.
+            // 4. The world's steps, with the stages' contributors, whose
+            // force evaluations count as their stages' time.
+            let lending: Vec<usize> = (0..self.stages.len())
+                .filter(|&k| self.stages[k].contributor().is_some())
+                .collect();
             let contributors: Vec<&dyn Contributor> =
                 self.stages.iter().filter_map(|s| s.contributor()).collect();
             let clock = Instant::now();
             let stepped = world.advance_to_with(target, &contributors);
-            self.world_seconds += clock.elapsed().as_secs_f64();
+            let mut world_seconds = clock.elapsed().as_secs_f64();
+            for (&k, &spent) in lending.iter().zip(world.interval_seconds()) {
+                self.seconds[k] += spent;
+                world_seconds -= spent;
+            }
+            self.world_seconds += world_seconds;
             stepped?;
             // 5. What the world's own stages did (particles erased): told to
             // every stage. The world already dropped its cached forces.

@@ -86,6 +86,10 @@ pub(crate) struct ForceScratch {
     pub evaluations: u64,
     /// Seconds spent updating neighbour lists (accumulated).
     pub neighbour_seconds: f64,
+    /// Seconds each contributor of the interval
+    /// ([`crate::World::advance_to_with`]'s `extra`) spent, since the
+    /// interval began.
+    pub extra_seconds: Vec<f64>,
 }
 
 /// Everything the internal force evaluation reads besides the state.
@@ -307,16 +311,23 @@ impl ForceContext<'_> {
         let built_in: [&dyn Contributor; 2] = [&uniform, self.accumulator];
         let tools = self.tools.map(|t| t as &dyn Contributor);
         let registered = self.registered.iter().map(|c| &**c as &dyn Contributor);
-        for c in tools
-            .into_iter()
-            .chain(built_in)
-            .chain(registered)
-            .chain(self.extra.iter().copied())
-            .chain(std::iter::once(&windows as &dyn Contributor))
-        {
+        for c in tools.into_iter().chain(built_in).chain(registered) {
             if c.is_active() {
                 c.contribute(&input, &mut out);
             }
+        }
+        // The interval's contributors, each timed.
+        let seconds = &mut self.scratch.extra_seconds;
+        seconds.resize(self.extra.len(), 0.0);
+        for (c, spent) in self.extra.iter().zip(seconds.iter_mut()) {
+            if c.is_active() {
+                let clock = std::time::Instant::now();
+                c.contribute(&input, &mut out);
+                *spent += clock.elapsed().as_secs_f64();
+            }
+        }
+        if windows.is_active() {
+            windows.contribute(&input, &mut out);
         }
     }
 }

@@ -313,6 +313,13 @@ impl World {
         &self.report
     }
 
+    /// Seconds each contributor of the last [`World::advance_to_with`]
+    /// (its `extra`, in order) spent in its force evaluations: not in
+    /// [`World::stage_seconds`], for the stages that lend them to report.
+    pub fn interval_seconds(&self) -> &[f64] {
+        &self.model.scratch.extra_seconds
+    }
+
     /// Seconds spent in each stage of [`World::step`] over every step so
     /// far, by stage name ([`CORE_STAGES`] and the after-step stages, in
     /// the order they first ran; none before the first step).

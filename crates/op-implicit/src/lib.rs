@@ -29,6 +29,7 @@
 #![warn(missing_docs)]
 
 pub mod contact;
+pub mod contact_forces;
 pub mod error;
 pub mod field;
 pub mod friction;

@@ -25,10 +25,11 @@ use parry3d_f64::math::Pose;
 use parry3d_f64::shape::Shape;
 use serde::{Deserialize, Serialize};
 
+use crate::contact_forces::{ContactForces, ParticleState};
 use crate::{
     collider_reactions, polygonize, polygonize_deformed, polygonize_field, surface_points,
-    ClippedField, ContactPair, ContactParams, ImplicitContactParams, Mesh, PolygonizeError,
-    PolygonizeParams, Primitive, Skin, SkinError,
+    ClippedField, ContactPair, ContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive,
+    Skin, SkinError,
 };
 
 /// The skin of one object: the [`Skin`] contact acts on and the one shown.
@@ -257,36 +258,37 @@ pub struct SkinTool {
 }
 
 impl SkinTool {
-    /// Adds the reactions on skin `skin` at world time `t` to `held` and
-    /// returns (total reaction force, deepest sample depth).
+    /// The reactions at world time `t` on the skin of field `field` (named
+    /// `name`, of cell `cell_size`), each passed to `add` (particle id,
+    /// force, torque), and (total reaction force, deepest sample depth).
     /// Each particle the reaction presses also gets its Coulomb friction
     /// over the interval `interval` and the damping of its normal velocity
     /// ([`crate::friction`]), from its velocity relative to the tool in
-    /// `world`.
-    fn react(
+    /// `state`.
+    pub(crate) fn react(
         &self,
-        held: &mut ExternalAccumulator,
-        skin: &ObjectSkin,
-        world: &World,
+        field: &crate::Field,
+        (name, cell_size): (&str, Real),
         t: Real,
         interval: Real,
+        state: &(dyn Fn(u32) -> Option<ParticleState> + Sync),
+        add: &mut dyn FnMut(u32, Vec3, Vec3),
     ) -> Result<(Vec3, Real), ContactError> {
         let pose = self.tool.pose(t);
         let frame = parry_pose(&pose.position, &pose.rotation);
         let shape = self.tool.shape();
         let aabb = shape.compute_aabb(&frame);
-        let h = skin.cell_size;
+        let h = cell_size;
         let lo = Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - Vec3::repeat(h);
         let hi = Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + Vec3::repeat(h);
         let params = PolygonizeParams::with_cell_size(h);
-        let samples = surface_points(skin.skin.field(), &params, (lo, hi)).map_err(|source| {
-            ContactError::Sample {
-                skin: skin.name.clone(),
+        let samples =
+            surface_points(field, &params, (lo, hi)).map_err(|source| ContactError::Sample {
+                skin: name.to_string(),
                 source,
-            }
-        })?;
+            })?;
         let r = collider_reactions(
-            skin.skin.field(),
+            field,
             &samples,
             shape,
             &frame,
@@ -294,24 +296,19 @@ impl SkinTool {
                 stiffness: self.stiffness,
             },
         );
-        r.add_to(held);
+        for x in r.reactions() {
+            add(x.particle, x.force, x.torque);
+        }
         if self.friction > 0.0 || self.damping > 0.0 {
-            let p = world.particles();
             for reaction in r.reactions() {
-                let Some(slot) = p.slot_of(reaction.particle) else {
+                let Some(p) = state(reaction.particle) else {
                     continue;
                 };
-                let x = p.positions()[slot].coords;
-                let v = p.velocities()[slot] - pose.velocity_at(&x);
-                let f = crate::friction::coulomb(
-                    reaction.force,
-                    v,
-                    p.masses()[slot],
-                    self.friction,
-                    interval,
-                );
+                let v = p.velocity - pose.velocity_at(&p.position.coords);
+                let f =
+                    crate::friction::coulomb(reaction.force, v, p.mass, self.friction, interval);
                 let d = crate::friction::normal_damping(reaction.force, v, self.damping);
-                held.add(reaction.particle, f + d, Vec3::zeros());
+                add(reaction.particle, f + d, Vec3::zeros());
             }
         }
         Ok((r.total_force(), r.max_depth()))
@@ -351,12 +348,12 @@ pub enum ContactError {
 }
 
 /// Re-poses `skins` on `world`, computes the contact reactions of every
-/// pair of skins and of every skin against the obstacle tools in `tools`,
-/// replaces `held` with them (to act over the coming interval of length
-/// `dt`, [`op_dynamics::World::advance_to_with`]) and updates `stats`.
-/// Depths are in units of each skin's rest spacing (r0). Against a tool,
-/// `max_penetration` is the depth of the deepest skin sample inside it and
-/// `total_impulse` adds the reaction on the skin.
+/// pair of skins and of every skin against the obstacle tools in `tools`
+/// ([`ContactForces::evaluate`]), replaces `held` with them (to act over
+/// the coming interval of length `dt`,
+/// [`op_dynamics::World::advance_to_with`]: an explicit coupling, first
+/// order in `dt`; the scene's contact stage evaluates [`ContactForces`] at
+/// every force evaluation instead) and updates `stats`.
 pub fn contact_step(
     world: &World,
     skins: &mut [ObjectSkin],
@@ -367,50 +364,16 @@ pub fn contact_step(
 ) -> Result<(), ContactError> {
     held.clear();
     held.grow(world.particles().id_bound());
-    // Contact acts on the contact skins only; the displayed ones follow
-    // when a frame is written (crate::skin_stages).
     for s in skins.iter_mut() {
         s.skin.repose(world).map_err(|source| ContactError::Pose {
             skin: s.name.clone(),
             source,
         })?;
     }
-    let t = world.time();
-    for tool in tools {
-        for &k in &tool.skins {
-            let skin = &skins[k];
-            let (force, depth) = tool.react(held, skin, world, t, dt)?;
-            let r0 = skin.rest_spacing.max(Real::MIN_POSITIVE);
-            stats.max_penetration = stats.max_penetration.max(depth / r0);
-            stats.total_impulse += force.norm() * dt;
-        }
-    }
-    for i in 0..skins.len() {
-        for j in i + 1..skins.len() {
-            let (a, b) = (&skins[i], &skins[j]);
-            let (fa, fb) = (a.skin.field(), b.skin.field());
-            let params = ImplicitContactParams::new(
-                0.5 * (a.stiffness + b.stiffness),
-                a.cell_size.min(b.cell_size),
-            );
-            let r = ContactPair::new(fa, fb)
-                .reactions(&params)
-                .map_err(|source| ContactError::Pair {
-                    a: a.name.clone(),
-                    b: b.name.clone(),
-                    source,
-                })?;
-            let Some((deepest, excess)) = r.peak() else {
-                continue;
-            };
-            let r0 = a.rest_spacing.min(b.rest_spacing).max(Real::MIN_POSITIVE);
-            let ga = fa.value_and_gradient(&deepest).1.norm();
-            let gb = fb.value_and_gradient(&deepest).1.norm();
-            let depth = excess / ga.max(1e-12) + excess / gb.max(1e-12);
-            stats.max_penetration = stats.max_penetration.max(depth / r0);
-            stats.total_impulse += r.b().total_force().norm() * dt;
-            r.add_to(held);
-        }
-    }
+    let mut forces = ContactForces::default();
+    forces.update(skins, tools, dt);
+    let figures = forces.evaluate_on(world, &mut |id, f, t| held.add(id, f, t))?;
+    stats.max_penetration = stats.max_penetration.max(figures.max_penetration);
+    stats.total_impulse += figures.force * dt;
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! An implicit object skinned on oriented particles (seed 002 §6: "we
 //! propose the use of an oriented particles system to handle skeletons").
 
-use op_dynamics::{Particles, World};
+use op_dynamics::{Particles, Point3, Quat, World};
 
 use crate::error::SkinError;
 use crate::field::Field;
@@ -13,6 +13,33 @@ use crate::stretch::StretchCompensation;
 pub struct SkinState {
     attachments: Vec<(u32, Primitive)>,
     stretch: Option<StretchCompensation>,
+}
+
+impl SkinState {
+    /// The field of these attachments posed where `pose` puts each
+    /// particle (position and orientation by id), with the stretch
+    /// compensation's references held ([`StretchCompensation::apply_held`]).
+    /// Errors: a particle `pose` does not know.
+    pub fn posed_field(
+        &self,
+        pose: impl Fn(u32) -> Option<(Point3, Quat)>,
+    ) -> Result<Field, SkinError> {
+        let posed = self
+            .attachments
+            .iter()
+            .enumerate()
+            .map(|(index, &(id, prim))| {
+                let (position, orientation) =
+                    pose(id).ok_or(SkinError::UnknownParticle { index, id })?;
+                Ok(prim.posed(id, &position, &orientation))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut field = Field::new(posed);
+        if let Some(stretch) = &self.stretch {
+            stretch.apply_held(&mut field);
+        }
+        Ok(field)
+    }
 }
 
 /// An implicit object: skeleton primitives attached to particles of an
@@ -76,6 +103,11 @@ impl Skin {
             stretch.apply(&mut self.field);
         }
         Ok(())
+    }
+
+    /// Whether `state` is this skin's [`Skin::state`] (without copying it).
+    pub fn has_state(&self, state: &SkinState) -> bool {
+        self.attachments == state.attachments && self.stretch == state.stretch
     }
 
     /// What changes of the skin during a run (a checkpoint saves it):

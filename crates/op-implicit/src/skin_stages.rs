@@ -2,15 +2,14 @@
 //! [`op_dynamics::driver`]): skins that follow their objects' particles,
 //! and skin contact (seed 002 §6).
 //!
-//! - [`ContactStage`] (forces): before every interval of at most `dt` the
-//!   skins are re-posed on the particles and [`contact_step`] computes the
-//!   reactions of every pair of skins and of every skin against the
-//!   obstacle tools it meets; they act over the interval as a force
-//!   contributor ([`op_dynamics::contributors`],
-//!   [`World::advance_to_with`]). With the adaptive scheme an interval may
-//!   take several steps and the reactions act on all of them: contact is
-//!   explicit, one evaluation per interval, so contact scenes are first
-//!   order in `dt` whatever the scheme.
+//! - [`ContactStage`] (forces): the reactions of every pair of skins and
+//!   of every skin against the obstacle tools it meets act as a force
+//!   contributor evaluated at every force evaluation of a step, on the
+//!   state being evaluated ([`ContactForces`]; [`World::advance_to_with`]):
+//!   contact scenes keep the integrator's order, and velocity Verlet
+//!   evaluates its forces once per step. Before each interval of at most
+//!   `dt` the stage refreshes the contributor's snapshot of the skins and
+//!   adds the last evaluation's figures to the run's.
 //! - [`SkinStage`] (follower): every skin gains primitives for created
 //!   particles of its object, drops those of removed ones (merged,
 //!   released, erased by tools), and is re-posed on the particles at the
@@ -20,10 +19,10 @@
 
 use op_dynamics::contributors::Contributor;
 use op_dynamics::driver::{Effects, Phase, Stage, StageError};
-use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Real, World};
 
-use crate::object_skin::{contact_step, ContactStats, ObjectSkin, SkinTool};
+use crate::contact_forces::ContactForces;
+use crate::object_skin::{ContactStats, ObjectSkin, SkinTool};
 
 /// What the skin stages borrow of a driver's shared state.
 pub struct SkinParts<'a> {
@@ -41,12 +40,33 @@ pub trait SkinnedState {
     fn skin_parts(&mut self) -> SkinParts<'_>;
 }
 
-/// Skin contact: reactions computed at the start of each interval of at
-/// most `dt` and acting over it as a force contributor (module docs).
+/// Skin contact: a force contributor evaluated at every force evaluation
+/// ([`ContactForces`], module docs), its snapshot of the skins refreshed
+/// before each interval of at most `dt`, when the figures of the last
+/// evaluation are added to the run's.
 #[derive(Default)]
 pub struct ContactStage {
-    /// The reactions of the current interval, by particle id.
-    held: ExternalAccumulator,
+    forces: ContactForces,
+    /// When the figures were last added to the run's.
+    folded: Option<Real>,
+}
+
+impl ContactStage {
+    /// Adds the last evaluation's figures over the time since they were
+    /// last added (its force times that time) to `stats`, or fails with
+    /// the error the evaluations met.
+    fn fold(&mut self, now: Real, stats: &mut ContactStats) -> Result<(), StageError> {
+        let (figures, error) = self.forces.take_last();
+        if let Some(e) = error {
+            return Err(StageError::new("contact", e));
+        }
+        if let Some(from) = self.folded {
+            stats.total_impulse += figures.force * (now - from).max(0.0);
+        }
+        stats.max_penetration = stats.max_penetration.max(figures.max_penetration);
+        self.folded = Some(now);
+        Ok(())
+    }
 }
 
 impl<C: SkinnedState> Stage<C> for ContactStage {
@@ -72,23 +92,20 @@ impl<C: SkinnedState> Stage<C> for ContactStage {
         1e-6 * world.params().dt
     }
 
-    fn run(&mut self, world: &mut World, ctx: &mut C, until: Real) -> Result<Effects, StageError> {
-        let h = until - world.time();
+    fn run(&mut self, world: &mut World, ctx: &mut C, _until: Real) -> Result<Effects, StageError> {
         let parts = ctx.skin_parts();
-        contact_step(
-            world,
-            parts.skins,
-            parts.tools,
-            h,
-            parts.contact,
-            &mut self.held,
-        )
-        .map_err(|e| StageError::new("contact", e))?;
+        self.fold(world.time(), parts.contact)?;
+        self.forces
+            .update(parts.skins, parts.tools, world.params().dt);
         Ok(Effects::default())
     }
 
     fn contributor(&self) -> Option<&dyn Contributor> {
-        Some(&self.held)
+        Some(&self.forces)
+    }
+
+    fn at_target(&mut self, world: &World, ctx: &mut C) -> Result<(), StageError> {
+        self.fold(world.time(), ctx.skin_parts().contact)
     }
 }
 

@@ -93,6 +93,30 @@ impl StretchCompensation {
         field.scale_weights(&factors);
     }
 
+    /// [`StretchCompensation::apply`] without recording references: a
+    /// particle without one keeps its amplitude (factor 1). The contact
+    /// force contributor poses its fields so, at every force evaluation,
+    /// from references the skin stages keep (`crate::contact_forces`).
+    pub fn apply_held(&self, field: &mut Field) {
+        let now = densities(field);
+        let factors: Vec<Real> = field
+            .primitives()
+            .iter()
+            .zip(&now)
+            .map(|(p, &rho)| {
+                let reference = match self {
+                    StretchCompensation::Uniform(r) => Some(*r),
+                    StretchCompensation::PerParticle(rest) => rest.get(&p.particle()).copied(),
+                };
+                match reference {
+                    Some(r) if rho > 0.0 && r > 0.0 => r / rho,
+                    _ => 1.0,
+                }
+            })
+            .collect();
+        field.scale_weights(&factors);
+    }
+
     /// Forgets the particles `keep` rejects (removed from the object).
     pub fn retain(&mut self, mut keep: impl FnMut(u32) -> bool) {
         if let StretchCompensation::PerParticle(rest) = self {

@@ -71,7 +71,11 @@ pub struct SkinSpec {
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub cell_size: Real,
     /// Contact pressure per unit removed field excess, >= 0 (a pair uses the
-    /// mean of its two). Default: 100.
+    /// mean of its two): the `k` of two skins' contact energy
+    /// `k ∫ max(0, min(e_A, e_B)) dV`, whose gradient gives every
+    /// particle's force and torque (op-implicit `implicit_contact`); where
+    /// the skins meet flat its pressure is `k` times the excess Gascuel's
+    /// deformation removes. Default: 100.
     #[serde(default = "hundred")]
     #[schemars(range(min = 0))]
     pub stiffness: Real,

@@ -46,11 +46,11 @@ impl World {
     /// [`World::advance_to`] with `extra` contributors acting in every force
     /// evaluation of the interval (after the pending forces, before the
     /// force windows; [`crate::contributors`]): an explicit coupling
-    /// evaluated once per interval (op-scene's skin contact) acts over all
-    /// of it, also when an adaptive scheme takes several steps. Cached
-    /// forces are dropped when the interval ends if some of them was
-    /// active: the next interval's contributions differ. The steps run on
-    /// a pool thread as [`World::step`]'s do.
+    /// evaluated once per interval acts over all of it, also when an
+    /// adaptive scheme takes several steps. Cached forces are dropped when
+    /// the interval ends if one of them was active and does not
+    /// [`Contributor::follows_state`]: the next interval's contributions
+    /// differ. The steps run on a pool thread as [`World::step`]'s do.
     pub fn advance_to_with(
         &mut self,
         t_end: Real,
@@ -59,9 +59,12 @@ impl World {
         if extra.iter().any(|c| c.is_active() && c.adds_torque()) {
             self.may_rotate = true;
         }
-        let active = extra.iter().any(|c| c.is_active());
+        let held = extra.iter().any(|c| c.is_active() && !c.follows_state());
+        let seconds = &mut self.model.scratch.extra_seconds;
+        seconds.clear();
+        seconds.resize(extra.len(), 0.0);
         let n = self.particles.len();
-        on_pool(n, || self.advance_steps(t_end, extra, active))
+        on_pool(n, || self.advance_steps(t_end, extra, held))
     }
 
     /// The steps of [`World::advance_to_with`] (on a pool thread).
@@ -69,12 +72,12 @@ impl World {
         &mut self,
         t_end: Real,
         extra: &[&dyn Contributor],
-        active: bool,
+        held: bool,
     ) -> Result<(), Divergence> {
         loop {
             let remaining = t_end - self.time;
             if remaining <= 1e-12 * self.params.dt {
-                if active {
+                if held {
                     self.integrator.invalidate_forces();
                 }
                 return Ok(());
@@ -124,6 +127,7 @@ impl World {
 
         let clock = std::time::Instant::now();
         let neighbour_before = self.model.scratch.neighbour_seconds;
+        let extra_before: f64 = self.model.scratch.extra_seconds.iter().sum();
         // Spacing-only worlds that nothing set spinning never rotate.
         let rotating = self.model.kernel == Kernel::Oriented || self.may_rotate;
         self.integrator.set_translation_only(!rotating);
@@ -136,10 +140,13 @@ impl World {
             .integrator
             .step(&mut ctx, &bodies, self.time, dt, state);
         let neighbour_seconds = self.model.scratch.neighbour_seconds - neighbour_before;
+        // The interval's contributors are timed on their own
+        // (World::interval_seconds): their callers' stages report them.
+        let extra_seconds = self.model.scratch.extra_seconds.iter().sum::<f64>() - extra_before;
         report.seconds.push(("neighbours", neighbour_seconds));
         report.seconds.push((
             "integrate",
-            clock.elapsed().as_secs_f64() - neighbour_seconds,
+            clock.elapsed().as_secs_f64() - neighbour_seconds - extra_seconds,
         ));
         report.dt = info.dt_taken;
         report.rejected = info.rejected;

@@ -339,10 +339,10 @@ pub fn case_table() -> Vec<CaseEntry> {
         CaseEntry {
             name: "ball_vs_spiral",
             about: "`scenes/ball_vs_spiral.ron` (seed 002 fig. 6): the skinned spiral hit by \
-                    a skinned ball, implicit contact (Gascuel) computed by the op-scene runner \
-                    once per interval of the scene's dt and held over it; sampled to scene time \
-                    20 (the hit and the start of the recovery). The adaptive scheme runs at one \
-                    tolerance: with contact the interval sets the accuracy (Findings).",
+                    a skinned ball, implicit contact (the gradient of Gascuel's contact energy) \
+                    evaluated by the op-scene runner at every force evaluation; sampled to scene \
+                    time 20 (the hit and the start of the recovery). The adaptive scheme runs at \
+                    one tolerance (Findings).",
             source: SceneSource::File("scenes/ball_vs_spiral.ron"),
             samples: vec![0.0, 2.5, 5.0, 10.0, 20.0],
             conservative: false,

@@ -32,7 +32,7 @@ pub struct Trajectory {
 /// replace the scene's), runs the settle phase, then advances through the
 /// sample times the way the op-scene runner does
 /// ([`op_scene::BuiltScene::advance_to`]: contact, when the scene has it,
-/// is computed once per step of `method.dt` and held during it).
+/// is evaluated at every force evaluation).
 ///
 /// # Errors
 ///
