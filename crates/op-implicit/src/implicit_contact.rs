@@ -376,22 +376,9 @@ impl<'a> ContactPair<'a> {
     /// The sampling grid of cell size `h` over the intersection of the two
     /// support boxes, centred on it; `None` when the boxes do not overlap.
     fn sampling_grid(&self, h: Real, max_nodes: usize) -> Result<Option<Grid>, PolygonizeError> {
-        let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) = (self.a.support_box(), self.b.support_box())
-        else {
+        let Some((lo, hi)) = common_box(self.a, self.b)? else {
             return Ok(None);
         };
-        // Each box on its own: the component-wise max and min of a pair
-        // drop a NaN.
-        if ![lo_a, hi_a, lo_b, hi_b]
-            .iter()
-            .all(|p| p.iter().all(|x| x.is_finite()))
-        {
-            return Err(PolygonizeError::NonFiniteRegion);
-        }
-        let (lo, hi) = (lo_a.sup(&lo_b), hi_a.inf(&hi_b));
-        if (0..3).any(|k| hi[k] <= lo[k]) {
-            return Ok(None);
-        }
         // Saturating: a box of astronomical size needs more nodes than any
         // limit, and says so.
         let dims = [0, 1, 2].map(|k| (((hi[k] - lo[k]) / h).ceil() as usize).saturating_add(1));
@@ -449,6 +436,23 @@ impl<'a> ContactPair<'a> {
             area: h * h * normal[k].abs(),
         })
     }
+}
+
+/// The intersection `(lo, hi)` of the support boxes of `a` and `b`; `None`
+/// when they do not overlap. Error: a non-finite box (each box is checked
+/// on its own: the component-wise max and min of a pair drop a NaN).
+fn common_box(a: &Field, b: &Field) -> Result<Option<(Point3, Point3)>, PolygonizeError> {
+    let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) = (a.support_box(), b.support_box()) else {
+        return Ok(None);
+    };
+    if ![lo_a, hi_a, lo_b, hi_b]
+        .iter()
+        .all(|p| p.iter().all(|x| x.is_finite()))
+    {
+        return Err(PolygonizeError::NonFiniteRegion);
+    }
+    let (lo, hi) = (lo_a.sup(&lo_b), hi_a.inf(&hi_b));
+    Ok((0..3).all(|k| hi[k] > lo[k]).then_some((lo, hi)))
 }
 
 /// Width of the bracket [`crossing`] stops at, as a fraction of the edge.

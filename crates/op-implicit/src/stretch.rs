@@ -71,26 +71,12 @@ impl StretchCompensation {
     /// reference (created after the skin was built) takes its current
     /// density: factor 1 now, compensated from then on.
     pub fn apply(&mut self, field: &mut Field) {
-        let now = densities(field);
-        let factors: Vec<Real> = field
-            .primitives()
-            .iter()
-            .zip(&now)
-            .map(|(p, &rho)| {
-                let reference = match self {
-                    StretchCompensation::Uniform(r) => *r,
-                    StretchCompensation::PerParticle(rest) => {
-                        *rest.entry(p.particle()).or_insert(rho)
-                    }
-                };
-                if rho > 0.0 && reference > 0.0 {
-                    reference / rho
-                } else {
-                    1.0
-                }
-            })
-            .collect();
-        field.scale_weights(&factors);
+        match self {
+            StretchCompensation::Uniform(r) => scale_to(field, |_, _| Some(*r)),
+            StretchCompensation::PerParticle(rest) => {
+                scale_to(field, |id, rho| Some(*rest.entry(id).or_insert(rho)))
+            }
+        }
     }
 
     /// [`StretchCompensation::apply`] without recording references: a
@@ -98,23 +84,12 @@ impl StretchCompensation {
     /// force contributor poses its fields so, at every force evaluation,
     /// from references the skin stages keep (`crate::contact_forces`).
     pub fn apply_held(&self, field: &mut Field) {
-        let now = densities(field);
-        let factors: Vec<Real> = field
-            .primitives()
-            .iter()
-            .zip(&now)
-            .map(|(p, &rho)| {
-                let reference = match self {
-                    StretchCompensation::Uniform(r) => Some(*r),
-                    StretchCompensation::PerParticle(rest) => rest.get(&p.particle()).copied(),
-                };
-                match reference {
-                    Some(r) if rho > 0.0 && r > 0.0 => r / rho,
-                    _ => 1.0,
-                }
-            })
-            .collect();
-        field.scale_weights(&factors);
+        match self {
+            StretchCompensation::Uniform(r) => scale_to(field, |_, _| Some(*r)),
+            StretchCompensation::PerParticle(rest) => {
+                scale_to(field, |id, _| rest.get(&id).copied())
+            }
+        }
     }
 
     /// Forgets the particles `keep` rejects (removed from the object).
@@ -123,6 +98,24 @@ impl StretchCompensation {
             rest.retain(|id, _| keep(*id));
         }
     }
+}
+
+/// Scales the amplitude of every primitive of `field` by `reference /
+/// current` density, the reference given per particle id and current
+/// density by `reference` (none, or a density that is not positive:
+/// factor 1).
+fn scale_to(field: &mut Field, mut reference: impl FnMut(u32, Real) -> Option<Real>) {
+    let now = densities(field);
+    let factors: Vec<Real> = field
+        .primitives()
+        .iter()
+        .zip(&now)
+        .map(|(p, &rho)| match reference(p.particle(), rho) {
+            Some(r) if rho > 0.0 && r > 0.0 => r / rho,
+            _ => 1.0,
+        })
+        .collect();
+    field.scale_weights(&factors);
 }
 
 /// The unit-amplitude field of `field`'s primitives at each primitive's

@@ -92,21 +92,9 @@ pub(super) fn lattice(
     h: Real,
     max_nodes: usize,
 ) -> Result<Option<Grid>, PolygonizeError> {
-    let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) = (a.support_box(), b.support_box()) else {
+    let Some((lo, hi)) = super::common_box(a, b)? else {
         return Ok(None);
     };
-    // Each box on its own: the component-wise max and min of a pair drop
-    // a NaN.
-    if ![lo_a, hi_a, lo_b, hi_b]
-        .iter()
-        .all(|p| p.iter().all(|x| x.is_finite()))
-    {
-        return Err(PolygonizeError::NonFiniteRegion);
-    }
-    let (lo, hi) = (lo_a.sup(&lo_b), hi_a.inf(&hi_b));
-    if (0..3).any(|k| hi[k] <= lo[k]) {
-        return Ok(None);
-    }
     // Saturating: an astronomical box needs more nodes than any limit,
     // and says so. One more node than the box needs: the lattice's first
     // node may lie up to a cell before the box.
