@@ -77,9 +77,10 @@ pub struct ContactForces {
 }
 
 impl ContactForces {
-    /// Takes the skins' attachments and stretch references, the tools and
-    /// the friction interval `dt` for the coming evaluations (copied only
-    /// when they changed).
+    /// Takes the skins' attachments and stretch references (copied only
+    /// when they changed), the tools (copied the first time: a scene's
+    /// tools stay the same through a run) and the friction interval `dt`
+    /// for the coming evaluations.
     pub fn update(&mut self, skins: &[ObjectSkin], tools: &[SkinTool], dt: Real) {
         self.friction_interval = dt;
         let same = self.skins.len() == skins.len()

@@ -147,7 +147,8 @@ const ROOT_BRACKET: Real = 1e-10;
 /// Per particle: the force and torque summed so far.
 type PerParticle = BTreeMap<u32, (Vec3, Vec3)>;
 
-/// One point's force `W ∇f_i` and torque on the particle of primitive `i`.
+/// One quadrature point's force and torque on the particle of one
+/// primitive (module doc, **Gradient**).
 type Term = (u32, Vec3, Vec3);
 
 /// One edge's share of the energy and its gradient.
