@@ -357,11 +357,12 @@ impl<C> Driver<C> {
             }
             // 4. The world's steps, with the stages' contributors, whose
             // force evaluations count as their stages' time.
-            let lending: Vec<usize> = (0..self.stages.len())
-                .filter(|&k| self.stages[k].contributor().is_some())
-                .collect();
-            let contributors: Vec<&dyn Contributor> =
-                self.stages.iter().filter_map(|s| s.contributor()).collect();
+            let (lending, contributors): (Vec<usize>, Vec<&dyn Contributor>) = self
+                .stages
+                .iter()
+                .enumerate()
+                .filter_map(|(k, s)| s.contributor().map(|c| (k, c)))
+                .unzip();
             let clock = Instant::now();
             let stepped = world.advance_to_with(target, &contributors);
             let mut world_seconds = clock.elapsed().as_secs_f64();

@@ -296,20 +296,16 @@ impl SkinTool {
                 stiffness: self.stiffness,
             },
         );
-        for x in r.reactions() {
-            add(x.particle, x.force, x.torque);
-        }
-        if self.friction > 0.0 || self.damping > 0.0 {
-            for reaction in r.reactions() {
-                let Some(p) = state(reaction.particle) else {
-                    continue;
-                };
-                let v = p.velocity - pose.velocity_at(&p.position.coords);
-                let f =
-                    crate::friction::coulomb(reaction.force, v, p.mass, self.friction, interval);
-                let d = crate::friction::normal_damping(reaction.force, v, self.damping);
-                add(reaction.particle, f + d, Vec3::zeros());
-            }
+        let dissipative = self.friction > 0.0 || self.damping > 0.0;
+        for reaction in r.reactions() {
+            add(reaction.particle, reaction.force, reaction.torque);
+            let Some(p) = dissipative.then(|| state(reaction.particle)).flatten() else {
+                continue;
+            };
+            let v = p.velocity - pose.velocity_at(&p.position.coords);
+            let f = crate::friction::coulomb(reaction.force, v, p.mass, self.friction, interval);
+            let d = crate::friction::normal_damping(reaction.force, v, self.damping);
+            add(reaction.particle, f + d, Vec3::zeros());
         }
         Ok((r.total_force(), r.max_depth()))
     }
