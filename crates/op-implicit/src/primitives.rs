@@ -94,7 +94,7 @@ impl Skeleton {
     /// and the factor by which the support radius grows along the worst axis
     /// (1 except for ellipsoids): the support lies within
     /// `extent + factor * R` of the origin.
-    fn extent_and_factor(&self) -> (Real, Real) {
+    pub(crate) fn extent_and_factor(&self) -> (Real, Real) {
         match *self {
             Skeleton::Point => (0.0, 1.0),
             Skeleton::Segment { half_length } => (half_length, 1.0),

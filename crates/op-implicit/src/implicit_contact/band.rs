@@ -30,7 +30,9 @@ use rayon::prelude::*;
 
 use crate::field::Field;
 use crate::kernel::ISO;
-use crate::polygonize::blocks::{sample_unless_below, BlockLists, Grid, BLOCK};
+use crate::polygonize::blocks::{
+    box_bounds, margin, sample_unless_below, splat_block, Block, BlockLists, Grid, BLOCK,
+};
 
 /// Node `i`'s index along each axis of `grid` (node `i` is
 /// `(i % nx, (i / nx) % ny, i / (nx ny))`).
@@ -102,49 +104,20 @@ fn overlapped((ea, eb): (Real, Real), (fa, fb): (Real, Real)) -> bool {
 /// contact surface of `a` and `b` (module docs), in increasing node and
 /// axis: nodes are evaluated only in the blocks both objects reach.
 pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
-    edges_where(grid, a, b, crossed, false)
-}
-
-/// The edges `(node, axis)` of `grid` that the interpenetration region of
-/// `a` and `b` can reach ([`overlapped`]), in increasing node and axis:
-/// the edges of the contact energy's line integrals. A block where A's
-/// splatted field is nowhere above the iso value has none, and B's field
-/// is not splatted there.
-pub(super) fn overlap_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
-    edges_where(grid, a, b, overlapped, true)
-}
-
-/// The edges of `grid` whose ends' excesses pass `test`, evaluated in the
-/// blocks both objects reach (module docs), in increasing node and axis;
-/// with `a_inside_somewhere`, only in blocks where a node of A is above
-/// the iso value (`test` passes no edge elsewhere).
-fn edges_where(
-    grid: &Grid,
-    a: &Field,
-    b: &Field,
-    test: impl Fn((Real, Real), (Real, Real)) -> bool + Sync + Copy,
-    a_inside_somewhere: bool,
-) -> Vec<(usize, usize)> {
-    let (in_a, in_b) = (reached(grid, a.spheres()), reached(grid, b.spheres()));
-    let active: Vec<usize> = (0..in_a.len()).filter(|&k| in_a[k] && in_b[k]).collect();
-    if active.is_empty() {
+    let Some((active, lists_a, lists_b)) = active_blocks(grid, a, b) else {
         return Vec::new();
-    }
-    let (lists_a, lists_b) = (BlockLists::new(a, grid), BlockLists::new(b, grid));
+    };
     let arch = pulp::Arch::new();
     let mut edges: Vec<(usize, usize)> = active
         .par_iter()
-        .flat_map_iter(|&block| {
-            let Some((va, _)) = sample_unless_below(a, grid, &lists_a, block, ISO, arch) else {
+        .flat_map_iter(|&k| {
+            let Some((va, _)) = sample_unless_below(a, grid, &lists_a, k, ISO, arch) else {
                 return Vec::new();
             };
-            if a_inside_somewhere && va.iter().all(|&v| v <= ISO) {
-                return Vec::new();
-            }
-            let Some((vb, _)) = sample_unless_below(b, grid, &lists_b, block, ISO, arch) else {
+            let Some((vb, _)) = sample_unless_below(b, grid, &lists_b, k, ISO, arch) else {
                 return Vec::new();
             };
-            block_edges(grid, &va, &vb, block, test)
+            block_edges(grid, &va, &vb, &grid.block(k), crossed)
         })
         .collect();
     edges.sort_unstable();
@@ -152,17 +125,68 @@ fn edges_where(
     edges
 }
 
-/// The edges between the nodes of block `block` and its far layer whose
+/// The edges `(node, axis)` of `grid` that the interpenetration region of
+/// `a` and `b` can reach ([`overlapped`]), in increasing node and axis:
+/// the edges of the contact energy's line integrals. A block both objects
+/// reach is sampled only when both fields' upper bounds on it reach the
+/// iso value ([`box_bounds`]), and B is splatted only where A's splatted
+/// values pass it somewhere.
+pub(super) fn overlap_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
+    let Some((active, lists_a, lists_b)) = active_blocks(grid, a, b) else {
+        return Vec::new();
+    };
+    let arch = pulp::Arch::new();
+    let mut edges: Vec<(usize, usize)> = active
+        .par_iter()
+        .flat_map_iter(|&k| {
+            let block = grid.block(k);
+            let (lo, hi) = block.bounds(grid);
+            let (list_a, list_b) = (lists_a.of(k), lists_b.of(k));
+            let reaches = |field: &Field, list: &[u32]| {
+                let (_, upper) = box_bounds(field, (&lo, &hi), list);
+                upper + margin(upper) >= ISO
+            };
+            if !(reaches(a, list_a) && reaches(b, list_b)) {
+                return Vec::new();
+            }
+            let (va, _) = splat_block(a, grid, &block, list_a, arch);
+            if va.iter().all(|&v| v <= ISO) {
+                return Vec::new();
+            }
+            let (vb, _) = splat_block(b, grid, &block, list_b, arch);
+            block_edges(grid, &va, &vb, &block, overlapped)
+        })
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
+
+/// The blocks of `grid` that both objects' spheres reach, and each
+/// object's primitives per block; `None` when there are none.
+fn active_blocks(
+    grid: &Grid,
+    a: &Field,
+    b: &Field,
+) -> Option<(Vec<usize>, BlockLists, BlockLists)> {
+    let (in_a, in_b) = (reached(grid, a.spheres()), reached(grid, b.spheres()));
+    let active: Vec<usize> = (0..in_a.len()).filter(|&k| in_a[k] && in_b[k]).collect();
+    if active.is_empty() {
+        return None;
+    }
+    Some((active, BlockLists::new(a, grid), BlockLists::new(b, grid)))
+}
+
+/// The edges between the nodes of `block` and its far layer whose
 /// ends pass `test`, from both fields' values there (`fa`, `fb`, x
 /// fastest).
 fn block_edges(
     grid: &Grid,
     fa: &[Real],
     fb: &[Real],
-    block: usize,
+    block: &Block,
     test: impl Fn((Real, Real), (Real, Real)) -> bool,
 ) -> Vec<(usize, usize)> {
-    let block = grid.block(block);
     let (start, nodes) = (block.start, block.nodes());
     let local = |[x, y, z]: [usize; 3]| x + nodes[0] * (y + nodes[1] * z);
     let excess: Vec<(Real, Real)> = fa.iter().zip(fb).map(|(a, b)| (a - ISO, b - ISO)).collect();

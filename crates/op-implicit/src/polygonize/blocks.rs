@@ -5,9 +5,9 @@
 //! The field is the sum of compactly supported primitive fields (seed 002
 //! §6), so a block can only be crossed by the surface where some
 //! primitive's support reaches it. For each candidate block, the sum of
-//! each point primitive's kernel at its nearest and farthest distance to
-//! the block bounds the field on the block (the kernel decreases with
-//! distance; other shapes count 0 to 1); a block whose bounds lie both
+//! each primitive's kernel at its nearest and farthest distance to the
+//! block bounds the field on the block (the kernel decreases with
+//! distance; [`box_bounds`]); a block whose bounds lie both
 //! below or both above the iso value has all its nodes on one side and no
 //! crossing, and is skipped. The rest are sampled by splatting (each
 //! primitive adds its field to the nodes of the block inside its bounding
@@ -74,7 +74,7 @@ impl Block {
     }
 
     /// The block's box `(lo, hi)` (its corner nodes).
-    fn bounds(&self, grid: &Grid) -> (Point3, Point3) {
+    pub(crate) fn bounds(&self, grid: &Grid) -> (Point3, Point3) {
         let [i, j, k] = self.start;
         let [a, b, c] = self.cells;
         (grid.node(i, j, k), grid.node(i + a, j + b, k + c))
@@ -201,25 +201,30 @@ pub(super) enum Sampled {
 }
 
 /// Lower and upper bounds of the field on block `block` from the
-/// primitives `list` (module doc): each point or ellipsoid kernel at the
-/// block's farthest and nearest point (an ellipsoid's scaled distance lies
-/// between the distance over its largest and over its smallest semi-axis),
-/// any other shape between 0 and its weight.
+/// primitives `list` (module doc).
 fn field_bounds(field: &Field, grid: &Grid, block: &Block, list: &[u32]) -> (Real, Real) {
     let (lo, hi) = block.bounds(grid);
+    box_bounds(field, (&lo, &hi), list)
+}
+
+/// Lower and upper bounds of the field on the box `(lo, hi)` from the
+/// primitives `list`: each kernel at the box's farthest and nearest point
+/// to its skeleton. The distance to the skeleton is at least the distance
+/// to its bounding sphere's centre less the skeleton's extent (a point's
+/// is 0), so the kernel there bounds the field above; a point's or an
+/// ellipsoid's kernel at the farthest corner bounds it below (an
+/// ellipsoid's scaled distance lies between the distance over its largest
+/// and over its smallest semi-axis), another skeleton's by 0.
+pub(crate) fn box_bounds(
+    field: &Field,
+    (lo, hi): (&Point3, &Point3),
+    list: &[u32],
+) -> (Real, Real) {
     let (mut upper, mut lower) = (0.0, 0.0);
     for &i in list {
         let prim = &field.primitives()[i as usize];
         let (c, r) = prim.bounding_sphere();
         let w = prim.weight();
-        let inner = match prim.shape() {
-            Skeleton::Point => r,
-            Skeleton::Ellipsoid { scales } => r * scales.min() / scales.max(),
-            _ => {
-                upper += w;
-                continue;
-            }
-        };
         let (mut near, mut far) = (0.0, 0.0);
         for k in 0..3 {
             let d_near = (lo[k] - c[k]).max(c[k] - hi[k]).max(0.0);
@@ -227,15 +232,30 @@ fn field_bounds(field: &Field, grid: &Grid, block: &Block, list: &[u32]) -> (Rea
             near += d_near * d_near;
             far += d_far * d_far;
         }
-        upper += w * value_sq(near / (r * r));
-        lower += w * value_sq(far / (inner * inner));
+        match prim.shape() {
+            Skeleton::Point => {
+                upper += w * value_sq(near / (r * r));
+                lower += w * value_sq(far / (r * r));
+            }
+            Skeleton::Ellipsoid { scales } => {
+                let inner = r * scales.min() / scales.max();
+                upper += w * value_sq(near / (r * r));
+                lower += w * value_sq(far / (inner * inner));
+            }
+            shape => {
+                let (extent, _) = shape.extent_and_factor();
+                let support = r - extent;
+                let gap = (near.sqrt() - extent).max(0.0);
+                upper += w * value_sq(gap * gap / (support * support));
+            }
+        }
     }
     (lower, upper)
 }
 
 /// A margin of the bounds well above the rounding of sums of a few
 /// hundred terms.
-fn margin(upper: Real) -> Real {
+pub(crate) fn margin(upper: Real) -> Real {
     1e-9 * (1.0 + upper)
 }
 
@@ -308,7 +328,7 @@ pub(super) fn sample_band(
 
 /// The node values of `block` from the primitives `list` of `field`
 /// ([`Splat`]), and how many primitive fields were evaluated.
-fn splat_block(
+pub(crate) fn splat_block(
     field: &Field,
     grid: &Grid,
     block: &Block,
