@@ -192,6 +192,25 @@ impl<'a, F: ScalarField + ?Sized> ClippedField<'a, F> {
         }
         best
     }
+
+    /// The clip's value at `p`: the smallest `ISO + g s_k`, if any
+    /// collider.
+    pub(crate) fn clip_value(&self, p: &Point3) -> Option<Real> {
+        self.clip(p).map(|(v, _)| v)
+    }
+
+    /// A lower bound of the clip's value over the ball of centre `c` and
+    /// radius `r` (a signed distance moves by at most the distance
+    /// moved); infinite without colliders.
+    pub(crate) fn clip_lower_bound(&self, c: &Point3, r: Real) -> Real {
+        self.colliders
+            .iter()
+            .map(|(shape, pose)| {
+                let s = signed_distance(*shape, pose, &c.coords).map_or(0.0, |(s, _)| s);
+                ISO + self.slope * (s - r)
+            })
+            .fold(Real::INFINITY, Real::min)
+    }
 }
 
 impl<F: ScalarField + ?Sized> ScalarField for ClippedField<'_, F> {

@@ -51,9 +51,9 @@ pub use implicit_contact::{
 };
 pub use kernel::{iso_radius, ISO};
 pub use polygonize::{
-    is_closed_oriented_manifold, polygonize, polygonize_deformed, polygonize_field,
-    polygonize_region, polygonize_with_stats, surface_points, Mesh, PolygonizeParams,
-    PolygonizeStats,
+    is_closed_oriented_manifold, polygonize, polygonize_clipped, polygonize_deformed,
+    polygonize_field, polygonize_region, polygonize_with_stats, surface_points, Mesh,
+    PolygonizeParams, PolygonizeStats,
 };
 pub use primitives::{PosedPrimitive, Primitive, Skeleton};
 pub use skin::{Skin, SkinState};

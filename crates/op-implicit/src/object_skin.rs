@@ -27,9 +27,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::contact_forces::{ContactForces, ParticleState};
 use crate::{
-    collider_reactions, polygonize, polygonize_deformed, polygonize_field, surface_points,
-    ClippedField, ContactPair, ContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive,
-    Skin, SkinError,
+    collider_reactions, polygonize, polygonize_clipped, polygonize_deformed, surface_points,
+    ContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive, Skin, SkinError,
 };
 
 /// The skin of one object: the [`Skin`] contact acts on and the one shown.
@@ -200,14 +199,11 @@ impl ObjectSkin {
             o.object != self.object
                 && boxes_overlap(own.support_box(), o.display_field().support_box())
         });
+        let other = other.map(|o| o.display_field());
         let mut mesh = match (other, colliders.is_empty()) {
-            (Some(o), true) => polygonize_deformed(own, o.display_field(), &params),
-            (Some(o), false) => {
-                let deformed = ContactPair::new(own, o.display_field()).deformed_a();
-                polygonize_field(&ClippedField::new(&deformed, colliders, slope), &params)
-            }
+            (Some(o), true) => polygonize_deformed(own, o, &params),
             (None, true) => polygonize(own, &params),
-            (None, false) => polygonize_field(&ClippedField::new(own, colliders, slope), &params),
+            (other, false) => polygonize_clipped(own, other, colliders, slope, &params),
         }?;
         mesh.taubin_smooth(self.smoothing);
         Ok(mesh)

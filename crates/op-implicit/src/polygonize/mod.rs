@@ -26,10 +26,13 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
+use crate::contact::ClippedField;
 use crate::error::PolygonizeError;
 use crate::field::{Field, ScalarField};
 use crate::kernel::ISO;
 use blocks::{BlockLists, Grid, Sampled};
+use parry3d_f64::math::Pose;
+use parry3d_f64::shape::Shape;
 
 /// Parameters of [`polygonize`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -228,31 +231,114 @@ pub fn polygonize_deformed(
     params: &PolygonizeParams,
 ) -> Result<Mesh, PolygonizeError> {
     let deformed = crate::ContactPair::new(own, other).deformed_a();
-    let Some(grid) = grid(&deformed, params, None)? else {
+    splatted_mesh(
+        &deformed,
+        (own, Some(other)),
+        None::<&ClippedField<Field>>,
+        params,
+    )
+}
+
+/// The skin of `own`, deformed by contact with `other` when given (as
+/// [`polygonize_deformed`]), clipped by rigid `colliders` (shape, pose)
+/// with slope `slope` ([`ClippedField`]): as [`polygonize_field`] of the
+/// clipped field gives it, but with the nodes splatted. The clip is
+/// evaluated at the nodes of the blocks where it can bite: where its
+/// lower bound over the block (the signed distance moves by at most the
+/// distance moved) is below the largest node value. Measured on a
+/// skinned cloth of 14,400 particles draped on a ball (`reports/scenes.md`
+/// case, 3 frames, 1 thread): export took 4.57 s with every node
+/// evaluated one by one, 2.50 s with this, the same bytes.
+pub fn polygonize_clipped(
+    own: &Field,
+    other: Option<&Field>,
+    colliders: Vec<(&dyn Shape, Pose)>,
+    slope: Real,
+    params: &PolygonizeParams,
+) -> Result<Mesh, PolygonizeError> {
+    match other {
+        Some(other) => {
+            let deformed = crate::ContactPair::new(own, other).deformed_a();
+            let clipped = ClippedField::new(&deformed, colliders, slope);
+            splatted_mesh(&clipped, (own, Some(other)), Some(&clipped), params)
+        }
+        None => {
+            let clipped = ClippedField::new(own, colliders, slope);
+            splatted_mesh(&clipped, (own, None), Some(&clipped), params)
+        }
+    }
+}
+
+/// The mesh of `field`, whose node values are `own`'s splatted, less
+/// `other`'s excess over the iso value where positive (Gascuel's
+/// deformation without bulge, `crate::implicit_contact::deform`), then
+/// lowered to `clip`'s value where it is lower: blocks where `own` is
+/// below the iso value everywhere are skipped (deforming and clipping only
+/// lower the field), and `other` is splatted only where it can exceed the
+/// iso value.
+fn splatted_mesh<F: ScalarField + ?Sized, C: ScalarField + ?Sized>(
+    field: &F,
+    (own, other): (&Field, Option<&Field>),
+    clip: Option<&ClippedField<'_, C>>,
+    params: &PolygonizeParams,
+) -> Result<Mesh, PolygonizeError> {
+    let Some(grid) = grid(field, params, None)? else {
         return Ok(Mesh::default());
     };
-    let (lists, others) = (BlockLists::new(own, &grid), BlockLists::new(other, &grid));
+    let lists = BlockLists::new(own, &grid);
+    let others = other.map(|o| (o, BlockLists::new(o, &grid)));
     let iso = params.iso;
     let arch = pulp::Arch::new();
-    let (mesh, _) = extract(&deformed, &grid, iso, |b| {
+    let (mesh, _) = extract(field, &grid, iso, |b| {
         let Some((mut values, mut evaluations)) =
             blocks::sample_unless_below(own, &grid, &lists, b, iso, arch)
         else {
             return Sampled::Skipped;
         };
-        if let Some((fb, n)) = blocks::sample_unless_below(other, &grid, &others, b, ISO, arch) {
-            evaluations += n;
-            for (fa, fb) in values.iter_mut().zip(fb) {
-                // crate::implicit_contact::deform's value, without bulge.
-                let eb = fb - ISO;
-                if eb > 0.0 {
-                    *fa -= eb;
+        if let Some((other, others)) = &others {
+            if let Some((fb, n)) = blocks::sample_unless_below(other, &grid, others, b, ISO, arch) {
+                evaluations += n;
+                for (fa, fb) in values.iter_mut().zip(fb) {
+                    // crate::implicit_contact::deform's value, without bulge.
+                    let eb = fb - ISO;
+                    if eb > 0.0 {
+                        *fa -= eb;
+                    }
                 }
             }
+        }
+        if let Some(clip) = clip {
+            clip_block(clip, &grid, b, &mut values);
         }
         Sampled::Values(values, evaluations)
     });
     Ok(mesh)
+}
+
+/// Lowers the node values `values` of block `b` to `clip`'s value where
+/// it is lower, evaluating the clip only when its lower bound over the
+/// block's bounding sphere is below the largest value.
+fn clip_block<C: ScalarField + ?Sized>(
+    clip: &ClippedField<'_, C>,
+    grid: &Grid,
+    b: usize,
+    values: &mut [Real],
+) {
+    let block = grid.block(b);
+    let (lo, hi) = block.bounds(grid);
+    let top = values.iter().copied().fold(Real::NEG_INFINITY, Real::max);
+    let centre = lo + (hi - lo) * 0.5;
+    if clip.clip_lower_bound(&centre, 0.5 * (hi - lo).norm()) >= top {
+        return;
+    }
+    let [nx, ny, _] = block.nodes();
+    let [a, bb, c] = block.start;
+    for (n, v) in values.iter_mut().enumerate() {
+        let (i, j, k) = (n % nx, (n / nx) % ny, n / (nx * ny));
+        if let Some(cv) = clip.clip_value(&grid.node(a + i, bb + j, c + k)) {
+            *v = v.min(cv);
+        }
+    }
 }
 
 /// The vertices of [`polygonize_region`]'s mesh of a skin's [`Field`]

@@ -216,6 +216,73 @@ fn lowered_fields_are_sampled_in_their_bounds_band() {
     }
 }
 
+/// A skin clipped by a collider, alone or deformed by another skin, is
+/// splatted ([`polygonize_clipped`]) into the mesh that evaluating every
+/// node gives: same triangles, vertices within rounding (splatted and
+/// evaluated kernels differ in their last bits), at any thread count.
+#[test]
+fn clipped_skins_are_splatted_into_the_dense_mesh() {
+    use crate::{ClippedField, ContactPair};
+    use parry3d_f64::math::{Pose, Vector};
+    use parry3d_f64::shape::{Ball, Cuboid, Shape};
+    let (squares, torus) = (sheet(12), torus());
+    let ball = lattice(0.1, 6, 0.3, |p| {
+        (p - Point3::new(0.9, 0.0, 0.3)).norm() < 0.35
+    });
+    // A slab whose top face z = -0.1 cuts the torus and the sheet, and a
+    // ball pressing the torus's side.
+    let floor = Cuboid::new(Vector::new(3.0, 3.0, 1.0));
+    let knob = Ball::new(0.3);
+    let colliders = || -> Vec<(&dyn Shape, Pose)> {
+        vec![
+            (&floor, Pose::from_translation(Vector::new(0.0, 0.0, -1.1))),
+            (&knob, Pose::from_translation(Vector::new(-1.0, 0.0, 0.2))),
+        ]
+    };
+    let h = 0.04;
+    let params = PolygonizeParams::with_cell_size(h);
+    let slope = ISO / h;
+    for (name, own, other) in [
+        ("torus", &torus, None),
+        ("sheet of squares", &squares, None),
+        ("torus pressed by a ball", &torus, Some(&ball)),
+    ] {
+        let dense = match other {
+            None => polygonize_field(&Dense(&ClippedField::new(own, colliders(), slope)), &params),
+            Some(o) => {
+                let deformed = ContactPair::new(own, o).deformed_a();
+                polygonize_field(
+                    &Dense(&ClippedField::new(&deformed, colliders(), slope)),
+                    &params,
+                )
+            }
+        }
+        .unwrap();
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let splatted = pool
+                .install(|| polygonize_clipped(own, other, colliders(), slope, &params))
+                .unwrap();
+            assert!(splatted.triangles().len() > 200, "{name}");
+            assert_eq!(splatted.triangles(), dense.triangles(), "{name}");
+            assert_eq!(splatted.positions().len(), dense.positions().len());
+            for (a, b) in splatted.positions().iter().zip(dense.positions()) {
+                assert!((a - b).norm() < 1e-9, "{name}: {a:?} vs {b:?}");
+            }
+            // The clip bites: vertices lie on the slab's top face.
+            let on_floor = splatted
+                .positions()
+                .iter()
+                .filter(|p| (p.z + 0.1).abs() < 1e-9)
+                .count();
+            assert!(on_floor > 20, "{name}: {on_floor} vertices on the floor");
+        }
+    }
+}
+
 fn test_fields() -> Vec<(&'static str, Field, Real)> {
     let sphere = lattice(0.1, 6, 0.3, |p| p.coords.norm() < 0.55);
     vec![
