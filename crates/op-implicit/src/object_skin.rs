@@ -19,7 +19,7 @@
 
 use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Point3, Real, Vec3, World};
-use op_modeling::tools::parry_pose;
+use op_modeling::tools::{parry_pose, signed_distance};
 use op_modeling::Tool;
 use parry3d_f64::math::Pose;
 use parry3d_f64::shape::Shape;
@@ -278,10 +278,18 @@ impl SkinTool {
         let lo = Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - Vec3::repeat(h);
         let hi = Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + Vec3::repeat(h);
         let params = PolygonizeParams::with_cell_size(h);
+        // Only samples inside the tool react: a block whose bounding
+        // sphere lies outside it (the signed distance moves by at most the
+        // distance moved) has none.
+        let may_reach_inside = |c: &Point3, r: Real| {
+            signed_distance(shape, &frame, &c.coords).is_none_or(|(s, _)| s <= r + 1e-9 * (1.0 + r))
+        };
         let samples =
-            surface_points(field, &params, (lo, hi)).map_err(|source| ContactError::Sample {
-                skin: name.to_string(),
-                source,
+            surface_points(field, &params, (lo, hi), may_reach_inside).map_err(|source| {
+                ContactError::Sample {
+                    skin: name.to_string(),
+                    source,
+                }
             })?;
         let r = collider_reactions(
             field,
