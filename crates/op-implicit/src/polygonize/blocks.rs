@@ -211,7 +211,8 @@ fn field_bounds(field: &Field, grid: &Grid, block: &Block, list: &[u32]) -> (Rea
 /// primitives `list`: each kernel at the box's farthest and nearest point
 /// to its skeleton. The distance to the skeleton is at least the distance
 /// to its bounding sphere's centre less the skeleton's extent (a point's
-/// is 0), so the kernel there bounds the field above; a point's or an
+/// is 0), and a rectangle's at least the distance to its plane, so the
+/// kernel there bounds the field above; a point's or an
 /// ellipsoid's kernel at the farthest corner bounds it below (an
 /// ellipsoid's scaled distance lies between the distance over its largest
 /// and over its smallest semi-axis), another skeleton's by 0.
@@ -245,7 +246,14 @@ pub(crate) fn box_bounds(
             shape => {
                 let (extent, _) = shape.extent_and_factor();
                 let support = r - extent;
-                let gap = (near.sqrt() - extent).max(0.0);
+                let mut gap = (near.sqrt() - extent).max(0.0);
+                if let Skeleton::Rectangle { .. } = shape {
+                    // No nearer than the rectangle's plane.
+                    let n = prim.pose().rotation * Vec3::z();
+                    let (mid, half) = ((lo.coords + hi.coords) * 0.5, (hi - lo) * 0.5);
+                    let across = n.abs().dot(&half);
+                    gap = gap.max((n.dot(&(mid - c.coords)).abs() - across).max(0.0));
+                }
                 upper += w * value_sq(gap * gap / (support * support));
             }
         }
