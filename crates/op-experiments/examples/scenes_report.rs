@@ -137,7 +137,7 @@ fn scaled(work: &Path, quick: bool) -> Res<Vec<Case>> {
             sizes.to_vec()
         }
     };
-    for n in take(&[30, 60, 120]) {
+    for n in take(&[30, 100, 316]) {
         let path = work.join(format!("cloth_{n}.ron"));
         std::fs::write(&path, cloth(n))?;
         cases.push(Case {
@@ -147,7 +147,7 @@ fn scaled(work: &Path, quick: bool) -> Res<Vec<Case>> {
             family: Some("skinned cloth draped on a sphere"),
         });
     }
-    for r in take(&[5, 8, 12]) {
+    for r in take(&[5, 12, 29]) {
         let path = work.join(format!("balls_{r}.ron"));
         std::fs::write(&path, balls(r))?;
         cases.push(Case {
@@ -157,7 +157,7 @@ fn scaled(work: &Path, quick: bool) -> Res<Vec<Case>> {
             family: Some("skinned ball on a skinned ball"),
         });
     }
-    for n in take(&[10_000, 40_000, 160_000]) {
+    for n in take(&[10_000, 100_000, 1_000_000]) {
         let path = work.join(format!("torus_{n}.xyz"));
         std::fs::write(&path, torus_samples(n))?;
         cases.push(Case {
@@ -176,9 +176,10 @@ fn scaled(work: &Path, quick: bool) -> Res<Vec<Case>> {
 }
 
 /// `sheet_on_sphere`'s cloth at `n x n` particles over a sphere of radius
-/// `n / 5`, dropped from just above it: 50 steps, 3 frames. At most 120
-/// across: the skin's polygonization grid has at most 512 nodes per axis
-/// at its cell size of 0.25.
+/// `n / 5`, dropped from just above it: 50 steps, 3 frames. At most about
+/// 500 across: the skin's polygonization grid has at most
+/// `op_implicit::MAX_NODES_PER_AXIS` nodes per axis at its cell size of
+/// 0.25.
 fn cloth(n: usize) -> String {
     let radius = n as f64 / 5.0;
     format!(

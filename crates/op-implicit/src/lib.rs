@@ -53,7 +53,7 @@ pub use kernel::{iso_radius, ISO};
 pub use polygonize::{
     is_closed_oriented_manifold, polygonize, polygonize_clipped, polygonize_deformed,
     polygonize_field, polygonize_region, polygonize_with_stats, surface_points, Mesh,
-    PolygonizeParams, PolygonizeStats,
+    PolygonizeParams, PolygonizeStats, MAX_NODES_PER_AXIS,
 };
 pub use primitives::{PosedPrimitive, Primitive, Skeleton};
 pub use skin::{Skin, SkinState};

@@ -573,10 +573,10 @@ mod tests {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sheet_on_box.ron");
         let scene = crate::load_scene(&path).expect("the scene loads");
         let mut built = scene.build(None, None).expect("builds");
-        // 300 away: 1200 cells of 0.25, beyond the 512 nodes of the grid.
+        // 1000 away: 4000 cells of 0.25, beyond the grid's 2048 nodes.
         let p = built.world_mut().particles_mut();
         let x = p.positions()[0];
-        p.set_position(0, x + op_dynamics::Vec3::new(300.0, 0.0, 0.0));
+        p.set_position(0, x + op_dynamics::Vec3::new(1000.0, 0.0, 0.0));
         let dir = std::env::temp_dir().join(format!("op-scene-coarser-{}", std::process::id()));
         let opts = RunOptions {
             out_dir: dir.clone(),

@@ -584,7 +584,7 @@ fn a_non_finite_skin_is_an_error() {
         crate::polygonize(&far, &crate::PolygonizeParams::with_cell_size(1e-300)).unwrap_err(),
         PolygonizeError::TooManyNodes {
             needed: usize::MAX,
-            max: 512
+            max: crate::MAX_NODES_PER_AXIS
         }
     );
 }

@@ -387,7 +387,7 @@ fn empty_field_and_bad_parameters() {
         Err(PolygonizeError::InvalidIso(0.0))
     );
     assert!(matches!(
-        polygonize(&f, &PolygonizeParams::with_cell_size(1e-3)),
+        polygonize(&f, &PolygonizeParams::with_cell_size(1e-4)),
         Err(PolygonizeError::TooManyNodes { .. })
     ));
 }

@@ -19,8 +19,8 @@ pub const MAX_EXTENT_OVER_SPACING: Real = 1e9;
 /// turns): beyond it the angle has no fractional precision left.
 pub const MAX_ROTATION: Real = 2e3 * std::f64::consts::PI;
 /// Largest number of grid nodes per axis of a skin's polygonization:
-/// op-implicit's own limit (`PolygonizeParams::max_nodes_per_axis`).
-pub const MAX_SKIN_NODES_PER_AXIS: Real = 512.0;
+/// op-implicit's own limit ([`op_implicit::MAX_NODES_PER_AXIS`]).
+pub const MAX_SKIN_NODES_PER_AXIS: Real = op_implicit::MAX_NODES_PER_AXIS as Real;
 /// Largest `conduction * dt` of the heat settings: the heat update takes
 /// about `2 conduction dt` times the neighbour weights sub-steps per step.
 pub const MAX_CONDUCTION_STEP: Real = 100.0;
