@@ -73,6 +73,14 @@ pub trait FileFormat: Sync + std::fmt::Debug {
         false
     }
 
+    /// About how many bytes [`FileFormat::encode_mesh`] writes for `mesh`
+    /// (the frame's buffer is reserved at once: a file of hundreds of
+    /// megabytes grown by doubling is copied and its pages cleared again
+    /// at every step). Default: 0 (unknown).
+    fn mesh_size_hint(&self, _mesh: &FrameMesh) -> usize {
+        0
+    }
+
     /// Encodes one sequence's frame ([`Files::PerSequence`] formats, and
     /// the meshes of [`FileFormat::writes_meshes_with_state`]).
     fn encode_mesh(&self, _mesh: &FrameMesh, _out: &mut dyn Write) -> std::io::Result<()> {

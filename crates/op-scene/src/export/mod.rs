@@ -701,7 +701,7 @@ fn prepare_sequence(
     let mut files = Vec::with_capacity(formats.len());
     for f in formats {
         let path = seq.path(out, k, f);
-        let mut bytes = Vec::new();
+        let mut bytes = Vec::with_capacity(f.format().mesh_size_hint(&mesh));
         f.format()
             .encode_mesh(&mesh, &mut bytes)
             .map_err(|e| failure(path.clone(), e))?;

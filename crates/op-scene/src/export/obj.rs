@@ -118,13 +118,37 @@ fn object(mesh: &FrameMesh, piece: Piece, name: &str) -> Object {
     object
 }
 
-/// obj-exporter's text of `objects`.
-fn export(objects: Vec<Object>) -> std::io::Result<Vec<u8>> {
+/// An upper bound of the bytes of `piece`'s lines in `mesh`'s file, for
+/// coordinates below 1e9 in size: a `v` or `vn` line holds three numbers
+/// of at most 17 characters (sign, 9 digits, point, 6 decimals), an `f`
+/// line three `a//a` of the vertex count's digits, an `l` line two.
+fn piece_bytes(mesh: &FrameMesh, piece: Piece) -> usize {
+    let digits = mesh.vertices.len().max(1).ilog10() as usize + 1;
+    let (lines, per_line) = match piece {
+        Piece::Vertices(a, b) | Piece::Normals(a, b) => (b - a, 3 + 3 * 18),
+        Piece::Triangles(a, b) => (b - a, 2 + 3 * (2 * digits + 3)),
+        Piece::Lines(a, b) => (b - a, 2 + 2 * (digits + 1)),
+    };
+    lines * per_line
+}
+
+/// About how many bytes [`write`] writes for `mesh`.
+pub(crate) fn size_hint(mesh: &FrameMesh) -> usize {
+    let header = mesh.name.len() + 3;
+    header
+        + pieces(mesh)
+            .into_iter()
+            .map(|p| piece_bytes(mesh, p))
+            .sum::<usize>()
+}
+
+/// obj-exporter's text of `objects`, into a buffer of `capacity` bytes.
+fn export(objects: Vec<Object>, capacity: usize) -> std::io::Result<Vec<u8>> {
     let set = ObjSet {
         material_library: None,
         objects,
     };
-    let mut out = Vec::new();
+    let mut out = Vec::with_capacity(capacity);
     obj_exporter::export(&set, &mut out)?;
     Ok(out)
 }
@@ -145,10 +169,10 @@ pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
         normals: Vec::new(),
         geometry: Vec::new(),
     };
-    w.write_all(&export(vec![header])?)?;
+    w.write_all(&export(vec![header], 0)?)?;
     let texts: Vec<Vec<u8>> = pieces(mesh)
         .into_par_iter()
-        .map(|piece| export(vec![object(mesh, piece, "")]))
+        .map(|piece| export(vec![object(mesh, piece, "")], 3 + piece_bytes(mesh, piece)))
         .collect::<std::io::Result<_>>()?;
     for text in texts {
         // Each piece's text starts with its empty object's `o \n`.
@@ -174,6 +198,10 @@ impl super::format::FileFormat for ObjFormat {
 
     fn files(&self) -> super::format::Files {
         super::format::Files::PerSequence
+    }
+
+    fn mesh_size_hint(&self, mesh: &FrameMesh) -> usize {
+        size_hint(mesh)
     }
 
     fn encode_mesh(&self, mesh: &FrameMesh, out: &mut dyn Write) -> std::io::Result<()> {
@@ -230,7 +258,11 @@ mod tests {
                     .collect(),
             }],
         };
-        let expected = export(vec![whole]).unwrap();
+        let expected = export(vec![whole], 0).unwrap();
+        assert!(
+            expected.len() <= size_hint(&mesh),
+            "the size hint bounds the file"
+        );
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
