@@ -18,6 +18,8 @@
 
 use std::sync::Mutex;
 
+use rayon::prelude::*;
+
 use op_dynamics::contributors::{Contribution, Contributor, ContributorInput};
 use op_dynamics::{Point3, Quat, Real, Vec3, World};
 
@@ -123,7 +125,7 @@ impl ContactForces {
     ) -> Result<ContactFigures, ContactError> {
         let fields = self
             .skins
-            .iter()
+            .par_iter()
             .map(|s| {
                 s.state
                     .posed_field(|id| state(id).map(|p| (p.position, p.orientation)))

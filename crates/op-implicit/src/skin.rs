@@ -2,6 +2,7 @@
 //! propose the use of an oriented particles system to handle skeletons").
 
 use op_dynamics::{Particles, Point3, Quat, World};
+use rayon::prelude::*;
 
 use crate::error::SkinError;
 use crate::field::Field;
@@ -22,11 +23,11 @@ impl SkinState {
     /// Errors: a particle `pose` does not know.
     pub fn posed_field(
         &self,
-        pose: impl Fn(u32) -> Option<(Point3, Quat)>,
+        pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
     ) -> Result<Field, SkinError> {
         let posed = self
             .attachments
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(index, &(id, prim))| {
                 let (position, orientation) =

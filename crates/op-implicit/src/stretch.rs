@@ -72,9 +72,13 @@ impl StretchCompensation {
     /// density: factor 1 now, compensated from then on.
     pub fn apply(&mut self, field: &mut Field) {
         match self {
-            StretchCompensation::Uniform(r) => scale_to(field, |_, _| Some(*r)),
+            StretchCompensation::Uniform(r) => scale_to(field, |_| Some(*r)),
             StretchCompensation::PerParticle(rest) => {
-                scale_to(field, |id, rho| Some(*rest.entry(id).or_insert(rho)))
+                let now = densities(field);
+                for (p, &rho) in field.primitives().iter().zip(&now) {
+                    rest.entry(p.particle()).or_insert(rho);
+                }
+                scale_by(field, &now, |id| rest.get(&id).copied())
             }
         }
     }
@@ -85,10 +89,8 @@ impl StretchCompensation {
     /// from references the skin stages keep (`crate::contact_forces`).
     pub fn apply_held(&self, field: &mut Field) {
         match self {
-            StretchCompensation::Uniform(r) => scale_to(field, |_, _| Some(*r)),
-            StretchCompensation::PerParticle(rest) => {
-                scale_to(field, |id, _| rest.get(&id).copied())
-            }
+            StretchCompensation::Uniform(r) => scale_to(field, |_| Some(*r)),
+            StretchCompensation::PerParticle(rest) => scale_to(field, |id| rest.get(&id).copied()),
         }
     }
 
@@ -101,16 +103,20 @@ impl StretchCompensation {
 }
 
 /// Scales the amplitude of every primitive of `field` by `reference /
-/// current` density, the reference given per particle id and current
-/// density by `reference` (none, or a density that is not positive:
-/// factor 1).
-fn scale_to(field: &mut Field, mut reference: impl FnMut(u32, Real) -> Option<Real>) {
+/// current` density, the reference given per particle id by `reference`
+/// (none, or a density that is not positive: factor 1).
+fn scale_to(field: &mut Field, reference: impl Fn(u32) -> Option<Real> + Sync) {
     let now = densities(field);
+    scale_by(field, &now, reference);
+}
+
+/// [`scale_to`] with the current densities `now` (in primitive order).
+fn scale_by(field: &mut Field, now: &[Real], reference: impl Fn(u32) -> Option<Real> + Sync) {
     let factors: Vec<Real> = field
         .primitives()
-        .iter()
-        .zip(&now)
-        .map(|(p, &rho)| match reference(p.particle(), rho) {
+        .par_iter()
+        .zip(now)
+        .map(|(p, &rho)| match reference(p.particle()) {
             Some(r) if rho > 0.0 && r > 0.0 => r / rho,
             _ => 1.0,
         })
