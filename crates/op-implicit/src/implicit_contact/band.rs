@@ -104,25 +104,16 @@ fn overlapped((ea, eb): (Real, Real), (fa, fb): (Real, Real)) -> bool {
 /// contact surface of `a` and `b` (module docs), in increasing node and
 /// axis: nodes are evaluated only in the blocks both objects reach.
 pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
-    let Some((active, lists_a, lists_b)) = active_blocks(grid, a, b) else {
-        return Vec::new();
-    };
     let arch = pulp::Arch::new();
-    let mut edges: Vec<(usize, usize)> = active
-        .par_iter()
-        .flat_map_iter(|&k| {
-            let Some((va, _)) = sample_unless_below(a, grid, &lists_a, k, ISO, arch) else {
-                return Vec::new();
-            };
-            let Some((vb, _)) = sample_unless_below(b, grid, &lists_b, k, ISO, arch) else {
-                return Vec::new();
-            };
-            block_edges(grid, &va, &vb, &grid.block(k), crossed)
-        })
-        .collect();
-    edges.sort_unstable();
-    edges.dedup();
-    edges
+    edges_in_active_blocks(grid, a, b, |k, lists_a, lists_b| {
+        let Some((va, _)) = sample_unless_below(a, grid, lists_a, k, ISO, arch) else {
+            return Vec::new();
+        };
+        let Some((vb, _)) = sample_unless_below(b, grid, lists_b, k, ISO, arch) else {
+            return Vec::new();
+        };
+        block_edges(grid, &va, &vb, &grid.block(k), crossed)
+    })
 }
 
 /// The edges `(node, axis)` of `grid` that the interpenetration region of
@@ -132,49 +123,50 @@ pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, u
 /// iso value ([`box_bounds`]), and B is splatted only where A's splatted
 /// values pass it somewhere.
 pub(super) fn overlap_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
-    let Some((active, lists_a, lists_b)) = active_blocks(grid, a, b) else {
-        return Vec::new();
-    };
     let arch = pulp::Arch::new();
+    edges_in_active_blocks(grid, a, b, |k, lists_a, lists_b| {
+        let block = grid.block(k);
+        let (lo, hi) = block.bounds(grid);
+        let (list_a, list_b) = (lists_a.of(k), lists_b.of(k));
+        let reaches = |field: &Field, list: &[u32]| {
+            let (_, upper) = box_bounds(field, (&lo, &hi), list);
+            upper + margin(upper) >= ISO
+        };
+        if !(reaches(a, list_a) && reaches(b, list_b)) {
+            return Vec::new();
+        }
+        let (va, _) = splat_block(a, grid, &block, list_a, arch);
+        if va.iter().all(|&v| v <= ISO) {
+            return Vec::new();
+        }
+        let (vb, _) = splat_block(b, grid, &block, list_b, arch);
+        block_edges(grid, &va, &vb, &block, overlapped)
+    })
+}
+
+/// The edges `per_block` lists in the blocks of `grid` that both objects'
+/// spheres reach (given the block and each object's primitives per
+/// block), listed in parallel, in increasing node and axis and each once
+/// (a block lists the edges of its far faces too).
+fn edges_in_active_blocks(
+    grid: &Grid,
+    a: &Field,
+    b: &Field,
+    per_block: impl Fn(usize, &BlockLists, &BlockLists) -> Vec<(usize, usize)> + Sync,
+) -> Vec<(usize, usize)> {
+    let (in_a, in_b) = (reached(grid, a.spheres()), reached(grid, b.spheres()));
+    let active: Vec<usize> = (0..in_a.len()).filter(|&k| in_a[k] && in_b[k]).collect();
+    if active.is_empty() {
+        return Vec::new();
+    }
+    let (lists_a, lists_b) = (BlockLists::new(a, grid), BlockLists::new(b, grid));
     let mut edges: Vec<(usize, usize)> = active
         .par_iter()
-        .flat_map_iter(|&k| {
-            let block = grid.block(k);
-            let (lo, hi) = block.bounds(grid);
-            let (list_a, list_b) = (lists_a.of(k), lists_b.of(k));
-            let reaches = |field: &Field, list: &[u32]| {
-                let (_, upper) = box_bounds(field, (&lo, &hi), list);
-                upper + margin(upper) >= ISO
-            };
-            if !(reaches(a, list_a) && reaches(b, list_b)) {
-                return Vec::new();
-            }
-            let (va, _) = splat_block(a, grid, &block, list_a, arch);
-            if va.iter().all(|&v| v <= ISO) {
-                return Vec::new();
-            }
-            let (vb, _) = splat_block(b, grid, &block, list_b, arch);
-            block_edges(grid, &va, &vb, &block, overlapped)
-        })
+        .flat_map_iter(|&k| per_block(k, &lists_a, &lists_b))
         .collect();
     edges.sort_unstable();
     edges.dedup();
     edges
-}
-
-/// The blocks of `grid` that both objects' spheres reach, and each
-/// object's primitives per block; `None` when there are none.
-fn active_blocks(
-    grid: &Grid,
-    a: &Field,
-    b: &Field,
-) -> Option<(Vec<usize>, BlockLists, BlockLists)> {
-    let (in_a, in_b) = (reached(grid, a.spheres()), reached(grid, b.spheres()));
-    let active: Vec<usize> = (0..in_a.len()).filter(|&k| in_a[k] && in_b[k]).collect();
-    if active.is_empty() {
-        return None;
-    }
-    Some((active, BlockLists::new(a, grid), BlockLists::new(b, grid)))
 }
 
 /// The edges between the nodes of `block` and its far layer whose
