@@ -123,18 +123,24 @@ impl ContactForces {
         state: &(dyn Fn(u32) -> Option<ParticleState> + Sync),
         add: &mut dyn FnMut(u32, Vec3, Vec3),
     ) -> Result<ContactFigures, ContactError> {
-        let fields = self
+        let mut fields = self
             .skins
             .par_iter()
             .map(|s| {
                 s.state
-                    .posed_field(|id| state(id).map(|p| (p.position, p.orientation)))
+                    .posed_uncompensated(|id| state(id).map(|p| (p.position, p.orientation)))
                     .map_err(|source| ContactError::Pose {
                         skin: s.name.clone(),
                         source,
                     })
             })
             .collect::<Result<Vec<Field>, _>>()?;
+        let regions = self.regions(t, &fields);
+        fields
+            .par_iter_mut()
+            .zip(&self.skins)
+            .zip(&regions)
+            .for_each(|((field, skin), regions)| skin.state.compensate(field, regions.as_deref()));
         let mut figures = ContactFigures::default();
         for tool in &self.tools {
             for &k in &tool.skins {
@@ -182,6 +188,50 @@ impl ContactForces {
             }
         }
         Ok(figures)
+    }
+
+    /// Per skin, the boxes where an evaluation at time `t` reads its
+    /// field (`None`: everywhere): the sampling box of each tool it meets
+    /// and the common box of the supports of each skin it overlaps, each
+    /// padded by three cells (the sampling grids reach a cell beyond their
+    /// box, and their blocks list the primitives a cell beyond their
+    /// nodes). The stretch compensation is computed there only: elsewhere
+    /// the weights are never read.
+    fn regions(&self, t: Real, fields: &[Field]) -> Vec<Option<Vec<(Point3, Point3)>>> {
+        let mut regions: Vec<Option<Vec<(Point3, Point3)>>> = vec![Some(Vec::new()); fields.len()];
+        let mut add = |k: usize, (lo, hi): (Point3, Point3), h: Real| {
+            let pad = Vec3::repeat(3.0 * h);
+            let (lo, hi) = (lo - pad, hi + pad);
+            let finite = lo.iter().chain(hi.iter()).all(|x| x.is_finite());
+            match (&mut regions[k], finite) {
+                (Some(boxes), true) => boxes.push((lo, hi)),
+                (slot, _) => *slot = None,
+            }
+        };
+        for tool in &self.tools {
+            for &k in &tool.skins {
+                let h = self.skins[k].cell_size;
+                add(k, tool.region(t, h), h);
+            }
+        }
+        for i in 0..fields.len() {
+            for j in i + 1..fields.len() {
+                let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) =
+                    (fields[i].support_box(), fields[j].support_box())
+                else {
+                    continue;
+                };
+                let (lo, hi) = (lo_a.sup(&lo_b), hi_a.inf(&hi_b));
+                if (0..3).all(|k| hi[k] > lo[k])
+                    || !(lo.iter().chain(hi.iter()).all(|x| x.is_finite()))
+                {
+                    let h = self.skins[i].cell_size.min(self.skins[j].cell_size);
+                    add(i, (lo, hi), h);
+                    add(j, (lo, hi), h);
+                }
+            }
+        }
+        regions
     }
 
     /// [`ContactForces::evaluate`] on `world`'s particles at its time.

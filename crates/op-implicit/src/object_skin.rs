@@ -254,6 +254,22 @@ pub struct SkinTool {
 }
 
 impl SkinTool {
+    /// The box a skin of cell `cell_size` is sampled in against the tool
+    /// at world time `t` ([`SkinTool::react`]): the tool's bounding box, a
+    /// cell wider.
+    pub(crate) fn region(&self, t: Real, cell_size: Real) -> (Point3, Point3) {
+        let pose = self.tool.pose(t);
+        let aabb = self
+            .tool
+            .shape()
+            .compute_aabb(&parry_pose(&pose.position, &pose.rotation));
+        let pad = Vec3::repeat(cell_size);
+        (
+            Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - pad,
+            Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + pad,
+        )
+    }
+
     /// The reactions at world time `t` on the skin of field `field` (named
     /// `name`, of cell `cell_size`), each passed to `add` (particle id,
     /// force, torque), and (total reaction force, deepest sample depth).
@@ -273,10 +289,8 @@ impl SkinTool {
         let pose = self.tool.pose(t);
         let frame = parry_pose(&pose.position, &pose.rotation);
         let shape = self.tool.shape();
-        let aabb = shape.compute_aabb(&frame);
         let h = cell_size;
-        let lo = Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - Vec3::repeat(h);
-        let hi = Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + Vec3::repeat(h);
+        let (lo, hi) = self.region(t, h);
         let params = PolygonizeParams::with_cell_size(h);
         // Only samples inside the tool react: a block whose bounding
         // sphere lies outside it (the signed distance moves by at most the

@@ -25,6 +25,17 @@ impl SkinState {
         &self,
         pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
     ) -> Result<Field, SkinError> {
+        let mut field = self.posed_uncompensated(pose)?;
+        self.compensate(&mut field, None);
+        Ok(field)
+    }
+
+    /// [`SkinState::posed_field`] before the stretch compensation
+    /// ([`SkinState::compensate`] adds it).
+    pub fn posed_uncompensated(
+        &self,
+        pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
+    ) -> Result<Field, SkinError> {
         let posed = self
             .attachments
             .par_iter()
@@ -35,11 +46,17 @@ impl SkinState {
                 Ok(prim.posed(id, &position, &orientation))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let mut field = Field::new(posed);
+        Ok(Field::new(posed))
+    }
+
+    /// Applies the stretch compensation's held references to `field`
+    /// (posed by [`SkinState::posed_uncompensated`]), on the primitives
+    /// that meet one of the boxes `regions` only when given
+    /// ([`StretchCompensation::apply_held_within`]).
+    pub fn compensate(&self, field: &mut Field, regions: Option<&[(Point3, Point3)]>) {
         if let Some(stretch) = &self.stretch {
-            stretch.apply_held(&mut field);
+            stretch.apply_held_within(field, regions);
         }
-        Ok(field)
     }
 }
 

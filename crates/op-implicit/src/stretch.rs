@@ -31,10 +31,11 @@
 
 use std::collections::BTreeMap;
 
-use op_dynamics::Real;
+use op_dynamics::{Point3, Real};
 use rayon::prelude::*;
 
 use crate::field::Field;
+use crate::primitives::PosedPrimitive;
 
 /// The reference densities of a skin's primitives (module doc).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -88,9 +89,32 @@ impl StretchCompensation {
     /// force contributor poses its fields so, at every force evaluation,
     /// from references the skin stages keep (`crate::contact_forces`).
     pub fn apply_held(&self, field: &mut Field) {
+        self.apply_held_within(field, None);
+    }
+
+    /// [`StretchCompensation::apply_held`] on the primitives whose
+    /// bounding sphere's box meets one of the boxes `regions` (all when
+    /// `None`): the others keep their amplitude, for a caller that reads
+    /// the field only in those boxes (the contact, near a tool or another
+    /// skin). Each compensated primitive gets the factor the whole field's
+    /// compensation gives it: its density sums every primitive reaching
+    /// its particle.
+    pub fn apply_held_within(&self, field: &mut Field, regions: Option<&[(Point3, Point3)]>) {
+        let within = |p: &PosedPrimitive| {
+            let Some(regions) = regions else {
+                return true;
+            };
+            let (c, r) = p.bounding_sphere();
+            regions
+                .iter()
+                .any(|(lo, hi)| (0..3).all(|k| c[k] - r <= hi[k] && lo[k] <= c[k] + r))
+        };
+        let now = densities_within(field, within);
         match self {
-            StretchCompensation::Uniform(r) => scale_to(field, |_| Some(*r)),
-            StretchCompensation::PerParticle(rest) => scale_to(field, |id| rest.get(&id).copied()),
+            StretchCompensation::Uniform(r) => scale_by(field, &now, |_| Some(*r)),
+            StretchCompensation::PerParticle(rest) => {
+                scale_by(field, &now, |id| rest.get(&id).copied())
+            }
         }
     }
 
@@ -128,10 +152,19 @@ fn scale_by(field: &mut Field, now: &[Real], reference: impl Fn(u32) -> Option<R
 /// particle (its own primitive included), in primitive order; summed in
 /// increasing primitive index, so the same bits at any thread count.
 fn densities(field: &Field) -> Vec<Real> {
+    densities_within(field, |_| true)
+}
+
+/// [`densities`] of the primitives `within` keeps, 0 for the others (a
+/// density of 0 gives the factor 1: the amplitude is kept).
+fn densities_within(field: &Field, within: impl Fn(&PosedPrimitive) -> bool + Sync) -> Vec<Real> {
     field
         .primitives()
         .par_iter()
         .map(|p| {
+            if !within(p) {
+                return 0.0;
+            }
             let x = p.particle_position();
             let mut rho = 0.0;
             field.for_each_near(x, |_, q| rho += q.field(x) / q.weight());
@@ -181,6 +214,43 @@ mod tests {
             }
         }
         lo
+    }
+
+    /// Compensating within a box gives the primitives that meet it the
+    /// weights of the whole field's compensation, bit for bit, and leaves
+    /// the others as they were.
+    #[test]
+    fn compensation_within_a_box_is_the_whole_ones_there() {
+        let rest = sheet(9, 1.0, 1.7, 1.2, 1.0);
+        let comp = StretchCompensation::per_particle(&rest);
+        let stretched = sheet(9, 1.3, 1.7, 1.2, 1.0);
+        let mut whole = stretched.clone();
+        comp.apply_held(&mut whole);
+        let region = (Point3::new(-1.0, -1.0, -1.0), Point3::new(2.0, 2.0, 1.0));
+        let mut within = stretched.clone();
+        comp.apply_held_within(&mut within, Some(&[region]));
+        let (mut inside, mut outside) = (0, 0);
+        for ((p, w), q) in stretched
+            .primitives()
+            .iter()
+            .zip(within.primitives())
+            .zip(whole.primitives())
+        {
+            let (c, r) = p.bounding_sphere();
+            let meets = (0..3).all(|k| c[k] - r <= region.1[k] && region.0[k] <= c[k] + r);
+            if meets {
+                inside += 1;
+                assert_eq!(w.weight(), q.weight());
+                assert!((w.weight() - 1.0).abs() > 0.01, "stretched: compensated");
+            } else {
+                outside += 1;
+                assert_eq!(w.weight(), p.weight());
+            }
+        }
+        assert!(
+            inside > 5 && outside > 5,
+            "{inside} inside, {outside} outside"
+        );
     }
 
     #[test]
