@@ -67,7 +67,7 @@ fn values_without_a_finite_run_are_refused() {
         ),
         (
             "(name: \"s\", materials: {\"m\": ()}, objects: [(name: \"s\", material: \"m\", \
-             generator: Chain(count: 10, spacing: 1), skin: (primitive: Point, radius: 100, \
+             generator: Chain(count: 10, spacing: 1), skin: (primitive: Point, radius: 300, \
              cell_size: 0.25))])"
                 .to_string(),
             "skin.cell_size",
