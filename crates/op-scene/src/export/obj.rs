@@ -154,7 +154,7 @@ fn export(objects: Vec<Object>, capacity: usize) -> std::io::Result<Vec<u8>> {
 }
 
 /// Writes `mesh` as a one-object OBJ file: obj-exporter's text of the
-/// whole object, encoded in pieces of [`PIECE`] lines in parallel and
+/// whole object, encoded in pieces of 16,384 lines in parallel and
 /// written in order (each piece is an unnamed object whose `o` line is
 /// dropped), so the bytes are the same at any thread count and as one
 /// call would write them. Measured on `reports/scenes.md`'s skinned
