@@ -50,7 +50,7 @@ pub struct PolygonizeParams {
 }
 
 /// The default [`PolygonizeParams::max_nodes_per_axis`]: a skinned cloth
-/// of 316 x 316 particles at a cell of 0.25 needs 1,273. A skin's narrow
+/// of 316 x 316 particles at a cell of 0.25 needs about 1,280. A skin's narrow
 /// band costs as its area in cells (the blocks its primitives reach), but
 /// a [`ScalarField`] without a bounding field is sampled at every node of
 /// the region, as its volume.
@@ -253,8 +253,8 @@ pub fn polygonize_deformed(
 /// evaluated at the nodes of the blocks where it can bite: where its
 /// lower bound over the block (the signed distance moves by at most the
 /// distance moved) is below the largest node value. Measured on a
-/// skinned cloth of 14,400 particles draped on a ball (`reports/scenes.md`
-/// case, 3 frames, 1 thread): export took 4.57 s with every node
+/// skinned cloth of 120 x 120 particles dropped on a ball (the scene
+/// report's cloth, 3 frames, 1 thread): export took 4.57 s with every node
 /// evaluated one by one, 2.50 s with this, the same bytes.
 pub fn polygonize_clipped(
     own: &Field,

@@ -157,8 +157,8 @@ fn export(objects: Vec<Object>, capacity: usize) -> std::io::Result<Vec<u8>> {
 /// whole object, encoded in pieces of 16,384 lines in parallel and
 /// written in order (each piece is an unnamed object whose `o` line is
 /// dropped), so the bytes are the same at any thread count and as one
-/// call would write them. Measured on `reports/scenes.md`'s skinned
-/// cloth of 120 x 120 particles (skins of 403,822 vertices, 3 frames):
+/// call would write them. Measured on the scene report's skinned cloth
+/// at 120 x 120 particles (skins of 403,822 vertices, 3 frames):
 /// the export stage took 2.12 s at 2 threads with one call per file, 1.32 s
 /// with pieces (2.50 and 2.26 s at 1 thread).
 pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
