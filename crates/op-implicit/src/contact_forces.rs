@@ -21,7 +21,7 @@ use std::sync::Mutex;
 use rayon::prelude::*;
 
 use op_dynamics::contributors::{Contribution, Contributor, ContributorInput};
-use op_dynamics::{Point3, Quat, Real, Vec3, World};
+use op_dynamics::{Point3, Quat, Real, Vec3, World, MIN_PARALLEL_LEN};
 
 use crate::object_skin::{ContactError, ObjectSkin, SkinTool};
 use crate::skin::SkinState;
@@ -123,9 +123,13 @@ impl ContactForces {
         state: &(dyn Fn(u32) -> Option<ParticleState> + Sync),
         add: &mut dyn FnMut(u32, Vec3, Vec3),
     ) -> Result<ContactFigures, ContactError> {
+        // Side by side only when the skins are large: a small one's posing
+        // costs less than waking another thread.
+        let large = self.skins.iter().map(|s| s.state.len()).sum::<usize>() >= MIN_PARALLEL_LEN;
         let mut fields = self
             .skins
             .par_iter()
+            .with_min_len(if large { 1 } else { self.skins.len().max(1) })
             .map(|s| {
                 s.state
                     .posed_uncompensated(|id| state(id).map(|p| (p.position, p.orientation)))
@@ -138,6 +142,7 @@ impl ContactForces {
         let regions = self.regions(t, &fields);
         fields
             .par_iter_mut()
+            .with_min_len(if large { 1 } else { self.skins.len().max(1) })
             .zip(&self.skins)
             .zip(&regions)
             .for_each(|((field, skin), regions)| skin.state.compensate(field, regions.as_deref()));

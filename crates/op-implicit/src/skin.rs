@@ -17,6 +17,16 @@ pub struct SkinState {
 }
 
 impl SkinState {
+    /// Number of attachments (primitives).
+    pub fn len(&self) -> usize {
+        self.attachments.len()
+    }
+
+    /// Whether it has no attachment.
+    pub fn is_empty(&self) -> bool {
+        self.attachments.is_empty()
+    }
+
     /// The field of these attachments posed where `pose` puts each
     /// particle (position and orientation by id), with the stretch
     /// compensation's references held ([`StretchCompensation::apply_held`]).
@@ -39,6 +49,7 @@ impl SkinState {
         let posed = self
             .attachments
             .par_iter()
+            .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
             .enumerate()
             .map(|(index, &(id, prim))| {
                 let (position, orientation) =

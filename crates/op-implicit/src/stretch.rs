@@ -139,6 +139,7 @@ fn scale_by(field: &mut Field, now: &[Real], reference: impl Fn(u32) -> Option<R
     let factors: Vec<Real> = field
         .primitives()
         .par_iter()
+        .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
         .zip(now)
         .map(|(p, &rho)| match reference(p.particle()) {
             Some(r) if rho > 0.0 && r > 0.0 => r / rho,
@@ -161,6 +162,7 @@ fn densities_within(field: &Field, within: impl Fn(&PosedPrimitive) -> bool + Sy
     field
         .primitives()
         .par_iter()
+        .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
         .map(|p| {
             if !within(p) {
                 return 0.0;
