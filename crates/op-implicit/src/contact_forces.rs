@@ -23,6 +23,7 @@ use rayon::prelude::*;
 use op_dynamics::contributors::{Contribution, Contributor, ContributorInput};
 use op_dynamics::{Point3, Quat, Real, Vec3, World, MIN_PARALLEL_LEN};
 
+use crate::implicit_contact::common_box;
 use crate::object_skin::{ContactError, ObjectSkin, SkinTool};
 use crate::skin::SkinState;
 use crate::{ContactPair, Field, ImplicitContactParams};
@@ -204,36 +205,35 @@ impl ContactForces {
     /// the weights are never read.
     fn regions(&self, t: Real, fields: &[Field]) -> Vec<Option<Vec<(Point3, Point3)>>> {
         let mut regions: Vec<Option<Vec<(Point3, Point3)>>> = vec![Some(Vec::new()); fields.len()];
-        let mut add = |k: usize, (lo, hi): (Point3, Point3), h: Real| {
+        // A box, padded; `None` or a non-finite box: everywhere.
+        let mut add = |k: usize, region: Option<(Point3, Point3)>, h: Real| {
             let pad = Vec3::repeat(3.0 * h);
-            let (lo, hi) = (lo - pad, hi + pad);
-            let finite = lo.iter().chain(hi.iter()).all(|x| x.is_finite());
-            match (&mut regions[k], finite) {
-                (Some(boxes), true) => boxes.push((lo, hi)),
+            let padded = region
+                .map(|(lo, hi)| (lo - pad, hi + pad))
+                .filter(|(lo, hi)| lo.iter().chain(hi.iter()).all(|x| x.is_finite()));
+            match (&mut regions[k], padded) {
+                (Some(boxes), Some(b)) => boxes.push(b),
                 (slot, _) => *slot = None,
             }
         };
         for tool in &self.tools {
             for &k in &tool.skins {
                 let h = self.skins[k].cell_size;
-                add(k, tool.region(t, h), h);
+                add(k, Some(tool.region(t, h)), h);
             }
         }
         for i in 0..fields.len() {
             for j in i + 1..fields.len() {
-                let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) =
-                    (fields[i].support_box(), fields[j].support_box())
-                else {
-                    continue;
+                let h = self.skins[i].cell_size.min(self.skins[j].cell_size);
+                // A non-finite box (an error): compensate everywhere, and
+                // let the pair's reactions report it.
+                let common = match common_box(&fields[i], &fields[j]) {
+                    Ok(None) => continue,
+                    Ok(Some(common)) => Some(common),
+                    Err(_) => None,
                 };
-                let (lo, hi) = (lo_a.sup(&lo_b), hi_a.inf(&hi_b));
-                if (0..3).all(|k| hi[k] > lo[k])
-                    || !(lo.iter().chain(hi.iter()).all(|x| x.is_finite()))
-                {
-                    let h = self.skins[i].cell_size.min(self.skins[j].cell_size);
-                    add(i, (lo, hi), h);
-                    add(j, (lo, hi), h);
-                }
+                add(i, common, h);
+                add(j, common, h);
             }
         }
         regions

@@ -441,7 +441,10 @@ impl<'a> ContactPair<'a> {
 /// The intersection `(lo, hi)` of the support boxes of `a` and `b`; `None`
 /// when they do not overlap. Error: a non-finite box (each box is checked
 /// on its own: the component-wise max and min of a pair drop a NaN).
-fn common_box(a: &Field, b: &Field) -> Result<Option<(Point3, Point3)>, PolygonizeError> {
+pub(crate) fn common_box(
+    a: &Field,
+    b: &Field,
+) -> Result<Option<(Point3, Point3)>, PolygonizeError> {
     let (Some((lo_a, hi_a)), Some((lo_b, hi_b))) = (a.support_box(), b.support_box()) else {
         return Ok(None);
     };

@@ -1,9 +1,9 @@
 //! The skins of a scene's objects and their contact (seed 002 §6, fig. 6):
 //! each skinned object carries an [`ObjectSkin`] (the skin contact acts on
 //! and, when smoother, the one shown), obstacle tools meet skins as
-//! [`SkinTool`]s, and [`contact_step`] computes the reactions of every
+//! [`SkinTool`]s, and [`crate::contact_forces::ContactForces`] computes the reactions of every
 //! pair of skins (the gradient of Gascuel's contact energy) and of every
-//! skin against the tools it meets, once per interval, as a force
+//! skin against the tools it meets, at every force evaluation, as a force
 //! contributor ([`op_dynamics::contributors`]). The stages that run them
 //! are in [`crate::skin_stages`].
 //!
@@ -17,7 +17,6 @@
 //! `e / |grad f_A| + e / |grad f_B|` (how deep each undeformed skin reaches
 //! past the contact surface, summed).
 
-use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Point3, Real, Vec3, World};
 use op_modeling::tools::{parry_pose, signed_distance};
 use op_modeling::Tool;
@@ -25,7 +24,7 @@ use parry3d_f64::math::Pose;
 use parry3d_f64::shape::Shape;
 use serde::{Deserialize, Serialize};
 
-use crate::contact_forces::{ContactForces, ParticleState};
+use crate::contact_forces::ParticleState;
 use crate::{
     collider_reactions, polygonize, polygonize_clipped, polygonize_deformed, surface_points,
     ContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive, Skin, SkinError,
@@ -329,7 +328,8 @@ impl SkinTool {
     }
 }
 
-/// Why skin contact could not be computed ([`contact_step`]).
+/// Why skin contact could not be computed
+/// ([`crate::contact_forces::ContactForces::evaluate`]).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ContactError {
@@ -359,35 +359,4 @@ pub enum ContactError {
         /// Why.
         source: PolygonizeError,
     },
-}
-
-/// Re-poses `skins` on `world`, computes the contact reactions of every
-/// pair of skins and of every skin against the obstacle tools in `tools`
-/// ([`ContactForces::evaluate`]), replaces `held` with them (to act over
-/// the coming interval of length `dt`,
-/// [`op_dynamics::World::advance_to_with`]: an explicit coupling, first
-/// order in `dt`; the scene's contact stage evaluates [`ContactForces`] at
-/// every force evaluation instead) and updates `stats`.
-pub fn contact_step(
-    world: &World,
-    skins: &mut [ObjectSkin],
-    tools: &[SkinTool],
-    dt: Real,
-    stats: &mut ContactStats,
-    held: &mut ExternalAccumulator,
-) -> Result<(), ContactError> {
-    held.clear();
-    held.grow(world.particles().id_bound());
-    for s in skins.iter_mut() {
-        s.skin.repose(world).map_err(|source| ContactError::Pose {
-            skin: s.name.clone(),
-            source,
-        })?;
-    }
-    let mut forces = ContactForces::default();
-    forces.update(skins, tools, dt);
-    let figures = forces.evaluate_on(world, &mut |id, f, t| held.add(id, f, t))?;
-    stats.max_penetration = stats.max_penetration.max(figures.max_penetration);
-    stats.total_impulse += figures.force * dt;
-    Ok(())
 }

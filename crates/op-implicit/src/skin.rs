@@ -28,20 +28,9 @@ impl SkinState {
     }
 
     /// The field of these attachments posed where `pose` puts each
-    /// particle (position and orientation by id), with the stretch
-    /// compensation's references held ([`StretchCompensation::apply_held`]).
-    /// Errors: a particle `pose` does not know.
-    pub fn posed_field(
-        &self,
-        pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
-    ) -> Result<Field, SkinError> {
-        let mut field = self.posed_uncompensated(pose)?;
-        self.compensate(&mut field, None);
-        Ok(field)
-    }
-
-    /// [`SkinState::posed_field`] before the stretch compensation
-    /// ([`SkinState::compensate`] adds it).
+    /// particle (position and orientation by id), before the stretch
+    /// compensation ([`SkinState::compensate`] adds it). Errors: a particle
+    /// `pose` does not know.
     pub fn posed_uncompensated(
         &self,
         pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,

@@ -24,9 +24,7 @@ use std::f64::consts::SQRT_2;
 
 use op_dynamics::math::shortest_rotation;
 use op_dynamics::{Point3, Real, Vec3, World};
-pub use op_implicit::object_skin::{
-    contact_step, ContactError, ContactStats, ObjectSkin, SkinTool,
-};
+pub use op_implicit::object_skin::{ContactError, ContactStats, ObjectSkin, SkinTool};
 use op_implicit::{Primitive, Skin, SkinError, StretchCompensation};
 use serde::{Deserialize, Serialize};
 
