@@ -151,6 +151,16 @@ enum Command {
         /// surface interpolates the samples).
         #[arg(long, default_value_t = 0.0)]
         relax: f64,
+        /// Approximate the samples within their noise: seed the particles
+        /// on a smoothed estimate of the surface, thinned to at least four
+        /// noise levels apart, instead of on every sample. Default: when
+        /// the estimated noise exceeds a tenth of the samples' spacing.
+        #[arg(long, conflicts_with = "interpolate")]
+        approximate: bool,
+        /// Pass through every sample, however noisy (the paper's surface
+        /// interpolation).
+        #[arg(long)]
+        interpolate: bool,
     },
     /// Print the scene format as a JSON Schema (for editors that complete
     /// and check JSON scenes), or with `--markdown` as the field reference
@@ -236,7 +246,16 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             spacing,
             open,
             relax,
-        }) => run_fit(&points, &out, spacing, open, relax),
+            approximate,
+            interpolate,
+        }) => run_fit(
+            &points,
+            &out,
+            spacing,
+            open,
+            relax,
+            (approximate || interpolate).then_some(approximate),
+        ),
         Some(Command::Schema { markdown }) => {
             if markdown {
                 outln!("{}", op_scene::reference::field_reference().trim_end());
@@ -295,6 +314,7 @@ fn run_fit(
     spacing: Option<f64>,
     open: bool,
     relax: f64,
+    approximate: Option<bool>,
 ) -> Result<(), Failure> {
     // Checked before the fit, which may take minutes.
     if !is_obj(out) {
@@ -321,6 +341,7 @@ fn run_fit(
         spacing,
         open,
         relax_time: relax,
+        approximate,
         ..Default::default()
     };
     let fit = op_scene::fit::fit(&data, &params).map_err(|e| Failure {

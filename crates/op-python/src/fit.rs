@@ -27,7 +27,7 @@ pub struct PyFit {
     /// and `faces` (counts), `euler_characteristic`, `boundary_loops`,
     /// `pieces`, `closed`, `rms_distance`, `max_distance` (samples to
     /// mesh), `spacing`, `normals`, `dropped_outliers`, `noise_estimate`,
-    /// `thin_features`.
+    /// `approximated`, `thin_features`.
     #[pyo3(get)]
     figures: Py<PyAny>,
     fit: op_scene::fit::Fit,
@@ -94,14 +94,17 @@ fn samples(points: &Bound<'_, PyAny>, normals: Option<&Bound<'_, PyAny>>) -> PyR
 /// or an (n, 3) array (optional `normals`, (n, 3)); `spacing` the sample
 /// spacing (default: the median nearest-sample distance); `open` for open
 /// data (only gaps within the search range are filled); `relax` a
-/// relaxation time after the release (smooths noisy samples; default 0:
-/// the surface passes through the samples).
+/// relaxation time after the release (default 0: the surface passes
+/// through the particles' seeds); `approximate` `True` seeds the particles
+/// on a smoothed estimate of the surface (noisy samples), `False` on every
+/// sample, `None` (default) decides by the samples' estimated noise (more
+/// than a tenth of their spacing: approximated).
 ///
 /// Returns a `FitResult`: `vertices`, `normals`, `faces` and `figures`
 /// (what `opsim fit` prints). Raises `ValueError` for bad input (opsim's
 /// message), `DivergenceError` when the relaxation diverged.
 #[pyfunction]
-#[pyo3(signature = (points, spacing = None, open = false, *, normals = None, relax = 0.0))]
+#[pyo3(signature = (points, spacing = None, open = false, *, normals = None, relax = 0.0, approximate = None))]
 pub fn fit(
     py: Python<'_>,
     points: &Bound<'_, PyAny>,
@@ -109,12 +112,14 @@ pub fn fit(
     open: bool,
     normals: Option<&Bound<'_, PyAny>>,
     relax: Real,
+    approximate: Option<bool>,
 ) -> PyResult<PyFit> {
     let data = samples(points, normals)?;
     let params = FitParams {
         spacing,
         open,
         relax_time: relax,
+        approximate,
         ..Default::default()
     };
     let fit = py

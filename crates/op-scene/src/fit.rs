@@ -58,7 +58,9 @@ pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
 /// the file or `"estimated"`; zero normals count as none),
 /// `dropped_outliers` (samples dropped as outliers before seeding),
 /// `noise_estimate` (the samples' estimated noise, a standard deviation in
-/// their units, like `spacing`) and `thin_features` (`centre`, `samples`,
+/// their units, like `spacing`), `approximated` (whether the particles
+/// were seeded on a smoothed estimate of noisy samples rather than on the
+/// samples) and `thin_features` (`centre`, `samples`,
 /// `thickness`; largest first). A non-finite figure is `null`.
 pub fn figures_json(fit: &Fit) -> String {
     let number = |x: Real| {
@@ -86,7 +88,7 @@ pub fn figures_json(fit: &Fit) -> String {
         })
         .collect();
     format!(
-        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"pieces\": {}, \"closed\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"normals\": \"{}\", \"dropped_outliers\": {}, \"noise_estimate\": {}, \"thin_features\": [{}]}}",
+        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"pieces\": {}, \"closed\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"normals\": \"{}\", \"dropped_outliers\": {}, \"noise_estimate\": {}, \"approximated\": {}, \"thin_features\": [{}]}}",
         fit.particles,
         fit.mesh.vertices.len(),
         fit.mesh.faces.len(),
@@ -100,6 +102,7 @@ pub fn figures_json(fit: &Fit) -> String {
         if fit.normals_given { "given" } else { "estimated" },
         fit.dropped_outliers,
         number(fit.noise_estimate),
+        fit.approximated,
         thin.join(", ")
     )
 }

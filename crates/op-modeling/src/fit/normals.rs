@@ -101,6 +101,23 @@ pub(crate) fn covariance<'a>(
     (mean, cov)
 }
 
+/// Weighted mean and covariance (the weighted sum of the outer products of
+/// the deviations) of `(weight, point)` pairs, summed in the order given.
+pub(crate) fn weighted_covariance<'a>(
+    points: impl Iterator<Item = (Real, &'a Point3)> + Clone,
+) -> (Vec3, op_dynamics::Mat3) {
+    let (sum, total) = points.clone().fold((Vec3::zeros(), 0.0), |(s, t), (w, p)| {
+        (s + p.coords * w, t + w)
+    });
+    let mean = sum / total;
+    let mut cov = op_dynamics::Mat3::zeros();
+    for (w, p) in points {
+        let d = p.coords - mean;
+        cov += d * d.transpose() * w;
+    }
+    (mean, cov)
+}
+
 /// [`covariance`] of `points[i]` and its neighbours `points[row]`.
 fn neighbourhood_covariance(
     points: &[Point3],

@@ -56,6 +56,14 @@ pub struct FitParams {
     /// pass. Open data close those narrower than `d_max` instead.
     /// Default: 8.
     pub max_hole: Real,
+    /// Approximate the samples within their noise instead of passing
+    /// through each (`Some(true)`), interpolate them (`Some(false)`), or
+    /// decide by their noise (`None`): samples whose estimated noise
+    /// ([`Fit::noise_estimate`](super::Fit::noise_estimate)) exceeds a
+    /// tenth of their spacing are approximated. Approximating seeds the
+    /// particles on a smoothed estimate of the surface, thinned to a
+    /// spacing of at least four noise levels. Default: `None`.
+    pub approximate: Option<bool>,
 }
 
 impl Default for FitParams {
@@ -71,6 +79,7 @@ impl Default for FitParams {
             neighbours: 12,
             drop_outliers: true,
             max_hole: 8.0,
+            approximate: None,
         }
     }
 }

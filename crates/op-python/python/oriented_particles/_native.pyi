@@ -203,5 +203,6 @@ def fit(
     *,
     normals: Optional[_ArrayLike] = None,
     relax: float = 0.0,
+    approximate: Optional[bool] = None,
 ) -> FitResult:
     """Fits a surface of oriented particles to a point set, as ``opsim fit``."""
