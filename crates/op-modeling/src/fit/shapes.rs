@@ -2,7 +2,7 @@
 //! with a fixed seed, with their distance to the true surface and the
 //! topology a fit must reproduce (genus 0, 1, 2 and an open
 //! patch with a hole). Shared by `tests/fit.rs` and
-//! `crates/op-experiments/examples/fitting_report.rs`.
+//! `crates/op-experiments/examples/fitting_report/`.
 
 use op_dynamics::{Point3, Real, Vec3};
 
