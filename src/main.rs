@@ -142,9 +142,14 @@ enum Command {
         /// Open data: stretching only, so holes wider than the search range
         /// (2.5 spacings) and than the gaps random sampling leaves by chance
         /// at the samples' density (about 4.7 spacings on 5,000 samples)
-        /// stay open.
-        #[arg(long)]
+        /// stay open. Default: open when the samples have a boundary (a
+        /// chain of samples whose neighbours all lie to one side).
+        #[arg(long, conflicts_with = "closed")]
         open: bool,
+        /// Closed data: holes up to 8 spacings are closed even where the
+        /// samples have a boundary.
+        #[arg(long)]
+        closed: bool,
         /// Relaxation time after the samples are released (in time units
         /// of a unit spacing): smooths noisy samples, moving the surface
         /// off them. At most 100 (20,000 relaxation steps). Default: 0 (the
@@ -245,6 +250,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             out,
             spacing,
             open,
+            closed,
             relax,
             approximate,
             interpolate,
@@ -252,7 +258,7 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             &points,
             &out,
             spacing,
-            open,
+            (open || closed).then_some(open),
             relax,
             (approximate || interpolate).then_some(approximate),
         ),
@@ -312,7 +318,7 @@ fn run_fit(
     points: &Path,
     out: &Path,
     spacing: Option<f64>,
-    open: bool,
+    open: Option<bool>,
     relax: f64,
     approximate: Option<bool>,
 ) -> Result<(), Failure> {

@@ -183,19 +183,21 @@ fn torus_with_normals_has_euler_characteristic_zero() {
     assert!(rms < 0.1 * f.spacing, "vertex RMS {rms} vs {}", f.spacing);
 }
 
-/// Through the CLI: an open patch with a hole of diameter 8 spacings (the
-/// search range is 2.5) keeps it (two boundary loops, χ = 0); one missing
-/// sample (a gap of 2 spacings) is filled (one loop, χ = 1). The mesh file
-/// re-reads with the printed vertex count.
+/// Through the CLI, without `--open`: an open patch is found open (its
+/// rim is a boundary) and keeps a hole of diameter 8 spacings (the search
+/// range is 2.5: two boundary loops, χ = 0); one missing sample (a gap of
+/// 2 spacings) is filled (one loop, χ = 1), with `--open` as without. The
+/// mesh file re-reads with the printed vertex count. `--closed` overrides.
 #[test]
 fn open_patch_keeps_a_wide_hole_and_fills_a_narrow_one() {
     let dir = temp_dir("open");
     let wide = dir.join("wide.xyz");
     write_xyz(&wide, &patch_with_hole(24, 4.0), None);
     let mesh = dir.join("wide.obj");
-    let o = opsim(&["fit", "wide.xyz", "--out", "wide.obj", "--open"], &dir);
+    let o = opsim(&["fit", "wide.xyz", "--out", "wide.obj"], &dir);
     assert!(o.status.success(), "{}", text(&o));
     let j = figures(&o);
+    assert_eq!(j["open"], true, "{j}");
     assert!(j["boundary_loops"].as_u64().unwrap() >= 2, "{j}");
     assert_eq!(j["euler_characteristic"], 0, "{j}");
     assert_eq!(
@@ -213,14 +215,23 @@ fn open_patch_keeps_a_wide_hole_and_fills_a_narrow_one() {
         read_point_set(&narrow).unwrap().positions.len(),
         24 * 24 - 1
     );
+    for flags in [&[][..], &["--open"][..]] {
+        let args = [&["fit", "narrow.xyz", "--out", "narrow.obj"][..], flags].concat();
+        let o = opsim(&args, &dir);
+        assert!(o.status.success(), "{}", text(&o));
+        let j = figures(&o);
+        assert_eq!(j["open"], true, "{j}");
+        assert_eq!(j["boundary_loops"], 1, "{flags:?}: {j}");
+        assert_eq!(j["euler_characteristic"], 1, "{flags:?}: {j}");
+    }
+    let o = opsim(&["fit", "wide.xyz", "--out", "c.obj", "--closed"], &dir);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(figures(&o)["open"], false);
     let o = opsim(
-        &["fit", "narrow.xyz", "--out", "narrow.obj", "--open"],
+        &["fit", "wide.xyz", "--out", "c.obj", "--closed", "--open"],
         &dir,
     );
-    assert!(o.status.success(), "{}", text(&o));
-    let j = figures(&o);
-    assert_eq!(j["boundary_loops"], 1, "{j}");
-    assert_eq!(j["euler_characteristic"], 1, "{j}");
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
 }
 
 /// Normals written as `0 0 0` (CGAL's "no normal") are no normals: the
@@ -596,12 +607,9 @@ fn os_errors_are_printed_once() {
 /// (RMS) of the true surface.
 fn random_samples_fit_with_the_right_topology(shape: Shape, n: usize) {
     let data = shape.sample(n, 17);
-    let params = FitParams {
-        open: shape.is_open(),
-        ..FitParams::default()
-    };
-    let f = fit(&data, &params).unwrap();
+    let f = fit(&data, &FitParams::default()).unwrap();
     let name = shape.name();
+    assert_eq!(f.open, shape.is_open(), "{name}: found open or closed");
     let (chi, loops) = shape.topology();
     assert_eq!(
         (f.mesh.euler_characteristic, f.mesh.boundary_loops),

@@ -92,8 +92,10 @@ fn samples(points: &Bound<'_, PyAny>, normals: Option<&Bound<'_, PyAny>>) -> PyR
 /// Fits a surface of oriented particles to a point set and triangulates
 /// it, as `opsim fit` does: `points` is a points file (.xyz, .ply, .obj)
 /// or an (n, 3) array (optional `normals`, (n, 3)); `spacing` the sample
-/// spacing (default: the median nearest-sample distance); `open` for open
-/// data (only gaps within the search range are filled); `relax` a
+/// spacing (default: the median nearest-sample distance); `open` `True`
+/// for open data (only gaps within the search range are filled), `False`
+/// for closed data, `None` (default) open when the samples have a
+/// boundary; `relax` a
 /// relaxation time after the release (default 0: the surface passes
 /// through the particles' seeds); `approximate` `True` seeds the particles
 /// on a smoothed estimate of the surface (noisy samples), `False` on every
@@ -104,12 +106,12 @@ fn samples(points: &Bound<'_, PyAny>, normals: Option<&Bound<'_, PyAny>>) -> PyR
 /// (what `opsim fit` prints). Raises `ValueError` for bad input (opsim's
 /// message), `DivergenceError` when the relaxation diverged.
 #[pyfunction]
-#[pyo3(signature = (points, spacing = None, open = false, *, normals = None, relax = 0.0, approximate = None))]
+#[pyo3(signature = (points, spacing = None, open = None, *, normals = None, relax = 0.0, approximate = None))]
 pub fn fit(
     py: Python<'_>,
     points: &Bound<'_, PyAny>,
     spacing: Option<Real>,
-    open: bool,
+    open: Option<bool>,
     normals: Option<&Bound<'_, PyAny>>,
     relax: Real,
     approximate: Option<bool>,

@@ -60,7 +60,8 @@ pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
 /// `noise_estimate` (the samples' estimated noise, a standard deviation in
 /// their units, like `spacing`), `approximated` (whether the particles
 /// were seeded on a smoothed estimate of noisy samples rather than on the
-/// samples) and `thin_features` (`centre`, `samples`,
+/// samples), `open` (fitted as open data: given, or a boundary found in
+/// the samples) and `thin_features` (`centre`, `samples`,
 /// `thickness`; largest first). A non-finite figure is `null`.
 pub fn figures_json(fit: &Fit) -> String {
     let number = |x: Real| {
@@ -88,7 +89,7 @@ pub fn figures_json(fit: &Fit) -> String {
         })
         .collect();
     format!(
-        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"pieces\": {}, \"closed\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"normals\": \"{}\", \"dropped_outliers\": {}, \"noise_estimate\": {}, \"approximated\": {}, \"thin_features\": [{}]}}",
+        "{{\"particles\": {}, \"vertices\": {}, \"faces\": {}, \"euler_characteristic\": {}, \"boundary_loops\": {}, \"pieces\": {}, \"closed\": {}, \"rms_distance\": {}, \"max_distance\": {}, \"spacing\": {}, \"normals\": \"{}\", \"dropped_outliers\": {}, \"noise_estimate\": {}, \"approximated\": {}, \"open\": {}, \"thin_features\": [{}]}}",
         fit.particles,
         fit.mesh.vertices.len(),
         fit.mesh.faces.len(),
@@ -103,6 +104,7 @@ pub fn figures_json(fit: &Fit) -> String {
         fit.dropped_outliers,
         number(fit.noise_estimate),
         fit.approximated,
+        fit.open,
         thin.join(", ")
     )
 }

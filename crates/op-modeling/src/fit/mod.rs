@@ -154,6 +154,7 @@
 //! deterministic at any thread count; a round's world is built from the
 //! state in slot order; sums here are serial).
 
+mod boundary;
 mod denoise;
 mod holes;
 mod input;
@@ -283,6 +284,10 @@ pub struct Fit {
     /// smoothed estimate of the surface (`denoise.rs`), and the mesh's
     /// distances are still measured to the samples.
     pub approximated: bool,
+    /// Whether the data were fitted as open ([`FitParams::open`], or found
+    /// open: a chain of samples whose nearest neighbours all lie to one
+    /// side in their tangent plane, `boundary.rs`).
+    pub open: bool,
 }
 
 impl Fit {
@@ -454,6 +459,9 @@ pub fn fit_with_stages(
     };
     let n = unit.len();
     let seed_normals = seed_normals(data, params, &kept, &seeds)?;
+    let open = params
+        .open
+        .unwrap_or_else(|| boundary::has_boundary(&seeds, &seed_normals));
     let rest = first_ring_mean(&seeds, 1.5);
     let thin = thin::thin_features(&seeds, &seed_normals, params.triangulation_radius * rest);
     stages.lap("spacing and normals");
@@ -467,7 +475,7 @@ pub fn fit_with_stages(
     })?;
 
     // Filling rounds (seed 000 §7).
-    relaxing.fill(&mut world, params, &seeds, &seed_normals)?;
+    relaxing.fill(&mut world, params, open, &seeds, &seed_normals)?;
     stages.lap("creation rounds");
     // Release (the seeds are the first ids) and relax.
     let seed_ids: Vec<u32> = (0..seeds.len() as u32).collect();
@@ -501,7 +509,7 @@ pub fn fit_with_stages(
     }
     // The final pass: close the holes narrower than the open-surface
     // threshold.
-    close_holes(&mut mesh, params, &seeds, &seed_normals, rest);
+    close_holes(&mut mesh, params, open, &seeds, &seed_normals, rest);
     mesh.measure(&unit);
     stages.lap("holes and distances");
     let thin_features = to_data(&mut mesh, thin, &frame, h, centroid, diagonal)?;
@@ -515,6 +523,7 @@ pub fn fit_with_stages(
             dropped_outliers,
             noise_estimate,
             approximated,
+            open,
         },
         stages.laps,
     ))
@@ -674,11 +683,12 @@ fn seed_normals(
 fn close_holes(
     mesh: &mut SurfaceMesh,
     params: &FitParams,
+    open: bool,
     seeds: &[Point3],
     seed_normals: &[Vec3],
     rest: Real,
 ) {
-    let max_width = if params.open {
+    let max_width = if open {
         // At least 3 seeds: k >= 2.
         let knn = Knn::new(seeds, 6);
         let r6 = median_of(knn.distances_to(knn.k()));

@@ -14,9 +14,12 @@ pub struct FitParams {
     /// would need more than [`MAX_PARTICLES`](super::MAX_PARTICLES)
     /// particles ([`FitError::Spacing`] gives the range). Default: `None`.
     pub spacing: Option<Real>,
-    /// Open data: stretching only, holes wider than `d_max` stay. Default:
-    /// false (closed data).
-    pub open: bool,
+    /// Open data (`Some(true)`): stretching only, holes wider than `d_max`
+    /// stay. Closed data (`Some(false)`): growing too, and holes up to
+    /// [`FitParams::max_hole`] are closed. `None`: open when the samples
+    /// have a boundary (a chain of samples whose neighbours all lie to one
+    /// side, [`Fit::open`](super::Fit::open)). Default: `None`.
+    pub open: Option<bool>,
     /// Stretching range `[d_min, d_max]` (the search range). Default:
     /// 2.0 and 2.5 (seed 000 §7).
     pub d_min: Real,
@@ -70,7 +73,7 @@ impl Default for FitParams {
     fn default() -> Self {
         FitParams {
             spacing: None,
-            open: false,
+            open: None,
             d_min: 2.0,
             d_max: 2.5,
             max_rounds: 20,

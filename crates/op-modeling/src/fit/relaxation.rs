@@ -83,6 +83,7 @@ impl Relaxation {
         &self,
         world: &mut World,
         params: &FitParams,
+        open: bool,
         seeds: &[Point3],
         seed_normals: &[Vec3],
     ) -> Result<(), FitError> {
@@ -94,14 +95,14 @@ impl Relaxation {
             reach: (0.6 * params.d_max).max(1.5),
             ..StretchingParams::default()
         });
-        if !params.open {
+        if !open {
             creation.growing = Some(GrowingParams {
                 max_gap: 170f64.to_radians(),
                 ..GrowingParams::default()
             });
         }
         creation.max_particles = (20 * seeds.len() + 1000).min(MAX_PARTICLES);
-        let near = DataNeighbourhood::new(seeds, seed_normals, rest, params.d_max, params.open);
+        let near = DataNeighbourhood::new(seeds, seed_normals, rest, params.d_max, open);
         for _ in 0..params.max_rounds {
             let mut descs = creation.candidates(world.particles())?;
             descs.retain(|d| near.contains(&d.position));

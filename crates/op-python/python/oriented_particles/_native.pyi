@@ -199,7 +199,7 @@ class FitResult:
 def fit(
     points: Union[_Path, _ArrayLike],
     spacing: Optional[float] = None,
-    open: bool = False,
+    open: Optional[bool] = None,
     *,
     normals: Optional[_ArrayLike] = None,
     relax: float = 0.0,
