@@ -25,7 +25,8 @@ use crate::triangulation::vertex_components;
 
 /// Closes the holes of `mesh` narrower than `max_width` (unit spacing);
 /// `samples` with unit `normals` place the centre vertices of large
-/// holes. The triangles are first wound consistently
+/// holes. For `open` data the longest loop of each piece is its rim, not
+/// a hole, and is never closed (however narrow a sheet it bounds). The triangles are first wound consistently
 /// ([`super::winding::orient`]); pinched vertices are split before and
 /// after, and pieces of
 /// fewer than `min_vertices` vertices dropped after. Returns the number
@@ -34,6 +35,7 @@ use crate::triangulation::vertex_components;
 pub(super) fn fill_holes(
     mesh: &mut SurfaceMesh,
     max_width: Real,
+    open: bool,
     samples: &[Point3],
     normals: &[Vec3],
     min_vertices: usize,
@@ -43,8 +45,14 @@ pub(super) fn fill_holes(
     split_pinched_vertices(mesh);
     let mut edges = edge_counts(&mesh.faces);
     let mut closed = 0;
-    for hole in boundary_loops(&mesh.faces) {
-        if hole.len() < 3 || width(&mesh.vertices, &hole) >= max_width {
+    let loops = boundary_loops(&mesh.faces);
+    let rims = if open {
+        rims(&mesh.vertices, &mesh.faces, &loops)
+    } else {
+        vec![false; loops.len()]
+    };
+    for (hole, rim) in loops.into_iter().zip(rims) {
+        if rim || hole.len() < 3 || width(&mesh.vertices, &hole) >= max_width {
             continue;
         }
         let before = mesh.faces.len();
@@ -244,6 +252,33 @@ fn boundary_loops(faces: &[[u32; 3]]) -> Vec<Vec<u32>> {
     loops
 }
 
+/// Which of `loops` is the rim of its piece of `faces`: the longest of
+/// the piece's loops (the first of equal ones).
+fn rims(vertices: &[Point3], faces: &[[u32; 3]], loops: &[Vec<u32>]) -> Vec<bool> {
+    let piece = vertex_components(faces);
+    let mut longest: HashMap<u32, (Real, usize)> = HashMap::new();
+    for (k, hole) in loops.iter().enumerate() {
+        let Some(p) = hole.first().and_then(|&v| piece[v as usize]) else {
+            continue;
+        };
+        let length: Real = (0..hole.len())
+            .map(|i| {
+                let (a, b) = (hole[i], hole[(i + 1) % hole.len()]);
+                (vertices[b as usize] - vertices[a as usize]).norm()
+            })
+            .sum();
+        let best = longest.entry(p).or_insert((length, k));
+        if length > best.0 {
+            *best = (length, k);
+        }
+    }
+    let mut rim = vec![false; loops.len()];
+    for (_, k) in longest.values() {
+        rim[*k] = true;
+    }
+    rim
+}
+
 /// A traced loop split into simple loops where it visits a vertex twice
 /// (two holes touching at a vertex).
 fn split_at_pinches(hole: Vec<u32>) -> Vec<Vec<u32>> {
@@ -414,7 +449,11 @@ mod tests {
             max_distance: 0.0,
         };
         assert_eq!(boundary_loops(&mesh.faces).len(), 1);
-        assert_eq!(fill_holes(&mut mesh, 10.0, &[], &[], 3), 1);
+        // Open data: the only loop is the piece's rim, kept.
+        let mut open = mesh.clone();
+        assert_eq!(fill_holes(&mut open, 10.0, true, &[], &[], 3), 0);
+        assert_eq!(boundary_loops(&open.faces).len(), 1);
+        assert_eq!(fill_holes(&mut mesh, 10.0, false, &[], &[], 3), 1);
         assert!(boundary_loops(&mesh.faces).is_empty());
         assert!(edge_counts(&mesh.faces).values().all(|&c| c == 2));
     }

@@ -696,7 +696,14 @@ fn close_holes(
     } else {
         params.max_hole * rest
     };
-    holes::fill_holes(mesh, max_width, seeds, seed_normals, params.neighbours);
+    holes::fill_holes(
+        mesh,
+        max_width,
+        open,
+        seeds,
+        seed_normals,
+        params.neighbours,
+    );
 }
 
 /// The stages of a fit with their wall-clock seconds, in order.
