@@ -847,9 +847,62 @@ fn an_open_strip_keeps_its_rim() {
         .unwrap();
         assert!(f.open, "{open:?}");
         assert_eq!(
-            (f.mesh.euler_characteristic, f.mesh.boundary_loops, f.pieces()),
+            (
+                f.mesh.euler_characteristic,
+                f.mesh.boundary_loops,
+                f.pieces()
+            ),
             (1, 1, 1),
             "{open:?}"
         );
+    }
+}
+
+/// Uneven samples of the torus: 10,000 random samples with those where
+/// x > 0 thinned to one in ten (a density step of 10:1), and samples
+/// along scan lines (the curves y = k d) ten times denser along a line
+/// than across. Both broke up at the median sample distance's spacing
+/// (23 pieces; "no surface": the 12 nearest of most samples lie along
+/// one line); thinned to the spacing their sparse parts need, each is
+/// one closed piece of χ 0 whose vertices lie within 1% of the diagonal
+/// (RMS) of the true torus.
+#[test]
+fn uneven_samples_fit_one_closed_torus() {
+    let diagonal = (2.0f64 * 2.8 * 2.8 + 0.8 * 0.8).sqrt();
+    let step: Vec<Point3> = Shape::Torus
+        .sample(10_000, 17)
+        .positions
+        .into_iter()
+        .enumerate()
+        .filter(|(k, p)| p.x <= 0.0 || k % 10 == 0)
+        .map(|(_, p)| p)
+        .collect();
+    // Lines d apart, samples about d / 10 apart along them.
+    let n = 5000.0;
+    let d = (10.0 * 4.0 * PI * PI * 0.4 / n).sqrt();
+    let dense = 40 * 5000;
+    let w = n * d / (2.0 * dense as f64);
+    let lines: Vec<Point3> = Shape::Torus
+        .sample(dense, 17)
+        .positions
+        .into_iter()
+        .filter(|p| (p.y - (p.y / d).round() * d).abs() < w)
+        .collect();
+    for (name, positions) in [("density step", step), ("scan lines", lines)] {
+        let f = fit(
+            &PointSet {
+                positions,
+                normals: None,
+            },
+            &FitParams::default(),
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(
+            (f.mesh.euler_characteristic, f.pieces(), f.closed(), f.approximated),
+            (0, 1, true, true),
+            "{name}"
+        );
+        let rms = f.mesh.vertex_rms(|v| Shape::Torus.distance(v));
+        assert!(rms < 0.01 * diagonal, "{name}: vertex RMS {rms}");
     }
 }

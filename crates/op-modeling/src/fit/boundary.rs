@@ -52,11 +52,20 @@ pub(super) fn has_boundary(seeds: &[Point3], normals: &[Vec3]) -> bool {
 
 /// The span (bounding box diagonal) of the widest chain of boundary
 /// samples: samples whose neighbours in `knn` leave a gap wider than
-/// [`GAP`] about them, joined where one is among the other's nearest.
+/// [`GAP`] about them and all face their way (a neighbour facing away is
+/// the other side of a thin part: its rim has all its neighbours to one
+/// side too, but it is no boundary), joined where one is among the
+/// other's nearest.
 fn widest_chain(seeds: &[Point3], normals: &[Vec3], knn: &Knn) -> Real {
     let on: Vec<bool> = (0..seeds.len())
         .into_par_iter()
-        .map(|i| widest_gap(seeds, normals[i], i, knn.neighbours(i)) > GAP)
+        .map(|i| {
+            let row = knn.neighbours(i);
+            // Neighbours facing away: the other side of a part thinner
+            // than the neighbourhood, whose rim is no boundary.
+            let thin = row.iter().any(|&j| normals[j].dot(&normals[i]) < 0.0);
+            !thin && widest_gap(seeds, normals[i], i, row) > GAP
+        })
         .collect();
     // Chains: components of the boundary samples (union-find).
     let mut root: Vec<usize> = (0..seeds.len()).collect();

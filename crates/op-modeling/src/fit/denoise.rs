@@ -63,6 +63,8 @@ pub(super) fn is_noisy(sigma: Real, h: Real) -> bool {
 /// of the sample it was made from. A sample whose neighbourhood spans no
 /// surface is kept where it is.
 pub(super) fn smoothed_seeds(points: &[Point3], sigma: Real, h: Real) -> (Vec<Point3>, Vec<usize>) {
+    // No estimate (no neighbourhood spans a surface): no noise to take off.
+    let sigma = if sigma.is_finite() { sigma } else { 0.0 };
     let spacing = h.max(THIN * sigma);
     let kept = merge_close(points, 0.75 * spacing);
     let entries: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();

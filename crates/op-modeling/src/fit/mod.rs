@@ -22,8 +22,11 @@
 //!    noise level is estimated from local quadric fits (`noise.rs`,
 //!    [`Fit::noise_estimate`]). Samples whose noise exceeds a tenth of
 //!    their spacing ([`FitParams::approximate`]), unless their spread is
-//!    in layers (two sides of a thin part, with no samples between them,
-//!    not noise) are approximated rather
+//!    in layers (two sides of a thin part, with no samples between them)
+//!    or detail (it grows over wider neighbourhoods, where noise stays),
+//!    and samples so uneven that their sparse parts need more than 2.5
+//!    times the default spacing (`uneven.rs`: a density step, scan lines;
+//!    thinned to that spacing) are approximated rather
 //!    than interpolated (`denoise.rs`, [`Fit::approximated`]): they are
 //!    thinned to at least four noise levels apart and each kept one is
 //!    moved onto a local quadric fit of its nearest samples (moving least
@@ -170,6 +173,7 @@ mod rounds;
 pub mod shapes;
 mod spacing;
 mod thin;
+mod uneven;
 mod unit_coordinates;
 mod winding;
 
@@ -385,19 +389,26 @@ pub fn fit_with_stages(
     let noise::Noise {
         level: noise,
         layered,
+        detail,
     } = noise::noise_level(&distinct);
     let noise_estimate = frame.length_to_data(noise);
     let sample_spacing = match params.spacing {
         Some(value) => frame.length_to_local(value),
         None => default_spacing(&distinct),
     };
-    let approximated = params
-        .approximate
-        .unwrap_or_else(|| !layered && denoise::is_noisy(noise, sample_spacing));
-    // Noisy samples: the fit runs on seeds smoothed from them and is
-    // measured against them.
+    // Uneven samples: the spacing their sparsest parts need.
+    let coarse = match (params.spacing, params.approximate) {
+        (None, None | Some(true)) => uneven::coarse_spacing(&distinct, sample_spacing),
+        _ => None,
+    };
+    let approximated = params.approximate.unwrap_or_else(|| {
+        coarse.is_some() || (!layered && !detail && denoise::is_noisy(noise, sample_spacing))
+    });
+    // Noisy or uneven samples: the fit runs on seeds thinned and smoothed
+    // from them and is measured against them.
     let smoothed = approximated.then(|| {
-        let (seeds, from) = denoise::smoothed_seeds(&distinct, noise, sample_spacing);
+        let thinned = coarse.unwrap_or(sample_spacing);
+        let (seeds, from) = denoise::smoothed_seeds(&distinct, noise, thinned);
         smoothed_point_set(measured, &frame, &local, &distinct, &seeds, &from)
     });
     let (

@@ -61,11 +61,13 @@ pub struct FitParams {
     pub max_hole: Real,
     /// Approximate the samples within their noise instead of passing
     /// through each (`Some(true)`), interpolate them (`Some(false)`), or
-    /// decide by their noise (`None`): samples whose estimated noise
+    /// decide by the samples (`None`): samples whose estimated noise
     /// ([`Fit::noise_estimate`](super::Fit::noise_estimate)) exceeds a
-    /// tenth of their spacing are approximated. Approximating seeds the
-    /// particles on a smoothed estimate of the surface, thinned to a
-    /// spacing of at least four noise levels. Default: `None`.
+    /// tenth of their spacing, or whose sparse parts need more than 2.5
+    /// times the default spacing (a density step, scan lines), are
+    /// approximated. Approximating seeds the particles on a smoothed
+    /// estimate of the surface, thinned to a spacing of at least four
+    /// noise levels (and to the sparse parts' spacing). Default: `None`.
     pub approximate: Option<bool>,
 }
 
