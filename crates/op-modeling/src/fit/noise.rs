@@ -52,7 +52,16 @@ pub(crate) fn noise_level(points: &[Point3]) -> Noise {
     // measure more of the noise, so this takes a few rounds.
     let mut k = NEIGHBOURS;
     let mut noise = loop {
-        let (noise, reach) = noise_level_over(points, &tree, k);
+        let (noise, reach) = noise_level_over(
+            points,
+            &tree,
+            k,
+            if k == NEIGHBOURS {
+                CENTRES
+            } else {
+                WIDE_CENTRES
+            },
+        );
         if !noise.level.is_finite() || noise.layered || reach >= WIDTH * noise.level {
             break noise;
         }
@@ -65,7 +74,7 @@ pub(crate) fn noise_level(points: &[Point3]) -> Noise {
     // Noise leaves the same residual over four times the neighbours;
     // detail the quadric follows only over few leaves more.
     if noise.level.is_finite() && !noise.layered {
-        let wider = noise_level_over(points, &tree, (4 * k).min(MOST_NEIGHBOURS)).0;
+        let wider = noise_level_over(points, &tree, (4 * k).min(MOST_NEIGHBOURS), DETAIL_CENTRES).0;
         noise.detail = wider.level > DETAIL * noise.level;
     }
     noise
@@ -92,19 +101,29 @@ const MOST_NEIGHBOURS: usize = 2048;
 /// cost stays bounded on a million samples.
 const CENTRES: usize = 20_000;
 
+/// Local fits of a widened estimate: a quarter as many (over more
+/// neighbours each, the median of 5,000 is within about 2%).
+const WIDE_CENTRES: usize = 5_000;
+
+/// Local fits of the detail test ([`DETAIL`]): over four times the
+/// neighbours each, a tenth as many (a ratio of two medians, each within a
+/// few percent over 2,000 fits, against a threshold 30% above noise's).
+const DETAIL_CENTRES: usize = 2_000;
+
 /// [`noise_level`] with `neighbours` nearest others in each local fit
-/// (found in `tree`, over `points`), and the median distance to the
-/// farthest of them.
+/// (found in `tree`, over `points`) about at most `centres` points spread
+/// through the set, and the median distance to the farthest of them.
 fn noise_level_over(
     points: &[Point3],
     tree: &ImmutableKdTree<Real, 3>,
     neighbours: usize,
+    centres: usize,
 ) -> (Noise, Real) {
     let k = neighbours.min(points.len().saturating_sub(1));
     let Some(want) = NonZeroUsize::new(k + 1).filter(|_| k >= COEFFICIENTS) else {
         return (Noise::NONE, Real::NAN);
     };
-    let stride = points.len().div_ceil(CENTRES).max(1);
+    let stride = points.len().div_ceil(centres).max(1);
     let centres: Vec<usize> = (0..points.len()).step_by(stride).collect();
     let fits: Vec<(Real, Real, Real)> = centres
         .par_iter()
