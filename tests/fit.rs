@@ -898,7 +898,12 @@ fn uneven_samples_fit_one_closed_torus() {
         )
         .unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(
-            (f.mesh.euler_characteristic, f.pieces(), f.closed(), f.approximated),
+            (
+                f.mesh.euler_characteristic,
+                f.pieces(),
+                f.closed(),
+                f.approximated
+            ),
             (0, 1, true, true),
             "{name}"
         );
