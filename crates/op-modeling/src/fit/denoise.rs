@@ -26,15 +26,12 @@
 //! surface at 0.25%, 0.4 at 1%. The rest of the fit runs on these
 //! seeds as on clean samples.
 
-use std::num::NonZeroUsize;
-
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{SMatrix, SVector};
 use op_dynamics::{Point3, Real, Vec3};
 use rayon::prelude::*;
 
 use super::normals::weighted_covariance;
-use super::spacing::merge_close;
+use super::spacing::{merge_close, Nearest};
 
 /// Samples are smoothed when their noise level exceeds this share of
 /// their spacing. Clean samples of the analytic shapes measure below
@@ -67,25 +64,20 @@ pub(super) fn smoothed_seeds(points: &[Point3], sigma: Real, h: Real) -> (Vec<Po
     let sigma = if sigma.is_finite() { sigma } else { 0.0 };
     let spacing = h.max(THIN * sigma);
     let kept = merge_close(points, 0.75 * spacing);
-    let entries: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
-    let Ok(tree) = ImmutableKdTree::<Real, 3>::new_from_slice(&entries) else {
+    let Some(tree) = Nearest::new(points) else {
         let same = kept.iter().map(|&k| points[k]).collect();
         return (same, kept);
     };
-    let most = NonZeroUsize::new(NEAREST[NEAREST.len() - 1]).expect("NEAREST > 0");
+    let most = NEAREST[NEAREST.len() - 1];
     let smoothed = kept
         .par_iter()
         .map(|&k| {
             let q = points[k];
-            let mut near: Vec<(Real, usize)> = tree
-                .query(&entries[k])
-                .nearest_n::<SquaredEuclidean<Real>>(most)
-                .execute()
-                .into_iter()
-                .map(|r| ((points[r.item as usize] - q).norm(), r.item as usize))
+            // The sample itself and its nearest others, in a deterministic
+            // order for the sums.
+            let near: Vec<(Real, usize)> = std::iter::once((0.0, k))
+                .chain(tree.others(k, most - 1))
                 .collect();
-            // A deterministic order for the sums.
-            near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             smoothed(points, &near, &q, sigma).unwrap_or(q)
         })
         .collect();

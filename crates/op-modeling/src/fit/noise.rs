@@ -17,14 +17,12 @@
 //! coordinate gives about `σ`. The median ignores the fits across sharp
 //! edges, thin parts and outliers as long as they are fewer than half.
 
-use std::num::NonZeroUsize;
-
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use op_dynamics::{Point3, Real, Vec3};
 use rayon::prelude::*;
 
 use super::input::median_of;
 use super::normals::covariance;
+use super::spacing::Nearest;
 
 /// Neighbours of each local fit: 16, so that a fit of the 6 coefficients
 /// of a quadric has 11 degrees of freedom.
@@ -40,8 +38,7 @@ const COEFFICIENTS: usize = 6;
 /// Levin 1998), in the points' units. `NaN` when there are too few points
 /// for a fit or no neighbourhood spans a surface.
 pub(crate) fn noise_level(points: &[Point3]) -> Noise {
-    let entries: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
-    let Ok(tree) = ImmutableKdTree::<Real, 3>::new_from_slice(&entries) else {
+    let Some(tree) = Nearest::new(points) else {
         return Noise::NONE;
     };
     // Neighbourhoods within a few noise levels fit the noise itself: the
@@ -115,32 +112,21 @@ const DETAIL_CENTRES: usize = 2_000;
 /// through the set, and the median distance to the farthest of them.
 fn noise_level_over(
     points: &[Point3],
-    tree: &ImmutableKdTree<Real, 3>,
+    tree: &Nearest,
     neighbours: usize,
     centres: usize,
 ) -> (Noise, Real) {
     let k = neighbours.min(points.len().saturating_sub(1));
-    let Some(want) = NonZeroUsize::new(k + 1).filter(|_| k >= COEFFICIENTS) else {
+    if k < COEFFICIENTS {
         return (Noise::NONE, Real::NAN);
-    };
+    }
     let stride = points.len().div_ceil(centres).max(1);
     let centres: Vec<usize> = (0..points.len()).step_by(stride).collect();
     let fits: Vec<(Real, Real, Real)> = centres
         .par_iter()
         .filter_map(|&i| {
-            let q = [points[i].x, points[i].y, points[i].z];
-            let mut row: Vec<(Real, usize)> = tree
-                .query(&q)
-                .nearest_n::<SquaredEuclidean<Real>>(want)
-                .execute()
-                .into_iter()
-                .map(|r| (r.distance, r.item as usize))
-                .filter(|&(_, j)| j != i)
-                .collect();
-            // Deterministic ties.
-            row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            row.truncate(k);
-            let reach = row.last()?.0.sqrt();
+            let row = tree.others(i, k);
+            let reach = row.last()?.0;
             let row: Vec<usize> = row.into_iter().map(|(_, j)| j).collect();
             quadric_residuals(points, i, &row).map(|(v, shape)| (v, shape, reach))
         })

@@ -107,32 +107,12 @@ impl Knn {
     /// most `k` points). Exact duplicates count as neighbours at distance 0.
     pub(crate) fn new(points: &[Point3], k: usize) -> Knn {
         let k = k.min(points.len().saturating_sub(1));
-        let entries: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
-        let rows: Vec<Vec<(Real, usize)>> = match (
-            NonZeroUsize::new(k + 1),
-            ImmutableKdTree::<Real, 3>::new_from_slice(&entries),
-        ) {
-            (Some(want), Ok(tree)) => entries
-                .par_iter()
-                .enumerate()
-                .map(|(i, q)| {
-                    let mut row: Vec<(Real, usize)> = tree
-                        .query(q)
-                        .nearest_n::<SquaredEuclidean<Real>>(want)
-                        .execute()
-                        .into_iter()
-                        .map(|r| (r.distance, r.item as usize))
-                        .filter(|&(_, j)| j != i)
-                        .collect();
-                    // Exact distances, deterministic ties.
-                    row.iter_mut()
-                        .for_each(|(d, j)| *d = (points[*j] - points[i]).norm());
-                    row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                    row.truncate(k);
-                    row
-                })
+        let rows: Vec<Vec<(Real, usize)>> = match Nearest::new(points) {
+            Some(nearest) => (0..points.len())
+                .into_par_iter()
+                .map(|i| nearest.others(i, k))
                 .collect(),
-            _ => vec![Vec::new(); points.len()],
+            None => vec![Vec::new(); points.len()],
         };
         let k = rows.iter().map(Vec::len).min().unwrap_or(0);
         let mut index = Vec::with_capacity(k * points.len());
@@ -163,6 +143,44 @@ impl Knn {
             .chunks(self.k.max(1))
             .map(|row| row[m - 1])
             .collect()
+    }
+}
+
+/// Nearest-neighbour queries over points (kiddo's immutable k-d tree).
+pub(crate) struct Nearest<'a> {
+    points: &'a [Point3],
+    tree: ImmutableKdTree<Real, 3>,
+}
+
+impl<'a> Nearest<'a> {
+    /// The tree over `points`; `None` when kiddo cannot build one.
+    pub(crate) fn new(points: &'a [Point3]) -> Option<Self> {
+        let entries: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
+        let tree = ImmutableKdTree::<Real, 3>::new_from_slice(&entries).ok()?;
+        Some(Nearest { points, tree })
+    }
+
+    /// The `k` nearest points to `points[i]` other than itself (fewer when
+    /// there are fewer): exact distance and index, nearest first, ties by
+    /// index; exact duplicates count, at distance 0.
+    pub(crate) fn others(&self, i: usize, k: usize) -> Vec<(Real, usize)> {
+        let Some(want) = NonZeroUsize::new(k + 1) else {
+            return Vec::new();
+        };
+        let q = self.points[i];
+        let mut row: Vec<(Real, usize)> = self
+            .tree
+            .query(&[q.x, q.y, q.z])
+            .nearest_n::<SquaredEuclidean<Real>>(want)
+            .execute()
+            .into_iter()
+            .map(|r| r.item as usize)
+            .filter(|&j| j != i)
+            .map(|j| ((self.points[j] - q).norm(), j))
+            .collect();
+        row.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        row.truncate(k);
+        row
     }
 }
 

@@ -21,13 +21,11 @@
 //! samples to it and approximates them (`denoise.rs`): one spacing for
 //! the whole surface, the dense parts at the sparse parts' resolution.
 
-use std::num::NonZeroUsize;
-
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use op_dynamics::{Point3, Real, Vec3};
 use rayon::prelude::*;
 
 use super::normals::covariance;
+use super::spacing::Nearest;
 
 /// Neighbourhood sizes tried for a sample's coverage distance, smallest
 /// first.
@@ -53,25 +51,12 @@ pub(super) const UNEVEN: Real = 2.5;
 /// [`UNEVEN`] times `h`, the default spacing; `None` for even samples or
 /// when no neighbourhood spans a surface.
 pub(super) fn coarse_spacing(points: &[Point3], h: Real) -> Option<Real> {
-    let entries: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
-    let tree = ImmutableKdTree::<Real, 3>::new_from_slice(&entries).ok()?;
-    let most = NonZeroUsize::new(SIZES[SIZES.len() - 1] + 1)?;
+    let tree = Nearest::new(points)?;
     let stride = points.len().div_ceil(CENTRES).max(1);
     let centres: Vec<usize> = (0..points.len()).step_by(stride).collect();
     let mut coverage: Vec<Real> = centres
         .par_iter()
-        .filter_map(|&i| {
-            let mut near: Vec<(Real, usize)> = tree
-                .query(&entries[i])
-                .nearest_n::<SquaredEuclidean<Real>>(most)
-                .execute()
-                .into_iter()
-                .map(|r| (r.distance, r.item as usize))
-                .filter(|&(_, j)| j != i)
-                .collect();
-            near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            coverage_distance(points, i, &near)
-        })
+        .filter_map(|&i| coverage_distance(points, i, &tree.others(i, SIZES[SIZES.len() - 1])))
         .collect();
     if coverage.is_empty() {
         return None;
@@ -97,8 +82,8 @@ pub(super) fn coarse_spacing(points: &[Point3], h: Real) -> Option<Real> {
     (coarse > UNEVEN * h && coarse < 0.1 * (hi - lo).norm()).then_some(coarse)
 }
 
-/// The distance from `points[i]` to its `k`-th nearest (`near`: squared
-/// distance, index; nearest first) for the smallest `k` of [`SIZES`]
+/// The distance from `points[i]` to its `k`-th nearest (`near`: distance,
+/// index; nearest first) for the smallest `k` of [`SIZES`]
 /// whose neighbourhood spans a surface: its second principal variance at
 /// least a tenth of the first (as for the normals' curve test). `None`
 /// for a sample on a boundary, whose neighbours lie to one side (their
@@ -114,7 +99,7 @@ fn coverage_distance(points: &[Point3], i: usize, near: &[(Real, usize)]) -> Opt
         e[1] >= 0.1 * e[0]
     })?;
     let row = &near[..k];
-    let reach = row[k - 1].0.sqrt();
+    let reach = row[k - 1].0;
     let (mean, _) = covariance(row.iter().map(|&(_, j)| &points[j]));
     ((mean - points[i].coords).norm() <= ONE_SIDED * reach).then_some(reach)
 }
