@@ -5,20 +5,20 @@
 //! around it in its tangent plane; seen from one on a boundary, on one
 //! side only. The largest angle between consecutive neighbours about the
 //! sample, in its tangent plane, tells them apart (the angle criterion of
-//! boundary detection in point clouds, as in Bendels et al. 2006):
-//! measured on random samples of the closed shapes of
-//! [`super::shapes`] (500 to 50,000), the largest gap among the 12 nearest
-//! stays under [`GAP`] at all but a few scattered samples, while on the
-//! rims of the open saddle it is half a turn or more. A boundary is a
-//! chain of such samples joined as nearest neighbours that spans more
-//! than [`SPAN`] times the widest gap random sampling leaves by chance:
-//! the rims of chance gaps (a chain of 10 samples on 5,000 random samples
-//! of the torus) are no boundary.
+//! boundary detection in point clouds, as in Bendels et al. 2006): on a
+//! straight rim the gap among the 12 nearest is half a turn, inside
+//! randomly sampled data rarely over a quarter, except at the rims of the
+//! gaps random sampling leaves by chance. A boundary is a chain of
+//! samples past [`GAP`], joined as nearest neighbours, that spans more
+//! than [`SPAN`] times the widest such chance gap: on random samples of
+//! the closed shapes of [`super::shapes`] (500 to 20,000) the chains are
+//! the rims of chance gaps (one of 10 samples on 5,000 samples of the
+//! torus) and none is a boundary; the open saddle's rims are.
+
+use std::collections::HashMap;
 
 use op_dynamics::{Point3, Real, Vec3};
 use rayon::prelude::*;
-
-use std::collections::HashMap;
 
 use super::holes::sampling_gap_width;
 use super::input::median_of;

@@ -22,8 +22,8 @@
 //! seeds' own noise is several times smaller than the samples' while the
 //! quadric follows the curvature: measured on 20,000 random samples of an
 //! ellipsoid and a torus with Gaussian noise of 0.25-1% of the diagonal,
-//! the mesh's vertices lie 0.13-0.17 noise levels (RMS) off the true
-//! surface at 0.25%, 0.4 at 1%. The rest of the fit runs on these
+//! the mesh's vertices lie 0.17-0.2 noise levels (RMS) off the true
+//! surface (`reports/fitting.md`). The rest of the fit runs on these
 //! seeds as on clean samples.
 
 use nalgebra::{SMatrix, SVector};

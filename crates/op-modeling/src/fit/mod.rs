@@ -35,8 +35,8 @@
 //!    on 20,000 random samples of the ellipsoid and torus of [`shapes`]
 //!    with Gaussian noise of 0.25%, 0.5% and 1% of the diagonal: one
 //!    closed piece of the right Euler characteristic each (interpolated:
-//!    up to 48 pieces), mesh vertices 0.3-4 per mille of the diagonal off
-//!    the true surface (`reports/fitting.md`).
+//!    up to 48 pieces), mesh vertices 0.4-1.9 per mille of the diagonal
+//!    off the true surface, 0.17-0.2 noise levels (`reports/fitting.md`).
 //! 1. *Spacing*: `--spacing` or 0.8 times the median over the distinct
 //!    samples of the distance to the 6th nearest other sample (a local
 //!    density, robust to uneven and random sampling and to a few
@@ -619,8 +619,8 @@ fn smoothed_point_set(
 }
 
 /// The spacing in local units (`--spacing` mapped to them, or `default`,
-/// the [`default_spacing`] of `distinct`), checked against the samples' bounding box and the
-/// particle limit.
+/// the [`default_spacing`] of `distinct`), checked against the samples'
+/// bounding box and the particle limit.
 fn local_spacing(
     params: &FitParams,
     frame: &input::Frame,
