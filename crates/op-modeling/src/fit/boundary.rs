@@ -23,6 +23,7 @@ use rayon::prelude::*;
 use super::holes::sampling_gap_width;
 use super::input::median_of;
 use super::spacing::Knn;
+use crate::disjoint_sets::DisjointSets;
 
 /// Neighbours seen about a sample.
 const NEIGHBOURS: usize = 12;
@@ -67,26 +68,18 @@ fn widest_chain(seeds: &[Point3], normals: &[Vec3], knn: &Knn) -> Real {
             !thin && widest_gap(seeds, normals[i], i, row) > GAP
         })
         .collect();
-    // Chains: components of the boundary samples (union-find).
-    let mut root: Vec<usize> = (0..seeds.len()).collect();
-    fn find(root: &mut [usize], mut i: usize) -> usize {
-        while root[i] != i {
-            root[i] = root[root[i]];
-            i = root[i];
-        }
-        i
-    }
+    // Chains: components of the boundary samples.
+    let mut chains = DisjointSets::new(seeds.len());
     for i in (0..seeds.len()).filter(|&i| on[i]) {
         for &j in knn.neighbours(i) {
             if on[j] {
-                let (a, b) = (find(&mut root, i), find(&mut root, j));
-                root[a.max(b)] = a.min(b);
+                chains.union(i, j);
             }
         }
     }
     let mut boxes: HashMap<usize, (Vec3, Vec3)> = HashMap::new();
     for i in (0..seeds.len()).filter(|&i| on[i]) {
-        let r = find(&mut root, i);
+        let r = chains.root(i);
         let p = seeds[i].coords;
         let b = boxes.entry(r).or_insert((p, p));
         *b = (b.0.inf(&p), b.1.sup(&p));

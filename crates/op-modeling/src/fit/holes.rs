@@ -21,6 +21,7 @@ use std::collections::{BTreeMap, HashMap};
 use op_dynamics::{Point3, Real, Vec3};
 
 use super::mesh::SurfaceMesh;
+use crate::disjoint_sets::DisjointSets;
 use crate::triangulation::vertex_components;
 
 /// Closes the holes of `mesh` narrower than `max_width` (unit spacing);
@@ -113,14 +114,7 @@ fn split_pinched_vertices(mesh: &mut SurfaceMesh) -> usize {
             continue;
         }
         // Union-find over the fan's triangles through shared edges at v.
-        let mut parent: Vec<usize> = (0..fan.len()).collect();
-        fn root(parent: &mut [usize], mut x: usize) -> usize {
-            while parent[x] != x {
-                parent[x] = parent[parent[x]];
-                x = parent[x];
-            }
-            x
-        }
+        let mut fans = DisjointSets::new(fan.len());
         let mut by_other: BTreeMap<u32, usize> = BTreeMap::new();
         for (k, &t) in fan.iter().enumerate() {
             for &u in &mesh.faces[t] {
@@ -128,8 +122,7 @@ fn split_pinched_vertices(mesh: &mut SurfaceMesh) -> usize {
                     continue;
                 }
                 if let Some(&j) = by_other.get(&u) {
-                    let (a, b) = (root(&mut parent, j), root(&mut parent, k));
-                    parent[a.max(b)] = a.min(b);
+                    fans.union(j, k);
                 } else {
                     by_other.insert(u, k);
                 }
@@ -139,7 +132,7 @@ fn split_pinched_vertices(mesh: &mut SurfaceMesh) -> usize {
         // first-triangle order (`fan` is sorted).
         let mut new_index: BTreeMap<usize, u32> = BTreeMap::new();
         for (k, &t) in fan.iter().enumerate() {
-            let r = root(&mut parent, k);
+            let r = fans.root(k);
             if r == 0 {
                 continue;
             }

@@ -18,6 +18,7 @@
 use op_dynamics::{Point3, Real, Vec3};
 
 use super::spacing::pairs;
+use crate::disjoint_sets::DisjointSets;
 
 /// A feature of the samples thinner than the triangulation radius.
 #[derive(Clone, Debug, PartialEq)]
@@ -41,14 +42,7 @@ pub(super) fn thin_features(
 ) -> Vec<ThinFeature> {
     const COS_30: Real = 0.866_025_403_784_438_6;
     let n = samples.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
+    let mut parts = DisjointSets::new(n);
     let mut thin = vec![Real::INFINITY; n];
     let near = pairs(samples, radius);
     for (i, j) in near.iter_pairs() {
@@ -68,8 +62,7 @@ pub(super) fn thin_features(
     }
     for (i, j) in near.iter_pairs() {
         if thin[i].is_finite() && thin[j].is_finite() {
-            let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-            parent[a.max(b)] = a.min(b);
+            parts.union(i, j);
         }
     }
     let mut features: Vec<(usize, Vec3, usize, Real)> = Vec::new();
@@ -78,7 +71,7 @@ pub(super) fn thin_features(
         if thin[i].is_infinite() {
             continue;
         }
-        let r = root(&mut parent, i);
+        let r = parts.root(i);
         if slot[r] == usize::MAX {
             slot[r] = features.len();
             features.push((i, Vec3::zeros(), 0, Real::INFINITY));

@@ -7,6 +7,7 @@
 use std::collections::BTreeMap;
 
 use super::Triangulation;
+use crate::disjoint_sets::DisjointSets;
 
 /// The pieces of a set of triangles (vertex indices): for each vertex
 /// index up to the largest used, the smallest vertex of its piece, `None`
@@ -19,28 +20,17 @@ pub fn vertex_components(triangles: &[[u32; 3]]) -> Vec<Option<u32>> {
         .map(|&v| v as usize + 1)
         .max()
         .unwrap_or(0);
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
+    let mut pieces = DisjointSets::new(n);
     let mut used = vec![false; n];
     for t in triangles {
         used[t[0] as usize] = true;
         for k in 1..3 {
             used[t[k] as usize] = true;
-            let (a, b) = (
-                root(&mut parent, t[0] as usize),
-                root(&mut parent, t[k] as usize),
-            );
-            parent[a.max(b)] = a.min(b);
+            pieces.union(t[0] as usize, t[k] as usize);
         }
     }
     (0..n)
-        .map(|i| used[i].then(|| root(&mut parent, i) as u32))
+        .map(|i| used[i].then(|| pieces.root(i) as u32))
         .collect()
 }
 
@@ -96,19 +86,10 @@ impl Triangulation {
         verts.sort_unstable();
         verts.dedup();
         let at = |v: u32| verts.binary_search(&v).unwrap_or(0);
-        let mut parent: Vec<usize> = (0..verts.len()).collect();
-        fn root(parent: &mut [usize], mut x: usize) -> usize {
-            while parent[x] != x {
-                parent[x] = parent[parent[x]];
-                x = parent[x];
-            }
-            x
-        }
+        let mut loops = DisjointSets::new(verts.len());
         let mut components = verts.len();
         for &(a, b) in &boundary {
-            let (ra, rb) = (root(&mut parent, at(a)), root(&mut parent, at(b)));
-            if ra != rb {
-                parent[ra] = rb;
+            if loops.union(at(a), at(b)) {
                 components -= 1;
             }
         }
