@@ -53,21 +53,19 @@ pub(super) fn is_noisy(sigma: Real, h: Real) -> bool {
     sigma.is_finite() && h > 0.0 && sigma > NOISY * h
 }
 
-/// The seeds of noisy samples (module docs): `points` (distinct) thinned
+/// The seeds of noisy samples (module docs): the points of `tree`
+/// (distinct) thinned
 /// so that no two kept ones are closer than `0.75 max(h, THIN sigma)`,
 /// each kept one moved onto a local quadric fit of its nearest samples
 /// ([`smoothed`]). Returns the smoothed positions and, for each, the index
 /// of the sample it was made from. A sample whose neighbourhood spans no
 /// surface is kept where it is.
-pub(super) fn smoothed_seeds(points: &[Point3], sigma: Real, h: Real) -> (Vec<Point3>, Vec<usize>) {
+pub(super) fn smoothed_seeds(tree: &Nearest, sigma: Real, h: Real) -> (Vec<Point3>, Vec<usize>) {
+    let points = tree.points();
     // No estimate (no neighbourhood spans a surface): no noise to take off.
     let sigma = if sigma.is_finite() { sigma } else { 0.0 };
     let spacing = h.max(THIN * sigma);
     let kept = merge_close(points, 0.75 * spacing);
-    let Some(tree) = Nearest::new(points) else {
-        let same = kept.iter().map(|&k| points[k]).collect();
-        return (same, kept);
-    };
     let most = NEAREST[NEAREST.len() - 1];
     let smoothed = kept
         .par_iter()
@@ -235,7 +233,7 @@ mod tests {
                 points.push(Point3::new(i as Real + jitter, j as Real - jitter, height));
             }
         }
-        let (seeds, kept) = smoothed_seeds(&points, s, 1.0);
+        let (seeds, kept) = smoothed_seeds(&Nearest::new(&points).unwrap(), s, 1.0);
         assert_eq!(seeds.len(), kept.len());
         assert!(seeds.len() < points.len() / 2, "{} seeds", seeds.len());
         let worst = seeds.iter().map(|p| p.z.abs()).fold(0.0, Real::max);
@@ -255,7 +253,7 @@ mod tests {
             Point3::new(100.0, 0.0, 0.0),
             Point3::new(0.0, 100.0, 0.0),
         ];
-        let (seeds, _) = smoothed_seeds(&points, 0.1, 1.0);
+        let (seeds, _) = smoothed_seeds(&Nearest::new(&points).unwrap(), 0.1, 1.0);
         assert_eq!(seeds, points);
     }
 }

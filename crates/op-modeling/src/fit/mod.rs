@@ -194,7 +194,7 @@ pub(crate) use relaxation::at_rest;
 pub use relaxation::release;
 use relaxation::{advance, Relaxation};
 pub use spacing::median_nearest_distance;
-use spacing::{first_ring_mean, nearest_distances, Knn};
+use spacing::{first_ring_mean, nearest_distances, Knn, Nearest};
 pub use thin::ThinFeature;
 use unit_coordinates::{to_data, unit_samples, UnitSamples};
 
@@ -386,19 +386,21 @@ pub fn fit_with_stages(
         diagonal,
         distinct,
     } = checked;
+    // One tree over the samples for the noise, spacing and smoothing.
+    let nearest = sample_tree(&distinct)?;
     let noise::Noise {
         level: noise,
         layered,
         detail,
-    } = noise::noise_level(&distinct);
+    } = noise::noise_level(&nearest);
     let noise_estimate = frame.length_to_data(noise);
     let sample_spacing = match params.spacing {
         Some(value) => frame.length_to_local(value),
-        None => default_spacing(&distinct),
+        None => default_spacing(&nearest),
     };
     // Uneven samples: the spacing their sparsest parts need.
     let coarse = match (params.spacing, params.approximate) {
-        (None, None | Some(true)) => uneven::coarse_spacing(&distinct, sample_spacing),
+        (None, None | Some(true)) => uneven::coarse_spacing(&nearest, sample_spacing),
         _ => None,
     };
     let approximated = params.approximate.unwrap_or_else(|| {
@@ -408,7 +410,7 @@ pub fn fit_with_stages(
     // from them and is measured against them.
     let smoothed = approximated.then(|| {
         let thinned = coarse.unwrap_or(sample_spacing);
-        let (seeds, from) = denoise::smoothed_seeds(&distinct, noise, thinned);
+        let (seeds, from) = denoise::smoothed_seeds(&nearest, noise, thinned);
         smoothed_point_set(measured, &frame, &local, &distinct, &seeds, &from)
     });
     let (
@@ -438,7 +440,7 @@ pub fn fit_with_stages(
     // The default spacing, of the smoothed seeds when the fit approximates
     // (unused when a spacing is given).
     let default_h = match params.spacing {
-        None if approximated => default_spacing(&distinct),
+        None if approximated => default_spacing(&sample_tree(&distinct)?),
         _ => sample_spacing,
     };
     stages.lap("outliers, noise and smoothing");
@@ -741,8 +743,22 @@ impl Stages {
     }
 }
 
-/// The default spacing (local units): 0.8 times the median over the
-/// distinct samples of the distance to the 6th nearest other one. On a
+/// The nearest-neighbour tree over the distinct samples.
+///
+/// # Errors
+/// [`FitError::Input`] when none can be built (kiddo refuses the points).
+fn sample_tree(distinct: &[Point3]) -> Result<Nearest<'_>, FitError> {
+    Nearest::new(distinct).ok_or_else(|| {
+        FitError::Input(format!(
+            "no nearest-neighbour tree over the {} distinct samples could be built",
+            distinct.len()
+        ))
+    })
+}
+
+/// The default spacing (local units) of the distinct samples the tree
+/// `distinct` is built over: 0.8 times the median over them of the
+/// distance to the 6th nearest other one. On a
 /// regular (hexagonal) sampling that is 0.8 times the sample distance; on
 /// uniformly random samples, where the nearest distances spread from 0 to
 /// twice their median, about 1.05 `/√ρ` (`ρ` the samples per area): the
@@ -753,8 +769,8 @@ impl Stages {
 /// [`shapes`] (500 and 5,000 points): factor 1.0 left 2 holes on the
 /// torus, 0.65 gave a wrong genus on the 500-sample double torus and 44
 /// loops on the 5,000-sample open saddle; 0.8 was the best of the three.
-fn default_spacing(distinct: &[Point3]) -> Real {
-    let knn = Knn::new(distinct, 6);
+fn default_spacing(distinct: &Nearest) -> Real {
+    let knn = Knn::over(distinct, 6);
     0.8 * median_of(knn.distances_to(knn.k()))
 }
 

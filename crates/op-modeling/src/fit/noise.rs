@@ -31,16 +31,15 @@ const NEIGHBOURS: usize = 16;
 /// Coefficients of the local quadric `a + b u + c v + d u² + e uv + f v²`.
 const COEFFICIENTS: usize = 6;
 
-/// The noise level of `points` (distinct, any units; module docs): the
+/// The noise level of the points of `tree` (distinct, any units; module
+/// docs): the
 /// median residual standard deviation of local quadric fits over
 /// [`CENTRES`] points spread through the set (every point of a smaller
 /// set) and their [`NEIGHBOURS`] nearest others (moving least squares,
 /// Levin 1998), in the points' units. `NaN` when there are too few points
 /// for a fit or no neighbourhood spans a surface.
-pub(crate) fn noise_level(points: &[Point3]) -> Noise {
-    let Some(tree) = Nearest::new(points) else {
-        return Noise::NONE;
-    };
+pub(crate) fn noise_level(tree: &Nearest) -> Noise {
+    let points = tree.points();
     // Neighbourhoods within a few noise levels fit the noise itself: the
     // estimate comes out low (0.7 of the noise of 1% of the diagonal on
     // 20,000 samples of an ellipsoid, whose 16 nearest lie within 1.4 noise
@@ -51,7 +50,7 @@ pub(crate) fn noise_level(points: &[Point3]) -> Noise {
     let mut noise = loop {
         let (noise, reach) = noise_level_over(
             points,
-            &tree,
+            tree,
             k,
             if k == NEIGHBOURS {
                 CENTRES
@@ -71,7 +70,7 @@ pub(crate) fn noise_level(points: &[Point3]) -> Noise {
     // Noise leaves the same residual over four times the neighbours;
     // detail the quadric follows only over few leaves more.
     if noise.level.is_finite() && !noise.layered {
-        let wider = noise_level_over(points, &tree, (4 * k).min(MOST_NEIGHBOURS), DETAIL_CENTRES).0;
+        let wider = noise_level_over(points, tree, (4 * k).min(MOST_NEIGHBOURS), DETAIL_CENTRES).0;
         noise.detail = wider.level > DETAIL * noise.level;
     }
     noise
@@ -251,6 +250,11 @@ mod tests {
     use crate::fit::shapes::Shape;
     use op_test_support::Rng;
 
+    /// [`noise_level`] of `points`.
+    fn noise_of(points: &[Point3]) -> Noise {
+        Nearest::new(points).map_or(Noise::NONE, |tree| noise_level(&tree))
+    }
+
     /// A standard normal variable (Box-Muller).
     fn gaussian(rng: &mut Rng) -> Real {
         let u = rng.uniform(Real::MIN_POSITIVE, 1.0);
@@ -278,7 +282,7 @@ mod tests {
         for shape in [Shape::Ellipsoid, Shape::Torus] {
             let clean = shape.sample(5000, 17).positions;
             let d = diagonal(shape);
-            let zero = noise_level(&clean).level / d;
+            let zero = noise_of(&clean).level / d;
             assert!(zero < 1e-4, "{}: clean {zero}", shape.name());
             let mut rng = Rng::new(11);
             let sigma = 0.005 * d;
@@ -289,7 +293,7 @@ mod tests {
                     p + e * sigma
                 })
                 .collect();
-            let noise = noise_level(&noisy);
+            let noise = noise_of(&noisy);
             assert!(!noise.layered, "{}", shape.name());
             let ratio = noise.level / sigma;
             assert!(
@@ -315,7 +319,7 @@ mod tests {
                 Point3::new(rng.uniform(0.0, side), rng.uniform(0.0, side), z)
             })
             .collect();
-        let noise = noise_level(&plate);
+        let noise = noise_of(&plate);
         assert!(noise.layered && noise.level > 0.1, "{noise:?}");
         let noisy: Vec<Point3> = (0..3200)
             .map(|_| {
@@ -323,7 +327,7 @@ mod tests {
                 Point3::new(rng.uniform(0.0, side), rng.uniform(0.0, side), z)
             })
             .collect();
-        let noise = noise_level(&noisy);
+        let noise = noise_of(&noisy);
         assert!(!noise.layered && noise.level > 0.1, "{noise:?}");
     }
 
@@ -333,9 +337,9 @@ mod tests {
         let few: Vec<Point3> = (0..5)
             .map(|k| Point3::new(k as Real, (k * k) as Real, 1.0 / (1.0 + k as Real)))
             .collect();
-        assert!(noise_level(&few).level.is_nan());
+        assert!(noise_of(&few).level.is_nan());
         let line: Vec<Point3> = (0..50).map(|k| Point3::new(k as Real, 0.0, 0.0)).collect();
-        assert!(noise_level(&line).level.is_nan());
-        assert!(noise_level(&[]).level.is_nan());
+        assert!(noise_of(&line).level.is_nan());
+        assert!(noise_of(&[]).level.is_nan());
     }
 }

@@ -106,14 +106,24 @@ impl Knn {
     /// The `k` nearest others of each of `points` (fewer when there are at
     /// most `k` points). Exact duplicates count as neighbours at distance 0.
     pub(crate) fn new(points: &[Point3], k: usize) -> Knn {
+        match Nearest::new(points) {
+            Some(nearest) => Knn::over(&nearest, k),
+            None => Knn {
+                k: 0,
+                index: Vec::new(),
+                distance: Vec::new(),
+            },
+        }
+    }
+
+    /// [`Knn::new`] with the tree `nearest` already built over the points.
+    pub(crate) fn over(nearest: &Nearest, k: usize) -> Knn {
+        let points = nearest.points();
         let k = k.min(points.len().saturating_sub(1));
-        let rows: Vec<Vec<(Real, usize)>> = match Nearest::new(points) {
-            Some(nearest) => (0..points.len())
-                .into_par_iter()
-                .map(|i| nearest.others(i, k))
-                .collect(),
-            None => vec![Vec::new(); points.len()],
-        };
+        let rows: Vec<Vec<(Real, usize)>> = (0..points.len())
+            .into_par_iter()
+            .map(|i| nearest.others(i, k))
+            .collect();
         let k = rows.iter().map(Vec::len).min().unwrap_or(0);
         let mut index = Vec::with_capacity(k * points.len());
         let mut distance = Vec::with_capacity(k * points.len());
@@ -158,6 +168,11 @@ impl<'a> Nearest<'a> {
         let entries: Vec<[Real; 3]> = points.iter().map(|p| [p.x, p.y, p.z]).collect();
         let tree = ImmutableKdTree::<Real, 3>::new_from_slice(&entries).ok()?;
         Some(Nearest { points, tree })
+    }
+
+    /// The points the tree is built over.
+    pub(crate) fn points(&self) -> &'a [Point3] {
+        self.points
     }
 
     /// The `k` nearest points to `points[i]` other than itself (fewer when

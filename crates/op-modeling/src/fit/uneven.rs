@@ -45,11 +45,11 @@ const CENTRES: usize = 20_000;
 /// radar scan.
 pub(super) const UNEVEN: Real = 2.5;
 
-/// The spacing uneven `points` need (see the module docs) when it exceeds
+/// The spacing the uneven points of `tree` need (see the module docs) when it exceeds
 /// [`UNEVEN`] times `h`, the default spacing; `None` for even samples or
 /// when no neighbourhood spans a surface.
-pub(super) fn coarse_spacing(points: &[Point3], h: Real) -> Option<Real> {
-    let tree = Nearest::new(points)?;
+pub(super) fn coarse_spacing(tree: &Nearest, h: Real) -> Option<Real> {
+    let points = tree.points();
     let stride = points.len().div_ceil(CENTRES).max(1);
     let centres: Vec<usize> = (0..points.len()).step_by(stride).collect();
     let mut coverage: Vec<Real> = centres
@@ -122,14 +122,17 @@ mod tests {
             let knn = super::super::spacing::Knn::new(p, 6);
             0.8 * super::super::input::median_of(knn.distances_to(6))
         };
-        assert_eq!(coarse_spacing(&torus, h(&torus)), None);
+        assert_eq!(
+            coarse_spacing(&Nearest::new(&torus).unwrap(), h(&torus)),
+            None
+        );
         let step: Vec<Point3> = torus
             .iter()
             .enumerate()
             .filter(|(k, p)| p.x <= 0.0 || k % 10 == 0)
             .map(|(_, p)| *p)
             .collect();
-        let coarse = coarse_spacing(&step, h(&step)).expect("uneven");
+        let coarse = coarse_spacing(&Nearest::new(&step).unwrap(), h(&step)).expect("uneven");
         assert!(coarse > 2.5 * h(&step), "{coarse} {}", h(&step));
         let dense = Shape::Torus.sample(200_000, 17).positions;
         let d = 0.1;
@@ -137,6 +140,6 @@ mod tests {
             .into_iter()
             .filter(|p| (p.y - (p.y / d).round() * d).abs() < 0.0025)
             .collect();
-        assert!(coarse_spacing(&lines, h(&lines)).is_some());
+        assert!(coarse_spacing(&Nearest::new(&lines).unwrap(), h(&lines)).is_some());
     }
 }
