@@ -368,7 +368,7 @@ fn flag_streams_in_the_wind_and_the_gust_lifts_it() {
     println!("claim: {}", claim("flag_in_wind"));
     let scene = load("flag_in_wind");
     let (built, runs) = frames(&scene);
-    assert!(built.world().enabled().contains(&"wind".to_string()));
+    assert!(built.stages().contains(&"wind".to_string()));
     let flag = &runs[0];
     let first = &flag[0];
     // The free edge: the particles farthest from the pole at the start.

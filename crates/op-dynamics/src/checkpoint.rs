@@ -35,7 +35,7 @@ use crate::particles::Particles;
 /// Version of the layout of [`WorldState`]: bumped whenever a field of it,
 /// or of the types it holds, changes, so that a checkpoint of another
 /// layout is refused instead of misread.
-pub const STATE_VERSION: u32 = 2;
+pub const STATE_VERSION: u32 = 3;
 
 /// Encodes `value` (postcard).
 pub fn encode<T: Serialize>(value: &T) -> Vec<u8> {
@@ -89,8 +89,6 @@ pub struct WorldState {
     pub(crate) neighbours: Option<NeighbourList>,
     pub(crate) bonds: Option<Bonds>,
     pub(crate) tools: Option<Vec<u8>>,
-    /// The registered after-step stages' states, by name, in their order.
-    pub(crate) stages: Vec<(String, Vec<u8>)>,
     pub(crate) accumulator: ExternalAccumulator,
     pub(crate) forces: Vec<Vec3>,
     pub(crate) torques: Vec<Vec3>,

@@ -12,14 +12,11 @@
 //! 2. the uniform field ([`crate::external::UniformField`]: gravity, linear
 //!    and angular damping, the cold drag of heated materials);
 //! 3. pending forces ([`crate::World::add_external_force`], for one step);
-//! 4. the contributors registered with the world
-//!    ([`crate::World::add_contributor`]; op-scene's features, such as
-//!    wind), in the order registered;
-//! 5. the contributors the caller passes for the interval
-//!    ([`crate::World::advance_to_with`]; the driver passes its stages',
-//!    e.g. op-implicit's skin contact, evaluated on the state at every
-//!    force evaluation);
-//! 6. the force windows ([`crate::external::ForceWindows`]);
+//! 4. the contributors the caller passes for the interval
+//!    ([`crate::World::advance_to_with`]): the driver passes those its
+//!    stages lend ([`crate::driver::Stage::lend`]), in the driver's order
+//!    (op-scene's features, such as wind, then op-implicit's skin contact);
+//! 5. the force windows ([`crate::external::ForceWindows`]);
 //!
 //! and finally fixed particles get zero force or torque. Each particle's
 //! sum is formed in this order whatever the thread count, so results are
@@ -33,7 +30,8 @@ use crate::math::{Real, Vec3};
 use crate::particles::{live_slot, Attributes};
 
 /// Names of the contributors every world may have (tools, uniform field,
-/// pending forces, force windows): a registered one may not take them.
+/// pending forces, force windows): a driver stage may not take them
+/// ([`crate::driver::RESERVED`]).
 pub const BUILT_IN: [&str; 4] = [
     "tools",
     "gravity and damping",
@@ -93,20 +91,6 @@ pub trait Contributor: Sync {
     /// particles then integrates rotations too.
     fn adds_torque(&self) -> bool {
         false
-    }
-
-    /// Whether it may add energy to the scene (a passive scene, whose
-    /// energy only damping changes, is checked for energy gain). Default:
-    /// true.
-    fn may_add_energy(&self) -> bool {
-        true
-    }
-
-    /// The largest speed it can give a particle on its own (a wind's air
-    /// speed), which explosion checks allow beyond gravity and the initial
-    /// velocities. Default: 0.
-    fn speed_allowance(&self) -> Real {
-        0.0
     }
 
     /// Whether its contribution is a function of the evaluated state and

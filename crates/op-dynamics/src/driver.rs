@@ -15,15 +15,15 @@
 //! 2. the interval's end is the earliest [`Stage::horizon`] (and the
 //!    target time);
 //! 3. every due [`Phase::Forces`] stage runs: it prepares the forces it
-//!    adds over the interval and offers them as a force [`Contributor`]
-//!    ([`Stage::contributor`]): computed once for the interval and held
-//!    (an explicit coupling), or evaluated on the state at every force
-//!    evaluation ([`Contributor::follows_state`]; op-implicit's skin
-//!    contact), whose time counts as the stage's;
-//! 4. the world advances to the interval's end with the stages'
-//!    contributors acting in every force evaluation
-//!    ([`World::advance_to_with`], landing on it exactly; the contributors'
-//!    order is that of [`crate::contributors`]).
+//!    adds over the interval, which it then lends ([`Stage::lend`]);
+//! 4. the world advances to the interval's end with what every stage lends
+//!    it ([`World::advance_to_with`], landing on it exactly): a force
+//!    [`Contributor`] acting in every force evaluation (computed once for
+//!    the interval and held, an explicit coupling; or evaluated on the
+//!    state, [`Contributor::follows_state`]: op-implicit's skin contact,
+//!    op-scene's wind), in the order of [`crate::contributors`], and an
+//!    [`AfterStep`] action run after every step, after the world's own
+//!    (op-scene's speed clamp). Their time counts as the lending stage's.
 //!
 //! [`Driver::advance_to`] repeats this until the target time, then runs
 //! every stage's [`Stage::at_target`] (skins follow the particles, dropping
@@ -31,13 +31,39 @@
 //! world's advance, is timed ([`Driver::timings`]). The context
 //! `C` is the state the stages share (for op-scene: objects, skins,
 //! contact figures); op-dynamics knows nothing of it.
+//!
+//! The driver's list is the one registry of a run's pipeline: the world
+//! holds only its own physics (the step's [`crate::world::CORE_STAGES`],
+//! its after-step stages and built-in contributors, [`RESERVED`]), and
+//! everything a caller adds, a stage between steps, a force or an action
+//! after every step, is a [`Stage`] pushed here, its name unique.
 
 use std::time::Instant;
 
 use crate::checkpoint::StateError;
 use crate::contributors::Contributor;
-use crate::world::{Divergence, World};
+use crate::world::{AfterStep, Divergence, World};
 use crate::Real;
+
+/// Names a stage may not take: the world's own parts (the step's core
+/// stages, its after-step stages, its built-in contributors) and `world`
+/// (the world's steps in [`Driver::timings`]). Timings are reported by
+/// name, so a stage named like one of them would merge with it.
+pub const RESERVED: [&str; 13] = [
+    "reorder",
+    "neighbours",
+    "integrate",
+    "check",
+    "heat",
+    "bonds",
+    "plasticity",
+    "erase",
+    "tools",
+    "gravity and damping",
+    "pending forces",
+    "force windows",
+    "world",
+];
 
 /// What a stage changed; [`World::apply_effects`] gives the one meaning
 /// of each flag, wherever the stage ran.
@@ -83,6 +109,21 @@ pub enum Phase {
     /// Before the interval, after the edits: adds external forces held
     /// over the interval.
     Forces,
+    /// Never runs between intervals: acts only inside the world's steps,
+    /// through what it lends ([`Stage::lend`]), a force in every force
+    /// evaluation or an action after every step (op-scene's features).
+    Step,
+}
+
+/// What a stage lends the world's steps over an interval
+/// ([`Stage::lend`], [`World::advance_to_with`]).
+#[derive(Default)]
+pub struct Lent<'a> {
+    /// Forces it adds in every force evaluation.
+    pub contributor: Option<&'a dyn Contributor>,
+    /// An action after every step, after the world's own after-step
+    /// stages.
+    pub after_step: Option<&'a mut dyn AfterStep>,
 }
 
 /// A stage's failure.
@@ -161,11 +202,29 @@ pub trait Stage<C>: Send {
         Ok(Effects::default())
     }
 
-    /// The forces it adds in every force evaluation of the coming interval,
-    /// if any (a [`Phase::Forces`] stage offers what its
-    /// [`Stage::run`] computed). Default: none.
-    fn contributor(&self) -> Option<&dyn Contributor> {
-        None
+    /// What it lends the world's steps over the coming interval: forces in
+    /// every force evaluation (a [`Phase::Forces`] stage offers what its
+    /// [`Stage::run`] computed), an action after every step. Default:
+    /// nothing.
+    fn lend(&mut self) -> Lent<'_> {
+        Lent::default()
+    }
+
+    /// Whether what it lends may add energy to the scene (a passive scene,
+    /// whose energy only damping changes, is checked for energy gain).
+    /// Default: true for a stage that lends forces or actions
+    /// ([`Phase::Forces`], [`Phase::Step`]), false for an edit (whose
+    /// changes its owner accounts for); a stage that only removes energy
+    /// says false.
+    fn may_add_energy(&self) -> bool {
+        self.phase() != Phase::Edit
+    }
+
+    /// The largest speed what it lends can give a particle on its own (a
+    /// wind's air speed): what an explosion check allows beyond gravity
+    /// and the initial velocities. Default: 0.
+    fn speed_allowance(&self) -> Real {
+        0.0
     }
 
     /// Told of the effects of the stages that ran before the interval.
@@ -226,12 +285,18 @@ impl<C> Driver<C> {
     ///
     /// # Errors
     ///
-    /// A stage of the same name is already there, or the name is `world`
-    /// (the world's steps in [`Driver::timings`]): names are unique, so
-    /// timings keyed by name never merge two stages.
+    /// A stage of the same name is already there, or the name is one of
+    /// the world's own ([`RESERVED`]): names are unique, so timings keyed
+    /// by name never merge two stages.
     pub fn push(&mut self, stage: Box<dyn Stage<C>>) -> Result<(), StageError> {
         let name = stage.name();
-        if name == "world" || self.stages.iter().any(|s| s.name() == name) {
+        if RESERVED.contains(&name) {
+            return Err(StageError::new(
+                name,
+                "the world has a part of this name: names must be unique",
+            ));
+        }
+        if self.stages.iter().any(|s| s.name() == name) {
             return Err(StageError::new(
                 name,
                 "a stage of this name is already in the driver: names must be unique",
@@ -271,6 +336,30 @@ impl<C> Driver<C> {
     /// The stages' names, in order.
     pub fn names(&self) -> Vec<&str> {
         self.stages.iter().map(|s| s.name()).collect()
+    }
+
+    /// Names of the stages of `phase`, in order.
+    pub fn names_of(&self, phase: Phase) -> Vec<&str> {
+        self.stages
+            .iter()
+            .filter(|s| s.phase() == phase)
+            .map(|s| s.name())
+            .collect()
+    }
+
+    /// Whether some stage's lent forces or actions may add energy
+    /// ([`Stage::may_add_energy`]).
+    pub fn may_add_energy(&self) -> bool {
+        self.stages.iter().any(|s| s.may_add_energy())
+    }
+
+    /// The largest speed a stage's lent forces can give a particle
+    /// ([`Stage::speed_allowance`]).
+    pub fn speed_allowance(&self) -> Real {
+        self.stages
+            .iter()
+            .map(|s| s.speed_allowance())
+            .fold(0.0, Real::max)
     }
 
     /// Seconds spent in each stage, then in the world's steps (`"world"`),
@@ -355,18 +444,25 @@ impl<C> Driver<C> {
                 self.seconds[k] += clock.elapsed().as_secs_f64();
                 world.apply_effects(&e);
             }
-            // 4. The world's steps, with the stages' contributors, whose
-            // force evaluations count as their stages' time.
-            let (lending, contributors): (Vec<usize>, Vec<&dyn Contributor>) = self
-                .stages
-                .iter()
-                .enumerate()
-                .filter_map(|(k, s)| s.contributor().map(|c| (k, c)))
-                .unzip();
+            // 4. The world's steps, with what the stages lend, whose time
+            // counts as their stages'.
+            let mut contributors: Vec<(usize, &dyn Contributor)> = Vec::new();
+            let mut after_steps: Vec<(usize, &mut dyn AfterStep)> = Vec::new();
+            for (k, s) in self.stages.iter_mut().enumerate() {
+                let lent = s.lend();
+                contributors.extend(lent.contributor.map(|c| (k, c)));
+                after_steps.extend(lent.after_step.map(|a| (k, a)));
+            }
+            let (forces_by, forces): (Vec<usize>, Vec<&dyn Contributor>) =
+                contributors.into_iter().unzip();
+            let (actions_by, mut actions): (Vec<usize>, Vec<&mut dyn AfterStep>) =
+                after_steps.into_iter().unzip();
             let clock = Instant::now();
-            let stepped = world.advance_to_with(target, &contributors);
+            let stepped = world.advance_to_with(target, &forces, &mut actions);
             let mut world_seconds = clock.elapsed().as_secs_f64();
-            for (&k, &spent) in lending.iter().zip(world.interval_seconds()) {
+            let (force_seconds, action_seconds) = world.interval_seconds();
+            let lent = forces_by.iter().zip(force_seconds);
+            for (&k, &spent) in lent.chain(actions_by.iter().zip(action_seconds)) {
                 self.seconds[k] += spent;
                 world_seconds -= spent;
             }
@@ -413,7 +509,17 @@ mod tests {
         let mut driver = Driver::<()>::new();
         driver.push(Box::new(Named("creation"))).unwrap();
         assert!(driver.push(Box::new(Named("creation"))).is_err());
-        assert!(driver.push(Box::new(Named("world"))).is_err());
+        for name in RESERVED {
+            assert!(driver.push(Box::new(Named(name))).is_err(), "{name}");
+        }
+        // Every name of the world's own parts is reserved.
+        let own = crate::world::CORE_STAGES
+            .iter()
+            .chain(&crate::world::after_step::BUILT_IN)
+            .chain(&crate::contributors::BUILT_IN);
+        for name in own {
+            assert!(RESERVED.contains(name), "{name} is not reserved");
+        }
         driver.push(Box::new(Named("contact"))).unwrap();
         assert_eq!(driver.names(), ["creation", "contact"]);
     }

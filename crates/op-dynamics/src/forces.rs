@@ -90,6 +90,10 @@ pub(crate) struct ForceScratch {
     /// ([`crate::World::advance_to_with`]'s `extra`) spent, since the
     /// interval began.
     pub extra_seconds: Vec<f64>,
+    /// Seconds each after-step action of the interval
+    /// ([`crate::World::advance_to_with`]'s `after_steps`) spent, since
+    /// the interval began.
+    pub lent_after_step_seconds: Vec<f64>,
 }
 
 /// Everything the internal force evaluation reads besides the state.
@@ -118,8 +122,6 @@ pub(crate) struct ForceContext<'a> {
     /// The caller's contributors for this interval
     /// ([`crate::World::advance_to_with`]).
     pub extra: &'a [&'a dyn Contributor],
-    /// Contributors callers registered with the world, before `extra`.
-    pub registered: &'a [Box<dyn Contributor + Send>],
     /// The world's tools, asked first ([`crate::tooling`]).
     pub tools: Option<&'a dyn ToolSet>,
     pub scratch: &'a mut ForceScratch,
@@ -143,8 +145,6 @@ pub(crate) struct ForceModel {
     /// Tools acting on the particles ([`crate::World::set_tools`]; none:
     /// no tool stage).
     pub tools: Option<Box<dyn ToolSet>>,
-    /// Contributors callers registered ([`crate::World::add_contributor`]).
-    pub contributors: Vec<Box<dyn Contributor + Send>>,
     pub scratch: ForceScratch,
 }
 
@@ -181,7 +181,6 @@ impl ForceModel {
             step_start: None,
             accumulator,
             extra,
-            registered: &self.contributors,
             tools: self.tools.as_deref(),
             scratch: &mut self.scratch,
         }
@@ -285,7 +284,7 @@ impl ForceContext<'_> {
 
     /// Adds the contributors in the order of the module docs of
     /// `crate::contributors`: tools, uniform field, accumulated actions,
-    /// registered and extra contributors, force windows.
+    /// the interval's contributors, force windows.
     fn add_contributors(
         &mut self,
         t: Real,
@@ -310,8 +309,7 @@ impl ForceContext<'_> {
         let windows = ForceWindows(&self.external.forces);
         let built_in: [&dyn Contributor; 2] = [&uniform, self.accumulator];
         let tools = self.tools.map(|t| t as &dyn Contributor);
-        let registered = self.registered.iter().map(|c| &**c as &dyn Contributor);
-        for c in tools.into_iter().chain(built_in).chain(registered) {
+        for c in tools.into_iter().chain(built_in) {
             if c.is_active() {
                 c.contribute(&input, &mut out);
             }

@@ -14,7 +14,7 @@ use crate::neighbours::NeighbourList;
 use crate::particles::Particles;
 use crate::tooling::ToolSet;
 
-mod after_step;
+pub(crate) mod after_step;
 mod config;
 mod divergence;
 mod editing;
@@ -35,15 +35,6 @@ pub enum WorldError {
     /// A parameter is out of range.
     #[error("invalid parameter: {0}")]
     Param(#[from] ParamError),
-    /// Two parts of the pipeline (after-step stages, or force
-    /// contributors) have the same name.
-    #[error("{kind} {name:?} is already in the world's pipeline: names must be unique")]
-    DuplicateName {
-        /// What was registered twice.
-        kind: &'static str,
-        /// The name.
-        name: String,
-    },
 }
 
 /// The stages every step has, around the after-step stages
@@ -105,9 +96,6 @@ pub struct World {
     /// The world's own after-step stages it uses, in their order
     /// ([`after_step`]).
     built_in_stages: Vec<Box<dyn AfterStep>>,
-    /// The after-step stages callers registered
-    /// ([`World::add_after_step`]), after the world's own.
-    registered_stages: Vec<Box<dyn AfterStep>>,
     /// Something may have set particles rotating (initial spin, external
     /// torques, direct state edits): the divergence check reads frames.
     may_rotate: bool,
@@ -186,14 +174,12 @@ impl World {
                 neighbours,
                 bonds,
                 tools: None,
-                contributors: Vec::new(),
                 scratch: ForceScratch::default(),
             },
             repulsion: config.repulsion,
             plastic: config.plastic,
             memory_flows: config.memory_flows,
             built_in_stages: Vec::new(),
-            registered_stages: Vec::new(),
             may_rotate: config.memory
                 || particles
                     .angular_velocities()
@@ -314,10 +300,12 @@ impl World {
     }
 
     /// Seconds each contributor of the last [`World::advance_to_with`]
-    /// (its `extra`, in order) spent in its force evaluations: not in
+    /// (its `extra`, in order) spent in its force evaluations, then each
+    /// of its after-step actions (`after_steps`, in order): not in
     /// [`World::stage_seconds`], for the stages that lend them to report.
-    pub fn interval_seconds(&self) -> &[f64] {
-        &self.model.scratch.extra_seconds
+    pub fn interval_seconds(&self) -> (&[f64], &[f64]) {
+        let s = &self.model.scratch;
+        (&s.extra_seconds, &s.lent_after_step_seconds)
     }
 
     /// Seconds spent in each stage of [`World::step`] over every step so

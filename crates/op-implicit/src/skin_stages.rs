@@ -17,8 +17,7 @@
 //!
 //! Both act on any driver state that lends its skins ([`SkinnedState`]).
 
-use op_dynamics::contributors::Contributor;
-use op_dynamics::driver::{Effects, Phase, Stage, StageError};
+use op_dynamics::driver::{Effects, Lent, Phase, Stage, StageError};
 use op_dynamics::{Real, World};
 
 use crate::contact_forces::ContactForces;
@@ -100,8 +99,11 @@ impl<C: SkinnedState> Stage<C> for ContactStage {
         Ok(Effects::default())
     }
 
-    fn contributor(&self) -> Option<&dyn Contributor> {
-        Some(&self.forces)
+    fn lend(&mut self) -> Lent<'_> {
+        Lent {
+            contributor: Some(&self.forces),
+            after_step: None,
+        }
     }
 
     fn at_target(&mut self, world: &World, ctx: &mut C) -> Result<(), StageError> {

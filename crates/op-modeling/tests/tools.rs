@@ -355,7 +355,7 @@ fn interval_contributors_act_over_the_whole_interval() {
     let mut w = World::new(p, &[Material::empty()], params).unwrap();
     let mut held = op_dynamics::external::ExternalAccumulator::new(1);
     held.add(0, Vec3::new(2.0, 0.0, 0.0), Vec3::zeros());
-    w.advance_to_with(1.0, &[&held]).unwrap();
+    w.advance_to_with(1.0, &[&held], &mut []).unwrap();
     assert!(w.steps() >= 20);
     let v = w.particles().velocities()[0];
     assert!((v - Vec3::new(2.0, 0.0, 0.0)).norm() < 1e-12, "{v}");

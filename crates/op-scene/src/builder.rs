@@ -7,6 +7,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use op_dynamics::driver::{Driver, Stage};
 use op_dynamics::{
     Flags, ForceWindow, Material, ParticleDesc, Particles, Point3, Real, Vec3, World,
 };
@@ -21,6 +22,7 @@ use crate::generators::Generated;
 use crate::schema::validate::object_path;
 use crate::schema::{ObjectSpec, Override, Scene};
 use crate::skins::{ContactStats, ObjectSkin, SkinTool};
+use crate::stages::SceneState;
 
 mod rest_spacing;
 mod velocities;
@@ -136,18 +138,6 @@ impl Scene {
         world.set_step_budget(self.step_budget(counts.iter().sum()));
         let objects = placed.objects;
         let file = self.origin();
-        let install = crate::features::InstallContext {
-            objects: &objects,
-            settle: self.world.settle,
-        };
-        for (k, f) in self.features.iter().enumerate() {
-            f.feature()
-                .install(&mut world, &install)
-                .map_err(|e| SceneError::Build {
-                    file: file.to_string(),
-                    message: format!("features[{k}].{}: {e}", f.name()),
-                })?;
-        }
         let mut skins = Vec::new();
         for (k, o) in self.objects.iter().enumerate() {
             let Some(spec) = &o.skin else { continue };
@@ -187,10 +177,20 @@ impl Scene {
             })
             .collect::<Result<Vec<_>, SceneError>>()?;
         let creation = self.creation_state(&objects, placed.fitted, placed.seeds.as_ref());
-        let driver = stage_driver(creation.as_ref(), &skins, &skin_tools, &world.stage_names())
-            .map_err(|message| SceneError::Build {
-                file: file.to_string(),
-                message,
+        let install = crate::features::InstallContext {
+            objects: &objects,
+            settle: self.world.settle,
+        };
+        let features = self.features.iter().enumerate().map(|(k, f)| {
+            let path = format!("features[{k}].{}", f.name());
+            (path, f.feature().stage(&install))
+        });
+        let driver =
+            stage_driver(features, creation.as_ref(), &skins, &skin_tools).map_err(|message| {
+                SceneError::Build {
+                    file: file.to_string(),
+                    message,
+                }
             })?;
         let w = &self.world;
         Ok(BuiltScene {
@@ -448,42 +448,45 @@ struct Placed {
     seeds: Option<FitSeeds>,
 }
 
-/// The driver with only the stages the scene uses ([`crate::stages`], in
-/// their order). Its stage names must differ from the world's
-/// (`world_stages`) and the runner's timing names, as every stage's time is
-/// reported by name.
+/// The driver with only the stages the scene uses: its features' (each
+/// with its field path, for errors), then those of [`crate::stages`], in
+/// their order. Stage names must differ from each other, from the world's
+/// own ([`op_dynamics::driver::RESERVED`]) and from the runner's timing
+/// names, as every stage's time is reported by name.
 fn stage_driver(
+    features: impl Iterator<Item = (String, Box<dyn Stage<SceneState>>)>,
     creation: Option<&CreationState>,
     skins: &[ObjectSkin],
     skin_tools: &[SkinTool],
-    world_stages: &[&str],
-) -> Result<op_dynamics::driver::Driver<crate::stages::SceneState>, String> {
-    use crate::stages::{ContactStage, Creation, FitRelease, SceneState, SkinStage};
-    type Boxed = Box<dyn op_dynamics::driver::Stage<SceneState>>;
-    let mut stages: Vec<Boxed> = Vec::new();
+) -> Result<Driver<SceneState>, String> {
+    use crate::stages::{ContactStage, Creation, FitRelease, SkinStage};
+    type Boxed = Box<dyn Stage<SceneState>>;
+    let mut stages: Vec<(String, Boxed)> = features.collect();
+    let mut own: Vec<Boxed> = Vec::new();
     if let Some(c) = creation {
         if c.fit.is_some() {
-            stages.push(Box::new(FitRelease));
+            own.push(Box::new(FitRelease));
         }
-        stages.push(Box::new(Creation));
+        own.push(Box::new(Creation));
     }
     if skins.len() >= 2 || !skin_tools.is_empty() {
-        stages.push(Box::new(ContactStage::default()));
+        own.push(Box::new(ContactStage::default()));
     }
     if !skins.is_empty() {
-        stages.push(Box::new(SkinStage));
+        own.push(Box::new(SkinStage));
     }
-    let mut driver = op_dynamics::driver::Driver::new();
-    for stage in stages {
+    stages.extend(own.into_iter().map(|s| (s.name().to_string(), s)));
+    let mut driver = Driver::new();
+    for (path, stage) in stages {
         let name = stage.name().to_string();
-        if world_stages.contains(&name.as_str())
-            || crate::run::RUNNER_STAGES.contains(&name.as_str())
-        {
+        if crate::run::RUNNER_STAGES.contains(&name.as_str()) {
             return Err(format!(
-                "stage {name:?} is named like a stage of the world or the runner"
+                "{path}: stage {name:?} is named like a stage of the runner"
             ));
         }
-        driver.push(stage).map_err(|e| e.to_string())?;
+        driver
+            .push(stage)
+            .map_err(|e| format!("{path}: {}", e.message))?;
     }
     Ok(driver)
 }

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use op_dynamics::driver::{DriveError, Driver};
+use op_dynamics::driver::{DriveError, Driver, Phase};
 use op_dynamics::{Point3, Real, World};
 use op_modeling::Tool;
 
@@ -358,7 +358,8 @@ impl BuiltScene {
     }
 
     /// What the scene computes ([`stage_names`]): the world's stages
-    /// ([`World::enabled`]) with every tool's role (an obstacle that meets
+    /// ([`World::enabled`]) and its features' ([`crate::features`]) with
+    /// every tool's role (an obstacle that meets
     /// skins acts in the contact stage, not in the world, and is listed
     /// all the same), followed by `skin` (skins are posed) and `polygonize`
     /// (skins are written in the frames, whatever [`Outputs::particles`]
@@ -366,13 +367,22 @@ impl BuiltScene {
     /// have or an obstacle meets one (implicit contact).
     pub fn stages(&self) -> Vec<String> {
         stage_names(
-            self.world.enabled(),
+            self.enabled(),
             self.tools.iter().map(|t| t.params().role.name()),
             !self.skins.is_empty(),
             self.has_contact(),
             self.creation.as_ref().map(|c| c.fit.is_some()),
             self.outputs.triangulation,
         )
+    }
+
+    /// What the world evaluates ([`World::enabled`]), then the scene's
+    /// features, the driver's [`Phase::Step`] stages ([`crate::features`]).
+    pub(crate) fn enabled(&self) -> Vec<String> {
+        let mut enabled = self.world.enabled();
+        let features = self.driver.names_of(Phase::Step);
+        enabled.extend(features.into_iter().map(String::from));
+        enabled
     }
 
     /// Whether nothing feeds energy into the scene or changes its energy
@@ -391,10 +401,18 @@ impl BuiltScene {
             && w.params().heat.is_none()
             && self.creation.is_none()
             && w.bonds().is_none()
-            && !w.registered_may_add_energy()
+            && !self.driver.may_add_energy()
             && w.materials()
                 .iter()
                 .all(|m| m.plasticity().is_none() && !m.enabled_terms().contains(&"spin"))
+    }
+
+    /// The largest speed the scene's features can give a particle on their
+    /// own (a wind's air speed, [`op_dynamics::driver::Stage::speed_allowance`]):
+    /// what the explosion check allows beyond gravity and the initial
+    /// velocities.
+    pub fn speed_allowance(&self) -> Real {
+        self.driver.speed_allowance()
     }
 
     /// Whether skins are in contact: implicit contact (two or more skinned

@@ -166,7 +166,7 @@ impl Health {
             .map(|v| v.norm())
             .filter(|v| v.is_finite())
             .fold(0.0, Real::max)
-            + w.registered_speed_allowance();
+            + scene.speed_allowance();
         let ext = &w.params().external;
         let min_mass = p
             .masses()
@@ -450,14 +450,14 @@ fn close_pairs(points: &[(u32, Point3)], reach: Real, mut f: impl FnMut(usize, u
 /// The energy scale no run falls below: the kinetic energy every particle
 /// would have moving at the larger of one scene size per frame interval
 /// and the speed gravity gives over the run (or a feature such as wind
-/// can give, [`op_dynamics::World::registered_speed_allowance`]). Never zero for a scene with
+/// can give, [`BuiltScene::speed_allowance`]). Never zero for a scene with
 /// mass, so a scene that starts at rest is not measured against nothing.
 pub fn energy_floor(scene: &BuiltScene, size: Real, duration: Real) -> Real {
     let w = &scene.world;
     let g = Vec3::from(w.params().external.gravity).norm();
     let v = (size * scene.frame_rate)
         .max(g * (duration + scene.settle))
-        .max(w.registered_speed_allowance());
+        .max(scene.speed_allowance());
     let mass: Real = w.particles().masses().iter().sum();
     0.5 * mass * v * v
 }

@@ -410,7 +410,7 @@ pub fn sample(scene: &Scene, base_dir: Option<&Path>) -> Result<Sample, SceneErr
     };
     let skins = scene.objects.iter().filter(|o| o.skin.is_some()).count();
     let stages = crate::built_scene::stage_names(
-        built.world.enabled(),
+        built.enabled(),
         scene.tools.iter().map(|t| t.role.name()),
         skins > 0,
         crate::built_scene::contact(skins, !scene.tool_params().1.is_empty()),

@@ -1,10 +1,8 @@
 //! The registered features (`op_scene::features`) act as their settings
-//! say, are listed and timed by the world, and bad settings are refused
-//! with the field path.
+//! say, are listed and timed as stages of the scene's driver, and bad
+//! settings are refused with the field path.
 
-use op_dynamics::driver::Effects;
-use op_dynamics::world::{AfterStep, AfterStepContext};
-use op_dynamics::{Real, WorldError};
+use op_dynamics::Real;
 use op_scene::{parse_scene, Format, SceneError};
 
 /// A scene of one free particle (no interaction) and of a second one
@@ -52,7 +50,7 @@ fn wind_drags_a_particle_toward_the_air_speed() {
         let mut s = parse_scene(&text, Format::Ron, "<test>")
             .and_then(|s| s.build(None, None))
             .unwrap();
-        assert!(s.world().enabled().contains(&"wind".to_string()));
+        assert!(s.stages().contains(&"wind".to_string()));
         assert!(!s.is_passive(), "wind adds energy");
         s.advance_to(t).unwrap();
         let v = velocity(&s, 0);
@@ -97,50 +95,42 @@ fn the_speed_clamp_limits_the_chosen_objects() {
         .and_then(|s| s.build(None, None))
         .unwrap();
     assert!(s.is_passive(), "a clamp only removes energy");
-    s.world_mut().step().unwrap();
+    // One step.
+    s.advance_to(1e-3).unwrap();
+    assert_eq!(s.world().steps(), 1);
     let v = velocity(&s, 0);
     assert!((v.norm() - 2.0).abs() < 1e-12, "clamped: {v}");
     assert!((v.x / v.y - 0.75).abs() < 1e-12, "direction kept: {v}");
     assert_eq!(velocity(&s, 1).z, 20.0, "b is not clamped");
-    let timed: Vec<&str> = s.world().stage_seconds().iter().map(|(n, _)| *n).collect();
+    let timings = s.timings();
+    let timed: Vec<&str> = timings.iter().map(|(n, _)| n.as_str()).collect();
     assert!(timed.contains(&"speed_clamp"), "timed: {timed:?}");
-    assert_eq!(
-        s.world().stage_names(),
-        ["reorder", "neighbours", "integrate", "speed_clamp", "check"]
-    );
+    assert!(s.stages().contains(&"speed_clamp".to_string()));
 }
 
-struct Named(&'static str);
-
-impl AfterStep for Named {
-    fn name(&self) -> &'static str {
-        self.0
-    }
-
-    fn run(&mut self, _: &mut AfterStepContext<'_>) -> Effects {
-        Effects::default()
-    }
-}
-
-/// Names in the world's pipeline are unique: a second stage of a name,
-/// or one named like a stage of the step, is refused.
+/// A feature is listed once: a second entry of one kind is refused,
+/// naming it (the driver refuses a second stage of a name as well,
+/// `op_dynamics::driver` tests); the features' stages are listed after the
+/// world's.
 #[test]
 fn a_stage_name_is_registered_once() {
-    let mut s = built(r#"SpeedClamp((max_speed: 2))"#);
-    for name in ["speed_clamp", "check", "heat"] {
-        let e = s
-            .world_mut()
-            .add_after_step(Box::new(Named(name)))
-            .unwrap_err();
-        assert!(
-            matches!(&e, WorldError::DuplicateName { name: n, .. } if n == name),
-            "{e}"
-        );
-    }
-    s.world_mut()
-        .add_after_step(Box::new(Named("mine")))
-        .unwrap();
-    assert!(s.world().enabled().contains(&"mine".to_string()));
+    let text =
+        two_particles(r#"SpeedClamp((max_speed: 2)), Wind((drag: 1)), SpeedClamp((max_speed: 3))"#);
+    let e = parse_scene(&text, Format::Ron, "<test>")
+        .and_then(|s| s.build(None, None))
+        .err()
+        .expect("two clamps are refused");
+    let message = e.to_string();
+    assert!(
+        message.contains("features[2].SpeedClamp") && message.contains("twice"),
+        "{message}"
+    );
+    let s = built(r#"SpeedClamp((max_speed: 2)), Wind((drag: 1))"#);
+    let stages = s.stages();
+    assert!(
+        stages.ends_with(&["speed_clamp".to_string(), "wind".to_string()]),
+        "{stages:?}"
+    );
 }
 
 fn refused(features: &str) -> String {

@@ -18,17 +18,17 @@
 //! 4. **erase** (seed 000 fig. 7 and 14): erasers and trapping shapers
 //!    remove particles.
 //!
-//! Then come the stages a caller registered with [`World::add_after_step`]
-//! (op-scene's features, such as a speed clamp), in the order registered.
-//! Each stage returns its [`Effects`]; the world merges them, applies them
-//! once ([`World::apply_effects`]), removes the particles they name and
-//! keeps those for the driver ([`World::take_effects`]), which tells its
-//! stages (a skin drops the primitives of erased particles).
+//! Then come the actions the driver's stages lend for the interval
+//! ([`crate::driver::Stage::lend`], [`World::advance_to_with`]; op-scene's
+//! features, such as a speed clamp), in the driver's order. Each stage
+//! returns its [`Effects`]; the world merges them, applies them once
+//! ([`World::apply_effects`]), removes the particles they name and keeps
+//! those for the driver ([`World::take_effects`]), which tells its stages
+//! (a skin drops the primitives of erased particles).
 
-use super::{StepReport, World, WorldError};
+use super::{StepReport, World};
 use crate::bond_memory;
 use crate::bonds::Bonds;
-use crate::checkpoint::StateError;
 use crate::driver::Effects;
 use crate::heat::{self, HeatParams, HeatScratch};
 use crate::interactions::PreparedMaterial;
@@ -60,40 +60,22 @@ pub struct AfterStepContext<'a> {
 }
 
 /// A stage the world runs after every step, after the integrator and
-/// before the divergence check ([`World::add_after_step`] registers one).
+/// before the divergence check: the world's own, and those a driver stage
+/// lends ([`crate::driver::Lent::after_step`]).
 pub trait AfterStep: Send + Sync {
     /// Name, unique in the world's pipeline (timings, `enabled`, errors).
     fn name(&self) -> &'static str;
-
-    /// Whether it may add energy to the scene (a passive scene, whose
-    /// energy only damping changes, is checked for energy gain). Default:
-    /// true.
-    fn may_add_energy(&self) -> bool {
-        true
-    }
 
     /// Runs on the state at the end of the step. Particles to remove go
     /// in the effects' `removed` (the world removes them); changed
     /// velocities or a changed force function set `forces_stale`.
     fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects;
-
-    /// What the stage changes as the run goes on, encoded
-    /// ([`crate::checkpoint::encode`]), for a checkpoint
-    /// ([`crate::World::state`]). Default: nothing (a stage that keeps no
-    /// state between steps).
-    fn save_state(&self) -> Vec<u8> {
-        Vec::new()
-    }
-
-    /// Puts back what [`AfterStep::save_state`] returned. Default: accepts
-    /// only the empty state.
-    fn restore_state(&mut self, state: &[u8]) -> Result<(), StateError> {
-        crate::checkpoint::no_state(self.name(), state)
-    }
 }
 
-/// Names of the world's own stages, in their order.
-pub(super) const BUILT_IN: [&str; 4] = ["heat", "bonds", "plasticity", "erase"];
+/// Names of the world's own stages, in their order (all reserved for
+/// driver stages, [`crate::driver::RESERVED`]).
+#[cfg(test)]
+pub(crate) const BUILT_IN: [&str; 4] = ["heat", "bonds", "plasticity", "erase"];
 
 /// Heat conduction, sources and cooling ([`crate::heat`]).
 struct HeatStage {
@@ -215,30 +197,6 @@ impl AfterStep for Erasers {
 }
 
 impl World {
-    /// Appends an after-step stage to the world's pipeline: it runs after
-    /// every step, after the world's own stages and those registered
-    /// before it (see [`AfterStep`]).
-    ///
-    /// # Errors
-    ///
-    /// A stage of the same name is already in the pipeline (the world's
-    /// own included: `heat`, `bonds`, `plasticity`, `erase`, and the
-    /// step's `reorder`, `neighbours`, `integrate`, `check`).
-    pub fn add_after_step(&mut self, stage: Box<dyn AfterStep>) -> Result<(), WorldError> {
-        let name = stage.name();
-        if super::CORE_STAGES.contains(&name)
-            || BUILT_IN.contains(&name)
-            || self.registered_stages.iter().any(|s| s.name() == name)
-        {
-            return Err(WorldError::DuplicateName {
-                kind: "after-step stage",
-                name: name.to_string(),
-            });
-        }
-        self.registered_stages.push(stage);
-        Ok(())
-    }
-
     /// Brings the world's own after-step stages in line with what it uses
     /// now (after building, editing the particle set, or new tools).
     pub(super) fn sync_built_in_stages(&mut self) {
@@ -270,14 +228,30 @@ impl World {
     }
 
     /// Runs every after-step stage for the step of length `dt` just taken,
-    /// timing each in `report`, and applies their merged effects: the
-    /// particles they name are removed, cached forces dropped once.
-    pub(super) fn run_after_step_stages(&mut self, dt: Real, report: &mut StepReport) -> Effects {
+    /// the world's own and then the `lent` ones, timing each (the world's
+    /// in `report`, the lent ones in [`World::interval_seconds`]), and
+    /// applies their merged effects: the particles they name are removed,
+    /// cached forces dropped once.
+    pub(super) fn run_after_step_stages(
+        &mut self,
+        dt: Real,
+        report: &mut StepReport,
+        lent: &mut [&mut dyn AfterStep],
+    ) -> Effects {
         let mut effects = Effects::default();
         let mut built_in = std::mem::take(&mut self.built_in_stages);
-        let mut registered = std::mem::take(&mut self.registered_stages);
+        let mut lent_seconds = std::mem::take(&mut self.model.scratch.lent_after_step_seconds);
+        lent_seconds.resize(lent.len(), 0.0);
+        type Timed<'s> = (&'s mut dyn AfterStep, Option<&'s mut f64>);
+        let own = built_in
+            .iter_mut()
+            .map(|s| -> Timed<'_> { (&mut **s, None) });
+        let borrowed = lent
+            .iter_mut()
+            .zip(lent_seconds.iter_mut())
+            .map(|(s, spent)| -> Timed<'_> { (&mut **s, Some(spent)) });
         let mut edited = false;
-        for stage in built_in.iter_mut().chain(registered.iter_mut()) {
+        for (stage, spent) in own.chain(borrowed) {
             let clock = std::time::Instant::now();
             let mut ctx = AfterStepContext {
                 time: self.time,
@@ -294,12 +268,14 @@ impl World {
                 self.remove_live(&e.removed);
                 edited = true;
             }
-            report
-                .seconds
-                .push((stage.name(), clock.elapsed().as_secs_f64()));
+            let seconds = clock.elapsed().as_secs_f64();
+            match spent {
+                Some(total) => *total += seconds,
+                None => report.seconds.push((stage.name(), seconds)),
+            }
             effects.merge(e);
         }
-        self.registered_stages = registered;
+        self.model.scratch.lent_after_step_seconds = lent_seconds;
         self.built_in_stages = built_in;
         if edited {
             // What the world uses may have changed with its particles.

@@ -13,11 +13,6 @@ impl World {
             neighbours: self.model.neighbours.clone(),
             bonds: self.model.bonds.clone(),
             tools: self.model.tools.as_ref().map(|t| t.save_state()),
-            stages: self
-                .registered_stages
-                .iter()
-                .map(|s| (s.name().to_string(), s.save_state()))
-                .collect(),
             accumulator: self.accumulator.clone(),
             forces: self.forces.clone(),
             torques: self.torques.clone(),
@@ -31,7 +26,7 @@ impl World {
     }
 
     /// Puts back a state taken by [`World::state`] from a world built from
-    /// the same inputs (materials, parameters, tools, after-step stages):
+    /// the same inputs (materials, parameters, tools):
     /// the world then steps exactly as the one the state was taken from.
     /// What depends on the particle set (kernel, neighbour radius, the
     /// after-step stages in use) is derived again.
@@ -89,23 +84,8 @@ impl World {
         if !list_fits {
             return fail("its neighbour list does not match its particles");
         }
-        let names = |s: &[(String, Vec<u8>)]| s.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
-        let registered: Vec<String> = self
-            .registered_stages
-            .iter()
-            .map(|s| s.name().to_string())
-            .collect();
-        if names(&state.stages) != registered {
-            return fail(&format!(
-                "it has the after-step stages {:?}, the world {registered:?}",
-                names(&state.stages)
-            ));
-        }
         if let (Some(tools), Some(saved)) = (self.model.tools.as_mut(), &state.tools) {
             tools.restore_state(saved)?;
-        }
-        for (stage, (_, saved)) in self.registered_stages.iter_mut().zip(&state.stages) {
-            stage.restore_state(saved)?;
         }
         self.apply_config(&config);
         self.model.neighbours = state.neighbours;

@@ -1,7 +1,7 @@
 //! Stepping the world: one step ([`World::step`]) and its stages, and
 //! advancing to a time.
 
-use super::{Divergence, StepReport, World};
+use super::{AfterStep, Divergence, StepReport, World};
 use crate::contributors::Contributor;
 use crate::forces::Kernel;
 use crate::math::Real;
@@ -32,7 +32,7 @@ impl World {
     pub fn step(&mut self) -> Result<&StepReport, Divergence> {
         let dt = self.dt_next.min(self.params.dt);
         let n = self.particles.len();
-        on_pool(n, || self.step_by(dt, false, &[]).map(|_| ()))?;
+        on_pool(n, || self.step_by(dt, false, &[], &mut []).map(|_| ()))?;
         Ok(&self.report)
     }
 
@@ -40,21 +40,26 @@ impl World {
     /// shortened (a shortened step does not change the adaptive
     /// controller's suggestion for the next one).
     pub fn advance_to(&mut self, t_end: Real) -> Result<(), Divergence> {
-        self.advance_to_with(t_end, &[])
+        self.advance_to_with(t_end, &[], &mut [])
     }
 
     /// [`World::advance_to`] with `extra` contributors acting in every force
     /// evaluation of the interval (after the pending forces, before the
-    /// force windows; [`crate::contributors`]): an explicit coupling
-    /// evaluated once per interval acts over all of it, also when an
-    /// adaptive scheme takes several steps. Cached forces are dropped when
-    /// the interval ends if one of them was active and does not
+    /// force windows; [`crate::contributors`]) and `after_steps` actions run
+    /// after every step, after the world's own after-step stages
+    /// ([`AfterStep`]): what a driver's stages lend
+    /// ([`crate::driver::Stage::lend`]). An explicit coupling evaluated
+    /// once per interval acts over all of it, also when an adaptive scheme
+    /// takes several steps. Cached forces are dropped when the interval
+    /// ends if one of them was active and does not
     /// [`Contributor::follows_state`]: the next interval's contributions
-    /// differ. The steps run on a pool thread as [`World::step`]'s do.
+    /// differ. Each one's time is in [`World::interval_seconds`]. The steps
+    /// run on a pool thread as [`World::step`]'s do.
     pub fn advance_to_with(
         &mut self,
         t_end: Real,
         extra: &[&dyn Contributor],
+        after_steps: &mut [&mut dyn AfterStep],
     ) -> Result<(), Divergence> {
         if extra.iter().any(|c| c.is_active() && c.adds_torque()) {
             self.may_rotate = true;
@@ -63,8 +68,11 @@ impl World {
         let seconds = &mut self.model.scratch.extra_seconds;
         seconds.clear();
         seconds.resize(extra.len(), 0.0);
+        let seconds = &mut self.model.scratch.lent_after_step_seconds;
+        seconds.clear();
+        seconds.resize(after_steps.len(), 0.0);
         let n = self.particles.len();
-        on_pool(n, || self.advance_steps(t_end, extra, held))
+        on_pool(n, || self.advance_steps(t_end, extra, after_steps, held))
     }
 
     /// The steps of [`World::advance_to_with`] (on a pool thread).
@@ -72,6 +80,7 @@ impl World {
         &mut self,
         t_end: Real,
         extra: &[&dyn Contributor],
+        after_steps: &mut [&mut dyn AfterStep],
         held: bool,
     ) -> Result<(), Divergence> {
         loop {
@@ -86,13 +95,13 @@ impl World {
             // A step within 1e-6 of the remaining time takes all of it, so
             // round-off in the accumulated time never leaves a sliver step.
             if remaining <= h * (1.0 + 1e-6) {
-                self.step_by(remaining, true, extra)?;
+                self.step_by(remaining, true, extra, after_steps)?;
                 if self.time < t_end && self.report.dt == remaining {
                     // Land exactly despite round-off in `time + dt`.
                     self.time = t_end;
                 }
             } else {
-                self.step_by(h, false, extra)?;
+                self.step_by(h, false, extra, after_steps)?;
             }
         }
     }
@@ -102,6 +111,7 @@ impl World {
         dt: Real,
         clipped: bool,
         extra: &[&dyn Contributor],
+        after_steps: &mut [&mut dyn AfterStep],
     ) -> Result<&StepReport, Divergence> {
         // The last report's buffer, to time this step's stages in.
         let mut seconds = std::mem::take(&mut self.report.seconds);
@@ -166,7 +176,7 @@ impl World {
         }
         // The after-step stages, in order; their effects applied once and
         // kept for the driver.
-        let effects = self.run_after_step_stages(info.dt_taken, &mut report);
+        let effects = self.run_after_step_stages(info.dt_taken, &mut report, after_steps);
         self.effects.merge(effects);
 
         let clock = std::time::Instant::now();

@@ -4,16 +4,18 @@
 //!
 //! A feature's settings deserialize straight into its own type (the scene
 //! schema, the JSON schema and `docs/scenes.md` come from it), are checked
-//! once by [`Feature::validate`] and put into the world by
-//! [`Feature::install`]: a force as an op-dynamics
-//! [`Contributor`](op_dynamics::contributors::Contributor)
-//! ([`World::add_contributor`]), an action after every step as an
-//! [`AfterStep`](op_dynamics::world::AfterStep) stage
-//! ([`World::add_after_step`]). The world then lists it in
-//! [`World::enabled`], times it and asks it whether it may add energy
-//! (passive scenes are checked for energy gain) and how fast it can move
-//! particles (the explosion check's allowance). A scene that lists no
-//! feature pays for none.
+//! once by [`Feature::validate`] and made into a driver stage by
+//! [`Feature::stage`] ([`Phase::Step`](op_dynamics::driver::Phase::Step)),
+//! which the builder pushes into the scene's driver before the scene's own
+//! stages. The stage lends the world's steps what the feature does
+//! ([`Stage::lend`]): a force as an
+//! op-dynamics [`Contributor`](op_dynamics::contributors::Contributor), an
+//! action after every step as an
+//! [`AfterStep`](op_dynamics::world::AfterStep). The driver then lists it
+//! ([`crate::BuiltScene::stages`]), times it and asks it whether it may
+//! add energy (passive scenes are checked for energy gain) and how fast it
+//! can move particles (the explosion check's allowance). A scene that
+//! lists no feature pays for none.
 //!
 //! Adding a feature: write `features/<name>.rs` with its settings type
 //! (serde, schemars, a doc comment on every field), its `UNITS` (the unit
@@ -21,13 +23,15 @@
 //! impl, then add one line `Name => module::Type,` to the `features!`
 //! list below.
 
-use op_dynamics::{Real, World};
+use op_dynamics::driver::Stage;
+use op_dynamics::Real;
 
 use crate::built_scene::BuiltObject;
 use crate::error::SceneError;
 use crate::schema::Scene;
+use crate::stages::SceneState;
 
-/// What [`Feature::install`] gets besides the world.
+/// What [`Feature::stage`] reads of the built scene.
 pub struct InstallContext<'a> {
     /// The scene's objects, in scene order (object `k` has object id `k`).
     pub objects: &'a [BuiltObject],
@@ -46,16 +50,11 @@ pub trait Feature {
     /// What is wrong and what would be valid, naming `path`.
     fn validate(&self, scene: &Scene, path: &str) -> Result<(), SceneError>;
 
-    /// Puts the feature into the world.
-    ///
-    /// # Errors
-    ///
-    /// What the world refused (a name already registered).
-    fn install(
-        &self,
-        world: &mut World,
-        ctx: &InstallContext<'_>,
-    ) -> Result<(), op_dynamics::WorldError>;
+    /// The feature as a driver stage, acting through what it lends the
+    /// world's steps ([`Stage::lend`]); its name is unique in the scene's
+    /// driver (a second feature of one kind is refused when the scene is
+    /// built).
+    fn stage(&self, ctx: &InstallContext<'_>) -> Box<dyn Stage<SceneState>>;
 }
 
 /// Declares the registered features: each line `Variant => module::Type`

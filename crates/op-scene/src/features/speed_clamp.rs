@@ -4,15 +4,16 @@
 //! tool's sharp kick, a stiff contact); it only removes kinetic energy,
 //! so a passive scene stays passive. Fixed particles are left alone.
 
-use op_dynamics::driver::Effects;
+use op_dynamics::driver::{Effects, Lent, Phase, Stage};
 use op_dynamics::world::{AfterStep, AfterStepContext};
-use op_dynamics::{Flags, Real, World, WorldError};
+use op_dynamics::{Flags, Real};
 use serde::{Deserialize, Serialize};
 
 use super::{check_objects, object_mask, Feature, InstallContext};
 use crate::error::SceneError;
 use crate::schema::checks::positive;
 use crate::schema::Scene;
+use crate::stages::SceneState;
 
 /// A speed limit: RON `SpeedClamp((max_speed: 5, objects: Some(["ball"])))`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -40,28 +41,47 @@ impl Feature for SpeedClamp {
         check_objects(scene, path, self.objects.as_deref())
     }
 
-    fn install(&self, world: &mut World, ctx: &InstallContext<'_>) -> Result<(), WorldError> {
-        world.add_after_step(Box::new(ClampStage {
+    fn stage(&self, ctx: &InstallContext<'_>) -> Box<dyn Stage<SceneState>> {
+        Box::new(ClampStage {
             max_speed: self.max_speed,
             objects: object_mask(ctx.objects, self.objects.as_deref()),
-        }))
+        })
     }
 }
 
-/// The clamp as an after-step stage.
+/// The clamp: a stage lending an after-step action to every step.
 struct ClampStage {
     max_speed: Real,
     /// Limited objects, by object id.
     objects: Vec<bool>,
 }
 
-impl AfterStep for ClampStage {
-    fn name(&self) -> &'static str {
+impl Stage<SceneState> for ClampStage {
+    fn name(&self) -> &str {
         "speed_clamp"
     }
 
+    fn phase(&self) -> Phase {
+        Phase::Step
+    }
+
+    fn lend(&mut self) -> Lent<'_> {
+        Lent {
+            contributor: None,
+            after_step: Some(self),
+        }
+    }
+
+    /// Clamping only removes kinetic energy: a passive scene stays
+    /// passive.
     fn may_add_energy(&self) -> bool {
         false
+    }
+}
+
+impl AfterStep for ClampStage {
+    fn name(&self) -> &'static str {
+        "speed_clamp"
     }
 
     fn run(&mut self, ctx: &mut AfterStepContext<'_>) -> Effects {

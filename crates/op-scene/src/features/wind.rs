@@ -6,7 +6,8 @@
 //! with wind is not passive.
 
 use op_dynamics::contributors::{Contribution, Contributor, ContributorInput};
-use op_dynamics::{Real, Vec3, World, WorldError};
+use op_dynamics::driver::{Lent, Phase, Stage};
+use op_dynamics::{Real, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -14,6 +15,7 @@ use super::{check_objects, object_mask, Feature, InstallContext};
 use crate::error::SceneError;
 use crate::schema::checks::{finite, finite3, positive};
 use crate::schema::Scene;
+use crate::stages::SceneState;
 
 /// A wind on some objects: RON `Wind((velocity: (2, 0, 0), drag: 0.1))`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -76,8 +78,8 @@ impl Feature for Wind {
         check_objects(scene, path, self.objects.as_deref())
     }
 
-    fn install(&self, world: &mut World, ctx: &InstallContext<'_>) -> Result<(), WorldError> {
-        world.add_contributor(Box::new(WindForce {
+    fn stage(&self, ctx: &InstallContext<'_>) -> Box<dyn Stage<SceneState>> {
+        Box::new(WindForce {
             velocity: Vec3::from(self.velocity),
             drag: self.drag,
             gusts: self
@@ -86,11 +88,11 @@ impl Feature for Wind {
                 .map(|g| (ctx.settle + g.time, Vec3::from(g.velocity)))
                 .collect(),
             objects: object_mask(ctx.objects, self.objects.as_deref()),
-        }))
+        })
     }
 }
 
-/// The wind as a force contributor.
+/// The wind as a force contributor, lent to every step by its stage.
 struct WindForce {
     velocity: Vec3,
     drag: Real,
@@ -115,14 +117,41 @@ impl WindForce {
     }
 }
 
+impl Stage<SceneState> for WindForce {
+    fn name(&self) -> &str {
+        "wind"
+    }
+
+    fn phase(&self) -> Phase {
+        Phase::Step
+    }
+
+    fn lend(&mut self) -> Lent<'_> {
+        Lent {
+            contributor: Some(self),
+            after_step: None,
+        }
+    }
+
+    // The default `may_add_energy`, true: drag does work and has no
+    // energy, so a scene with wind is not passive.
+
+    /// The largest air speed, which the explosion check allows.
+    fn speed_allowance(&self) -> Real {
+        let gust = self.gusts.iter().map(|g| g.1.norm()).fold(0.0, Real::max);
+        self.velocity.norm() + gust
+    }
+}
+
 impl Contributor for WindForce {
     fn name(&self) -> &str {
         "wind"
     }
 
-    fn speed_allowance(&self) -> Real {
-        let gust = self.gusts.iter().map(|g| g.1.norm()).fold(0.0, Real::max);
-        self.velocity.norm() + gust
+    /// The drag at a state and time: forces cached at an interval's end
+    /// stay valid for the next.
+    fn follows_state(&self) -> bool {
+        true
     }
 
     fn contribute(&self, input: &ContributorInput<'_>, out: &mut Contribution<'_>) {
@@ -154,6 +183,6 @@ mod tests {
         assert_eq!(wind.air(0.0), Vec3::new(1.0, 0.0, 0.0));
         assert_eq!(wind.air(1.5), Vec3::new(1.0, 2.0, 0.0));
         assert_eq!(wind.air(9.0), Vec3::new(1.0, 4.0, 0.0));
-        assert_eq!(wind.speed_allowance(), 5.0);
+        assert_eq!(Stage::<SceneState>::speed_allowance(&wind), 5.0);
     }
 }
