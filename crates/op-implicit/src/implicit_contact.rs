@@ -402,6 +402,7 @@ impl<'a> ContactPair<'a> {
     fn samples(&self, grid: &Grid, edges: &[(usize, usize)]) -> Vec<ContactSample> {
         edges
             .par_iter()
+            .with_min_len(min_len(self.a, self.b, edges.len()))
             .filter_map(|&(i, k)| {
                 let mut dir = Vec3::zeros();
                 dir[k] = grid.h;
@@ -476,6 +477,21 @@ fn crossing(phi: impl Fn(Real) -> Real) -> (Real, Real) {
 /// already known.
 fn crossing_from(phi: impl Fn(Real) -> Real, f0: Real, f1: Real) -> (Real, Real) {
     crossing_to(phi, f0, f1, BRACKET)
+}
+
+/// The least number of `items` (blocks, edges) a parallel pass over the
+/// pair `a`, `b` gives one task: all of them (one task, no other thread
+/// woken) when the two skins hold fewer than
+/// [`op_dynamics::MIN_PARALLEL_LEN`] primitives together, the codebase's
+/// rule for small passes. A small pair's whole evaluation takes tens of
+/// microseconds (`ball_vs_spiral`: 2 to 4 blocks and about one crossed
+/// edge), less than waking a thread and joining it.
+fn min_len(a: &Field, b: &Field, items: usize) -> usize {
+    if a.primitives().len() + b.primitives().len() >= op_dynamics::MIN_PARALLEL_LEN {
+        1
+    } else {
+        items.max(1)
+    }
 }
 
 /// [`crossing_from`] to a bracket narrower than `bracket` instead of

@@ -162,6 +162,7 @@ fn edges_in_active_blocks(
     let (lists_a, lists_b) = (BlockLists::new(a, grid), BlockLists::new(b, grid));
     let mut edges: Vec<(usize, usize)> = active
         .par_iter()
+        .with_min_len(super::min_len(a, b, active.len()))
         .flat_map_iter(|&k| per_block(k, &lists_a, &lists_b))
         .collect();
     edges.sort_unstable();

@@ -184,6 +184,7 @@ pub(super) fn sweep(grid: &Grid, a: &Field, b: &Field, k: Real, gradient: bool) 
     let scale = k * grid.h.powi(3);
     let sums: Vec<EdgeSum> = edges
         .par_iter()
+        .with_min_len(super::min_len(a, b, edges.len()))
         .filter_map(|&(i, axis)| {
             let p0 = band::node(grid, i);
             edge_integral((a, b), &p0, axis, grid.h, scale, gradient)
