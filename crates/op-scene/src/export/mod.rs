@@ -47,6 +47,7 @@ pub mod format;
 pub mod geometry;
 pub mod layout;
 pub mod obj;
+mod obj_text;
 pub mod ply;
 pub mod run_cache;
 pub mod series;

@@ -13,10 +13,17 @@
 //! importers keep only in a file holding nothing else: hence one file per
 //! object. obj-exporter prints fixed 6 decimals: coordinates below 1e-6
 //! scene units are lost, so keep scenes in sensible units (r0 ~ 1).
+//!
+//! The file is obj-exporter's text byte for byte: its object line is
+//! obj-exporter's, and the vertex, normal and element lines are encoded by
+//! [`super::obj_text`] as obj-exporter formats them, without `core::fmt`
+//! (the tests compare the two).
 
 use std::io::Write;
 
-use obj_exporter::{Geometry, ObjSet, Object, Primitive, Shape, Vertex};
+#[cfg(test)]
+use obj_exporter::{Geometry, Primitive, Shape, Vertex};
+use obj_exporter::{ObjSet, Object};
 use op_dynamics::Vec3;
 use rayon::prelude::*;
 
@@ -34,11 +41,13 @@ pub fn obj_to_scene(v: [f64; 3]) -> [f64; 3] {
     [v[0], 0.0 - v[2], v[1]]
 }
 
+#[cfg(test)]
 fn vertex(v: &Vec3) -> Vertex {
     let [x, y, z] = scene_to_obj([v.x, v.y, v.z]);
     Vertex { x, y, z }
 }
 
+#[cfg(test)]
 fn shape(primitive: Primitive) -> Shape {
     Shape {
         primitive,
@@ -76,7 +85,9 @@ fn pieces(mesh: &FrameMesh) -> Vec<Piece> {
 
 /// The obj-exporter object of a piece of `mesh`, named `name`: a
 /// piece's indices are the mesh's, and an object holding no vertex before
-/// them numbers them as the whole file does.
+/// them numbers them as the whole file does. The tests' reference for
+/// [`encode`].
+#[cfg(test)]
 fn object(mesh: &FrameMesh, piece: Piece, name: &str) -> Object {
     let with_normal = |v: u32| (v as usize, None, Some(v as usize));
     let plain = |v: u32| (v as usize, None, None);
@@ -142,6 +153,22 @@ pub(crate) fn size_hint(mesh: &FrameMesh) -> usize {
             .sum::<usize>()
 }
 
+/// The lines of `piece` of `mesh`'s file, as obj-exporter writes them
+/// ([`super::obj_text`]): a piece's indices are the mesh's, numbered as the
+/// whole file numbers them.
+fn encode(mesh: &FrameMesh, piece: Piece) -> Vec<u8> {
+    use super::obj_text::{point_lines, segment_lines, triangle_lines};
+    let to_file = |v: &Vec3| scene_to_obj([v.x, v.y, v.z]);
+    let mut out = Vec::with_capacity(piece_bytes(mesh, piece));
+    match piece {
+        Piece::Vertices(a, b) => point_lines(&mut out, b"v", &mesh.vertices[a..b], to_file),
+        Piece::Normals(a, b) => point_lines(&mut out, b"vn", &mesh.normals[a..b], to_file),
+        Piece::Triangles(a, b) => triangle_lines(&mut out, &mesh.triangles[a..b]),
+        Piece::Lines(a, b) => segment_lines(&mut out, &mesh.lines[a..b]),
+    }
+    out
+}
+
 /// obj-exporter's text of `objects`, into a buffer of `capacity` bytes.
 fn export(objects: Vec<Object>, capacity: usize) -> std::io::Result<Vec<u8>> {
     let set = ObjSet {
@@ -154,13 +181,13 @@ fn export(objects: Vec<Object>, capacity: usize) -> std::io::Result<Vec<u8>> {
 }
 
 /// Writes `mesh` as a one-object OBJ file: obj-exporter's text of the
-/// whole object, encoded in pieces of 16,384 lines in parallel and
-/// written in order (each piece is an unnamed object whose `o` line is
-/// dropped), so the bytes are the same at any thread count and as one
-/// call would write them. Measured on the scene report's skinned cloth
-/// at 120 x 120 particles (skins of 403,822 vertices, 3 frames):
-/// the export stage took 2.12 s at 2 threads with one call per file, 1.32 s
-/// with pieces (2.50 and 2.26 s at 1 thread).
+/// whole object, its lines encoded in pieces of 16,384 lines in parallel
+/// ([`encode`]) and written in order, so the bytes are the same at any
+/// thread count and as one obj-exporter call would write them. Measured on
+/// the scene report's skinned cloth at 120 x 120 particles (skins of
+/// 403,822 vertices, 3 frames): the export stage took 2.12 s at 2 threads
+/// with one call per file, 1.32 s with pieces (2.50 and 2.26 s at 1
+/// thread).
 pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
     let header = Object {
         name: mesh.name.clone(),
@@ -172,11 +199,10 @@ pub fn write(mesh: &FrameMesh, w: &mut dyn Write) -> std::io::Result<()> {
     w.write_all(&export(vec![header], 0)?)?;
     let texts: Vec<Vec<u8>> = pieces(mesh)
         .into_par_iter()
-        .map(|piece| export(vec![object(mesh, piece, "")], 3 + piece_bytes(mesh, piece)))
-        .collect::<std::io::Result<_>>()?;
+        .map(|piece| encode(mesh, piece))
+        .collect();
     for text in texts {
-        // Each piece's text starts with its empty object's `o \n`.
-        w.write_all(&text[b"o \n".len()..])?;
+        w.write_all(&text)?;
     }
     Ok(())
 }
