@@ -91,12 +91,21 @@ pub(crate) struct BlockLists {
 impl BlockLists {
     /// Lists the primitives of `field` per block of `grid`.
     pub fn new(field: &Field, grid: &Grid) -> Self {
+        Self::filtered(field, grid, |_, _| true)
+    }
+
+    /// Lists the primitives of `field` whose bounding sphere (centre,
+    /// radius) `keep` accepts, per block of `grid`.
+    pub fn filtered(field: &Field, grid: &Grid, keep: impl Fn(&Point3, Real) -> bool) -> Self {
         let nb = grid.blocks();
         let n_blocks: usize = nb.iter().product();
         let ranges: Vec<Option<[(usize, usize); 3]>> = field
             .primitives()
             .iter()
-            .map(|p| block_range(grid, p.bounding_sphere()))
+            .map(|p| {
+                let (c, r) = p.bounding_sphere();
+                keep(&c, r).then(|| block_range(grid, (c, r))).flatten()
+            })
             .collect();
         let mut counts = vec![0u32; n_blocks + 1];
         let each = |r: &[(usize, usize); 3], f: &mut dyn FnMut(usize)| {

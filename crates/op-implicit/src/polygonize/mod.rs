@@ -363,7 +363,14 @@ fn clip_block<C: ScalarField + ?Sized>(
 /// Only the vertices a caller keeps cost: a block is sampled only when
 /// `wanted(centre, radius)` holds for its bounding sphere (a collider's
 /// contact wants the blocks that may reach inside it), and the vertices
-/// of the others are left out, the rest keeping their order.
+/// of the others are left out, the rest keeping their order. Only the
+/// primitives whose bounding sphere `wanted` accepts once widened by a
+/// cell are splatted: a kept vertex lies in a wanted region, the ends of
+/// its grid edge within a cell of it, and a primitive reaches them only
+/// if its sphere widened by a cell reaches that region, so their values
+/// keep every term, in the same order (a primitive left out adds nothing
+/// there), and the kept vertices their bits. Others' vertices move or
+/// vanish: what the caller leaves out.
 pub fn surface_points(
     field: &Field,
     params: &PolygonizeParams,
@@ -373,7 +380,7 @@ pub fn surface_points(
     let Some(grid) = grid(field, params, Some(clip))? else {
         return Ok(Vec::new());
     };
-    let lists = BlockLists::new(field, &grid);
+    let lists = BlockLists::filtered(field, &grid, |c, r| wanted(c, r + grid.h));
     let iso = params.iso;
     let arch = pulp::Arch::new();
     let (positions, _, _) = vertices(&grid, iso, |b| {

@@ -391,3 +391,52 @@ fn empty_field_and_bad_parameters() {
         Err(PolygonizeError::TooManyNodes { .. })
     ));
 }
+
+/// A collider's samples: [`surface_points`] splats only the primitives
+/// that reach a cell around the wanted region, and the vertices inside
+/// that region are those of splatting every primitive, bit for bit and
+/// in their order, though most of the sheet is left out (and the dense
+/// mesh's, to round-off).
+#[test]
+fn surface_points_inside_the_wanted_region_keep_their_bits() {
+    let field = sheet(24);
+    let (centre, radius) = (Point3::new(2.3, 2.3, -1.0), 1.05);
+    let inside = |p: &Point3| (p - centre).norm() < radius;
+    let wanted = |c: &Point3, r: Real| (c - centre).norm() - radius <= r;
+    let params = PolygonizeParams::with_cell_size(0.05);
+    let pad = Vec3::repeat(radius + params.cell_size);
+    let clip = (centre - pad, centre + pad);
+    let kept = field
+        .primitives()
+        .iter()
+        .filter(|p| {
+            let (c, r) = p.bounding_sphere();
+            wanted(&c, r + params.cell_size)
+        })
+        .count();
+    assert!(
+        kept < field.primitives().len() / 4,
+        "{kept} primitives splatted"
+    );
+    let inside_of =
+        |points: Vec<Point3>| -> Vec<Point3> { points.into_iter().filter(|p| inside(p)).collect() };
+    let samples = inside_of(surface_points(&field, &params, clip, wanted).unwrap());
+    let every = inside_of(surface_points(&field, &params, clip, |_, _| true).unwrap());
+    let dense = inside_of(
+        polygonize_region(&field, &params, Some(clip))
+            .unwrap()
+            .positions()
+            .to_vec(),
+    );
+    assert!(samples.len() > 100, "{} samples inside", samples.len());
+    assert!(
+        samples == every,
+        "{} against {}",
+        samples.len(),
+        every.len()
+    );
+    assert_eq!(samples.len(), dense.len());
+    for (s, d) in samples.iter().zip(&dense) {
+        assert!((s - d).norm() < 1e-12, "{s} against the dense {d}");
+    }
+}
