@@ -23,25 +23,19 @@ const LIMIT: f64 = 1e9;
 /// that round to zero). Magnitudes of [`LIMIT`] and more, infinities and
 /// NaN go through `core::fmt`.
 pub(super) fn fixed6(out: &mut Vec<u8>, x: f64) {
-    if x.is_nan() || x.abs() >= LIMIT {
+    if encodable(x) {
+        let mut line = Line::new();
+        line.fixed6(x);
+        out.extend_from_slice(line.as_bytes());
+    } else {
         // Writing into a `Vec` cannot fail.
         let _ = write!(out, "{x:.6}");
-        return;
     }
-    if x.is_sign_negative() {
-        out.push(b'-');
-    }
-    let micro = micro_units(x.abs());
-    push_decimal(out, micro / 1_000_000);
-    out.push(b'.');
-    let frac = micro % 1_000_000;
-    let mut digits = [b'0'; 6];
-    let mut rest = frac;
-    for d in digits.iter_mut().rev() {
-        *d = b'0' + (rest % 10) as u8;
-        rest /= 10;
-    }
-    out.extend_from_slice(&digits);
+}
+
+/// Whether [`Line::fixed6`] encodes `x` (finite, below [`LIMIT`]).
+fn encodable(x: f64) -> bool {
+    x.abs() < LIMIT
 }
 
 /// `a · 10^6` rounded to an integer, half to even, for `0 <= a <`
@@ -72,19 +66,57 @@ fn micro_units(a: f64) -> u64 {
     (quotient + u128::from(up)) as u64
 }
 
-/// Appends `n` in decimal, as `{}` writes it.
-fn push_decimal(out: &mut Vec<u8>, mut n: u64) {
-    let mut digits = [0u8; 20];
-    let mut k = digits.len();
-    loop {
-        k -= 1;
-        digits[k] = b'0' + (n % 10) as u8;
-        n /= 10;
-        if n == 0 {
-            break;
+/// One line of text, built on the stack and appended to the file's buffer
+/// at once (one copy per line instead of one per number). The longest
+/// line is an `f` line of three `a//a` of ten digits each (71 bytes).
+struct Line {
+    buf: [u8; 128],
+    len: usize,
+}
+
+impl Line {
+    fn new() -> Line {
+        Line {
+            buf: [0; 128],
+            len: 0,
         }
     }
-    out.extend_from_slice(&digits[k..]);
+
+    fn as_bytes(&self) -> &[u8] {
+        &self.buf[..self.len]
+    }
+
+    fn byte(&mut self, b: u8) {
+        self.buf[self.len] = b;
+        self.len += 1;
+    }
+
+    /// `n` in decimal, as `{}` writes it.
+    fn decimal(&mut self, n: u64) {
+        let digits = n.checked_ilog10().unwrap_or(0) as usize + 1;
+        let mut rest = n;
+        for k in (0..digits).rev() {
+            self.buf[self.len + k] = b'0' + (rest % 10) as u8;
+            rest /= 10;
+        }
+        self.len += digits;
+    }
+
+    /// `x` as `{:.6}` writes it, for an [`encodable`] `x`.
+    fn fixed6(&mut self, x: f64) {
+        if x.is_sign_negative() {
+            self.byte(b'-');
+        }
+        let micro = micro_units(x.abs());
+        self.decimal(micro / 1_000_000);
+        self.byte(b'.');
+        let mut rest = micro % 1_000_000;
+        for k in (0..6).rev() {
+            self.buf[self.len + k] = b'0' + (rest % 10) as u8;
+            rest /= 10;
+        }
+        self.len += 6;
+    }
 }
 
 /// Appends a `v` or `vn` line (`prefix`) per point of `points`, each
@@ -96,12 +128,26 @@ pub(super) fn point_lines(
     to_file: impl Fn(&Vec3) -> [f64; 3],
 ) {
     for p in points {
-        out.extend_from_slice(prefix);
-        for c in to_file(p) {
-            out.push(b' ');
-            fixed6(out, c);
+        let c = to_file(p);
+        if c.iter().all(|&x| encodable(x)) {
+            let mut line = Line::new();
+            for &b in prefix {
+                line.byte(b);
+            }
+            for x in c {
+                line.byte(b' ');
+                line.fixed6(x);
+            }
+            line.byte(b'\n');
+            out.extend_from_slice(line.as_bytes());
+        } else {
+            out.extend_from_slice(prefix);
+            for x in c {
+                out.push(b' ');
+                fixed6(out, x);
+            }
+            out.push(b'\n');
         }
-        out.push(b'\n');
     }
 }
 
@@ -109,15 +155,18 @@ pub(super) fn point_lines(
 /// the same one-based rank.
 pub(super) fn triangle_lines(out: &mut Vec<u8>, triangles: &[[u32; 3]]) {
     for t in triangles {
-        out.push(b'f');
+        let mut line = Line::new();
+        line.byte(b'f');
         for &v in t {
             let v = u64::from(v) + 1;
-            out.push(b' ');
-            push_decimal(out, v);
-            out.extend_from_slice(b"//");
-            push_decimal(out, v);
+            line.byte(b' ');
+            line.decimal(v);
+            line.byte(b'/');
+            line.byte(b'/');
+            line.decimal(v);
         }
-        out.push(b'\n');
+        line.byte(b'\n');
+        out.extend_from_slice(line.as_bytes());
     }
 }
 
@@ -125,12 +174,14 @@ pub(super) fn triangle_lines(out: &mut Vec<u8>, triangles: &[[u32; 3]]) {
 /// is not valid on a line).
 pub(super) fn segment_lines(out: &mut Vec<u8>, segments: &[[u32; 2]]) {
     for s in segments {
-        out.push(b'l');
+        let mut line = Line::new();
+        line.byte(b'l');
         for &v in s {
-            out.push(b' ');
-            push_decimal(out, u64::from(v) + 1);
+            line.byte(b' ');
+            line.decimal(u64::from(v) + 1);
         }
-        out.push(b'\n');
+        line.byte(b'\n');
+        out.extend_from_slice(line.as_bytes());
     }
 }
 
@@ -149,7 +200,7 @@ mod tests {
     }
 
     /// Exact ties round half to even, signs are kept on zeros, and the
-    /// edges of the fast path agree with `{:.6}`.
+    /// edges of the fast path agree with `{:.6}`, alone and in a line.
     #[test]
     fn special_values_print_as_core_fmt_does() {
         let tie = 1.0 / 128.0; // 0.0078125: a tie at the sixth decimal
@@ -183,6 +234,12 @@ mod tests {
         ];
         for x in cases {
             assert_eq!(ours(x), std_fixed6(x), "{x:e}");
+            let mut line = Vec::new();
+            point_lines(&mut line, b"v", &[Vec3::new(x, 1.5, -x)], |p| {
+                [p.x, p.y, p.z]
+            });
+            let expected = format!("v {x:.6} 1.500000 {:.6}\n", -x);
+            assert_eq!(String::from_utf8(line).unwrap(), expected);
         }
         assert_eq!(ours(tie), "0.007812");
         assert_eq!(ours(-0.0), "-0.000000");
