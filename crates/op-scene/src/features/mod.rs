@@ -15,7 +15,10 @@
 //! ([`crate::BuiltScene::stages`]), times it and asks it whether it may
 //! add energy (passive scenes are checked for energy gain) and how fast it
 //! can move particles (the explosion check's allowance). A scene that
-//! lists no feature pays for none.
+//! lists no feature pays for none. Features act when the scene advances
+//! through its driver ([`crate::BuiltScene::advance_to`], the runner, the
+//! settle phase), not when a caller steps its world directly
+//! ([`crate::BuiltScene::world_mut`]).
 //!
 //! Adding a feature: write `features/<name>.rs` with its settings type
 //! (serde, schemars, a doc comment on every field), its `UNITS` (the unit
