@@ -15,9 +15,9 @@
 //! scene units are lost, so keep scenes in sensible units (r0 ~ 1).
 //!
 //! The file is obj-exporter's text byte for byte: its object line is
-//! obj-exporter's, and the vertex, normal and element lines are encoded by
-//! [`super::obj_text`] as obj-exporter formats them, without `core::fmt`
-//! (the tests compare the two).
+//! obj-exporter's, and the vertex, normal and element lines are encoded
+//! by op-scene's `export::obj_text` as obj-exporter formats them, without
+//! `core::fmt` (the tests compare the two).
 
 use std::io::Write;
 
@@ -182,7 +182,7 @@ fn export(objects: Vec<Object>, capacity: usize) -> std::io::Result<Vec<u8>> {
 
 /// Writes `mesh` as a one-object OBJ file: obj-exporter's text of the
 /// whole object, its lines encoded in pieces of 16,384 lines in parallel
-/// ([`encode`]) and written in order, so the bytes are the same at any
+/// (`encode`) and written in order, so the bytes are the same at any
 /// thread count and as one obj-exporter call would write them. Measured on
 /// the scene report's skinned cloth at 120 x 120 particles (skins of
 /// 403,822 vertices, 3 frames): the export stage took 2.12 s at 2 threads
