@@ -167,22 +167,13 @@ fn fig_12c_bonded_tearing_claim_one_tear_two_pieces() {
 fn bond_components(built: &BuiltScene) -> Vec<usize> {
     let p = built.world().particles();
     let bonds = built.world().bonds().expect("bonded");
-    let mut parent: Vec<usize> = (0..p.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
+    let mut sets = op_modeling::disjoint_sets::DisjointSets::new(p.len());
     for &(a, b) in bonds.pairs() {
-        let (a, b) = (p.slot_of(a).expect("live"), p.slot_of(b).expect("live"));
-        let (a, b) = (root(&mut parent, a), root(&mut parent, b));
-        parent[a.max(b)] = a.min(b);
+        sets.union(p.slot_of(a).expect("live"), p.slot_of(b).expect("live"));
     }
     let mut sizes = vec![0; p.len()];
     for i in 0..p.len() {
-        sizes[root(&mut parent, i)] += 1;
+        sizes[sets.root(i)] += 1;
     }
     let mut sizes: Vec<usize> = sizes.into_iter().filter(|&s| s > 0).collect();
     sizes.sort_unstable_by(|a, b| b.cmp(a));

@@ -103,25 +103,16 @@ fn pieces(t: &Triangulation) -> usize {
         .flatten()
         .max()
         .map_or(0, |&m| m as usize + 1);
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
+    let mut sets = op_modeling::disjoint_sets::DisjointSets::new(n);
     for tri in &t.triangles {
-        let a = root(&mut parent, tri[0] as usize);
         for &v in &tri[1..] {
-            let b = root(&mut parent, v as usize);
-            parent[b] = a;
+            sets.union(tri[0] as usize, v as usize);
         }
     }
     let roots: std::collections::BTreeSet<usize> = t
         .vertices()
         .iter()
-        .map(|&v| root(&mut parent, v as usize))
+        .map(|&v| sets.root(v as usize))
         .collect();
     roots.len()
 }

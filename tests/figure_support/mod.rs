@@ -74,23 +74,15 @@ pub fn plane_fit(points: &[Point3]) -> (Vec3, Real) {
 /// Connected components of the graph joining points closer than `radius`
 /// (brute force: the figures are small): a component label per point.
 pub fn labels(points: &[Point3], radius: Real) -> Vec<usize> {
-    let mut parent: Vec<usize> = (0..points.len()).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
+    let mut sets = op_modeling::disjoint_sets::DisjointSets::new(points.len());
     for i in 0..points.len() {
         for j in i + 1..points.len() {
             if (points[i] - points[j]).norm() < radius {
-                let (a, b) = (root(&mut parent, i), root(&mut parent, j));
-                parent[a.max(b)] = a.min(b);
+                sets.union(i, j);
             }
         }
     }
-    (0..points.len()).map(|i| root(&mut parent, i)).collect()
+    (0..points.len()).map(|i| sets.root(i)).collect()
 }
 
 /// Sizes, largest first, of the connected components of the graph joining

@@ -1,24 +1,25 @@
 //! Disjoint sets (union-find) over `0..n`, for the connected pieces the
-//! triangulation and the fit count: mesh pieces, boundary loops, fans,
-//! thin features, chains of boundary samples.
+//! triangulation and the fit count (mesh pieces, boundary loops, fans,
+//! thin features, chains of boundary samples) and those of a scene's
+//! objects (op-scene's health watch).
 
 /// Disjoint sets of `0..n` with path halving; a set's root is its
 /// smallest member, so roots, and everything ordered by them, do not
 /// depend on the order of the unions.
-pub(crate) struct DisjointSets {
+pub struct DisjointSets {
     parent: Vec<usize>,
 }
 
 impl DisjointSets {
     /// `n` singletons.
-    pub(crate) fn new(n: usize) -> Self {
+    pub fn new(n: usize) -> Self {
         DisjointSets {
             parent: (0..n).collect(),
         }
     }
 
     /// The root (smallest member) of `x`'s set.
-    pub(crate) fn root(&mut self, mut x: usize) -> usize {
+    pub fn root(&mut self, mut x: usize) -> usize {
         while self.parent[x] != x {
             self.parent[x] = self.parent[self.parent[x]];
             x = self.parent[x];
@@ -27,10 +28,17 @@ impl DisjointSets {
     }
 
     /// Joins the sets of `a` and `b`; whether they were apart.
-    pub(crate) fn union(&mut self, a: usize, b: usize) -> bool {
+    pub fn union(&mut self, a: usize, b: usize) -> bool {
         let (ra, rb) = (self.root(a), self.root(b));
         self.parent[ra.max(rb)] = ra.min(rb);
         ra != rb
+    }
+
+    /// Number of sets.
+    pub fn count(&mut self) -> usize {
+        (0..self.parent.len())
+            .filter(|&x| self.root(x) == x)
+            .count()
     }
 }
 
@@ -50,5 +58,6 @@ mod tests {
             (0..6).map(|x| s.root(x)).collect::<Vec<_>>(),
             [0, 1, 2, 1, 2, 2]
         );
+        assert_eq!(s.count(), 3);
     }
 }

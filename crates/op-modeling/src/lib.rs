@@ -19,7 +19,7 @@
 #![warn(missing_docs)]
 
 pub mod creation;
-mod disjoint_sets;
+pub mod disjoint_sets;
 pub mod fit;
 pub mod tools;
 pub mod triangulation;

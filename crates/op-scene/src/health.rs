@@ -386,23 +386,11 @@ pub fn pieces(scene: &BuiltScene, o: &BuiltObject, range: Real) -> usize {
         .all_ids()
         .filter_map(|id| p.slot_of(id).map(|s| (id, p.positions()[s])))
         .collect();
-    let mut parent: Vec<usize> = (0..points.len()).collect();
-    fn root(parent: &mut [usize], mut a: usize) -> usize {
-        while parent[a] != a {
-            parent[a] = parent[parent[a]];
-            a = parent[a];
-        }
-        a
-    }
+    let mut sets = op_modeling::disjoint_sets::DisjointSets::new(points.len());
     close_pairs(&points, range, |a, b, _| {
-        let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-        if ra != rb {
-            parent[ra.max(rb)] = ra.min(rb);
-        }
+        sets.union(a, b);
     });
-    (0..points.len())
-        .filter(|&a| root(&mut parent, a) == a)
-        .count()
+    sets.count()
 }
 
 /// Calls `f(a, b, distance)` for every pair of `points` (indices, `a < b`)
