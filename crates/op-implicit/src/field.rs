@@ -29,7 +29,11 @@ pub struct Field {
 impl Field {
     /// Builds the field of `primitives` (and its pruning grid).
     pub fn new(primitives: Vec<PosedPrimitive>) -> Self {
-        let spheres: Vec<_> = primitives.iter().map(|p| p.bounding_sphere()).collect();
+        let spheres: Vec<_> = primitives
+            .par_iter()
+            .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
+            .map(|p| p.bounding_sphere())
+            .collect();
         let grid = CellGrid::new(&spheres);
         Field {
             primitives,

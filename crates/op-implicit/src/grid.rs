@@ -3,7 +3,10 @@
 //! lists, in increasing order, the spheres whose bounding box overlaps it,
 //! stored flat (CSR).
 
-use op_dynamics::{Point3, Real};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use op_dynamics::{Point3, Real, MIN_PARALLEL_LEN};
+use rayon::prelude::*;
 
 /// Cells are as large as the mean sphere radius: a lookup then scans the
 /// spheres whose box overlaps a cell of side R, about (3 R)^3 / (4 R)^3 = 0.42
@@ -60,40 +63,22 @@ impl CellGrid {
             starts: Vec::new(),
             items: Vec::new(),
         };
-        let n_cells: usize = dims.iter().product();
-        let mut counts = vec![0u32; n_cells + 1];
-        grid.for_each_cell_of(spheres, |_, cell| counts[cell + 1] += 1);
-        for k in 1..counts.len() {
-            counts[k] += counts[k - 1];
-        }
-        let mut fill = counts.clone();
-        let mut items = vec![0u32; counts[n_cells] as usize];
-        grid.for_each_cell_of(spheres, |i, cell| {
-            items[fill[cell] as usize] = i as u32;
-            fill[cell] += 1;
-        });
-        grid.starts = counts;
-        grid.items = items;
+        let boxes: Vec<Option<CellBox>> = spheres
+            .par_iter()
+            .with_min_len(MIN_PARALLEL_LEN)
+            .map(|(c, r)| {
+                let lo = [0, 1, 2].map(|k| grid.cell_coord(c[k] - r, k));
+                let hi = [0, 1, 2].map(|k| grid.cell_coord(c[k] + r, k));
+                Some([0, 1, 2].map(|k| (lo[k], hi[k])))
+            })
+            .collect();
+        (grid.starts, grid.items) = bucket(dims, &boxes);
         grid
     }
 
     fn cell_coord(&self, x: Real, k: usize) -> usize {
         let c = ((x - self.origin[k]) * self.inv_cell).floor();
         c.clamp(0.0, (self.dims[k] - 1) as Real) as usize
-    }
-
-    fn for_each_cell_of(&self, spheres: &[(Point3, Real)], mut visit: impl FnMut(usize, usize)) {
-        for (i, (c, r)) in spheres.iter().enumerate() {
-            let lo = [0, 1, 2].map(|k| self.cell_coord(c[k] - r, k));
-            let hi = [0, 1, 2].map(|k| self.cell_coord(c[k] + r, k));
-            for z in lo[2]..=hi[2] {
-                for y in lo[1]..=hi[1] {
-                    for x in lo[0]..=hi[0] {
-                        visit(i, (z * self.dims[1] + y) * self.dims[0] + x);
-                    }
-                }
-            }
-        }
     }
 
     /// The spheres whose box overlaps the cell holding `p`, in increasing
@@ -117,6 +102,78 @@ impl CellGrid {
     }
 }
 
+/// An item's box of bins: the inclusive index range along each axis.
+pub(crate) type CellBox = [(usize, usize); 3];
+
+/// Lists, per bin of a `dims` grid (x fastest), the indices of the items
+/// whose box (`boxes[i]`, none for an item in no bin) covers it, in
+/// increasing order, flat (CSR: the bin `b` holds
+/// `items[starts[b]..starts[b + 1]]`). A counting sort in chunks of the
+/// items, one per thread (none under [`MIN_PARALLEL_LEN`] items): each
+/// chunk counts its items per bin, the counts are summed bin by bin in
+/// chunk order, and each chunk fills its places, so every bin lists its
+/// items in increasing order whatever the number of chunks: the same
+/// lists at any thread count.
+pub(crate) fn bucket(dims: [usize; 3], boxes: &[Option<CellBox>]) -> (Vec<u32>, Vec<u32>) {
+    let n_bins: usize = dims.iter().product();
+    let each = |b: &CellBox, f: &mut dyn FnMut(usize)| {
+        for z in b[2].0..=b[2].1 {
+            for y in b[1].0..=b[1].1 {
+                for x in b[0].0..=b[0].1 {
+                    f((z * dims[1] + y) * dims[0] + x);
+                }
+            }
+        }
+    };
+    let per_chunk = boxes
+        .len()
+        .div_ceil(rayon::current_num_threads().max(1))
+        .max(MIN_PARALLEL_LEN);
+    let chunks: Vec<&[Option<CellBox>]> = boxes.chunks(per_chunk).collect();
+    let mut places: Vec<Vec<u32>> = chunks
+        .par_iter()
+        .map(|chunk| {
+            let mut counts = vec![0u32; n_bins];
+            for b in chunk.iter().flatten() {
+                each(b, &mut |bin| counts[bin] += 1);
+            }
+            counts
+        })
+        .collect();
+    // Each chunk's count becomes its first place in the bin.
+    let mut starts = vec![0u32; n_bins + 1];
+    let mut total = 0u32;
+    for bin in 0..n_bins {
+        starts[bin] = total;
+        for counts in places.iter_mut() {
+            let count = counts[bin];
+            counts[bin] = total;
+            total += count;
+        }
+    }
+    starts[n_bins] = total;
+    let items: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+    chunks
+        .par_iter()
+        .zip(places.par_iter_mut())
+        .enumerate()
+        .for_each(|(c, (chunk, next))| {
+            for (k, b) in chunk.iter().enumerate() {
+                let Some(b) = b else { continue };
+                let item = (c * per_chunk + k) as u32;
+                each(b, &mut |bin| {
+                    // Each place is written once, by its chunk.
+                    items[next[bin] as usize].store(item, Ordering::Relaxed);
+                    next[bin] += 1;
+                });
+            }
+        });
+    (
+        starts,
+        items.into_iter().map(AtomicU32::into_inner).collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -132,5 +189,41 @@ mod tests {
         ];
         let grid = CellGrid::new(&spheres);
         assert!(grid.dims.iter().product::<usize>() <= MAX_CELLS_PER_SPHERE * 2 + 1024);
+    }
+
+    /// The chunked bucketing lists every bin's items in increasing order,
+    /// the same at one and several threads and as one serial pass.
+    #[test]
+    fn buckets_are_the_same_at_any_thread_count() {
+        let dims = [7, 5, 3];
+        let boxes: Vec<Option<CellBox>> = (0..5000usize)
+            .map(|i| {
+                let x = (i * 7919) % 6;
+                let y = (i * 104_729) % 4;
+                (i % 11 != 0).then_some([(x, x + i % 2), (y, y + 1), (i % 3, i % 3)])
+            })
+            .collect();
+        let mut serial = vec![Vec::new(); 7 * 5 * 3];
+        for (i, b) in boxes.iter().enumerate() {
+            let Some(b) = b else { continue };
+            for z in b[2].0..=b[2].1 {
+                for y in b[1].0..=b[1].1 {
+                    for x in b[0].0..=b[0].1 {
+                        serial[(z * 5 + y) * 7 + x].push(i as u32);
+                    }
+                }
+            }
+        }
+        for threads in [1, 2, 3, 8] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (starts, items) = pool.install(|| bucket(dims, &boxes));
+            for (bin, expected) in serial.iter().enumerate() {
+                let got = &items[starts[bin] as usize..starts[bin + 1] as usize];
+                assert_eq!(got, &expected[..], "bin {bin} at {threads} threads");
+            }
+        }
     }
 }

@@ -17,7 +17,10 @@
 
 use op_dynamics::{Point3, Real, Vec3};
 
+use rayon::prelude::*;
+
 use crate::field::{Field, ScalarField};
+use crate::grid::{bucket, CellBox};
 use crate::kernel::value_sq;
 use crate::primitives::Skeleton;
 
@@ -96,47 +99,22 @@ impl BlockLists {
 
     /// Lists the primitives of `field` whose bounding sphere (centre,
     /// radius) `keep` accepts, per block of `grid`.
-    pub fn filtered(field: &Field, grid: &Grid, keep: impl Fn(&Point3, Real) -> bool) -> Self {
-        let nb = grid.blocks();
-        let n_blocks: usize = nb.iter().product();
-        let ranges: Vec<Option<[(usize, usize); 3]>> = field
+    pub fn filtered(
+        field: &Field,
+        grid: &Grid,
+        keep: impl Fn(&Point3, Real) -> bool + Sync,
+    ) -> Self {
+        let ranges: Vec<Option<CellBox>> = field
             .primitives()
-            .iter()
+            .par_iter()
+            .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
             .map(|p| {
                 let (c, r) = p.bounding_sphere();
                 keep(&c, r).then(|| block_range(grid, (c, r))).flatten()
             })
             .collect();
-        let mut counts = vec![0u32; n_blocks + 1];
-        let each = |r: &[(usize, usize); 3], f: &mut dyn FnMut(usize)| {
-            for k in r[2].0..=r[2].1 {
-                for j in r[1].0..=r[1].1 {
-                    for i in r[0].0..=r[0].1 {
-                        f((k * nb[1] + j) * nb[0] + i);
-                    }
-                }
-            }
-        };
-        for r in ranges.iter().flatten() {
-            each(r, &mut |b| counts[b + 1] += 1);
-        }
-        for b in 0..n_blocks {
-            counts[b + 1] += counts[b];
-        }
-        let mut fill = counts.clone();
-        let mut items = vec![0u32; counts[n_blocks] as usize];
-        for (i, r) in ranges.iter().enumerate() {
-            if let Some(r) = r {
-                each(r, &mut |b| {
-                    items[fill[b] as usize] = i as u32;
-                    fill[b] += 1;
-                });
-            }
-        }
-        BlockLists {
-            starts: counts,
-            items,
-        }
+        let (starts, items) = bucket(grid.blocks(), &ranges);
+        BlockLists { starts, items }
     }
 
     /// The primitives reaching block `b`, increasing.
