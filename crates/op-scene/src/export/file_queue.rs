@@ -14,6 +14,7 @@
 //! series files) are written atomically but not synced
 //! ([`super::replace_atomically`], [`FileQueue::push_index`]).
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -35,9 +36,9 @@ pub struct WriteFailure {
     pub error: std::io::Error,
 }
 
-/// One file to write: its frame, path, bytes and whether it is synced to
-/// disk.
-type Job = (usize, PathBuf, Vec<u8>, bool);
+/// One file to write: its frame, path, bytes (in pieces written one after
+/// the other) and whether it is synced to disk.
+type Job = (usize, PathBuf, Vec<Vec<u8>>, bool);
 
 /// The first failure of the writing thread, shared with the queue.
 type Failed = Arc<Mutex<Option<WriteFailure>>>;
@@ -63,7 +64,23 @@ impl FileQueue {
         path: PathBuf,
         bytes: Vec<u8>,
     ) -> Result<(), WriteFailure> {
-        self.send((frame, path, bytes, true))
+        self.push_pieces(frame, path, vec![bytes])
+    }
+
+    /// [`FileQueue::push`] of a file whose bytes are the concatenation of
+    /// `pieces` (a format encoded in parallel hands its pieces over
+    /// without joining them into one more buffer of the file's size).
+    ///
+    /// # Errors
+    ///
+    /// An earlier file's failure (nothing more is written after one).
+    pub fn push_pieces(
+        &mut self,
+        frame: usize,
+        path: PathBuf,
+        pieces: Vec<Vec<u8>>,
+    ) -> Result<(), WriteFailure> {
+        self.send((frame, path, pieces, true))
     }
 
     /// [`FileQueue::push`] for an index file rewritten after every frame
@@ -79,7 +96,7 @@ impl FileQueue {
         path: PathBuf,
         bytes: Vec<u8>,
     ) -> Result<(), WriteFailure> {
-        self.send((frame, path, bytes, false))
+        self.send((frame, path, vec![bytes], false))
     }
 
     /// Queues `job`, starting the writing thread on first use.
@@ -163,11 +180,12 @@ impl Drop for FileQueue {
 /// The writing thread: every job in order until the queue closes or a
 /// file fails.
 fn write_all(jobs: &Receiver<Job>, failed: &Failed) {
-    for (frame, path, bytes, sync) in jobs {
+    for (frame, path, pieces, sync) in jobs {
+        let write = |w: &mut dyn Write| pieces.iter().try_for_each(|p| w.write_all(p));
         let written = if sync {
-            write_atomically(&path, |w| w.write_all(&bytes))
+            write_atomically(&path, write)
         } else {
-            replace_atomically(&path, |w| w.write_all(&bytes))
+            replace_atomically(&path, write)
         };
         if let Err(error) = written {
             let mut slot = failed.lock().unwrap_or_else(PoisonError::into_inner);
@@ -181,7 +199,8 @@ fn write_all(jobs: &Receiver<Job>, failed: &Failed) {
 mod tests {
     use super::*;
 
-    /// Files come out in order and complete; a file that cannot be written
+    /// Files come out in order and complete (a file in pieces as their
+    /// concatenation); a file that cannot be written
     /// stops the queue and names its frame, and the ones before it stay.
     #[test]
     fn writes_in_order_and_stops_at_a_failure() {
@@ -197,11 +216,15 @@ mod tests {
             )
             .unwrap();
         }
+        let pieces = vec![b"in ".to_vec(), Vec::new(), b"pieces".to_vec()];
+        q.push_pieces(200, dir.join("pieces"), pieces).unwrap();
         q.finish().unwrap();
         for k in 0..200 {
             let text = std::fs::read_to_string(dir.join(format!("f{k}"))).unwrap();
             assert_eq!(text, format!("frame {k}"));
         }
+        let text = std::fs::read_to_string(dir.join("pieces")).unwrap();
+        assert_eq!(text, "in pieces", "pieces are written one after the other");
         let mut q = FileQueue::default();
         q.push(0, dir.join("ok"), b"a".to_vec()).unwrap();
         q.push(1, dir.join("missing").join("f"), b"b".to_vec())

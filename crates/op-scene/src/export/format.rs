@@ -90,6 +90,18 @@ pub trait FileFormat: Sync + std::fmt::Debug {
         )))
     }
 
+    /// [`FileFormat::encode_mesh`]'s bytes as pieces the frame writer
+    /// writes one after the other: a format that encodes its file in
+    /// pieces in parallel (OBJ) hands them over as they are, instead of
+    /// copying them into one more buffer of the file's size, whose fresh
+    /// pages the kernel clears. Default: one piece, reserved at
+    /// [`FileFormat::mesh_size_hint`].
+    fn encode_mesh_pieces(&self, mesh: &FrameMesh) -> std::io::Result<Vec<Vec<u8>>> {
+        let mut bytes = Vec::with_capacity(self.mesh_size_hint(mesh));
+        self.encode_mesh(mesh, &mut bytes)?;
+        Ok(vec![bytes])
+    }
+
     /// Encodes the particle state of a frame ([`Files::State`] formats).
     fn encode_state(
         &self,

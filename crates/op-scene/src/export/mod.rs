@@ -544,8 +544,8 @@ impl FrameWriter {
             if let Some((name, cell, export)) = p.coarsened {
                 coarsened.push((name, k, cell, export));
             }
-            for (f, path, bytes) in p.files {
-                self.files.push(k, path, bytes)?;
+            for (f, path, pieces) in p.files {
+                self.files.push_pieces(k, path, pieces)?;
                 // After the frame's file: on disk, the series lists only
                 // files already there.
                 let series = seq.series_path(&self.out, f);
@@ -630,7 +630,7 @@ struct FrameInputs<'a> {
 /// One sequence's part of a frame, made on any thread.
 struct PreparedSequence {
     /// The frame file of each format that writes the sequence, encoded.
-    files: Vec<(FrameFormat, PathBuf, Vec<u8>)>,
+    files: Vec<(FrameFormat, PathBuf, Vec<Vec<u8>>)>,
     /// The geometry for the caches of one file per run (meshes only).
     mesh: Option<FrameMesh>,
     /// A skin exported coarser than its cell size: its name, cell size and
@@ -702,11 +702,11 @@ fn prepare_sequence(
     let mut files = Vec::with_capacity(formats.len());
     for f in formats {
         let path = seq.path(out, k, f);
-        let mut bytes = Vec::with_capacity(f.format().mesh_size_hint(&mesh));
-        f.format()
-            .encode_mesh(&mesh, &mut bytes)
+        let pieces = f
+            .format()
+            .encode_mesh_pieces(&mesh)
             .map_err(|e| failure(path.clone(), e))?;
-        files.push((f, path, bytes));
+        files.push((f, path, pieces));
     }
     Ok(Some(PreparedSequence {
         files,
