@@ -277,6 +277,29 @@ mod tests {
         }
     }
 
+    /// Thousands of lines, some through `core::fmt` (beyond the limit),
+    /// come out in order.
+    #[test]
+    fn many_lines_keep_their_order() {
+        let points: Vec<Vec3> = (0..5000)
+            .map(|k| {
+                let big = if k % 997 == 0 { 1e12 } else { 1.0 };
+                Vec3::new(
+                    k as f64 * 0.37 - 900.0,
+                    big * (k as f64).sin(),
+                    -1e-7 * k as f64,
+                )
+            })
+            .collect();
+        let mut out = Vec::new();
+        point_lines(&mut out, b"vn", &points, |p| [p.x, p.y, p.z]);
+        let expected: String = points
+            .iter()
+            .map(|p| format!("vn {:.6} {:.6} {:.6}\n", p.x, p.y, p.z))
+            .collect();
+        assert!(String::from_utf8(out).unwrap() == expected);
+    }
+
     #[test]
     fn indices_are_one_based_decimals() {
         let mut out = Vec::new();
