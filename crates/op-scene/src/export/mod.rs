@@ -515,11 +515,20 @@ impl FrameWriter {
             tools,
             outputs,
         };
+        // Side by side only when there is work to share: a skin to
+        // polygonize or a large world. A small frame's sequences cost less
+        // than waking a thread, which then spins while the frame writer
+        // needs the core (`cookbook/ball_bounce`, 800 frames of 177
+        // particles: 28,052 `sched_yield` at 2 threads, `strace -c -f`).
+        let parallel =
+            !skins.is_empty() || world.particles().len() >= op_dynamics::MIN_PARALLEL_LEN;
         let prepared: Vec<Result<Option<PreparedSequence>, WriteFailure>> = {
             use rayon::prelude::*;
             let (out, formats, sheet_gap) = (&self.out, &self.formats, &self.sheet_gap);
+            let n = self.sequences.len();
             self.sequences
                 .par_iter()
+                .with_min_len(if parallel { 1 } else { n.max(1) })
                 .zip(&self.sources)
                 .map(|(seq, source)| {
                     let cache = cache_file.as_deref();

@@ -197,9 +197,19 @@ fn file_pieces(mesh: &FrameMesh) -> std::io::Result<Vec<Vec<u8>>> {
         geometry: Vec::new(),
     };
     let mut out = vec![export(vec![header], 0)?];
+    let pieces = pieces(mesh);
+    // A small mesh (fewer lines than one piece holds) on one task: its
+    // few pieces cost less than waking a thread.
+    let lines = mesh.vertices.len() + mesh.normals.len() + mesh.triangles.len() + mesh.lines.len();
+    let min_len = if lines < PIECE {
+        pieces.len().max(1)
+    } else {
+        1
+    };
     out.par_extend(
-        pieces(mesh)
+        pieces
             .into_par_iter()
+            .with_min_len(min_len)
             .map(|piece| encode(mesh, piece)),
     );
     Ok(out)
