@@ -408,6 +408,9 @@ pub fn fit_with_stages(
     });
     // Noisy or uneven samples: the fit runs on seeds thinned and smoothed
     // from them and is measured against them.
+    // The nearest-sample distances' median, over these samples when the
+    // fit interpolates them (the tree is theirs), else over the seeds below.
+    let interpolated_median = (!approximated).then(|| median_of(nearest_distances(&nearest)));
     let smoothed = approximated.then(|| {
         let thinned = coarse.unwrap_or(sample_spacing);
         let (seeds, from) = denoise::smoothed_seeds(&nearest, noise, thinned);
@@ -437,14 +440,21 @@ pub fn fit_with_stages(
         ),
     };
     let data = data.as_ref();
-    // The default spacing, of the smoothed seeds when the fit approximates
-    // (unused when a spacing is given).
-    let default_h = match params.spacing {
-        None if approximated => default_spacing(&sample_tree(&distinct)?),
-        _ => sample_spacing,
+    // The default spacing and the median nearest distance of the smoothed
+    // seeds when the fit approximates (the default spacing is unused when a
+    // spacing is given).
+    let (default_h, median) = match interpolated_median {
+        Some(median) => (sample_spacing, median),
+        None => {
+            let seeds_tree = sample_tree(&distinct)?;
+            let default_h = match params.spacing {
+                None => default_spacing(&seeds_tree),
+                Some(_) => sample_spacing,
+            };
+            (default_h, median_of(nearest_distances(&seeds_tree)))
+        }
     };
     stages.lap("outliers, noise and smoothing");
-    let median = median_of(nearest_distances(&distinct));
     let smallest = median * (distinct.len() as Real / MAX_PARTICLES as Real).sqrt();
     let h = local_spacing(
         params, &frame, diagonal, &distinct, median, smallest, default_h,

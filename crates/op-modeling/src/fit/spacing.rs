@@ -7,90 +7,19 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
-use op_dynamics::{Point3, Real, Vec3};
+use op_dynamics::{Point3, Real};
 
 use super::input::{bits, distinct_points, median_of};
 use super::neighbourhood::Grid;
 use super::FitError;
 
-/// For each of the (distinct) `points`, the distance to its nearest other
-/// point, by a k-d tree (each node split at the median of its widest
-/// axis): O(n log n) for any distribution.
-pub(super) fn nearest_distances(points: &[Point3]) -> Vec<Real> {
-    let mut index: Vec<usize> = (0..points.len()).collect();
-    let mut axes = vec![0u8; points.len()];
-    build_kd(points, &mut index, &mut axes);
-    let tree = KdTree {
-        points,
-        index: &index,
-        axes: &axes,
-    };
-    (0..points.len())
-        .map(|i| {
-            let mut best = Real::INFINITY;
-            tree.nearest(0, points.len(), &points[i], i, &mut best);
-            best
-        })
+/// For each of the (distinct) points of `tree`, the distance to its
+/// nearest other point (queries in parallel, collected in order).
+pub(super) fn nearest_distances(tree: &Nearest) -> Vec<Real> {
+    (0..tree.points().len())
+        .into_par_iter()
+        .map(|i| tree.others(i, 1).first().map_or(Real::INFINITY, |r| r.0))
         .collect()
-}
-
-/// Orders `index` as an implicit k-d tree: the median of each range at its
-/// middle, split on the axis stored at the same place of `axes`.
-fn build_kd(points: &[Point3], index: &mut [usize], axes: &mut [u8]) {
-    if index.len() <= 1 {
-        return;
-    }
-    let (lo, hi) = index.iter().fold(
-        (
-            Vec3::repeat(Real::INFINITY),
-            Vec3::repeat(Real::NEG_INFINITY),
-        ),
-        |(lo, hi), &i| (lo.inf(&points[i].coords), hi.sup(&points[i].coords)),
-    );
-    let axis = (hi - lo).imax();
-    let mid = index.len() / 2;
-    index.select_nth_unstable_by(mid, |&a, &b| points[a][axis].total_cmp(&points[b][axis]));
-    axes[mid] = axis as u8;
-    let (left, right) = index.split_at_mut(mid);
-    let (left_axes, right_axes) = axes.split_at_mut(mid);
-    build_kd(points, left, left_axes);
-    build_kd(points, &mut right[1..], &mut right_axes[1..]);
-}
-
-/// An implicit k-d tree over `points` built by [`build_kd`].
-struct KdTree<'a> {
-    points: &'a [Point3],
-    index: &'a [usize],
-    axes: &'a [u8],
-}
-
-impl KdTree<'_> {
-    /// Lowers `best` to the distance from `q` to the nearest point of the
-    /// range `start..end` other than the point `skip`.
-    fn nearest(&self, start: usize, end: usize, q: &Point3, skip: usize, best: &mut Real) {
-        if start >= end {
-            return;
-        }
-        let mid = start + (end - start) / 2;
-        let i = self.index[mid];
-        if i != skip {
-            *best = best.min((self.points[i] - q).norm());
-        }
-        if end - start == 1 {
-            return;
-        }
-        let axis = self.axes[mid] as usize;
-        let diff = q[axis] - self.points[i][axis];
-        let (near, far) = if diff < 0.0 {
-            ((start, mid), (mid + 1, end))
-        } else {
-            ((mid + 1, end), (start, mid))
-        };
-        self.nearest(near.0, near.1, q, skip, best);
-        if diff.abs() < *best {
-            self.nearest(far.0, far.1, q, skip, best);
-        }
-    }
 }
 
 /// The `k` nearest other points of each point (kiddo's immutable k-d
@@ -215,7 +144,10 @@ pub fn median_nearest_distance(points: &[Point3]) -> Result<Real, FitError> {
             "all samples coincide: no spacing can be estimated".into(),
         ));
     }
-    let nearest = nearest_distances(&distinct);
+    let tree = Nearest::new(&distinct).ok_or_else(|| {
+        FitError::Input("no nearest-neighbour tree over the samples could be built".into())
+    })?;
+    let nearest = nearest_distances(&tree);
     let mut count: HashMap<[u64; 3], usize> = HashMap::new();
     for p in points {
         *count.entry(bits(p)).or_default() += 1;
@@ -284,8 +216,8 @@ mod tests {
 
     use crate::fit::shapes::scattered;
 
-    /// The k-d tree's nearest distances equal brute force, also on planar
-    /// data (ties on one axis) and with a far outlier.
+    /// The k-d tree's nearest distances equal brute force, bit for bit,
+    /// also on planar data (ties on one axis) and with a far outlier.
     #[test]
     fn kd_tree_nearest_distances_match_brute_force() {
         let mut sets = vec![scattered(500, 1.0)];
@@ -296,7 +228,7 @@ mod tests {
         outlier.push(Point3::new(1e3, 0.0, 0.0));
         sets.push(outlier);
         for pts in sets {
-            let fast = nearest_distances(&pts);
+            let fast = nearest_distances(&Nearest::new(&pts).unwrap());
             for (i, p) in pts.iter().enumerate() {
                 let slow = pts
                     .iter()
