@@ -20,6 +20,14 @@
 //! `OP_QUICK=1` runs only the smallest scaled-up size of each family and
 //! one repetition (a check that the generator works, not a report to
 //! keep).
+//!
+//! For a many-core machine, four more variables: `OP_THREADS` (the thread
+//! counts, comma-separated, default `1,2`; speed-ups are against the
+//! first), `OP_ONLY` (comma-separated pieces of case labels: only cases
+//! whose label contains one of them run), `OP_REPORT` (the report's path,
+//! default `reports/scenes.md`), `OPSIM` (the binary, default
+//! `target/release/opsim`) and `OP_ROOT` (the checkout whose `scenes/`
+//! are run, default this workspace).
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -29,7 +37,7 @@ use std::time::Instant;
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
 
-/// Thread counts measured.
+/// Thread counts measured unless `OP_THREADS` names others.
 const THREADS: [usize; 2] = [1, 2];
 
 /// One thing to run: a label, the `opsim` arguments before `--threads`
@@ -54,8 +62,12 @@ struct Sample {
 
 fn main() -> Res<()> {
     let started = Instant::now();
-    let root = op_experiments::workspace_root();
-    let opsim = root.join("target/release/opsim");
+    let root = std::env::var_os("OP_ROOT")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(op_experiments::workspace_root);
+    let opsim = std::env::var_os("OPSIM")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join("target/release/opsim"));
     if !opsim.exists() {
         return Err(format!(
             "{} is missing: build it first with `cargo build --release --bin opsim`",
@@ -71,13 +83,19 @@ fn main() -> Res<()> {
     };
     let work = std::env::temp_dir().join(format!("op-scenes-report-{}", std::process::id()));
     std::fs::create_dir_all(&work)?;
+    let threads = thread_counts()?;
+    let only: Vec<String> = std::env::var("OP_ONLY")
+        .map(|v| v.split(',').map(str::to_string).collect())
+        .unwrap_or_default();
     let mut cases = shipped(&root)?;
     cases.extend(scaled(&work, quick)?);
+    cases.retain(|c| only.is_empty() || only.iter().any(|o| c.label.contains(o.as_str())));
     let load_before = op_experiments::machine::load_average();
-    let mut results: Vec<[Vec<Sample>; 2]> = cases.iter().map(|_| [vec![], vec![]]).collect();
+    let mut results: Vec<Vec<Vec<Sample>>> =
+        cases.iter().map(|_| vec![vec![]; threads.len()]).collect();
     for rep in 0..reps {
         for (c, case) in cases.iter().enumerate() {
-            for (k, &t) in THREADS.iter().enumerate() {
+            for (k, &t) in threads.iter().enumerate() {
                 let s = measure(&opsim, case, t, &work)?;
                 eprintln!(
                     "rep {rep} {} {t} thread(s): {:.3} s (exit {})",
@@ -88,12 +106,35 @@ fn main() -> Res<()> {
         }
     }
     let load_after = op_experiments::machine::load_average();
-    let md = report(&cases, &results, reps, started, (&load_before, &load_after))?;
-    let path = root.join("reports/scenes.md");
+    let md = report(
+        &cases,
+        &results,
+        &threads,
+        reps,
+        started,
+        (&load_before, &load_after),
+    )?;
+    let path = std::env::var_os("OP_REPORT")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join("reports/scenes.md"));
     std::fs::write(&path, md)?;
     let _ = std::fs::remove_dir_all(&work);
     eprintln!("wrote {}", path.display());
     Ok(())
+}
+
+/// The thread counts to measure: `OP_THREADS`, or [`THREADS`].
+fn thread_counts() -> Res<Vec<usize>> {
+    let Ok(v) = std::env::var("OP_THREADS") else {
+        return Ok(THREADS.to_vec());
+    };
+    let counts = v
+        .split(',')
+        .map(|t| t.trim().parse::<usize>().ok().filter(|&t| t > 0))
+        .collect::<Option<Vec<usize>>>()
+        .filter(|c| !c.is_empty())
+        .ok_or_else(|| format!("OP_THREADS={v}: not a comma-separated list of thread counts"))?;
+    Ok(counts)
 }
 
 /// The shipped scenes, in path order.
@@ -393,37 +434,58 @@ fn speedup(one: &[Sample], two: &[Sample]) -> (f64, f64, f64) {
     stats(one.iter().zip(two).map(|(a, b)| a.wall / b.wall).collect())
 }
 
+/// `1 thread` or `T threads`.
+fn threads_label(t: usize) -> String {
+    if t == 1 {
+        "1 thread".into()
+    } else {
+        format!("{t} threads")
+    }
+}
+
 /// The Markdown report.
 fn report(
     cases: &[Case],
-    results: &[[Vec<Sample>; 2]],
+    results: &[Vec<Vec<Sample>>],
+    threads: &[usize],
     reps: usize,
     started: Instant,
     load: (&str, &str),
 ) -> Res<String> {
     let mut md = String::new();
-    intro(&mut md, reps, started, load)?;
-    shipped_table(&mut md, cases, results)?;
-    scaled_table(&mut md, cases, results)?;
+    intro(&mut md, threads, reps, started, load)?;
+    shipped_table(&mut md, cases, results, threads)?;
+    scaled_table(&mut md, cases, results, threads)?;
     growth_table(&mut md, cases, results)?;
     Ok(md)
 }
 
 /// The report's title, how it was made, and the machine's load.
-fn intro(md: &mut String, reps: usize, started: Instant, load: (&str, &str)) -> std::fmt::Result {
+fn intro(
+    md: &mut String,
+    threads: &[usize],
+    reps: usize,
+    started: Instant,
+    load: (&str, &str),
+) -> std::fmt::Result {
+    let counts: Vec<String> = threads.iter().map(|t| t.to_string()).collect();
+    let flags: Vec<String> = threads.iter().map(|t| format!("`--threads {t}`")).collect();
     writeln!(
         md,
-        "# Whole scenes: wall time and stages at 1 and 2 threads\n"
+        "# Whole scenes: wall time and stages at {} threads\n",
+        counts.join(", ")
     )?;
     writeln!(
         md,
         "Generated by `cargo build --release --bin opsim && cargo run --release -p \
          op-experiments --example scenes_report` ({:.0} s). Every case is its own `opsim` \
-         process at `--threads 1` then `--threads 2`, interleaved over {reps} repetitions; \
-         seconds are medians [min-max], speed-ups are per-repetition ratios. A run's wall \
-         time is its `summary.json` `wall_seconds` (building the scene included), whose \
-         `stages` add up to it; `opsim fit` is timed as a whole process.\n",
-        started.elapsed().as_secs_f64()
+         process at {}, interleaved over {reps} repetition(s); seconds are medians [min-max], \
+         speed-ups are per-repetition ratios to {}. A run's wall time is its `summary.json` \
+         `wall_seconds` (building the scene included), whose `stages` add up to it; \
+         `opsim fit` is timed as a whole process.\n",
+        started.elapsed().as_secs_f64(),
+        flags.join(", "),
+        threads_label(threads[0]),
     )?;
     md.push_str(&op_experiments::machine::table(&[(
         "load average before / after",
@@ -433,50 +495,106 @@ fn intro(md: &mut String, reps: usize, started: Instant, load: (&str, &str)) -> 
     Ok(())
 }
 
-/// The table of the shipped scenes, and which are slower at 2 threads.
+/// The header cells shared by both tables: seconds at each thread count,
+/// then the speed-up of each later count.
+fn thread_columns(threads: &[usize]) -> (String, String) {
+    let mut head = String::new();
+    let mut rule = String::new();
+    for &t in threads {
+        head.push_str(&format!(" {} (s) |", threads_label(t)));
+        rule.push_str("---|");
+    }
+    for &t in &threads[1..] {
+        head.push_str(&format!(" speed-up {t} |"));
+        rule.push_str("---|");
+    }
+    (head, rule)
+}
+
+/// The cells of [`thread_columns`] for one case.
+fn thread_cells(per_thread: &[Vec<Sample>]) -> String {
+    let mut row = String::new();
+    for samples in per_thread {
+        row.push_str(&format!(
+            " {} |",
+            spread(samples.iter().map(|x| x.wall).collect())
+        ));
+    }
+    for samples in &per_thread[1..] {
+        let (s, lo, hi) = speedup(&per_thread[0], samples);
+        row.push_str(&format!(" {s:.2} [{lo:.2}-{hi:.2}] |"));
+    }
+    row
+}
+
+/// The table of the shipped scenes, and which are slower with more
+/// threads.
 fn shipped_table(
     md: &mut String,
     cases: &[Case],
-    results: &[[Vec<Sample>; 2]],
+    results: &[Vec<Vec<Sample>>],
+    threads: &[usize],
 ) -> std::fmt::Result {
+    if cases.iter().all(|c| c.family.is_some()) {
+        return Ok(());
+    }
+    let last = *threads.last().unwrap_or(&1);
     writeln!(md, "## Shipped scenes\n")?;
+    let (head, rule) = thread_columns(threads);
+    let at_last = if threads.len() > 1 {
+        format!(" largest stages at {} |", threads_label(last))
+    } else {
+        String::new()
+    };
     writeln!(
         md,
-        "| scene | particles | 1 thread (s) | 2 threads (s) | speed-up | build (s) | largest \
-         stages at 1 thread | exit |"
+        "| scene | particles |{head} build (s) | largest stages at {} |{at_last} exit |",
+        threads_label(threads[0])
     )?;
-    writeln!(md, "|---|---|---|---|---|---|---|---|")?;
+    writeln!(
+        md,
+        "|---|---|{rule}---|---|{}---|",
+        if at_last.is_empty() { "" } else { "---|" }
+    )?;
     let mut slower = Vec::new();
-    for (case, [one, two]) in cases.iter().zip(results) {
+    for (case, per_thread) in cases.iter().zip(results) {
         if case.family.is_some() {
             continue;
         }
-        let (s, lo, hi) = speedup(one, two);
-        if hi < 1.0 {
-            slower.push(format!("{} ({s:.2} [{lo:.2}-{hi:.2}])", case.label));
+        for (samples, &t) in per_thread.iter().zip(threads).skip(1) {
+            let (s, lo, hi) = speedup(&per_thread[0], samples);
+            if hi < 1.0 {
+                slower.push(format!("{} at {t} ({s:.2} [{lo:.2}-{hi:.2}])", case.label));
+            }
         }
+        let last_stages = if threads.len() > 1 {
+            format!(" {} |", top_stages(&per_thread[per_thread.len() - 1]))
+        } else {
+            String::new()
+        };
         writeln!(
             md,
-            "| {} | {} | {} | {} | {s:.2} [{lo:.2}-{hi:.2}] | {:.3} | {} | {} |",
+            "| {} | {} |{} {:.3} | {} |{last_stages} {} |",
             case.label,
-            one[0].particles,
-            spread(one.iter().map(|x| x.wall).collect()),
-            spread(two.iter().map(|x| x.wall).collect()),
-            stage(one, "build"),
-            top_stages(one),
-            one[0].exit,
+            per_thread[0][0].particles,
+            thread_cells(per_thread),
+            stage(&per_thread[0], "build"),
+            top_stages(&per_thread[0]),
+            per_thread[0][0].exit,
         )?;
     }
     writeln!(md)?;
     if slower.is_empty() {
         writeln!(
             md,
-            "No shipped scene is slower at 2 threads than at 1 in every repetition.\n"
+            "No shipped scene is slower with more threads than at {} in every repetition.\n",
+            threads_label(threads[0])
         )?;
     } else {
         writeln!(
             md,
-            "Slower at 2 threads than at 1 in every repetition: {}.\n",
+            "Slower than at {} in every repetition: {}.\n",
+            threads_label(threads[0]),
             slower.join(", ")
         )?;
     }
@@ -484,51 +602,64 @@ fn shipped_table(
 }
 
 /// The table of the scaled-up cases: times, stages, peak memory.
-fn scaled_table(md: &mut String, cases: &[Case], results: &[[Vec<Sample>; 2]]) -> std::fmt::Result {
+fn scaled_table(
+    md: &mut String,
+    cases: &[Case],
+    results: &[Vec<Vec<Sample>>],
+    threads: &[usize],
+) -> std::fmt::Result {
+    if cases.iter().all(|c| c.family.is_none()) {
+        return Ok(());
+    }
     writeln!(md, "## Scaled-up scenes\n")?;
+    let (head, rule) = thread_columns(threads);
+    let counts: Vec<String> = threads.iter().map(|t| t.to_string()).collect();
     writeln!(
         md,
-        "| case | particles | 1 thread (s) | 2 threads (s) | speed-up | build | contact | \
-         integrate | export | peak memory 1 / 2 threads (MB) |"
+        "| case | particles |{head} build | contact | integrate | export | peak memory at {} \
+         threads (MB) |",
+        counts.join(" / ")
     )?;
-    writeln!(md, "|---|---|---|---|---|---|---|---|---|---|")?;
-    for (case, [one, two]) in cases.iter().zip(results) {
+    writeln!(md, "|---|---|{rule}---|---|---|---|---|")?;
+    for (case, per_thread) in cases.iter().zip(results) {
         if case.family.is_none() {
             continue;
         }
-        let (s, lo, hi) = speedup(one, two);
         let peak = |xs: &[Sample]| {
             xs.iter()
                 .filter_map(|x| x.peak_mb)
                 .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))
                 .map_or("n/a".to_string(), |v| format!("{v:.0}"))
         };
+        let one = &per_thread[0];
+        let peaks: Vec<String> = per_thread.iter().map(|s| peak(s)).collect();
         writeln!(
             md,
-            "| {} | {} | {} | {} | {s:.2} [{lo:.2}-{hi:.2}] | {:.2} | {:.2} | {:.2} | {:.2} | {} / {} |",
+            "| {} | {} |{} {:.2} | {:.2} | {:.2} | {:.2} | {} |",
             case.label,
             one[0].particles,
-            spread(one.iter().map(|x| x.wall).collect()),
-            spread(two.iter().map(|x| x.wall).collect()),
+            thread_cells(per_thread),
             stage(one, "build"),
             stage(one, "contact"),
             stage(one, "integrate"),
             stage(one, "export"),
-            peak(one),
-            peak(two),
+            peaks.join(" / "),
         )?;
     }
     Ok(())
 }
 
 /// The exponent of `t ~ N^a` per scaled-up family, for the wall time and
-/// the largest stages.
-fn growth_table(md: &mut String, cases: &[Case], results: &[[Vec<Sample>; 2]]) -> std::fmt::Result {
+/// the largest stages (at the first thread count).
+fn growth_table(md: &mut String, cases: &[Case], results: &[Vec<Vec<Sample>>]) -> std::fmt::Result {
+    if cases.iter().all(|c| c.family.is_none()) {
+        return Ok(());
+    }
     writeln!(md)?;
     writeln!(
         md,
         "Growth with the number of particles N (exponent a of t ~ N^a, least squares over \
-         the sizes above, 1 thread):\n"
+         the sizes above, first thread count):\n"
     )?;
     writeln!(
         md,
