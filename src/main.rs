@@ -166,6 +166,11 @@ enum Command {
         /// interpolation).
         #[arg(long)]
         interpolate: bool,
+        /// Print the seconds of each stage (reading, the fit's own stages,
+        /// writing) on standard error, as `run --profile` does; standard
+        /// output keeps its one JSON line.
+        #[arg(long)]
+        profile: bool,
     },
     /// Print the scene format as a JSON Schema (for editors that complete
     /// and check JSON scenes), or with `--markdown` as the field reference
@@ -254,13 +259,18 @@ fn dispatch(cli: Cli) -> Result<(), Failure> {
             relax,
             approximate,
             interpolate,
+            profile,
         }) => run_fit(
             &points,
             &out,
-            spacing,
-            (open || closed).then_some(open),
-            relax,
-            (approximate || interpolate).then_some(approximate),
+            op_scene::fit::FitParams {
+                spacing,
+                open: (open || closed).then_some(open),
+                relax_time: relax,
+                approximate: (approximate || interpolate).then_some(approximate),
+                ..Default::default()
+            },
+            profile,
         ),
         Some(Command::Schema { markdown }) => {
             if markdown {
@@ -313,15 +323,16 @@ fn is_obj(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
 }
 
-/// `opsim fit`: read, fit, write the mesh, print the figures as JSON.
+/// `opsim fit`: read, fit, write the mesh, print the figures as JSON (and
+/// with `profile` the stages' seconds on standard error).
 fn run_fit(
     points: &Path,
     out: &Path,
-    spacing: Option<f64>,
-    open: Option<bool>,
-    relax: f64,
-    approximate: Option<bool>,
+    params: op_scene::fit::FitParams,
+    profile: bool,
 ) -> Result<(), Failure> {
+    let started = std::time::Instant::now();
+    let relax = params.relax_time;
     // Checked before the fit, which may take minutes.
     if !is_obj(out) {
         return Err(anyhow!(
@@ -343,14 +354,8 @@ fn run_fit(
     // are read, when it holds more samples than a fit takes.
     let data =
         op_scene::pointsets::read_point_set_at_most(points, op_modeling::fit::MAX_PARTICLES)?;
-    let params = op_scene::fit::FitParams {
-        spacing,
-        open,
-        relax_time: relax,
-        approximate,
-        ..Default::default()
-    };
-    let fit = op_scene::fit::fit(&data, &params).map_err(|e| Failure {
+    let mut stages = vec![("read", started.elapsed().as_secs_f64())];
+    let (fit, fitted) = op_scene::fit::fit_with_stages(&data, &params).map_err(|e| Failure {
         // A relaxation that diverged is a simulation failure (exit 3).
         code: if matches!(
             e,
@@ -367,10 +372,35 @@ fn run_fit(
         }
         .context(format!("cannot fit {}", points.display())),
     })?;
+    stages.extend(fitted);
+    let writing = std::time::Instant::now();
     op_scene::fit::write_obj(out, &fit)
         .with_context(|| format!("cannot write {}", out.display()))?;
+    stages.push(("write", writing.elapsed().as_secs_f64()));
     outln!("{}", op_scene::fit::figures_json(&fit));
+    if profile {
+        print_fit_profile(&stages, started.elapsed().as_secs_f64());
+    }
     Ok(())
+}
+
+/// `opsim fit --profile`'s table on standard error: seconds and share of
+/// the wall time per stage, in the fit's order.
+fn print_fit_profile(stages: &[(&str, f64)], wall: f64) {
+    let width = stages
+        .iter()
+        .map(|(n, _)| n.len())
+        .max()
+        .unwrap_or(5)
+        .max(5);
+    eprintln!("{:<width$} {:>10} {:>7}", "stage", "seconds", "share");
+    for (name, secs) in stages {
+        eprintln!(
+            "{name:<width$} {secs:>10.4} {:>6.1}%",
+            100.0 * secs / wall.max(f64::MIN_POSITIVE)
+        );
+    }
+    eprintln!("{:<width$} {wall:>10.4} {:>6.1}%", "wall", 100.0);
 }
 
 /// `--view` and `--up`'s parser: `X,Y,Z`, finite and not all zero.
