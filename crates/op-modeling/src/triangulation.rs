@@ -722,8 +722,10 @@ fn canonical(t: [u32; 3]) -> [u32; 3] {
     [t[m], t[(m + 1) % 3], t[(m + 2) % 3]]
 }
 
+mod edge_table;
 mod held_cells;
 mod topology;
+pub use edge_table::EdgeTable;
 pub use topology::vertex_components;
 
 #[cfg(test)]

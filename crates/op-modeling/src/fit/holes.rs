@@ -22,7 +22,7 @@ use op_dynamics::{Point3, Real, Vec3};
 
 use super::mesh::SurfaceMesh;
 use crate::disjoint_sets::DisjointSets;
-use crate::triangulation::vertex_components;
+use crate::triangulation::{vertex_components, EdgeTable};
 
 /// Closes the holes of `mesh` narrower than `max_width` (unit spacing);
 /// `samples` with unit `normals` place the centre vertices of large
@@ -41,12 +41,19 @@ pub(super) fn fill_holes(
     normals: &[Vec3],
     min_vertices: usize,
 ) -> usize {
-    drop_overfull_edges(&mut mesh.faces);
-    super::winding::cut_crosscaps(mesh);
-    split_pinched_vertices(mesh);
-    let mut edges = edge_counts(&mesh.faces);
+    let table = drop_overfull_edges(&mut mesh.faces);
+    let (_, table) = super::winding::cut_crosscaps(mesh, table);
+    // Splitting renumbers corners: the table holds while nothing split.
+    let table = match split_pinched_vertices(mesh) {
+        0 => table,
+        _ => EdgeTable::new(&mesh.faces),
+    };
+    let loops = boundary_loops_of(&mesh.faces, &table);
+    let mut edges = EdgeCounts {
+        table,
+        added: HashMap::new(),
+    };
     let mut closed = 0;
-    let loops = boundary_loops(&mesh.faces);
     let rims = if open {
         rims(&mesh.vertices, &mesh.faces, &loops)
     } else {
@@ -194,40 +201,71 @@ fn key(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
 }
 
-/// Number of triangles on each edge.
-fn edge_counts(faces: &[[u32; 3]]) -> HashMap<(u32, u32), usize> {
-    let mut e = HashMap::new();
-    for f in faces {
-        for k in 0..3 {
-            *e.entry(key(f[k], f[(k + 1) % 3])).or_insert(0) += 1;
-        }
-    }
-    e
+/// Number of triangles on each edge while holes are closed: the counts of
+/// the mesh's [`EdgeTable`] plus those of the triangles added since.
+struct EdgeCounts {
+    table: EdgeTable,
+    added: HashMap<(u32, u32), usize>,
 }
 
-/// Drops the triangles on edges held by more than two.
-fn drop_overfull_edges(faces: &mut Vec<[u32; 3]>) {
-    let e = edge_counts(faces);
-    faces.retain(|f| (0..3).all(|k| e[&key(f[k], f[(k + 1) % 3])] <= 2));
+impl EdgeCounts {
+    /// Number of triangles on the edge `{a, b}`.
+    fn count(&self, a: u32, b: u32) -> usize {
+        self.table.count_of(a, b) + self.added.get(&key(a, b)).copied().unwrap_or(0)
+    }
+}
+
+/// Drops the triangles on edges held by more than two. Returns the
+/// [`EdgeTable`] of `faces` when none was dropped (it still holds).
+fn drop_overfull_edges(faces: &mut Vec<[u32; 3]>) -> Option<EdgeTable> {
+    let e = EdgeTable::new(faces);
+    if (0..e.len()).all(|k| e.count(k) <= 2) {
+        return Some(e);
+    }
+    let mut t = 0;
+    faces.retain(|_| {
+        t += 1;
+        e.sides(t - 1).iter().all(|&k| e.count(k) <= 2)
+    });
+    None
 }
 
 /// The holes: loops of boundary half-edges, each reversed from its face's
 /// winding (so a triangle `[prev, cur, next]` on a hole is wound like the
 /// mesh). Deterministic (started from the smallest unused half-edge).
+#[cfg(test)]
 fn boundary_loops(faces: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let e = edge_counts(faces);
+    boundary_loops_of(faces, &EdgeTable::new(faces))
+}
+
+/// [`boundary_loops`] of `faces`, whose [`EdgeTable`] is `table` (built
+/// from them, or before some were only turned).
+fn boundary_loops_of(faces: &[[u32; 3]], table: &EdgeTable) -> Vec<Vec<u32>> {
     let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
-    for f in faces {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            if e[&key(a, b)] == 1 {
-                next.entry(b).or_default().push(a);
-            }
-        }
+    for e in (0..table.len()).filter(|&e| table.count(e) == 1) {
+        let f = faces[table.slots(e)[0] as usize / 3];
+        let (a, b) = table.vertices(e);
+        // The direction the triangle traverses its boundary edge now.
+        let (a, b) = if super::winding::forward(&f, a, b) {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        next.entry(b).or_default().push(a);
     }
     next.values_mut().for_each(|v| v.sort_unstable());
+    // Lists only shrink: the first one left with a half-edge is never
+    // before the last one found.
+    let starts: Vec<u32> = next.keys().copied().collect();
+    let mut first = 0;
     let mut loops = Vec::new();
-    while let Some((&start, _)) = next.iter().find(|(_, v)| !v.is_empty()) {
+    loop {
+        while first < starts.len() && next[&starts[first]].is_empty() {
+            first += 1;
+        }
+        let Some(&start) = starts.get(first) else {
+            break;
+        };
         let mut hole = vec![start];
         let mut at = start;
         while let Some(to) = next.get_mut(&at).and_then(Vec::pop) {
@@ -311,7 +349,7 @@ fn centroid(vertices: &[Point3], hole: &[u32]) -> Point3 {
 /// Closes `hole` by clipping its sharpest ear first.
 fn close_by_ears(
     mesh: &mut SurfaceMesh,
-    edges: &mut HashMap<(u32, u32), usize>,
+    edges: &mut EdgeCounts,
     hole: Vec<u32>,
     samples: &[Point3],
     normals: &[Vec3],
@@ -341,7 +379,7 @@ fn close_by_ears(
         order.sort_by(|&a, &b| angle(a).total_cmp(&angle(b)).then(a.cmp(&b)));
         let ear = order.into_iter().find(|&k| {
             let (a, b, c) = (hole[(k + m - 1) % m], hole[k], hole[(k + 1) % m]);
-            let diagonal = edges.get(&key(a, c)).copied().unwrap_or(0);
+            let diagonal = edges.count(a, c);
             a != b
                 && b != c
                 && a != c
@@ -368,7 +406,7 @@ fn close_by_ears(
 /// the tangent plane of the nearest sample.
 fn close_by_fan(
     mesh: &mut SurfaceMesh,
-    edges: &mut HashMap<(u32, u32), usize>,
+    edges: &mut EdgeCounts,
     hole: &[u32],
     samples: &[Point3],
     normals: &[Vec3],
@@ -402,13 +440,13 @@ fn close_by_fan(
     }
 }
 
-fn count(edges: &HashMap<(u32, u32), usize>, a: u32, b: u32) -> usize {
-    edges.get(&key(a, b)).copied().unwrap_or(0)
+fn count(edges: &EdgeCounts, a: u32, b: u32) -> usize {
+    edges.count(a, b)
 }
 
-fn add_face(mesh: &mut SurfaceMesh, edges: &mut HashMap<(u32, u32), usize>, f: [u32; 3]) {
+fn add_face(mesh: &mut SurfaceMesh, edges: &mut EdgeCounts, f: [u32; 3]) {
     for k in 0..3 {
-        *edges.entry(key(f[k], f[(k + 1) % 3])).or_insert(0) += 1;
+        *edges.added.entry(key(f[k], f[(k + 1) % 3])).or_insert(0) += 1;
     }
     mesh.faces.push(f);
 }
@@ -448,7 +486,8 @@ mod tests {
         assert_eq!(boundary_loops(&open.faces).len(), 1);
         assert_eq!(fill_holes(&mut mesh, 10.0, false, &[], &[], 3), 1);
         assert!(boundary_loops(&mesh.faces).is_empty());
-        assert!(edge_counts(&mesh.faces).values().all(|&c| c == 2));
+        let table = EdgeTable::new(&mesh.faces);
+        assert!((0..table.len()).all(|e| table.count(e) == 2));
     }
 
     /// Two triangles touching at one corner (a bow tie): the shared

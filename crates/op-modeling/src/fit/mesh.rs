@@ -4,7 +4,7 @@ use std::collections::HashMap;
 
 use rayon::prelude::*;
 
-use crate::triangulation::{triangulate_points, Triangulation, TriangulationParams};
+use crate::triangulation::{triangulate_points, EdgeTable, Triangulation, TriangulationParams};
 use op_dynamics::{Point3, Real, Vec3};
 
 use super::FitError;
@@ -46,6 +46,20 @@ impl SurfaceMesh {
         radius: Real,
         samples: &[Point3],
     ) -> Result<Self, FitError> {
+        Self::with_distances(positions, normals, radius, samples).map(|(mesh, _)| mesh)
+    }
+
+    /// [`Self::new`], with the distance from each of `samples` to the
+    /// triangles ([`sample_distances`]).
+    ///
+    /// # Errors
+    /// As [`Self::new`].
+    pub(super) fn with_distances(
+        positions: &[Point3],
+        normals: &[Vec3],
+        radius: Real,
+        samples: &[Point3],
+    ) -> Result<(Self, Vec<Real>), FitError> {
         let triangles = triangulate_points(
             positions,
             normals,
@@ -74,16 +88,19 @@ impl SurfaceMesh {
                 })
             })
             .collect();
-        let (rms_distance, max_distance) = distances(samples, &vertices, &faces);
-        Ok(SurfaceMesh {
-            euler_characteristic: mesh.euler_characteristic(),
-            boundary_loops: mesh.boundary_loops(),
+        let d = sample_distances(samples, &vertices, &faces);
+        let (rms_distance, max_distance) = rms_and_max(&d);
+        let edges = EdgeTable::new(&mesh.triangles);
+        let mesh = SurfaceMesh {
+            euler_characteristic: mesh.euler_characteristic_with(&edges),
+            boundary_loops: Triangulation::boundary_loops_of(&edges),
             vertices,
             normals: normals_out,
             faces,
             rms_distance,
             max_distance,
-        })
+        };
+        Ok((mesh, d))
     }
 
     /// Root mean square over the vertices of `distance`, a distance to the
@@ -135,8 +152,9 @@ impl SurfaceMesh {
         let t = Triangulation {
             triangles: self.faces.clone(),
         };
-        self.euler_characteristic = t.euler_characteristic();
-        self.boundary_loops = t.boundary_loops();
+        let edges = EdgeTable::new(&t.triangles);
+        self.euler_characteristic = t.euler_characteristic_with(&edges);
+        self.boundary_loops = Triangulation::boundary_loops_of(&edges);
         (self.rms_distance, self.max_distance) = distances(samples, &self.vertices, &self.faces);
     }
 }
@@ -148,11 +166,15 @@ pub(super) fn distances(
     vertices: &[Point3],
     faces: &[[u32; 3]],
 ) -> (Real, Real) {
-    let d = sample_distances(samples, vertices, faces);
+    rms_and_max(&sample_distances(samples, vertices, faces))
+}
+
+/// RMS and largest of the distances `d` (NaN RMS when there is none).
+fn rms_and_max(d: &[Real]) -> (Real, Real) {
     let sum: Real = d.iter().map(|x| x * x).sum();
     (
-        (sum / samples.len() as Real).sqrt(),
-        d.into_iter().fold(0.0, Real::max),
+        (sum / d.len() as Real).sqrt(),
+        d.iter().copied().fold(0.0, Real::max),
     )
 }
 

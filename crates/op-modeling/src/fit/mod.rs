@@ -509,7 +509,7 @@ pub fn fit_with_stages(
     // Triangulate and measure at unit spacing, then map back.
     let p = world.particles();
     let pnormals: Vec<Vec3> = (0..p.len()).map(|s| p.normal(s)).collect();
-    let mut mesh = SurfaceMesh::new(
+    let (mut mesh, distances) = SurfaceMesh::with_distances(
         p.positions(),
         &pnormals,
         params.triangulation_radius * rest,
@@ -517,10 +517,7 @@ pub fn fit_with_stages(
     )?;
     stages.lap("triangulation");
     // A surface covers its samples: most lie within a spacing of it.
-    let covered = sample_distances(&unit, &mesh.vertices, &mesh.faces)
-        .iter()
-        .filter(|&&d| d <= 1.0)
-        .count();
+    let covered = distances.iter().filter(|&&d| d <= 1.0).count();
     if 2 * covered <= n {
         return Err(FitError::Input(format!(
             "no surface: the {} particles grown from {} samples at spacing {spacing:.3e} gave {} triangle(s), within one spacing of only {covered} of the {n} samples (samples along a curve, or a spacing too coarse for them: the median distance between samples is {:.3e})",

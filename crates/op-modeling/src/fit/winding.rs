@@ -22,27 +22,27 @@
 //! where the walk meets itself wound against, and the hole pass fills the
 //! cut.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::VecDeque;
 
 use op_dynamics::{Point3, Vec3};
+use rayon::prelude::*;
 
 use super::mesh::SurfaceMesh;
+use crate::triangulation::EdgeTable;
+
+/// Whether triangle `f` traverses `a -> b`.
+pub(super) fn forward(f: &[u32; 3], a: u32, b: u32) -> bool {
+    (0..3).any(|k| f[k] == a && f[(k + 1) % 3] == b)
+}
 
 /// Winds the triangles of `mesh` consistently (see the module
 /// documentation) and turns each vertex normal that points against the
-/// (area-weighted) sum of its triangles' normals. Returns the number of
-/// triangles turned.
-pub(super) fn orient(mesh: &mut SurfaceMesh) -> usize {
+/// (area-weighted) sum of its triangles' normals. `edges` is the
+/// [`EdgeTable`] of the mesh's triangles (built from them as they are, or
+/// before some were only turned: a turned triangle holds the same edges).
+/// Returns the number of triangles turned.
+pub(super) fn orient(mesh: &mut SurfaceMesh, edges: &EdgeTable) -> usize {
     let faces = &mut mesh.faces;
-    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (t, f) in faces.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            by_edge.entry((a.min(b), a.max(b))).or_default().push(t);
-        }
-    }
-    // Whether `f` traverses a -> b.
-    let forward = |f: &[u32; 3], a: u32, b: u32| (0..3).any(|k| f[k] == a && f[(k + 1) % 3] == b);
     let mut seen = vec![false; faces.len()];
     let mut flipped = vec![false; faces.len()];
     for start in 0..faces.len() {
@@ -54,13 +54,22 @@ pub(super) fn orient(mesh: &mut SurfaceMesh) -> usize {
         let mut queue = VecDeque::from([start]);
         while let Some(t) = queue.pop_front() {
             let f = faces[t];
+            let sides = edges.sides(t);
             for k in 0..3 {
                 let (a, b) = (f[k], f[(k + 1) % 3]);
-                let on = &by_edge[&(a.min(b), a.max(b))];
+                // The side of `t` on {a, b}, whatever turns `t` took.
+                let Some(&e) = sides
+                    .iter()
+                    .find(|&&e| edges.vertices(e) == (a.min(b), a.max(b)))
+                else {
+                    continue;
+                };
+                let on = edges.slots(e);
                 if on.len() != 2 {
                     continue;
                 }
-                let u = if on[0] == t { on[1] } else { on[0] };
+                let (t0, t1) = (on[0] as usize / 3, on[1] as usize / 3);
+                let u = if t0 == t { t1 } else { t0 };
                 if seen[u] {
                     continue;
                 }
@@ -97,11 +106,15 @@ pub(super) fn orient(mesh: &mut SurfaceMesh) -> usize {
             sums[v as usize] += n;
         }
     }
-    for (n, s) in mesh.normals.iter_mut().zip(&sums) {
-        if n.dot(s) < 0.0 {
-            *n = -*n;
-        }
-    }
+    mesh.normals
+        .par_iter_mut()
+        .zip(&sums)
+        .with_min_len(4096)
+        .for_each(|(n, s)| {
+            if n.dot(s) < 0.0 {
+                *n = -*n;
+            }
+        });
     flipped.iter().filter(|&&f| f).count()
 }
 
@@ -111,35 +124,39 @@ pub(super) fn orient(mesh: &mut SurfaceMesh) -> usize {
 /// way round (a Möbius band: across the rim of a feature thinner than the
 /// spacing, where the normals turn within one triangle); dropping its
 /// triangles cuts the band across, and the hole pass fills the cut as
-/// a hole of an orientable surface. Returns the number of triangles
-/// dropped. On the 26,002 vertices of a scanned armadillo: two such bands
-/// at the ears (4 triangles), which had left two holes that could not be
-/// traced and χ -2.
-pub(super) fn cut_crosscaps(mesh: &mut SurfaceMesh) -> usize {
+/// a hole of an orientable surface. `edges` is the table of the mesh's
+/// triangles when the caller has it. Returns the number of triangles
+/// dropped and the table of the triangles left (valid for them: a wound
+/// triangle holds the same edges). On the 26,002 vertices of a scanned
+/// armadillo: two such bands at the ears (4 triangles), which had left
+/// two holes that could not be traced and χ -2.
+pub(super) fn cut_crosscaps(
+    mesh: &mut SurfaceMesh,
+    edges: Option<EdgeTable>,
+) -> (usize, EdgeTable) {
     let mut dropped = 0;
+    let mut edges = edges.unwrap_or_else(|| EdgeTable::new(&mesh.faces));
     loop {
-        orient(mesh);
-        let mut on: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-        for (t, f) in mesh.faces.iter().enumerate() {
-            for k in 0..3 {
-                let (a, b) = (f[k], f[(k + 1) % 3]);
-                on.entry((a.min(b), a.max(b))).or_default().push(t);
-            }
-        }
-        let forward =
-            |f: &[u32; 3], a: u32, b: u32| (0..3).any(|k| f[k] == a && f[(k + 1) % 3] == b);
-        let mut bad = vec![false; mesh.faces.len()];
-        for (&(a, b), ts) in &on {
-            if ts.len() == 2
-                && forward(&mesh.faces[ts[0]], a, b) == forward(&mesh.faces[ts[1]], a, b)
-            {
-                bad[ts[0]] = true;
-                bad[ts[1]] = true;
-            }
+        orient(mesh, &edges);
+        let faces = &mesh.faces;
+        let mut bad = vec![false; faces.len()];
+        let crossed: Vec<[usize; 2]> = (0..edges.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .filter_map(|e| {
+                let on = edges.slots(e);
+                let (a, b) = edges.vertices(e);
+                let (t0, t1) = (*on.first()? as usize / 3, *on.last()? as usize / 3);
+                (on.len() == 2 && forward(&faces[t0], a, b) == forward(&faces[t1], a, b))
+                    .then_some([t0, t1])
+            })
+            .collect();
+        for t in crossed.into_iter().flatten() {
+            bad[t] = true;
         }
         let n = bad.iter().filter(|&&b| b).count();
         if n == 0 {
-            return dropped;
+            return (dropped, edges);
         }
         dropped += n;
         let mut k = 0;
@@ -147,6 +164,7 @@ pub(super) fn cut_crosscaps(mesh: &mut SurfaceMesh) -> usize {
             k += 1;
             !bad[k - 1]
         });
+        edges = EdgeTable::new(&mesh.faces);
     }
 }
 
@@ -159,6 +177,7 @@ fn face_normal(vertices: &[Point3], f: &[u32; 3]) -> Vec3 {
 /// Whether every edge held by two triangles is traversed once each way.
 #[cfg(test)]
 fn consistent(faces: &[[u32; 3]]) -> bool {
+    use std::collections::HashMap;
     let mut half: HashMap<(u32, u32), usize> = HashMap::new();
     for f in faces {
         for k in 0..3 {
@@ -210,7 +229,8 @@ mod tests {
             max_distance: 0.0,
         };
         assert!(!consistent(&mesh.faces));
-        orient(&mut mesh);
+        let edges = EdgeTable::new(&mesh.faces);
+        orient(&mut mesh, &edges);
         assert!(consistent(&mesh.faces));
         for f in &mesh.faces {
             let c = f

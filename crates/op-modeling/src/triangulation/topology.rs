@@ -6,7 +6,9 @@
 
 use std::collections::BTreeMap;
 
-use super::Triangulation;
+use rayon::prelude::*;
+
+use super::{EdgeTable, Triangulation};
 use crate::disjoint_sets::DisjointSets;
 
 /// The pieces of a set of triangles (vertex indices): for each vertex
@@ -48,7 +50,7 @@ impl Triangulation {
     /// The distinct vertices (particle ids) used by the triangles, ascending.
     pub fn vertices(&self) -> Vec<u32> {
         let mut v: Vec<u32> = self.triangles.iter().flatten().copied().collect();
-        v.sort_unstable();
+        v.par_sort_unstable();
         v.dedup();
         v
     }
@@ -70,17 +72,26 @@ impl Triangulation {
     /// vertices used by some triangle): 2 for a sphere, 0 for a torus, 1
     /// for a disc.
     pub fn euler_characteristic(&self) -> i64 {
-        self.vertices().len() as i64 - self.edges().len() as i64 + self.triangles.len() as i64
+        self.euler_characteristic_with(&EdgeTable::new(&self.triangles))
+    }
+
+    /// [`Self::euler_characteristic`] with the triangles' [`EdgeTable`].
+    pub fn euler_characteristic_with(&self, edges: &EdgeTable) -> i64 {
+        self.vertices().len() as i64 - edges.len() as i64 + self.triangles.len() as i64
     }
 
     /// Number of boundary loops: connected components of the edges held by
     /// exactly one triangle (0 for a closed surface, 1 for a disc).
     pub fn boundary_loops(&self) -> usize {
-        let boundary: Vec<(u32, u32)> = self
-            .edges()
-            .into_iter()
-            .filter(|(_, c)| *c == 1)
-            .map(|(e, _)| e)
+        Self::boundary_loops_of(&EdgeTable::new(&self.triangles))
+    }
+
+    /// [`Self::boundary_loops`] of the triangles whose [`EdgeTable`] is
+    /// `edges`.
+    pub fn boundary_loops_of(edges: &EdgeTable) -> usize {
+        let boundary: Vec<(u32, u32)> = (0..edges.len())
+            .filter(|&e| edges.count(e) == 1)
+            .map(|e| edges.vertices(e))
             .collect();
         let mut verts: Vec<u32> = boundary.iter().flat_map(|&(a, b)| [a, b]).collect();
         verts.sort_unstable();
