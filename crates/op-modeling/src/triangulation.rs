@@ -124,8 +124,6 @@
 //! [`Triangulation::boundary_loops`], [`Triangulation::is_manifold`],
 //! [`Triangulation::is_consistently_oriented`].
 
-use std::collections::BTreeMap;
-
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
@@ -354,11 +352,13 @@ fn resolve_crossed_diagonals(
 ) {
     use std::collections::BTreeSet;
     loop {
-        let keys: BTreeSet<[u32; 3]> = tris.iter().map(|&t| sorted(t)).collect();
-        let has = |a: u32, b: u32, c: u32| keys.contains(&sorted([a, b, c]));
-        let opposite = opposite_corners(keys.iter());
+        // The distinct vertex sets, ascending.
+        let mut keys: Vec<[u32; 3]> = tris.par_iter().map(|&t| sorted(t)).collect();
+        keys.par_sort_unstable();
+        keys.dedup();
+        let has = |a: u32, b: u32, c: u32| keys.binary_search(&sorted([a, b, c])).is_ok();
         let mut drop: BTreeSet<[u32; 3]> = BTreeSet::new();
-        for (&(p, q), others) in opposite.iter().filter(|(_, o)| o.len() > 2) {
+        for ((p, q), others) in crowded_edges(&keys) {
             for (x, &r) in others.iter().enumerate() {
                 for &s in &others[x + 1..] {
                     // All four faces of the tetrahedron p, q, r, s kept.
@@ -387,19 +387,22 @@ fn resolve_crossed_diagonals(
     }
 }
 
-/// The corner opposite each edge in each triangle holding it, by edge
-/// (smaller id first).
-fn opposite_corners<'a>(
-    tris: impl Iterator<Item = &'a [u32; 3]>,
-) -> BTreeMap<(u32, u32), Vec<u32>> {
-    let mut opposite: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
-    for t in tris {
-        for k in 0..3 {
-            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            opposite.entry((a.min(b), a.max(b))).or_default().push(c);
-        }
-    }
-    opposite
+/// The edges `(p, q)` (`p < q`) held by more than two of `tris`, ascending,
+/// each with the corner opposite it in each triangle holding it (in the
+/// order of `tris`).
+fn crowded_edges(tris: &[[u32; 3]]) -> Vec<((u32, u32), Vec<u32>)> {
+    let table = EdgeTable::new(tris);
+    (0..table.len())
+        .filter(|&e| table.count(e) > 2)
+        .map(|e| {
+            let corners = table
+                .slots(e)
+                .iter()
+                .map(|&s| tris[s as usize / 3][(s as usize % 3 + 2) % 3])
+                .collect();
+            (table.vertices(e), corners)
+        })
+        .collect()
 }
 
 /// Keeps, of the triangles on an edge held by more than two, at most one on
@@ -415,9 +418,8 @@ fn resolve_overfull_edges(
 ) {
     use std::collections::BTreeSet;
     loop {
-        let opposite = opposite_corners(tris.iter());
         let mut drop: BTreeSet<[u32; 3]> = BTreeSet::new();
-        for (&(p, q), others) in opposite.iter().filter(|(_, o)| o.len() > 2) {
+        for ((p, q), others) in crowded_edges(tris) {
             let (xp, xq) = (positions[p as usize], positions[q as usize]);
             let n = normals[p as usize] + normals[q as usize];
             let across = n.cross(&(xq - xp));

@@ -5,6 +5,7 @@
 use std::collections::BTreeMap;
 
 use op_dynamics::math::Point3;
+use rayon::prelude::*;
 
 use super::{canonical, Linked};
 
@@ -19,19 +20,27 @@ pub(super) fn close_held_cells(
     positions: &[Point3],
     linked: &Linked<'_>,
 ) {
-    // Every directed edge of the kept triangles, and the undirected count.
-    let mut directed: BTreeMap<(u32, u32), usize> = BTreeMap::new();
-    for t in tris.iter() {
-        for k in 0..3 {
-            *directed.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
-        }
-    }
-    let has = |a: u32, b: u32| directed.contains_key(&(a, b)) || directed.contains_key(&(b, a));
-    // Boundary edges, as the direction their one triangle runs them.
-    let boundary: Vec<(u32, u32)> = directed
-        .keys()
-        .copied()
-        .filter(|&(a, b)| !directed.contains_key(&(b, a)) && directed[&(a, b)] == 1)
+    // Every directed edge `a -> b` of the kept triangles as `a << 32 | b`,
+    // ascending (a parallel sort: the same at any thread count).
+    let key = |a: u32, b: u32| (u64::from(a) << 32) | u64::from(b);
+    let mut directed: Vec<u64> = tris
+        .par_iter()
+        .flat_map_iter(|&t| (0..3).map(move |k| key(t[k], t[(k + 1) % 3])))
+        .collect();
+    directed.par_sort_unstable();
+    let runs = |a: u32, b: u32| directed.binary_search(&key(a, b)).is_ok();
+    let has = |a: u32, b: u32| runs(a, b) || runs(b, a);
+    // Boundary edges, as the direction their one triangle runs them: run
+    // once, never run back; ascending.
+    let boundary: Vec<(u32, u32)> = (0..directed.len())
+        .into_par_iter()
+        .with_min_len(4096)
+        .filter(|&i| {
+            let d = directed[i];
+            let (a, b) = ((d >> 32) as u32, d as u32);
+            (i == 0 || directed[i - 1] != d) && directed.get(i + 1) != Some(&d) && !runs(b, a)
+        })
+        .map(|i| ((directed[i] >> 32) as u32, directed[i] as u32))
         .collect();
     let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
     for &(a, b) in &boundary {
