@@ -98,4 +98,31 @@ impl Grid {
         }
         best.map(|(_, q)| q)
     }
+
+    /// The indices of the points within `dist` (at most the cell size) of
+    /// `p`, ascending, among those before index `before`.
+    pub(super) fn before_within(&self, p: &Point3, dist: Real, before: usize) -> Vec<u32> {
+        let k = self.key(p);
+        let mut found = Vec::new();
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(v) = self.map.get(&[
+                        k[0].saturating_add(dx),
+                        k[1].saturating_add(dy),
+                        k[2].saturating_add(dz),
+                    ]) else {
+                        continue;
+                    };
+                    found.extend(
+                        v.iter()
+                            .filter(|&&(q, i)| i < before && (q - p).norm() <= dist)
+                            .map(|&(_, i)| i as u32),
+                    );
+                }
+            }
+        }
+        found.sort_unstable();
+        found
+    }
 }

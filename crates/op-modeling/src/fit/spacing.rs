@@ -171,16 +171,23 @@ pub fn median_nearest_distance(points: &[Point3]) -> Result<Real, FitError> {
 
 /// Indices of the points kept when each point within `dist` of an earlier
 /// kept point is merged into it.
+///
+/// The earlier points within `dist` of each point are found in parallel
+/// (most points have none); one pass in point order then keeps a point when
+/// none of them was kept: the greedy merge, the same at any thread count.
 pub(super) fn merge_close(points: &[Point3], dist: Real) -> Vec<usize> {
-    let mut grid = Grid::new(&[], dist);
-    let mut kept = Vec::new();
-    for (k, p) in points.iter().enumerate() {
-        if grid.nearest_within(p, dist).is_none() {
-            grid.insert(*p);
-            kept.push(k);
-        }
+    let grid = Grid::new(points, dist);
+    let earlier: Vec<Vec<u32>> = points
+        .par_iter()
+        .enumerate()
+        .with_min_len(1024)
+        .map(|(k, p)| grid.before_within(p, dist, k))
+        .collect();
+    let mut keep = vec![false; points.len()];
+    for (k, close) in earlier.iter().enumerate() {
+        keep[k] = !close.iter().any(|&j| keep[j as usize]);
     }
-    kept
+    (0..points.len()).filter(|&k| keep[k]).collect()
 }
 
 /// Mean distance between points and their neighbours within `ring`, when
