@@ -292,7 +292,33 @@ impl PairList {
 
     /// The full neighbour rows of this half list: for each particle, every
     /// neighbour in either direction, ascending.
+    ///
+    /// With the incoming index ([`PairList::build_incoming`]; lists from
+    /// [`super::search`] have it) each row is built on its own, in
+    /// parallel: the first particles of its incoming pairs (ascending,
+    /// below it) then its own row (ascending, above it).
     pub fn full_rows(&self) -> Vec<Vec<u32>> {
+        if !self.has_incoming {
+            return self.full_rows_serial();
+        }
+        let mut sources = Vec::new();
+        self.sources_into(&mut sources);
+        (0..self.len())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|i| {
+                let (incoming, row) = (self.incoming(i), self.row(i));
+                let mut full = Vec::with_capacity(incoming.len() + row.len());
+                full.extend(incoming.iter().map(|&k| sources[k as usize]));
+                full.extend_from_slice(row);
+                full
+            })
+            .collect()
+    }
+
+    /// [`PairList::full_rows`] without the incoming index: every pair
+    /// pushed to both rows, each row sorted.
+    fn full_rows_serial(&self) -> Vec<Vec<u32>> {
         let mut rows = vec![Vec::new(); self.len()];
         for (i, j) in self.iter_pairs() {
             rows[i].push(j as u32);
@@ -617,6 +643,14 @@ mod tests {
         parallel.build_incoming();
         assert_eq!(serial.in_offsets, parallel.in_offsets);
         assert_eq!(serial.incoming, parallel.incoming);
+        // Full rows from the incoming index equal every pair pushed both
+        // ways and sorted; every neighbour by the relation, ascending.
+        let full = parallel.full_rows();
+        assert_eq!(full, parallel.full_rows_serial());
+        for (i, row) in full.iter().enumerate() {
+            let expected: Vec<u32> = (0..n).filter(|&j| rel(i, j)).map(|j| j as u32).collect();
+            assert_eq!(row, &expected, "row {i}");
+        }
     }
 
     #[test]
