@@ -3,10 +3,12 @@
 //! module adds a scene's fit state ([`SceneFit`], `creation.fit`) and the
 //! mesh's OBJ output ([`write_obj`]).
 
+use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
 
 use op_dynamics::Real;
+use rayon::prelude::*;
 
 pub use op_modeling::fit::*;
 
@@ -36,18 +38,51 @@ pub fn write_obj(path: &Path, fit: &Fit) -> std::io::Result<()> {
             mesh.faces.len(),
             fit.spacing
         )?;
-        for v in &mesh.vertices {
-            writeln!(w, "v {} {} {}", v.x, v.y, v.z)?;
-        }
-        for n in &mesh.normals {
-            writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
-        }
-        for f in &mesh.faces {
+        write_lines(w, &mesh.vertices, |s, v| {
+            writeln!(s, "v {} {} {}", v.x, v.y, v.z)
+        })?;
+        write_lines(w, &mesh.normals, |s, n| {
+            writeln!(s, "vn {} {} {}", n.x, n.y, n.z)
+        })?;
+        write_lines(w, &mesh.faces, |s, f| {
             let [a, b, c] = f.map(|k| k + 1);
-            writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
-        }
-        Ok(())
+            writeln!(s, "f {a}//{a} {b}//{b} {c}//{c}")
+        })
     })
+}
+
+/// Lines formatted per parallel task by [`write_lines`].
+const LINES_PER_CHUNK: usize = 16_384;
+
+/// Writes one line per item of `items` (`line` appends it to a string):
+/// chunks of lines are formatted in parallel, a bounded window at a time,
+/// and written in order, so the bytes are those of a serial loop.
+fn write_lines<T: Sync>(
+    w: &mut dyn Write,
+    items: &[T],
+    line: impl Fn(&mut String, &T) -> std::fmt::Result + Sync,
+) -> std::io::Result<()> {
+    let chunk = |c: &[T]| {
+        let mut s = String::with_capacity(48 * c.len());
+        for x in c {
+            line(&mut s, x).map_err(std::io::Error::other)?;
+        }
+        Ok::<_, std::io::Error>(s)
+    };
+    for window in items.chunks(16 * LINES_PER_CHUNK) {
+        let texts: Vec<String> = if window.len() > LINES_PER_CHUNK {
+            window
+                .par_chunks(LINES_PER_CHUNK)
+                .map(chunk)
+                .collect::<Result<_, _>>()?
+        } else {
+            vec![chunk(window)?]
+        };
+        for t in texts {
+            w.write_all(t.as_bytes())?;
+        }
+    }
+    Ok(())
 }
 
 /// The figures of a fit as one line of JSON, what `opsim fit` prints:
