@@ -2,6 +2,8 @@
 //! filling rounds, the release of the seeds and the relaxation (module
 //! docs of [`super`], stages 3 and 4).
 
+use rayon::prelude::*;
+
 use op_dynamics::interactions::spacing::Spacing;
 use op_dynamics::interactions::CohesionParams;
 use op_dynamics::{
@@ -63,10 +65,20 @@ impl Relaxation {
         seeds: &[Point3],
         normals: &[Vec3],
     ) -> Result<World, WorldError> {
+        // The descriptions (an orientation from each normal) in parallel,
+        // pushed in order.
+        let descs: Vec<ParticleDesc> = seeds
+            .par_iter()
+            .zip(normals)
+            .with_min_len(4096)
+            .map(|(p, nrm)| {
+                let mut d = ParticleDesc::at(*p).with_normal(*nrm);
+                d.flags = Flags::FIXED_POSITION.union(Flags::FIXED_ORIENTATION);
+                d
+            })
+            .collect();
         let mut particles = Particles::new();
-        for (p, nrm) in seeds.iter().zip(normals) {
-            let mut d = ParticleDesc::at(*p).with_normal(*nrm);
-            d.flags = Flags::FIXED_POSITION.union(Flags::FIXED_ORIENTATION);
+        for d in descs {
             particles.push(d)?;
         }
         World::new(
