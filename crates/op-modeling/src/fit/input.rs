@@ -1,6 +1,7 @@
 //! Degenerate-input checks and the data frame: normalization to unit scale.
 
 use op_dynamics::{Point3, Real, Vec3};
+use rayon::prelude::*;
 
 use super::PointSet;
 use super::{FitError, MAX_PARTICLES};
@@ -136,9 +137,10 @@ pub(super) fn bits(p: &Point3) -> [u64; 3] {
 /// The points of `points` without exact repeats (first occurrence kept, in
 /// order).
 pub(super) fn distinct_points(points: &[Point3]) -> Vec<Point3> {
-    let keys: Vec<[u64; 3]> = points.iter().map(bits).collect();
+    let keys: Vec<[u64; 3]> = points.par_iter().map(bits).collect();
     let mut order: Vec<usize> = (0..points.len()).collect();
-    order.sort_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
+    // A total order (ties broken by index): the same at any thread count.
+    order.par_sort_unstable_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
     let mut keep = vec![false; points.len()];
     for (k, &i) in order.iter().enumerate() {
         keep[i] = k == 0 || keys[order[k - 1]] != keys[i];
@@ -151,7 +153,9 @@ pub(super) fn distinct_points(points: &[Point3]) -> Vec<Point3> {
 
 /// The median of `v` (not empty).
 pub(super) fn median_of(mut v: Vec<Real>) -> Real {
-    v.sort_by(|a, b| a.total_cmp(b));
+    // `total_cmp` is a total order: equal values are equal bits, so the
+    // parallel sort gives the serial sort's array.
+    v.par_sort_unstable_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
 }
 

@@ -142,6 +142,8 @@ fn one_pass(points: &[Point3]) -> Vec<bool> {
     // own gap, whose curvature puts its samples off their neighbours'
     // plane by a fraction of it).
     let gaps: Vec<Real> = (0..points.len())
+        .into_par_iter()
+        .with_min_len(1024)
         .map(|i| {
             let d = knn.neighbours(i).iter().map(|&j| local[j].mean_distance);
             median_of(d.collect()).max(m)
