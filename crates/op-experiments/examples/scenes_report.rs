@@ -91,6 +91,9 @@ fn main() -> Res<()> {
     cases.extend(scaled(&work, quick)?);
     cases.retain(|c| only.is_empty() || only.iter().any(|o| c.label.contains(o.as_str())));
     let load_before = op_experiments::machine::load_average();
+    let path = std::env::var_os("OP_REPORT")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join("reports/scenes.md"));
     let mut results: Vec<Vec<Vec<Sample>>> =
         cases.iter().map(|_| vec![vec![]; threads.len()]).collect();
     for rep in 0..reps {
@@ -103,21 +106,20 @@ fn main() -> Res<()> {
                 );
                 results[c][k].push(s);
             }
+            // Written after every case, so that a run cut short leaves the
+            // figures it has (cases not yet run show NaN).
+            let load_now = op_experiments::machine::load_average();
+            let md = report(
+                &cases,
+                &results,
+                &threads,
+                reps,
+                started,
+                (&load_before, &load_now),
+            )?;
+            std::fs::write(&path, md)?;
         }
     }
-    let load_after = op_experiments::machine::load_average();
-    let md = report(
-        &cases,
-        &results,
-        &threads,
-        reps,
-        started,
-        (&load_before, &load_after),
-    )?;
-    let path = std::env::var_os("OP_REPORT")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| root.join("reports/scenes.md"));
-    std::fs::write(&path, md)?;
     let _ = std::fs::remove_dir_all(&work);
     eprintln!("wrote {}", path.display());
     Ok(())
@@ -328,8 +330,10 @@ fn measure(opsim: &Path, case: &Case, threads: usize, work: &Path) -> Res<Sample
         cmd.arg("--threads").arg(threads.to_string());
         cmd.arg("--out").arg(&out);
     } else {
-        // `opsim fit` runs on rayon's global pool, sized by this variable.
+        // `opsim fit` runs on rayon's global pool, sized by this variable;
+        // `--profile` prints its stages' seconds on standard error.
         cmd.env("RAYON_NUM_THREADS", threads.to_string());
+        cmd.arg("--profile");
     }
     let clock = Instant::now();
     let output = cmd.output()?;
@@ -373,11 +377,37 @@ fn measure(opsim: &Path, case: &Case, threads: usize, work: &Path) -> Res<Sample
         let line = String::from_utf8_lossy(&output.stdout);
         let v: serde_json::Value = serde_json::from_str(line.trim())?;
         sample.particles = v["particles"].as_u64().unwrap_or(0) as usize;
+        sample.stages = fit_stages(&stderr);
     } else {
         eprintln!("{} failed: {stderr}", case.label);
         sample.wall = f64::NAN;
     }
     Ok(sample)
+}
+
+/// The stages of `opsim fit --profile`'s table on standard error (`name
+/// seconds share%` lines between the `stage` header and the `wall` line).
+fn fit_stages(stderr: &str) -> BTreeMap<String, f64> {
+    let mut stages = BTreeMap::new();
+    let mut inside = false;
+    for line in stderr.lines() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        if words.first() == Some(&"stage") && words.get(1) == Some(&"seconds") {
+            inside = true;
+            continue;
+        }
+        if !inside || words.len() < 3 {
+            continue;
+        }
+        if words[0] == "wall" {
+            break;
+        }
+        let name = words[..words.len() - 2].join(" ");
+        if let Ok(t) = words[words.len() - 2].parse::<f64>() {
+            stages.insert(name, t);
+        }
+    }
+    stages
 }
 
 /// Median and range of the finite values of `xs` (NaN when none: every
@@ -558,7 +588,7 @@ fn shipped_table(
     )?;
     let mut slower = Vec::new();
     for (case, per_thread) in cases.iter().zip(results) {
-        if case.family.is_some() {
+        if case.family.is_some() || per_thread[0].is_empty() {
             continue;
         }
         for (samples, &t) in per_thread.iter().zip(threads).skip(1) {
@@ -616,13 +646,14 @@ fn scaled_table(
     let counts: Vec<String> = threads.iter().map(|t| t.to_string()).collect();
     writeln!(
         md,
-        "| case | particles |{head} build | contact | integrate | export | peak memory at {} \
-         threads (MB) |",
+        "| case | particles |{head} build | contact | integrate | export | largest stages at {} \
+         | peak memory at {} threads (MB) |",
+        threads_label(threads[0]),
         counts.join(" / ")
     )?;
-    writeln!(md, "|---|---|{rule}---|---|---|---|---|")?;
+    writeln!(md, "|---|---|{rule}---|---|---|---|---|---|")?;
     for (case, per_thread) in cases.iter().zip(results) {
-        if case.family.is_none() {
+        if case.family.is_none() || per_thread[0].is_empty() {
             continue;
         }
         let peak = |xs: &[Sample]| {
@@ -635,7 +666,7 @@ fn scaled_table(
         let peaks: Vec<String> = per_thread.iter().map(|s| peak(s)).collect();
         writeln!(
             md,
-            "| {} | {} |{} {:.2} | {:.2} | {:.2} | {:.2} | {} |",
+            "| {} | {} |{} {:.2} | {:.2} | {:.2} | {:.2} | {} | {} |",
             case.label,
             one[0].particles,
             thread_cells(per_thread),
@@ -643,6 +674,7 @@ fn scaled_table(
             stage(one, "contact"),
             stage(one, "integrate"),
             stage(one, "export"),
+            top_stages(one),
             peaks.join(" / "),
         )?;
     }
@@ -672,7 +704,7 @@ fn growth_table(md: &mut String, cases: &[Case], results: &[Vec<Vec<Sample>>]) -
         let members: Vec<(&Case, &[Sample])> = cases
             .iter()
             .zip(results)
-            .filter(|(c, _)| c.family == Some(family))
+            .filter(|(c, r)| c.family == Some(family) && !r[0].is_empty())
             .map(|(c, r)| (c, r[0].as_slice()))
             .collect();
         let fit = |f: &dyn Fn(&[Sample]) -> f64| {
@@ -692,6 +724,43 @@ fn growth_table(md: &mut String, cases: &[Case], results: &[Vec<Vec<Sample>>]) -
             fit(&|s| stage(s, "integrate")),
             fit(&|s| stage(s, "export")),
         )?;
+    }
+    writeln!(md)?;
+    writeln!(
+        md,
+        "Every stage of at least 2% of the largest case's wall time, exponent a (first thread \
+         count):\n"
+    )?;
+    let mut families: Vec<&str> = cases.iter().filter_map(|c| c.family).collect();
+    families.dedup();
+    for family in families {
+        let members: Vec<(&Case, &[Sample])> = cases
+            .iter()
+            .zip(results)
+            .filter(|(c, r)| c.family == Some(family) && !r[0].is_empty())
+            .map(|(c, r)| (c, r[0].as_slice()))
+            .collect();
+        let Some((_, largest)) = members.last() else {
+            continue;
+        };
+        let wall = stats(largest.iter().map(|x| x.wall).collect()).0;
+        let mut names: Vec<&String> = largest.iter().flat_map(|s| s.stages.keys()).collect();
+        names.sort();
+        names.dedup();
+        let mut cells = Vec::new();
+        for name in names {
+            if stage(largest, name) < 0.02 * wall {
+                continue;
+            }
+            let pts: Vec<(f64, f64)> = members
+                .iter()
+                .map(|(c, s)| ((c.size.max(s[0].particles)) as f64, stage(s, name)))
+                .collect();
+            if let Some(a) = op_experiments::stability::sweep::log_log_slope(&pts) {
+                cells.push(format!("{name} {a:.2}"));
+            }
+        }
+        writeln!(md, "- {family}: {}", cells.join(", "))?;
     }
     Ok(())
 }
