@@ -19,6 +19,7 @@
 use std::collections::{BTreeMap, HashMap};
 
 use op_dynamics::{Point3, Real, Vec3};
+use rayon::prelude::*;
 
 use super::mesh::SurfaceMesh;
 use crate::disjoint_sets::DisjointSets;
@@ -109,32 +110,47 @@ fn drop_specks(faces: &mut Vec<[u32; 3]>, min_vertices: usize) -> usize {
 /// surface the triangles describe. Fans are ordered by their first
 /// triangle: deterministic. Returns the number of vertices added.
 fn split_pinched_vertices(mesh: &mut SurfaceMesh) -> usize {
-    let mut around: Vec<Vec<usize>> = vec![Vec::new(); mesh.vertices.len()];
-    for (t, f) in mesh.faces.iter().enumerate() {
+    // The triangles around each vertex, ascending (CSR).
+    let n = mesh.vertices.len();
+    let mut starts = vec![0usize; n + 1];
+    for f in &mesh.faces {
         for &v in f {
-            around[v as usize].push(t);
+            starts[v as usize + 1] += 1;
         }
     }
+    for v in 0..n {
+        starts[v + 1] += starts[v];
+    }
+    let mut around = vec![0usize; starts[n]];
+    let mut next = starts.clone();
+    for (t, f) in mesh.faces.iter().enumerate() {
+        for &v in f {
+            around[next[v as usize]] = t;
+            next[v as usize] += 1;
+        }
+    }
+    let fan_of = |v: usize| &around[starts[v]..starts[v + 1]];
+    // Which vertices are pinched in the triangles as they are, in
+    // parallel. Splitting a vertex renumbers corners of its triangles only,
+    // so a vertex none of whose triangles was rewritten keeps this answer;
+    // the others are looked at again in order below.
+    let faces = &mesh.faces;
+    let pinched: Vec<bool> = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|v| {
+            let fan = fan_of(v);
+            fan.len() >= 2 && fans(faces, v, fan).count() > 1
+        })
+        .collect();
+    let mut rewritten = vec![false; mesh.faces.len()];
     let mut added = 0;
-    for (v, fan) in around.iter().enumerate() {
-        if fan.len() < 2 {
+    for v in 0..n {
+        let fan = fan_of(v);
+        if fan.len() < 2 || !(pinched[v] || fan.iter().any(|&t| rewritten[t])) {
             continue;
         }
-        // Union-find over the fan's triangles through shared edges at v.
-        let mut fans = DisjointSets::new(fan.len());
-        let mut by_other: BTreeMap<u32, usize> = BTreeMap::new();
-        for (k, &t) in fan.iter().enumerate() {
-            for &u in &mesh.faces[t] {
-                if u as usize == v {
-                    continue;
-                }
-                if let Some(&j) = by_other.get(&u) {
-                    fans.union(j, k);
-                } else {
-                    by_other.insert(u, k);
-                }
-            }
-        }
+        let mut fans = fans(&mesh.faces, v, fan);
         // Roots are the smallest member of each fan: fan order is
         // first-triangle order (`fan` is sorted).
         let mut new_index: BTreeMap<usize, u32> = BTreeMap::new();
@@ -154,9 +170,31 @@ fn split_pinched_vertices(mesh: &mut SurfaceMesh) -> usize {
                     *c = w;
                 }
             }
+            rewritten[t] = true;
         }
     }
     added
+}
+
+/// The fans of vertex `v` (its triangles `fan`, ascending) as disjoint
+/// sets over the positions in `fan`: union-find through the edges at `v`
+/// the triangles share.
+fn fans(faces: &[[u32; 3]], v: usize, fan: &[usize]) -> DisjointSets {
+    let mut fans = DisjointSets::new(fan.len());
+    let mut by_other: BTreeMap<u32, usize> = BTreeMap::new();
+    for (k, &t) in fan.iter().enumerate() {
+        for &u in &faces[t] {
+            if u as usize == v {
+                continue;
+            }
+            if let Some(&j) = by_other.get(&u) {
+                fans.union(j, k);
+            } else {
+                by_other.insert(u, k);
+            }
+        }
+    }
+    fans
 }
 
 /// Median of the Gamma(6, 1) distribution: for samples spread uniformly at
