@@ -145,9 +145,9 @@ fn split_pinched_vertices(mesh: &mut SurfaceMesh) -> usize {
         .collect();
     let mut rewritten = vec![false; mesh.faces.len()];
     let mut added = 0;
-    for v in 0..n {
+    for (v, &was_pinched) in pinched.iter().enumerate() {
         let fan = fan_of(v);
-        if fan.len() < 2 || !(pinched[v] || fan.iter().any(|&t| rewritten[t])) {
+        if fan.len() < 2 || !(was_pinched || fan.iter().any(|&t| rewritten[t])) {
             continue;
         }
         let mut fans = fans(&mesh.faces, v, fan);
