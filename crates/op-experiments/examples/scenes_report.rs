@@ -681,6 +681,37 @@ fn scaled_table(
     Ok(())
 }
 
+/// The families of the scaled-up cases, in case order.
+fn families(cases: &[Case]) -> Vec<&'static str> {
+    let mut families: Vec<&str> = cases.iter().filter_map(|c| c.family).collect();
+    families.dedup();
+    families
+}
+
+/// The measured cases of `family` with their samples at the first thread
+/// count.
+fn members<'a>(
+    cases: &'a [Case],
+    results: &'a [Vec<Vec<Sample>>],
+    family: &str,
+) -> Vec<(&'a Case, &'a [Sample])> {
+    cases
+        .iter()
+        .zip(results)
+        .filter(|(c, r)| c.family == Some(family) && !r[0].is_empty())
+        .map(|(c, r)| (c, r[0].as_slice()))
+        .collect()
+}
+
+/// The exponent `a` of `t ~ N^a` over `members`, `t` from `f`.
+fn exponent(members: &[(&Case, &[Sample])], f: &dyn Fn(&[Sample]) -> f64) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = members
+        .iter()
+        .map(|(c, s)| ((c.size.max(s[0].particles)) as f64, f(s)))
+        .collect();
+    op_experiments::stability::sweep::log_log_slope(&pts)
+}
+
 /// The exponent of `t ~ N^a` per scaled-up family, for the wall time and
 /// the largest stages (at the first thread count).
 fn growth_table(md: &mut String, cases: &[Case], results: &[Vec<Vec<Sample>>]) -> std::fmt::Result {
@@ -698,22 +729,10 @@ fn growth_table(md: &mut String, cases: &[Case], results: &[Vec<Vec<Sample>>]) -
         "| family | wall | build | contact | integrate | export |"
     )?;
     writeln!(md, "|---|---|---|---|---|---|")?;
-    let mut families: Vec<&str> = cases.iter().filter_map(|c| c.family).collect();
-    families.dedup();
-    for family in families {
-        let members: Vec<(&Case, &[Sample])> = cases
-            .iter()
-            .zip(results)
-            .filter(|(c, r)| c.family == Some(family) && !r[0].is_empty())
-            .map(|(c, r)| (c, r[0].as_slice()))
-            .collect();
+    for family in families(cases) {
+        let members = members(cases, results, family);
         let fit = |f: &dyn Fn(&[Sample]) -> f64| {
-            let pts: Vec<(f64, f64)> = members
-                .iter()
-                .map(|(c, s)| ((c.size.max(s[0].particles)) as f64, f(s)))
-                .collect();
-            op_experiments::stability::sweep::log_log_slope(&pts)
-                .map_or("-".to_string(), |a| format!("{a:.2}"))
+            exponent(&members, f).map_or("-".to_string(), |a| format!("{a:.2}"))
         };
         writeln!(
             md,
@@ -731,15 +750,8 @@ fn growth_table(md: &mut String, cases: &[Case], results: &[Vec<Vec<Sample>>]) -
         "Every stage of at least 2% of the largest case's wall time, exponent a (first thread \
          count):\n"
     )?;
-    let mut families: Vec<&str> = cases.iter().filter_map(|c| c.family).collect();
-    families.dedup();
-    for family in families {
-        let members: Vec<(&Case, &[Sample])> = cases
-            .iter()
-            .zip(results)
-            .filter(|(c, r)| c.family == Some(family) && !r[0].is_empty())
-            .map(|(c, r)| (c, r[0].as_slice()))
-            .collect();
+    for family in families(cases) {
+        let members = members(cases, results, family);
         let Some((_, largest)) = members.last() else {
             continue;
         };
@@ -752,11 +764,7 @@ fn growth_table(md: &mut String, cases: &[Case], results: &[Vec<Vec<Sample>>]) -
             if stage(largest, name) < 0.02 * wall {
                 continue;
             }
-            let pts: Vec<(f64, f64)> = members
-                .iter()
-                .map(|(c, s)| ((c.size.max(s[0].particles)) as f64, stage(s, name)))
-                .collect();
-            if let Some(a) = op_experiments::stability::sweep::log_log_slope(&pts) {
+            if let Some(a) = exponent(&members, &|s| stage(s, name)) {
                 cells.push(format!("{name} {a:.2}"));
             }
         }

@@ -72,28 +72,27 @@ impl Grid {
         self.len += 1;
     }
 
+    /// The points (with their indices) of the 27 cells around `p`'s, in
+    /// cell order: every point within a cell of `p`.
+    fn around<'a>(&'a self, p: &Point3) -> impl Iterator<Item = &'a (Point3, usize)> + 'a {
+        let k = self.key(p);
+        (0..27).flat_map(move |c: i64| {
+            let cell = [c / 9 - 1, (c / 3) % 3 - 1, c % 3 - 1];
+            self.map
+                .get(&[0, 1, 2].map(|a| k[a].saturating_add(cell[a])))
+                .into_iter()
+                .flatten()
+        })
+    }
+
     /// The index of the nearest point within `dist` (at most the cell
     /// size) of `p` (the smallest index among equals).
     pub(super) fn nearest_within(&self, p: &Point3, dist: Real) -> Option<usize> {
-        let k = self.key(p);
         let mut best: Option<(Real, usize)> = None;
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(v) = self.map.get(&[
-                        k[0].saturating_add(dx),
-                        k[1].saturating_add(dy),
-                        k[2].saturating_add(dz),
-                    ]) else {
-                        continue;
-                    };
-                    for &(q, i) in v {
-                        let d = (q - p).norm();
-                        if d <= dist && best.is_none_or(|(b, j)| d < b || (d == b && i < j)) {
-                            best = Some((d, i));
-                        }
-                    }
-                }
+        for &(q, i) in self.around(p) {
+            let d = (q - p).norm();
+            if d <= dist && best.is_none_or(|(b, j)| d < b || (d == b && i < j)) {
+                best = Some((d, i));
             }
         }
         best.map(|(_, q)| q)
@@ -102,26 +101,11 @@ impl Grid {
     /// The indices of the points within `dist` (at most the cell size) of
     /// `p`, ascending, among those before index `before`.
     pub(super) fn before_within(&self, p: &Point3, dist: Real, before: usize) -> Vec<u32> {
-        let k = self.key(p);
-        let mut found = Vec::new();
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(v) = self.map.get(&[
-                        k[0].saturating_add(dx),
-                        k[1].saturating_add(dy),
-                        k[2].saturating_add(dz),
-                    ]) else {
-                        continue;
-                    };
-                    found.extend(
-                        v.iter()
-                            .filter(|&&(q, i)| i < before && (q - p).norm() <= dist)
-                            .map(|&(_, i)| i as u32),
-                    );
-                }
-            }
-        }
+        let mut found: Vec<u32> = self
+            .around(p)
+            .filter(|&&(q, i)| i < before && (q - p).norm() <= dist)
+            .map(|&(_, i)| i as u32)
+            .collect();
         found.sort_unstable();
         found
     }
