@@ -188,22 +188,43 @@ pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 
     // edge; a sample looks in its cell's 27 cells first, all triangles when
     // that finds none.
     let cell = faces
-        .iter()
-        .flat_map(|f| {
+        .par_iter()
+        .map(|f| {
             (0..3)
-                .map(move |k| (vertices[f[k] as usize] - vertices[f[(k + 1) % 3] as usize]).norm())
+                .map(|k| (vertices[f[k] as usize] - vertices[f[(k + 1) % 3] as usize]).norm())
+                .fold(0.0, Real::max)
         })
-        .fold(0.0, Real::max)
+        .reduce(|| 0.0, Real::max)
         .max(1e-12);
     let key = |p: &Vec3| [p.x, p.y, p.z].map(|c| (c / cell).floor() as i64);
-    let mut bins: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-    for (t, f) in faces.iter().enumerate() {
-        let c = f
-            .iter()
-            .fold(Vec3::zeros(), |s, &v| s + vertices[v as usize].coords)
-            / 3.0;
-        bins.entry(key(&c)).or_default().push(t);
+    // The triangles sorted by the cell of their centroid (a parallel sort
+    // of distinct pairs), each cell's run found through a map.
+    let mut binned: Vec<([i64; 3], u32)> = faces
+        .par_iter()
+        .enumerate()
+        .map(|(t, f)| {
+            let c = f
+                .iter()
+                .fold(Vec3::zeros(), |s, &v| s + vertices[v as usize].coords)
+                / 3.0;
+            (key(&c), t as u32)
+        })
+        .collect();
+    binned.par_sort_unstable();
+    let mut bins: HashMap<[i64; 3], (usize, usize)> = HashMap::new();
+    let mut start = 0;
+    for k in 1..=binned.len() {
+        if k == binned.len() || binned[k].0 != binned[start].0 {
+            bins.insert(binned[start].0, (start, k));
+            start = k;
+        }
     }
+    let bin = |k: &[i64; 3]| {
+        bins.get(k)
+            .map_or(&[][..], |&(a, b)| &binned[a..b])
+            .iter()
+            .map(|&(_, t)| t as usize)
+    };
     let tri_distance = |p: &Point3, t: usize| {
         let f = faces[t];
         point_triangle_distance(
@@ -220,14 +241,12 @@ pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    if let Some(v) = bins.get(&[
+                    for t in bin(&[
                         k[0].saturating_add(dx),
                         k[1].saturating_add(dy),
                         k[2].saturating_add(dz),
                     ]) {
-                        for &t in v {
-                            best = best.min(tri_distance(p, t));
-                        }
+                        best = best.min(tri_distance(p, t));
                     }
                 }
             }
