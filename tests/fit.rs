@@ -410,6 +410,49 @@ fn cli_fit_is_identical_at_one_and_two_threads() {
     assert_eq!(meshes[0], meshes[1]);
 }
 
+/// Above the parallel thresholds (20,000 samples: the edge tables, the
+/// greedy merge, the pinched-vertex search and the mesh lines run in
+/// parallel), the mesh and the figures are the same at 1, 2 and 3 threads;
+/// `--profile` prints every stage's seconds on standard error, standard
+/// output staying one JSON line.
+#[test]
+fn large_fit_is_identical_at_any_thread_count_and_profiles_its_stages() {
+    let dir = temp_dir("threads-large");
+    write_xyz(&dir.join("s.xyz"), &fibonacci_sphere(20_000, 1.0), None);
+    let mut runs = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let out = format!("m{threads}.obj");
+        let o = Command::new(env!("CARGO_BIN_EXE_opsim"))
+            .args(["fit", "s.xyz", "--out", &out, "--profile"])
+            .env("RAYON_NUM_THREADS", threads)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", text(&o));
+        let stdout = String::from_utf8_lossy(&o.stdout).to_string();
+        assert_eq!(stdout.lines().count(), 1, "{stdout}");
+        let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+        assert_eq!(v["euler_characteristic"], 2, "{v}");
+        let stderr = String::from_utf8_lossy(&o.stderr).to_string();
+        for stage in [
+            "read",
+            "spacing and normals",
+            "creation rounds",
+            "triangulation",
+            "holes and distances",
+            "write",
+            "wall",
+        ] {
+            assert!(
+                stderr.lines().any(|l| l.starts_with(stage)),
+                "no {stage:?} in {stderr}"
+            );
+        }
+        runs.push((std::fs::read(dir.join(&out)).unwrap(), stdout));
+    }
+    assert!(runs.windows(2).all(|w| w[0] == w[1]));
+}
+
 /// Runs `opsim` in `cwd`, killed after `seconds` (a hang fails the test
 /// instead of stalling it).
 fn opsim_within(args: &[&str], cwd: &Path, seconds: u64) -> Output {
