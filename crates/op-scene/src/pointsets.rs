@@ -15,6 +15,7 @@
 use std::path::Path;
 
 use op_dynamics::{Point3, Real, Vec3};
+use rayon::prelude::*;
 
 pub use crate::input::EXCERPT_CHARS;
 use crate::input::{excerpt, read_regular_file, strip_bom, InputFileError};
@@ -199,50 +200,49 @@ fn given_normals(normals: Vec<Option<Vec3>>) -> Option<Vec<Vec3>> {
 /// Either every point has a normal or none has.
 pub fn parse_xyz(text: &str, file: &str) -> Result<PointSet, PointSetError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    // Each line parsed on its own, in parallel; the lines are then taken
+    // in order, so the first error is the first bad line's, as a serial
+    // reading reports it.
+    let lines: Vec<&str> = text.lines().collect();
+    let parsed: Vec<XyzLine> = lines
+        .par_iter()
+        .enumerate()
+        .with_min_len(4096)
+        .map(|(k, raw)| xyz_line(raw, file, k + 1))
+        .collect();
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut columns = None;
-    for (k, raw) in text.lines().enumerate() {
+    for (k, parsed) in parsed.into_iter().enumerate() {
         let line = k + 1;
-        let content = raw.split('#').next().unwrap_or("");
-        let fields: Vec<&str> = content
-            .split(|c: char| c.is_whitespace() || c == ',')
-            .filter(|s| !s.is_empty())
-            .collect();
-        if fields.is_empty() {
-            continue;
-        }
-        if fields.len() != 3 && fields.len() != 6 {
-            return Err(format_err(
-                file,
-                Some(line),
-                format!(
-                    "expected 3 numbers (x y z) or 6 (x y z nx ny nz), found {}",
-                    fields.len()
-                ),
-            ));
-        }
+        let (count, values) = match parsed {
+            XyzLine::Empty => continue,
+            XyzLine::Miscounted(count) => {
+                return Err(format_err(
+                    file,
+                    Some(line),
+                    format!("expected 3 numbers (x y z) or 6 (x y z nx ny nz), found {count}"),
+                ))
+            }
+            XyzLine::Point(count, values) => (count, values),
+        };
         match columns {
-            None => columns = Some(fields.len()),
-            Some(c) if c != fields.len() => {
+            None => columns = Some(count),
+            Some(c) if c != count => {
                 return Err(format_err(
                     file,
                     Some(line),
                     format!(
-                    "{} numbers where earlier lines have {c}: give normals for every point or none",
-                    fields.len()
+                    "{count} numbers where earlier lines have {c}: give normals for every point or none"
                 ),
                 ))
             }
             Some(_) => {}
         }
-        let v = fields
-            .iter()
-            .map(|f| number(f, file, line))
-            .collect::<Result<Vec<_>, _>>()?;
-        positions.push(Point3::new(v[0], v[1], v[2]));
-        if v.len() == 6 {
-            normals.push(unit(Vec3::new(v[3], v[4], v[5]), file, Some(line))?);
+        let (p, n) = values?;
+        positions.push(p);
+        if let Some(n) = n {
+            normals.push(n);
         }
     }
     let has_normals = columns == Some(6);
@@ -250,6 +250,47 @@ pub fn parse_xyz(text: &str, file: &str) -> Result<PointSet, PointSetError> {
         positions,
         normals: has_normals.then(|| given_normals(normals)).flatten(),
     })
+}
+
+/// One line of an `.xyz` file.
+enum XyzLine {
+    /// No fields: blank or a comment.
+    Empty,
+    /// A number of fields other than 3 or 6.
+    Miscounted(usize),
+    /// 3 or 6 fields: the point and, for 6, its normal ([`unit`]), or why
+    /// they are not numbers.
+    Point(usize, Result<(Point3, Option<Option<Vec3>>), PointSetError>),
+}
+
+/// Parses line number `line` (`raw`, without its end) of an `.xyz` file.
+fn xyz_line(raw: &str, file: &str, line: usize) -> XyzLine {
+    let content = raw.split('#').next().unwrap_or("");
+    let fields: Vec<&str> = content
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter(|s| !s.is_empty())
+        .collect();
+    if fields.is_empty() {
+        return XyzLine::Empty;
+    }
+    let count = fields.len();
+    if count != 3 && count != 6 {
+        return XyzLine::Miscounted(count);
+    }
+    let values = (|| {
+        let v = fields
+            .iter()
+            .map(|f| number(f, file, line))
+            .collect::<Result<Vec<_>, _>>()?;
+        let p = Point3::new(v[0], v[1], v[2]);
+        let n = if count == 6 {
+            Some(unit(Vec3::new(v[3], v[4], v[5]), file, Some(line))?)
+        } else {
+            None
+        };
+        Ok((p, n))
+    })();
+    XyzLine::Point(count, values)
 }
 
 /// Parses `.obj` text: `v x y z [w]` lines are the points; `vn` lines, when
@@ -367,6 +408,35 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("m.xyz:2"), "{e}");
+    }
+
+    /// Lines are parsed in parallel chunks (thousands of lines): the error
+    /// is still the first bad line's, and a line with the wrong number of
+    /// columns is named for that before its numbers are looked at.
+    #[test]
+    fn the_first_bad_line_of_a_long_file_is_named() {
+        let lines = |bad: &[(usize, &str)]| {
+            (1..=20_000)
+                .map(|k| {
+                    bad.iter()
+                        .find(|(at, _)| *at == k)
+                        .map_or(format!("{k} 0 0"), |(_, l)| l.to_string())
+                })
+                .collect::<Vec<_>>()
+                .join("\n")
+        };
+        let text = lines(&[(7001, "1 2 x"), (15_000, "1 2")]);
+        let e = parse_xyz(&text, "long.xyz").unwrap_err().to_string();
+        assert!(e.starts_with("long.xyz:7001:") && e.contains("`x`"), "{e}");
+        let text = lines(&[(12_000, "1 2 y 0 0 1"), (19_000, "1 2")]);
+        let e = parse_xyz(&text, "long.xyz").unwrap_err().to_string();
+        assert!(
+            e.starts_with("long.xyz:12000:") && e.contains("earlier lines have 3"),
+            "{e}"
+        );
+        let set = parse_xyz(&lines(&[]), "long.xyz").unwrap();
+        assert_eq!(set.positions.len(), 20_000);
+        assert_eq!(set.positions[19_999], Point3::new(20_000.0, 0.0, 0.0));
     }
 
     #[test]
