@@ -421,8 +421,8 @@ fn close_by_ears(
             a != b
                 && b != c
                 && a != c
-                && count(edges, a, b) <= 1
-                && count(edges, b, c) <= 1
+                && edges.count(a, b) <= 1
+                && edges.count(b, c) <= 1
                 && (diagonal == 0 || (m == 3 && diagonal <= 1))
         });
         let Some(k) = ear else {
@@ -453,7 +453,7 @@ fn close_by_fan(
     sorted.sort_unstable();
     sorted.dedup();
     if sorted.len() < hole.len()
-        || (0..hole.len()).any(|k| count(edges, hole[k], hole[(k + 1) % hole.len()]) > 1)
+        || (0..hole.len()).any(|k| edges.count(hole[k], hole[(k + 1) % hole.len()]) > 1)
     {
         // A pinched loop (a vertex twice): left open.
         return;
@@ -476,10 +476,6 @@ fn close_by_fan(
     for k in 0..hole.len() {
         add_face(mesh, edges, [hole[k], hole[(k + 1) % hole.len()], v]);
     }
-}
-
-fn count(edges: &EdgeCounts, a: u32, b: u32) -> usize {
-    edges.count(a, b)
 }
 
 fn add_face(mesh: &mut SurfaceMesh, edges: &mut EdgeCounts, f: [u32; 3]) {

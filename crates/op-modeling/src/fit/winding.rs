@@ -144,11 +144,12 @@ pub(super) fn cut_crosscaps(
             .into_par_iter()
             .with_min_len(4096)
             .filter_map(|e| {
-                let on = edges.slots(e);
+                let &[s0, s1] = edges.slots(e) else {
+                    return None;
+                };
                 let (a, b) = edges.vertices(e);
-                let (t0, t1) = (*on.first()? as usize / 3, *on.last()? as usize / 3);
-                (on.len() == 2 && forward(&faces[t0], a, b) == forward(&faces[t1], a, b))
-                    .then_some([t0, t1])
+                let (t0, t1) = (s0 as usize / 3, s1 as usize / 3);
+                (forward(&faces[t0], a, b) == forward(&faces[t1], a, b)).then_some([t0, t1])
             })
             .collect();
         for t in crossed.into_iter().flatten() {
