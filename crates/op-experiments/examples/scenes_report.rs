@@ -200,6 +200,17 @@ fn scaled(work: &Path, quick: bool) -> Res<Vec<Case>> {
             family: Some("skinned ball on a skinned ball"),
         });
     }
+    let (scene, points) = (work.join("solid_torus.ron"), work.join("solid_torus.xyz"));
+    std::fs::write(&points, solid_torus_points())?;
+    std::fs::write(&scene, SOLID_TORUS)?;
+    cases.push(Case {
+        label:
+            "skinned solid torus (24,536 particles, point skins of radius 2, cell 0.25), one step"
+                .into(),
+        args: vec!["run".into(), scene.display().to_string()],
+        size: 0,
+        family: None,
+    });
     for n in take(&[10_000, 100_000, 1_000_000]) {
         let path = work.join(format!("torus_{n}.xyz"));
         std::fs::write(&path, torus_samples(n))?;
@@ -217,6 +228,43 @@ fn scaled(work: &Path, quick: bool) -> Res<Vec<Case>> {
     }
     Ok(cases)
 }
+
+/// A solid torus on the unit lattice (major radius 20, minor 7.93:
+/// 24,536 points), the object whose build issue 31 timed at 37-39 s.
+fn solid_torus_points() -> String {
+    let mut out = String::new();
+    for x in -30i32..=30 {
+        for y in -30i32..=30 {
+            for z in -9i32..=9 {
+                let d = f64::from(x).hypot(f64::from(y)) - 20.0;
+                if d * d + f64::from(z * z) <= 7.93 * 7.93 {
+                    out.push_str(&format!("{x} {y} {z}\n"));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// [`solid_torus_points`] skinned by point primitives of radius 2 at cell
+/// 0.25, run for one step (two frames): building, posing and
+/// polygonizing the skin.
+const SOLID_TORUS: &str = r#"(
+    name: "solid_torus",
+    world: (integrator: VelocityVerlet, dt: 0.004, duration: 0.004, frame_rate: 250),
+    materials: {
+        "solid": (spacing: LennardJones((epsilon: 5, r0: 1, cutoff: 1.3))),
+    },
+    objects: [
+        (
+            name: "torus",
+            material: "solid",
+            generator: Points(path: "solid_torus.xyz"),
+            skin: Some((primitive: Point, radius: 2, cell_size: 0.25, stiffness: 100)),
+        ),
+    ],
+)
+"#;
 
 /// `sheet_on_sphere`'s cloth at `n x n` particles over a sphere of radius
 /// `n / 5`, dropped from just above it: 50 steps, 3 frames. At most about
@@ -248,7 +296,7 @@ fn cloth(n: usize) -> String {
     ],
     tools: [
         (name: "sphere", shape: Ball(radius: {radius}), path: [(time: 0, position: (0, 0, 0))],
-         role: Obstacle(stiffness: 100)),
+         role: Obstacle(stiffness: 1600)),
     ],
 )
 "#,

@@ -1,41 +1,23 @@
-//! Contact of a skin against a rigid parry collider (seed 002 §6;
+//! Contact reactions and rigid colliders' clipping of skins (seed 002 §6;
 //! Gascuel 1993 with only the deformable skin compressed).
 //!
-//! The skin is sampled (for instance at the vertices of its polygonization,
-//! [`crate::Mesh::positions`]). Each sample inside the collider gets the
-//! reaction `k * depth * n`, where `n` is the collider's outward normal at
-//! the closest surface point and `depth` the distance to it. The reaction is
-//! shared among the primitives producing the field at the sample, in
-//! proportion to their field values there, and each share acts on the
-//! primitive's particle as a force and a torque about the particle's
-//! position: "reaction forces are then expressed at the skeleton center of
-//! mass as a pair (force, torque) and integrated during the following time
-//! step" (seed 002 §6).
-//!
-//! Samples are tested in parallel (ordered collect) and accumulated
-//! serially in sample order, so the result does not depend on the thread
-//! count. The stiffness is per sample: the total reaction grows with the
-//! sampling density (keep the polygonization cell size fixed in a scene).
-//! Contact between two implicit objects is in [`crate::implicit_contact`].
-
-use std::collections::BTreeMap;
+//! A contact evaluation gives each particle a force and a torque about its
+//! position ([`Reaction`], gathered in [`Reactions`]): "reaction forces are
+//! then expressed at the skeleton center of mass as a pair (force, torque)
+//! and integrated during the following time step" (seed 002 §6). They come
+//! from a contact energy: a skin against a rigid obstacle
+//! ([`crate::ObstacleContact`]) or two skins ([`crate::ContactPair`]).
+//! [`ClippedField`] is a skin clipped at the obstacles it presses, for
+//! display.
 
 use op_dynamics::external::ExternalAccumulator;
 use op_dynamics::{Point3, Real, Vec3, World};
 use op_modeling::tools::signed_distance;
-use parry3d_f64::math::{Pose, Vector};
+use parry3d_f64::math::Pose;
 use parry3d_f64::shape::Shape;
-use rayon::prelude::*;
 
 use crate::field::{Field, ScalarField, ValueGradient};
 use crate::kernel::ISO;
-
-/// Parameters of [`collider_reactions`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ContactParams {
-    /// Reaction per unit penetration depth, per sample, >= 0 (force/length).
-    pub stiffness: Real,
-}
 
 /// Force and torque (world frame, torque about the particle's position)
 /// on one particle.
@@ -70,14 +52,21 @@ impl Reactions {
         }
     }
 
+    /// The same reactions with `depth` as the deepest penetration.
+    pub(crate) fn with_max_depth(self, depth: Real) -> Self {
+        Reactions {
+            max_depth: depth,
+            ..self
+        }
+    }
+
     /// Per-particle reactions, in increasing particle id.
     pub fn reactions(&self) -> &[Reaction] {
         &self.reactions
     }
 
-    /// Number of samples in contact: inside the collider, or, for two
-    /// skins ([`crate::ContactPair::reactions`]), edges of the contact
-    /// energy's lattice with a positive integral.
+    /// Number of edges of the contact energy's lattice with a positive
+    /// integral.
     pub fn samples_in_contact(&self) -> usize {
         self.samples_in_contact
     }
@@ -88,9 +77,9 @@ impl Reactions {
         self.total_force
     }
 
-    /// Depth of the deepest sample inside the collider
-    /// ([`collider_reactions`]; 0 for implicit contact, which measures
-    /// its overlap per sample, see [`crate::ContactSample`]).
+    /// The deepest penetration into an obstacle
+    /// ([`crate::ObstacleContact::reactions`]; 0 for two skins, whose
+    /// overlap [`crate::PairReactions::peak`] gives).
     pub fn max_depth(&self) -> Real {
         self.max_depth
     }
@@ -110,44 +99,6 @@ impl Reactions {
         for r in &self.reactions {
             held.add(r.particle, r.force, r.torque);
         }
-    }
-}
-
-fn to_parry(p: &Point3) -> Vector {
-    Vector::new(p.x, p.y, p.z)
-}
-
-/// Reactions of the skin of `field`, sampled at `samples`, against
-/// `collider` at `pose` (module doc for the model).
-pub fn collider_reactions(
-    field: &Field,
-    samples: &[Point3],
-    collider: &dyn Shape,
-    pose: &Pose,
-    params: &ContactParams,
-) -> Reactions {
-    let hits: Vec<Option<(Point3, Vec3, Real)>> = samples
-        .par_iter()
-        .map(|p| {
-            let proj = collider.project_point(pose, to_parry(p), false);
-            if !proj.is_inside {
-                return None;
-            }
-            let surface = Vec3::new(proj.point.x, proj.point.y, proj.point.z);
-            let out = surface - p.coords;
-            let depth = out.norm();
-            (depth > 0.0).then(|| (*p, out * params.stiffness, depth))
-        })
-        .collect();
-    let mut acc = ReactionAccumulator::default();
-    let mut max_depth: Real = 0.0;
-    for (p, force, depth) in hits.into_iter().flatten() {
-        acc.add(field, &p, force);
-        max_depth = max_depth.max(depth);
-    }
-    Reactions {
-        max_depth,
-        ..acc.finish()
     }
 }
 
@@ -241,71 +192,14 @@ impl<F: ScalarField + ?Sized> ScalarField for ClippedField<'_, F> {
     }
 }
 
-/// Serial accumulator of sample reactions into per-particle (force,
-/// torque) pairs, shared among primitives by field share (module doc).
-#[derive(Default)]
-struct ReactionAccumulator {
-    per_particle: BTreeMap<u32, (Vec3, Vec3)>,
-    shares: Vec<(usize, Real)>,
-    samples: usize,
-    total_force: Vec3,
-}
-
-impl ReactionAccumulator {
-    /// Shares `force`, acting at `p`, among the primitives of `field` with
-    /// a positive field at `p`; returns false (and adds nothing) when there
-    /// are none.
-    fn add(&mut self, field: &Field, p: &Point3, force: Vec3) -> bool {
-        self.shares.clear();
-        field.for_each_near(p, |i, prim| {
-            let f = prim.field(p);
-            if f > 0.0 {
-                self.shares.push((i, f));
-            }
-        });
-        let total: Real = self.shares.iter().map(|s| s.1).sum();
-        if total <= 0.0 {
-            return false;
-        }
-        self.samples += 1;
-        self.total_force += force;
-        for &(i, f) in &self.shares {
-            let prim = &field.primitives()[i];
-            let share = force * (f / total);
-            let lever = p - prim.particle_position();
-            let entry = self.per_particle.entry(prim.particle()).or_default();
-            entry.0 += share;
-            entry.1 += lever.cross(&share);
-        }
-        true
-    }
-
-    /// The accumulated reactions, in increasing particle id.
-    fn finish(self) -> Reactions {
-        Reactions {
-            reactions: self
-                .per_particle
-                .into_iter()
-                .map(|(particle, (force, torque))| Reaction {
-                    particle,
-                    force,
-                    torque,
-                })
-                .collect(),
-            samples_in_contact: self.samples,
-            total_force: self.total_force,
-            max_depth: 0.0,
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::polygonize::{polygonize, PolygonizeParams};
     use crate::primitives::Primitive;
     use crate::skin::Skin;
+    use crate::{ImplicitContactParams, ObstacleContact};
     use op_dynamics::{Material, ParticleDesc, Particles, WorldParams};
+    use parry3d_f64::math::Vector;
     use parry3d_f64::shape::Cuboid;
 
     fn world_at(points: &[Point3]) -> World {
@@ -324,17 +218,22 @@ mod tests {
         )
     }
 
-    fn skin_and_samples(world: &World) -> (Skin, Vec<Point3>) {
+    /// A point skin of radius 1 on every particle of `world`.
+    fn skin_of(world: &World) -> Skin {
         let n = world.particles().len() as u32;
         let prims = (0..n)
             .map(|id| (id, Primitive::point(Vec3::zeros(), 1.0)))
             .collect();
-        let skin = Skin::new(world, prims).unwrap();
-        let mesh = polygonize(skin.field(), &PolygonizeParams::with_cell_size(0.05)).unwrap();
-        (skin, mesh.positions().to_vec())
+        Skin::new(world, prims).unwrap()
     }
 
-    const PARAMS: ContactParams = ContactParams { stiffness: 10.0 };
+    /// The reactions of `skin` against the floor.
+    fn on_floor(skin: &Skin) -> Reactions {
+        let (slab, pose) = floor();
+        ObstacleContact::new(skin.field(), &slab, &pose)
+            .reactions(&ImplicitContactParams::new(10.0, 0.05))
+            .unwrap()
+    }
 
     /// A ball skin sunk into a floor, clipped by it: the mesh stays
     /// closed and outward, no vertex is below the floor's top face, the
@@ -376,12 +275,17 @@ mod tests {
     fn ball_pressed_on_floor_is_pushed_up_without_spin() {
         let c = Point3::new(0.013, -0.021, 0.4);
         let mut world = world_at(&[c]);
-        let (skin, samples) = skin_and_samples(&world);
-        let (slab, pose) = floor();
-        let r = collider_reactions(skin.field(), &samples, &slab, &pose, &PARAMS);
+        let skin = skin_of(&world);
+        let r = on_floor(&skin);
         assert!(r.samples_in_contact() > 10);
         let f = r.total_force();
-        assert!(f.z > 0.0 && f.x == 0.0 && f.y == 0.0, "{f:?}");
+        // Sideways only by the lattice's offset from the ball's axis.
+        assert!(f.z > 0.0 && f.xy().norm() < 1e-3 * f.z, "{f:?}");
+        assert!(
+            r.max_depth() > 0.09 && r.max_depth() < 0.1,
+            "{}",
+            r.max_depth()
+        );
         assert_eq!(r.reactions().len(), 1);
         let one = r.reactions()[0];
         assert!((one.force - f).norm() < 1e-12 * f.norm());
@@ -398,16 +302,15 @@ mod tests {
     }
 
     #[test]
-    fn reaction_is_shared_among_the_primitives_producing_the_field() {
+    fn reaction_is_shared_among_the_primitives_in_contact() {
         let world = world_at(&[Point3::new(-0.3, 0.0, 0.4), Point3::new(0.3, 0.0, 0.4)]);
-        let (skin, samples) = skin_and_samples(&world);
-        let (slab, pose) = floor();
+        let skin = skin_of(&world);
         let run = |threads| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| collider_reactions(skin.field(), &samples, &slab, &pose, &PARAMS))
+                .install(|| on_floor(&skin))
         };
         let r = run(2);
         assert_eq!(r, run(1));
@@ -417,16 +320,21 @@ mod tests {
         assert!((sum - r.total_force()).norm() < 1e-12 * sum.norm());
         assert!(left.force.z > 0.0 && right.force.z > 0.0);
         assert!((left.force.z - right.force.z).abs() < 0.1 * left.force.z);
-        // Each particle is pushed more on its inner side: opposite spins.
-        assert!(left.torque.y < 0.0 && right.torque.y > 0.0);
+        // The lens is deeper between them: each is pushed up and outwards.
+        assert!(
+            left.force.x < 0.0 && right.force.x > 0.0,
+            "{left:?} {right:?}"
+        );
+        // A point primitive centred on its particle does not turn with it:
+        // the energy's gradient has no torque.
+        for x in [left, right] {
+            assert!(x.torque.norm() < 1e-12 * x.force.norm(), "{x:?}");
+        }
     }
 
     #[test]
     fn no_reaction_without_penetration() {
         let world = world_at(&[Point3::new(0.0, 0.0, 0.6)]);
-        let (skin, samples) = skin_and_samples(&world);
-        let (slab, pose) = floor();
-        let r = collider_reactions(skin.field(), &samples, &slab, &pose, &PARAMS);
-        assert_eq!(r, Reactions::default());
+        assert_eq!(on_floor(&skin_of(&world)), Reactions::default());
     }
 }

@@ -48,6 +48,7 @@ struct ContactSkin {
     rest_spacing: Real,
     cell_size: Real,
     stiffness: Real,
+    surface_slope: Real,
     state: SkinState,
 }
 
@@ -100,6 +101,7 @@ impl ContactForces {
                     rest_spacing: s.rest_spacing,
                     cell_size: s.cell_size,
                     stiffness: s.stiffness,
+                    surface_slope: s.surface_slope,
                     state: s.skin.state(),
                 })
                 .collect();
@@ -153,7 +155,12 @@ impl ContactForces {
                 let skin = &self.skins[k];
                 let (force, depth) = tool.react(
                     &fields[k],
-                    (&skin.name, skin.cell_size),
+                    (
+                        &skin.name,
+                        skin.cell_size,
+                        skin.rest_spacing,
+                        skin.surface_slope,
+                    ),
                     t,
                     self.friction_interval,
                     state,

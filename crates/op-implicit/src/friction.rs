@@ -1,16 +1,16 @@
 //! Coulomb friction of a skinned particle on a rigid collider.
 //!
 //! Seed 002 §6 gives the skin's contact with a rigid collider only its
-//! normal reaction: samples of the skin inside the collider are pushed out
-//! along its normal ([`crate::collider_reactions`]), so a skin rests on a
+//! normal reaction: the skin inside the collider is pushed out along its
+//! normal ([`crate::ObstacleContact`]), so a skin rests on a
 //! level collider but slides down any slope and off any edge its overhang
 //! drags it over. Coulomb's law adds the tangential reaction: a contact
 //! pressed by the normal reaction `N` resists sliding with a force of at
 //! most `μ |N|` opposite the sliding velocity, and sticks (no sliding)
 //! while the force needed to hold it is below that bound.
 //!
-//! **Per particle.** The normal reaction of a skinned particle is the sum
-//! of its samples' shares ([`crate::Reactions`]), `N_i`, along the
+//! **Per particle.** The normal reaction of a skinned particle is its
+//! share of the contact energy's gradient ([`crate::Reactions`]), `N_i`, along the
 //! collider normals where it touches. Its sliding velocity is its velocity
 //! relative to the collider's material point at the particle, less its
 //! component along `N_i`: `v_t`. The friction force is

@@ -55,6 +55,9 @@ use crate::polygonize::blocks::Grid;
 
 mod band;
 mod energy;
+mod obstacle;
+
+pub use obstacle::ObstacleContact;
 
 /// The optional bulge of Gascuel's propagation region (Gascuel 1993).
 ///

@@ -15,8 +15,9 @@
 //! - [`polygonize()`] turns a field into a closed, outward-oriented
 //!   [`Mesh`] with analytic normals.
 //!
-//! - [`collider_reactions`] computes the contact reactions of a sampled
-//!   skin against a parry collider, shared among the particles and applied
+//! - [`ObstacleContact`] is a skin pressed into a rigid parry collider:
+//!   [`ObstacleContact::reactions`] gives its particles the forces and
+//!   torques of one contact energy ([`ObstacleContact::energy`]), applied
 //!   with [`Reactions::apply`] (`World::add_external_force`).
 //!
 //! - [`ContactPair`] is the contact between two implicit objects (Gascuel
@@ -43,17 +44,18 @@ pub mod skin;
 pub mod skin_stages;
 pub mod stretch;
 
-pub use contact::{collider_reactions, ClippedField, ContactParams, Reaction, Reactions};
+pub use contact::{ClippedField, Reaction, Reactions};
 pub use error::{PolygonizeError, SkinError};
 pub use field::{Field, ScalarField};
 pub use implicit_contact::{
-    deform, Bulge, ContactPair, ContactSample, DeformedField, ImplicitContactParams, PairReactions,
+    deform, Bulge, ContactPair, ContactSample, DeformedField, ImplicitContactParams,
+    ObstacleContact, PairReactions,
 };
 pub use kernel::{iso_radius, ISO};
 pub use polygonize::{
     is_closed_oriented_manifold, polygonize, polygonize_clipped, polygonize_deformed,
-    polygonize_field, polygonize_region, polygonize_with_stats, surface_points, Mesh,
-    PolygonizeParams, PolygonizeStats, MAX_NODES_PER_AXIS,
+    polygonize_field, polygonize_region, polygonize_with_stats, Mesh, PolygonizeParams,
+    PolygonizeStats, MAX_NODES_PER_AXIS,
 };
 pub use primitives::{PosedPrimitive, Primitive, Skeleton};
 pub use skin::{Skin, SkinState};

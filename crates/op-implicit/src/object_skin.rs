@@ -18,7 +18,7 @@
 //! past the contact surface, summed).
 
 use op_dynamics::{Point3, Real, Vec3, World};
-use op_modeling::tools::{parry_pose, signed_distance};
+use op_modeling::tools::parry_pose;
 use op_modeling::Tool;
 use parry3d_f64::math::Pose;
 use parry3d_f64::shape::Shape;
@@ -26,8 +26,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::contact_forces::ParticleState;
 use crate::{
-    collider_reactions, polygonize, polygonize_clipped, polygonize_deformed, surface_points,
-    ContactParams, Mesh, PolygonizeError, PolygonizeParams, Primitive, Skin, SkinError,
+    polygonize, polygonize_clipped, polygonize_deformed, ImplicitContactParams, Mesh,
+    ObstacleContact, PolygonizeError, PolygonizeParams, Primitive, Skin, SkinError,
 };
 
 /// The skin of one object: the [`Skin`] contact acts on and the one shown.
@@ -49,6 +49,11 @@ pub struct ObjectSkin {
     pub cell_size: Real,
     /// Contact stiffness.
     pub stiffness: Real,
+    /// The slope `|∇f|` of the contact skin's field at its surface, as its
+    /// kernel gives it for one primitive: converts an obstacle's spring
+    /// per particle into its contact energy's stiffness
+    /// ([`SkinTool::stiffness`]).
+    pub surface_slope: Real,
     /// The primitive each particle of the object carries in the contact
     /// skin (in its body frame).
     pub primitive: Primitive,
@@ -229,20 +234,24 @@ pub struct ContactStats {
     pub total_impulse: Real,
 }
 
-/// An obstacle tool that skinned objects meet through their skins: the
-/// skin is sampled where it may touch the tool (the vertices of its
-/// polygonization clipped to the tool's bounding box, a cell wider:
-/// [`crate::surface_points`]), and every sample
-/// inside the tool gets the reaction `stiffness x depth` along the tool's
-/// outward normal ([`crate::collider_reactions`]; seed 002 §6 with
-/// only the skin compressed).
+/// An obstacle tool that skinned objects meet through their skins: each
+/// skin's particles get the gradient of the contact energy
+/// `stiffness ∫ max(0, f - ISO) dV` over the tool's interior
+/// ([`crate::ObstacleContact`]; seed 002 §6 with only the skin
+/// compressed), integrated on a lattice of the skin's cell size.
 #[derive(Clone, Debug)]
 pub struct SkinTool {
     /// The tool (shape and path; its role is an obstacle).
     pub tool: Tool,
     /// Indices (in the scene's list of skins) of the skins it touches.
     pub skins: Vec<usize>,
-    /// Reaction per unit depth, per sample.
+    /// Spring per particle, force per unit depth (as the tool pushes a
+    /// bare particle). A skin of field slope `g` at its surface
+    /// ([`ObjectSkin::surface_slope`]) and rest spacing `r0` meets the
+    /// tool with the contact energy's stiffness `stiffness / (g r0^2)`
+    /// ([`crate::ObstacleContact`]): where it meets a flat face at depth
+    /// `d`, the pressure `k g d` over a particle's footprint `r0^2` is
+    /// `stiffness d`.
     pub stiffness: Real,
     /// Coulomb friction coefficient of the skinned particles on the tool
     /// ([`crate::friction`]), >= 0.
@@ -269,9 +278,10 @@ impl SkinTool {
         )
     }
 
-    /// The reactions at world time `t` on the skin of field `field` (named
-    /// `name`, of cell `cell_size`), each passed to `add` (particle id,
-    /// force, torque), and (total reaction force, deepest sample depth).
+    /// The reactions at world time `t` on the skin of field `field`
+    /// (`skin`: its name, cell size, rest spacing and surface slope), each
+    /// passed to `add` (particle id, force, torque), and (total reaction
+    /// force, deepest penetration).
     /// Each particle the reaction presses also gets its Coulomb friction
     /// over the interval `interval` and the damping of its normal velocity
     /// ([`crate::friction`]), from its velocity relative to the tool in
@@ -279,7 +289,7 @@ impl SkinTool {
     pub(crate) fn react(
         &self,
         field: &crate::Field,
-        (name, cell_size): (&str, Real),
+        (name, cell_size, r0, slope): (&str, Real, Real, Real),
         t: Real,
         interval: Real,
         state: &(dyn Fn(u32) -> Option<ParticleState> + Sync),
@@ -287,32 +297,14 @@ impl SkinTool {
     ) -> Result<(Vec3, Real), ContactError> {
         let pose = self.tool.pose(t);
         let frame = parry_pose(&pose.position, &pose.rotation);
-        let shape = self.tool.shape();
-        let h = cell_size;
-        let (lo, hi) = self.region(t, h);
-        let params = PolygonizeParams::with_cell_size(h);
-        // Only samples inside the tool react: a block whose bounding
-        // sphere lies outside it (the signed distance moves by at most the
-        // distance moved) has none.
-        let may_reach_inside = |c: &Point3, r: Real| {
-            signed_distance(shape, &frame, &c.coords).is_none_or(|(s, _)| s <= r + 1e-9 * (1.0 + r))
-        };
-        let samples =
-            surface_points(field, &params, (lo, hi), may_reach_inside).map_err(|source| {
-                ContactError::Sample {
-                    skin: name.to_string(),
-                    source,
-                }
+        let k = self.stiffness / (slope * r0 * r0).max(Real::MIN_POSITIVE);
+        let params = ImplicitContactParams::new(k, cell_size);
+        let r = ObstacleContact::new(field, self.tool.shape(), &frame)
+            .reactions(&params)
+            .map_err(|source| ContactError::Sample {
+                skin: name.to_string(),
+                source,
             })?;
-        let r = collider_reactions(
-            field,
-            &samples,
-            shape,
-            &frame,
-            &ContactParams {
-                stiffness: self.stiffness,
-            },
-        );
         let dissipative = self.friction > 0.0 || self.damping > 0.0;
         for reaction in r.reactions() {
             add(reaction.particle, reaction.force, reaction.torque);

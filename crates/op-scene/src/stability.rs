@@ -28,10 +28,10 @@
 //! `λ ≤ λ_world + λ_contact`, with `λ_contact` the largest contact spring
 //! of a particle over its mass:
 //!
-//! - an obstacle tool meeting a skin pushes each skin sample inside it
-//!   with `k · depth` (per sample, op-implicit `contact`); a particle's
-//!   share of the skin holds about `r0² / h²` samples (its footprint over
-//!   the polygonization cell `h`), so its spring is `k r0² / h²`;
+//! - an obstacle tool of stiffness `k` meeting a skin presses it with
+//!   the pressure `k_E g d` of its contact energy (op-implicit
+//!   `ObstacleContact`), whose stiffness `k_E = k / (g r0²)` makes a
+//!   particle's footprint `r0²` a spring `k`, as a bare particle's;
 //! - two skins press with `s · e · area` (op-implicit `implicit_contact`),
 //!   `s` the mean of their stiffnesses and `e` the other skin's field
 //!   excess, which grows with depth at the other skin's field slope `g`
@@ -444,14 +444,16 @@ pub fn contact_stiffness(scene: &Scene, sample: &crate::BuiltScene) -> Option<(R
         let tools: Real = skin_tools
             .iter()
             .filter(|t| t.2.contains(&o))
-            .map(|t| t.3 .0 * footprint / (skin.cell_size * skin.cell_size))
+            .map(|t| t.3 .0)
             .sum();
         let skins = skinned
             .iter()
             .filter(|&&q| q != o)
             .filter_map(|&q| scene.objects[q].skin.as_ref())
             .map(|other| {
-                0.5 * (skin.stiffness + other.stiffness) * surface_slope(other) * footprint
+                0.5 * (skin.stiffness + other.stiffness)
+                    * crate::skins::surface_slope(other)
+                    * footprint
             })
             .sum::<Real>();
         let p = sample.world().particles();
@@ -468,20 +470,6 @@ pub fn contact_stiffness(scene: &Scene, sample: &crate::BuiltScene) -> Option<(R
         }
     }
     stiffest
-}
-
-/// The slope of a skin's field at its surface: `ISO |f'(t)| / f(t)` for a
-/// skin `t` from its skeleton (the amplitude puts the iso value there),
-/// `19 / (12 R)` at the default `t = R / 2` (op-implicit `kernel`).
-fn surface_slope(skin: &crate::skins::SkinSpec) -> Real {
-    use op_implicit::kernel::{derivative, iso_radius, value, ISO};
-    let t = skin.thickness.unwrap_or(iso_radius(skin.radius));
-    let f = value(t, skin.radius);
-    if f > 0.0 {
-        ISO * derivative(t, skin.radius).abs() / f
-    } else {
-        0.0
-    }
 }
 
 /// The largest eigenvalue (in magnitude) of the mass-weighted Hessian at

@@ -96,7 +96,7 @@ fn crossed((ea, eb): (Real, Real), (fa, fb): (Real, Real)) -> bool {
 /// region can reach the edge (a field monotone along it is positive
 /// somewhere on it only if it is at an end).
 #[inline]
-fn overlapped((ea, eb): (Real, Real), (fa, fb): (Real, Real)) -> bool {
+pub(super) fn overlapped((ea, eb): (Real, Real), (fa, fb): (Real, Real)) -> bool {
     ea.max(fa) > 0.0 && eb.max(fb) > 0.0
 }
 
@@ -173,7 +173,7 @@ fn edges_in_active_blocks(
 /// The edges between the nodes of `block` and its far layer whose
 /// ends pass `test`, from both fields' values there (`fa`, `fb`, x
 /// fastest).
-fn block_edges(
+pub(super) fn block_edges(
     grid: &Grid,
     fa: &[Real],
     fb: &[Real],

@@ -134,7 +134,7 @@ fn anchor(a: &Field, b: &Field) -> Point3 {
 }
 
 /// Three-point Gauss-Legendre on `[0, 1]`: nodes and weights.
-const GAUSS: [(Real, Real); 3] = [
+pub(super) const GAUSS: [(Real, Real); 3] = [
     (0.112_701_665_379_258_3, 5.0 / 18.0),
     (0.5, 8.0 / 18.0),
     (0.887_298_334_620_741_7, 5.0 / 18.0),
@@ -143,6 +143,22 @@ const GAUSS: [(Real, Real); 3] = [
 /// Width of the bracket the roots are found to, as a fraction of the edge:
 /// an error `δ` in a root costs `O(δ^2)` of the integral.
 const ROOT_BRACKET: Real = 1e-10;
+
+/// The root of `phi` along an edge (`t` in `[0, 1]`), when its values
+/// `f0` and `f1` at the ends differ in sign: the middle of a bracket
+/// narrower than [`ROOT_BRACKET`].
+pub(super) fn edge_root(phi: &dyn Fn(Real) -> Real, f0: Real, f1: Real) -> Option<Real> {
+    ((f0 > 0.0) != (f1 > 0.0)).then(|| {
+        let (t0, t1) = super::crossing_to(phi, f0, f1, ROOT_BRACKET);
+        0.5 * (t0 + t1)
+    })
+}
+
+/// Whether a sign has flipped by `u` along an edge: past its `root` (at or
+/// before a piece's start `u`).
+pub(super) fn flipped(root: Option<Real>, u: Real) -> bool {
+    root.is_some_and(|t| t <= u)
+}
 
 /// Per particle: the force and torque summed so far.
 type PerParticle = BTreeMap<u32, (Vec3, Vec3)>;
@@ -227,20 +243,12 @@ fn edge_integral(
     let ea = |t: Real| a.value(&at(t)) - ISO;
     let eb = |t: Real| b.value(&at(t)) - ISO;
     let (a0, a1, b0, b1) = (ea(0.0), ea(1.0), eb(0.0), eb(1.0));
-    let root = |phi: &dyn Fn(Real) -> Real, f0: Real, f1: Real| {
-        ((f0 > 0.0) != (f1 > 0.0)).then(|| {
-            let (t0, t1) = super::crossing_to(phi, f0, f1, ROOT_BRACKET);
-            0.5 * (t0 + t1)
-        })
-    };
-    let ta = root(&ea, a0, a1);
-    let tb = root(&eb, b0, b1);
-    let tc = root(&|t| ea(t) - eb(t), a0 - b0, a1 - b1);
+    let ta = edge_root(&ea, a0, a1);
+    let tb = edge_root(&eb, b0, b1);
+    let tc = edge_root(&|t| ea(t) - eb(t), a0 - b0, a1 - b1);
     let mut cuts = vec![0.0, 1.0];
     cuts.extend([ta, tb, tc].into_iter().flatten());
     cuts.sort_by(Real::total_cmp);
-    // Past a root (at or before the piece's start) the sign has flipped.
-    let flipped = |root: Option<Real>, u: Real| root.is_some_and(|t| t <= u);
     let mut sum = EdgeSum::default();
     let (mut near_w, mut near_o) = (Vec::new(), Vec::new());
     for piece in cuts.windows(2) {

@@ -348,51 +348,6 @@ fn clip_block<C: ScalarField + ?Sized>(
     }
 }
 
-/// The vertices of [`polygonize_region`]'s mesh of a skin's [`Field`]
-/// inside the box `clip`, without its triangles' use or its normals: the
-/// samples of a skin near a collider ([`crate::collider_reactions`]). The
-/// nodes are sampled in the narrow band by splatting the primitives, as
-/// [`polygonize`] samples a whole skin, instead of evaluating the field at
-/// every node of the box one by one; each vertex is the crossing of its
-/// grid edge, welded across blocks, in block order: the mesh's vertices,
-/// in its order. Measured on `sheet_on_sphere` (a skinned sheet of
-/// squares draped on a ball, 2000 steps, one thread): the contact stage
-/// took 7.7 s with the mesh, 2.6 s with this and the splatting of
-/// non-point skeletons in their own frame (`blocks`), the same frames.
-///
-/// Only the vertices a caller keeps cost: a block is sampled only when
-/// `wanted(centre, radius)` holds for its bounding sphere (a collider's
-/// contact wants the blocks that may reach inside it), and the vertices
-/// of the others are left out, the rest keeping their order. Only the
-/// primitives whose bounding sphere `wanted` accepts once widened by a
-/// cell are splatted: a kept vertex lies in a wanted region, the ends of
-/// its grid edge within a cell of it, and a primitive reaches them only
-/// if its sphere widened by a cell reaches that region, so their values
-/// keep every term, in the same order (a primitive left out adds nothing
-/// there), and the kept vertices their bits. Others' vertices move or
-/// vanish: what the caller leaves out.
-pub fn surface_points(
-    field: &Field,
-    params: &PolygonizeParams,
-    clip: (Point3, Point3),
-    wanted: impl Fn(&Point3, Real) -> bool + Sync,
-) -> Result<Vec<Point3>, PolygonizeError> {
-    let Some(grid) = grid(field, params, Some(clip))? else {
-        return Ok(Vec::new());
-    };
-    let lists = BlockLists::filtered(field, &grid, |c, r| wanted(c, r + grid.h));
-    let iso = params.iso;
-    let arch = pulp::Arch::new();
-    let (positions, _, _) = vertices(&grid, iso, |b| {
-        let (lo, hi) = grid.block(b).bounds(&grid);
-        if !wanted(&(lo + (hi - lo) * 0.5), 0.5 * (hi - lo).norm()) {
-            return Sampled::Skipped;
-        }
-        blocks::sample_band(field, &grid, &lists, b, iso, arch)
-    });
-    Ok(positions)
-}
-
 /// The padded node grid over the field's support box (clipped), or `None`
 /// when there is nothing to polygonize.
 fn grid<F: ScalarField + ?Sized>(

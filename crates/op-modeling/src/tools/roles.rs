@@ -20,9 +20,15 @@ use op_dynamics::math::Real;
 pub enum Role {
     /// A solid obstacle: a penalty `E = k d² / 2` on the penetration
     /// `d = max(0, margin - s)`, so the force `k d n` pushes the particle
-    /// out along the outward normal, growing with depth.
+    /// out along the outward normal, growing with depth. A skinned object
+    /// meets it through its skin (seed 002 §6): its particles get the
+    /// gradient of the contact energy `k_E ∫ max(0, f - ISO) dV` over the
+    /// obstacle's interior, `k_E = k / (g r0²)` (`g` the skin's field slope
+    /// at its surface, `r0` the object's spacing), so that a particle's
+    /// footprint pressed `d` deep feels the same `k d`
+    /// (`op_implicit::ObstacleContact`).
     Obstacle {
-        /// Penalty stiffness `k`, > 0 (force per unit depth).
+        /// Penalty stiffness `k`, > 0 (force per unit depth, per particle).
         #[schemars(extend("exclusiveMinimum" = 0))]
         stiffness: Real,
         /// Contact offset from the surface (a particle radius), >= 0.

@@ -1,0 +1,432 @@
+//! The contact energy of a skin pressed into a rigid obstacle and its
+//! gradient: [`super::ObstacleContact`] (seed 002 §6, Gascuel 1993 with
+//! only the deformable skin compressed).
+//!
+//! **Energy.** With the skin's excess `e = f - ISO` (positive inside) and
+//! `C` the obstacle's interior,
+//!
+//! ```text
+//! E = k ∫_C max(0, e) dV,
+//! ```
+//!
+//! the limit of the two skins' energy `k ∫ max(0, min(e_A, e_B)) dV`
+//! (module `energy`) when the other object's excess grows without bound
+//! inside it: a rigid object is not compressed. Where the skin meets a
+//! flat face at depth `d`, with field slope `g` there, `E` per unit area
+//! is `k g d^2 / 2`: the pressure `k g d`, Gascuel's pressure `k e` with
+//! the whole excess removed from the skin.
+//!
+//! **Quadrature.** As for two skins, `E` is integrated along the edges of
+//! a lattice of cell `h` (each of the three families of parallel edges
+//! covers the volume once, `h^2` per line), a point of an edge along axis
+//! `k` counted with the share `n_k^2` of the obstacle's outward normal `n`
+//! there (the shares sum to one): the lines crossing a thin lens count,
+//! those grazing it do not. An edge is cut at the root of `e` and at the
+//! obstacle's surface (the root of its signed distance, both by Illinois
+//! regula falsi), and each piece inside the obstacle where `e > 0` is
+//! integrated by three-point Gauss-Legendre. The lattice is anchored at
+//! the world's origin (an obstacle takes no reaction, so nothing needs to
+//! balance). Edges are those with `e > 0` at an end and an end inside the
+//! obstacle: a lens that reaches no node along an edge is missed.
+//!
+//! **Gradient.** The integrand vanishes at the root of `e`, and the
+//! obstacle's surface does not move with the particles, so moving the
+//! pieces' ends adds nothing: the derivative of an edge's integral is the
+//! integral of the derivative, at the same Gauss points. The share `n_k^2`
+//! depends on the obstacle only. Moving a particle `p` by `δp` and turning
+//! it by `ω` about itself moves its primitives rigidly and changes their
+//! fields by `-∇f_i · (δp + ω × (x - p))`, so a point of weight `W`
+//! (times `k`, the share included) gives primitive `i` the force
+//! `W ∇f_i(x)` and the torque `(x - p) × W ∇f_i(x)`. The kernel's weights
+//! (stretch compensation, [`crate::stretch`]) are held fixed over an
+//! evaluation. The forces are continuous in the state where the lens does
+//! not jump past a node unseen, which velocity Verlet's second order
+//! needs.
+//!
+//! **Band.** Only the lattice's blocks whose bounding sphere may reach
+//! inside the obstacle are sampled, and of those only the ones the skin's
+//! bound reaches ([`box_bounds`]); the obstacle's signed distance is
+//! computed only at nodes next to one where `e > 0`. Edges are integrated
+//! in parallel and summed in edge order: the same bits at any thread
+//! count.
+
+use std::collections::BTreeMap;
+
+use op_dynamics::{Point3, Real, Vec3, MIN_PARALLEL_LEN};
+use op_modeling::tools::signed_distance;
+use parry3d_f64::math::{Pose, Vector};
+use parry3d_f64::query::Ray;
+use parry3d_f64::shape::Shape;
+use rayon::prelude::*;
+
+use super::band;
+use super::energy::{edge_root, flipped, GAUSS};
+use super::ImplicitContactParams;
+use crate::contact::{Reaction, Reactions};
+use crate::error::PolygonizeError;
+use crate::field::Field;
+use crate::kernel::ISO;
+use crate::polygonize::blocks::{box_bounds, margin, splat_block, Block, BlockLists, Grid};
+
+/// A skin pressed into a rigid obstacle (module doc): its reactions are
+/// the gradient of the contact energy [`ObstacleContact::energy`].
+#[derive(Clone, Copy)]
+pub struct ObstacleContact<'a> {
+    field: &'a Field,
+    obstacle: Obstacle<'a>,
+}
+
+impl<'a> ObstacleContact<'a> {
+    /// The skin of `field` against the obstacle `shape` at `pose`.
+    pub fn new(field: &'a Field, shape: &'a dyn Shape, pose: &'a Pose) -> Self {
+        ObstacleContact {
+            field,
+            obstacle: Obstacle { shape, pose },
+        }
+    }
+
+    /// Every particle's force and torque (about itself): minus the
+    /// derivatives of [`ObstacleContact::energy`] in its position and in a
+    /// rotation about itself, in increasing particle id. Their
+    /// `max_depth` is the deepest quadrature point inside the obstacle
+    /// where the skin's field is above the iso value, and their samples
+    /// the edges with a positive integral. Errors: an invalid cell size, a
+    /// non-finite box, or too many lattice nodes along an axis.
+    pub fn reactions(&self, params: &ImplicitContactParams) -> Result<Reactions, PolygonizeError> {
+        let Some(grid) = self.lattice(params)? else {
+            return Ok(Reactions::default());
+        };
+        let sweep = sweep(&grid, self.field, &self.obstacle, params.stiffness, true);
+        Ok(reactions(sweep))
+    }
+
+    /// The contact energy `E_h` (module doc) with stiffness
+    /// `params.stiffness` on the lattice of cell `params.cell_size`.
+    pub fn energy(&self, params: &ImplicitContactParams) -> Result<Real, PolygonizeError> {
+        Ok(match self.lattice(params)? {
+            Some(grid) => sweep(&grid, self.field, &self.obstacle, params.stiffness, false).energy,
+            None => 0.0,
+        })
+    }
+
+    fn lattice(&self, params: &ImplicitContactParams) -> Result<Option<Grid>, PolygonizeError> {
+        let h = params.cell_size;
+        if !(h.is_finite() && h > 0.0) {
+            return Err(PolygonizeError::InvalidCellSize(h));
+        }
+        lattice(self.field, &self.obstacle, h, params.max_nodes_per_axis)
+    }
+}
+
+/// A rigid obstacle: a parry shape at a pose.
+#[derive(Clone, Copy)]
+struct Obstacle<'a> {
+    shape: &'a dyn Shape,
+    pose: &'a Pose,
+}
+
+impl Obstacle<'_> {
+    /// The signed distance at `x` (negative inside) and the outward
+    /// normal there; on the surface itself, where parry gives no normal,
+    /// 0 and none.
+    fn signed(&self, x: &Point3) -> (Real, Option<Vec3>) {
+        match signed_distance(self.shape, self.pose, &x.coords) {
+            Some((s, n)) => (s, Some(n)),
+            None => (0.0, None),
+        }
+    }
+
+    /// Whether the ball of centre `c` and radius `r` may reach inside (a
+    /// signed distance moves by at most the distance moved).
+    fn may_reach_inside(&self, c: &Point3, r: Real) -> bool {
+        self.signed(c).0 <= r + 1e-9 * (1.0 + r)
+    }
+
+    /// Where the segment from `a` (inside) to `b` (outside) leaves the
+    /// obstacle, as a fraction of the way (a ray cast; `None` if it finds
+    /// no exit, at round-off from the surface).
+    fn exit(&self, a: &Point3, b: &Point3) -> Option<Real> {
+        let ray = Ray::new(Vector::new(a.x, a.y, a.z), {
+            let d = b - a;
+            Vector::new(d.x, d.y, d.z)
+        });
+        self.shape
+            .cast_ray(self.pose, &ray, 1.0, false)
+            .filter(|t| (0.0..=1.0).contains(t))
+    }
+
+    /// The obstacle's bounding box.
+    fn bounding_box(&self) -> (Point3, Point3) {
+        let aabb = self.shape.compute_aabb(self.pose);
+        (
+            Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z),
+            Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z),
+        )
+    }
+}
+
+/// The lattice of cell `h` (nodes at multiples of `h`) over the
+/// intersection of the skin's support box and the obstacle's bounding
+/// box; `None` when they do not overlap. Errors: a non-finite skin box
+/// (the obstacle's may be infinite: a half-space), or more than
+/// `max_nodes` nodes along an axis.
+fn lattice(
+    field: &Field,
+    obstacle: &Obstacle<'_>,
+    h: Real,
+    max_nodes: usize,
+) -> Result<Option<Grid>, PolygonizeError> {
+    let Some((flo, fhi)) = field.support_box() else {
+        return Ok(None);
+    };
+    if ![flo, fhi].iter().all(|p| p.iter().all(|x| x.is_finite())) {
+        return Err(PolygonizeError::NonFiniteRegion);
+    }
+    // A half-space's box is infinite: the skin's bounds it.
+    let (tlo, thi) = obstacle.bounding_box();
+    let (lo, hi) = (flo.sup(&tlo), fhi.inf(&thi));
+    if ![lo, hi].iter().all(|p| p.iter().all(|x| x.is_finite())) {
+        return Err(PolygonizeError::NonFiniteRegion);
+    }
+    if (0..3).any(|k| lo[k] >= hi[k]) {
+        return Ok(None);
+    }
+    let mut start = lo;
+    let mut dims = [2; 3];
+    for k in 0..3 {
+        start[k] = h * (lo[k] / h).floor();
+        // Saturating: an astronomical box needs more nodes than any limit.
+        dims[k] = (((hi[k] - start[k]) / h).ceil() as usize)
+            .saturating_add(1)
+            .max(2);
+    }
+    let needed = dims.into_iter().max().unwrap_or(2);
+    if needed > max_nodes {
+        return Err(PolygonizeError::TooManyNodes {
+            needed,
+            max: max_nodes,
+        });
+    }
+    Ok(Some(Grid { lo: start, h, dims }))
+}
+
+/// The minimum number of items per parallel task: all of them (one task,
+/// on the calling thread) for a small skin.
+fn min_len(field: &Field, items: usize) -> usize {
+    if field.primitives().len() >= MIN_PARALLEL_LEN {
+        1
+    } else {
+        items.max(1)
+    }
+}
+
+/// The edges `(node, axis)` of `grid` along which the skin can be inside
+/// the obstacle: `e > 0` at an end and an end inside (module doc,
+/// **Band**), in increasing node and axis.
+fn edges(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>) -> Vec<(usize, usize)> {
+    let lists = BlockLists::filtered(field, grid, |c, r| obstacle.may_reach_inside(c, r + grid.h));
+    let n_blocks: usize = grid.blocks().iter().product();
+    let arch = pulp::Arch::new();
+    let mut edges: Vec<(usize, usize)> = (0..n_blocks)
+        .into_par_iter()
+        .with_min_len(min_len(field, n_blocks))
+        .flat_map_iter(|b| {
+            let block = grid.block(b);
+            let list = lists.of(b);
+            let (lo, hi) = block.bounds(grid);
+            let centre = lo + (hi - lo) * 0.5;
+            if list.is_empty() || !obstacle.may_reach_inside(&centre, 0.5 * (hi - lo).norm()) {
+                return Vec::new();
+            }
+            let (_, upper) = box_bounds(field, (&lo, &hi), list);
+            if upper + margin(upper) < ISO {
+                return Vec::new();
+            }
+            let (values, _) = splat_block(field, grid, &block, list, arch);
+            if values.iter().all(|&v| v <= ISO) {
+                return Vec::new();
+            }
+            // The obstacle as a second "field" whose excess is minus the
+            // signed distance, computed where an edge has e > 0 at an end.
+            let inside = insides(grid, &block, &values, obstacle);
+            band::block_edges(grid, &values, &inside, &block, band::overlapped)
+        })
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
+
+/// Per node of `block` (values `values`, x fastest): `ISO - s`, `s` the
+/// obstacle's signed distance, at every node with `e > 0` there or at a
+/// neighbour along an axis, and 0 (outside, as far as the edges' test
+/// goes) elsewhere.
+fn insides(grid: &Grid, block: &Block, values: &[Real], obstacle: &Obstacle<'_>) -> Vec<Real> {
+    let nodes = block.nodes();
+    let strides = [1, nodes[0], nodes[0] * nodes[1]];
+    let mut out = vec![0.0; values.len()];
+    for z in 0..nodes[2] {
+        for y in 0..nodes[1] {
+            for x in 0..nodes[0] {
+                let here = [x, y, z];
+                let i = x + strides[1] * y + strides[2] * z;
+                let positive = |j: usize| values[j] > ISO;
+                let needed = positive(i)
+                    || (0..3).any(|k| {
+                        (here[k] > 0 && positive(i - strides[k]))
+                            || (here[k] + 1 < nodes[k] && positive(i + strides[k]))
+                    });
+                if needed {
+                    let [a, b, c] = [0, 1, 2].map(|k| block.start[k] + here[k]);
+                    out[i] = ISO - obstacle.signed(&grid.node(a, b, c)).0;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// One quadrature point's force and torque on the particle of one
+/// primitive (module doc, **Gradient**).
+type Term = (u32, Vec3, Vec3);
+
+/// One edge's share of the energy, its deepest point inside the obstacle
+/// with `e > 0`, and its gradient's terms.
+#[derive(Default)]
+struct EdgeSum {
+    energy: Real,
+    depth: Real,
+    terms: Vec<Term>,
+}
+
+/// The sum over the lattice, in edge order.
+#[derive(Default)]
+struct Sweep {
+    /// `E_h` (module doc).
+    energy: Real,
+    /// Edges with a positive integral.
+    edges: usize,
+    /// The deepest quadrature point inside the obstacle with `e > 0`.
+    depth: Real,
+    /// Force and torque per particle (empty unless the gradient was
+    /// asked for).
+    per_particle: BTreeMap<u32, (Vec3, Vec3)>,
+}
+
+/// `E_h` over `grid` for stiffness `k`, with the gradient's terms when
+/// `gradient` (module doc).
+fn sweep(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>, k: Real, gradient: bool) -> Sweep {
+    let edges = edges(grid, field, obstacle);
+    let scale = k * grid.h.powi(3);
+    let sums: Vec<EdgeSum> = edges
+        .par_iter()
+        .with_min_len(min_len(field, edges.len()))
+        .filter_map(|&(i, axis)| {
+            let p0 = band::node(grid, i);
+            edge_integral(field, obstacle, (&p0, axis, grid.h), scale, gradient)
+        })
+        .collect();
+    let mut out = Sweep::default();
+    for s in sums {
+        out.energy += s.energy;
+        out.edges += 1;
+        out.depth = out.depth.max(s.depth);
+        for (id, f, t) in s.terms {
+            let entry = out.per_particle.entry(id).or_default();
+            entry.0 += f;
+            entry.1 += t;
+        }
+    }
+    out
+}
+
+/// The integral of `scale * max(0, e)` inside the obstacle along the edge
+/// from `p0` along `axis`, of length `h`, with its gradient terms when
+/// `gradient` (module doc); `None` when it is zero.
+fn edge_integral(
+    field: &Field,
+    obstacle: &Obstacle<'_>,
+    (p0, axis, h): (&Point3, usize, Real),
+    scale: Real,
+    gradient: bool,
+) -> Option<EdgeSum> {
+    let mut dir = Vec3::zeros();
+    dir[axis] = h;
+    let at = |t: Real| p0 + dir * t;
+    let e = |t: Real| field.value(&at(t)) - ISO;
+    // Minus the signed distance: positive inside.
+    let inside = |t: Real| -obstacle.signed(&at(t)).0;
+    let (e0, e1, c0, c1) = (e(0.0), e(1.0), inside(0.0), inside(1.0));
+    let te = edge_root(&e, e0, e1);
+    // The surface's crossing: a ray cast from the inner end, or, failing
+    // that, the root of the signed distance.
+    let tc = ((c0 > 0.0) != (c1 > 0.0))
+        .then(|| {
+            let (a, b) = (at(0.0), at(1.0));
+            let cast = if c0 > 0.0 {
+                obstacle.exit(&a, &b)
+            } else {
+                obstacle.exit(&b, &a).map(|t| 1.0 - t)
+            };
+            cast.or_else(|| edge_root(&inside, c0, c1))
+        })
+        .flatten();
+    let mut cuts = vec![0.0, 1.0];
+    cuts.extend([te, tc].into_iter().flatten());
+    cuts.sort_by(Real::total_cmp);
+    let mut sum = EdgeSum::default();
+    for piece in cuts.windows(2) {
+        let (u, v) = (piece[0], piece[1]);
+        let in_skin = (e0 > 0.0) != flipped(te, u);
+        let in_obstacle = (c0 > 0.0) != flipped(tc, u);
+        if v <= u || !(in_skin && in_obstacle) {
+            continue;
+        }
+        for (x, w) in GAUSS {
+            let point = at(u + x * (v - u));
+            let (s, normal) = obstacle.signed(&point);
+            // The axis's share n_k^2 of the obstacle's normal.
+            let share = normal.map_or(1.0 / 3.0, |n| n[axis] * n[axis]);
+            let weight = scale * w * (v - u) * share;
+            let start = sum.terms.len();
+            let mut f = 0.0;
+            field.for_each_near(&point, |_, prim| {
+                let (fi, gi) = prim.field_and_gradient(&point);
+                f += fi;
+                if gradient && gi != Vec3::zeros() {
+                    let force = gi * weight;
+                    let lever = point - prim.particle_position();
+                    sum.terms
+                        .push((prim.particle(), force, lever.cross(&force)));
+                }
+            });
+            let excess = f - ISO;
+            if excess <= 0.0 {
+                // Only where the field is not monotone along the edge.
+                sum.terms.truncate(start);
+                continue;
+            }
+            sum.energy += weight * excess;
+            sum.depth = sum.depth.max(-s);
+        }
+    }
+    (sum.energy > 0.0).then_some(sum)
+}
+
+/// The reactions of `sweep`, in increasing particle id.
+fn reactions(sweep: Sweep) -> Reactions {
+    let reactions: Vec<Reaction> = sweep
+        .per_particle
+        .into_iter()
+        .map(|(particle, (force, torque))| Reaction {
+            particle,
+            force,
+            torque,
+        })
+        .collect();
+    let total_force = reactions.iter().map(|r| r.force).sum();
+    Reactions::from_parts(reactions, sweep.edges, total_force).with_max_depth(sweep.depth)
+}
+
+#[cfg(test)]
+mod tests;
