@@ -236,9 +236,10 @@ pub struct ContactStats {
 
 /// An obstacle tool that skinned objects meet through their skins: each
 /// skin's particles get the gradient of the contact energy
-/// `stiffness ∫ max(0, f - ISO) dV` over the tool's interior
-/// ([`crate::ObstacleContact`]; seed 002 §6 with only the skin
-/// compressed), integrated on a lattice of the skin's cell size.
+/// `k_E ∫ max(0, f - ISO) dV` over the tool's interior, `k_E` from
+/// [`SkinTool::stiffness`] ([`crate::ObstacleContact`]; seed 002 §6 with
+/// only the skin compressed), integrated on a lattice of the skin's cell
+/// size.
 #[derive(Clone, Debug)]
 pub struct SkinTool {
     /// The tool (shape and path; its role is an obstacle).
@@ -278,8 +279,8 @@ impl SkinTool {
         )
     }
 
-    /// The reactions at world time `t` on the skin of field `field`
-    /// (`skin`: its name, cell size, rest spacing and surface slope), each
+    /// The reactions at world time `t` on the skin of field `field` (given
+    /// its name, cell size, rest spacing and surface slope), each
     /// passed to `add` (particle id, force, torque), and (total reaction
     /// force, deepest penetration).
     /// Each particle the reaction presses also gets its Coulomb friction
