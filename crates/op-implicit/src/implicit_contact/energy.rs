@@ -156,7 +156,7 @@ pub(super) fn edge_root(phi: &dyn Fn(Real) -> Real, f0: Real, f1: Real) -> Optio
 
 /// Whether a sign has flipped by `u` along an edge: past its `root` (at or
 /// before a piece's start `u`).
-pub(super) fn flipped(root: Option<Real>, u: Real) -> bool {
+fn flipped(root: Option<Real>, u: Real) -> bool {
     root.is_some_and(|t| t <= u)
 }
 

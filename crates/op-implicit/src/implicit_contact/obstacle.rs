@@ -21,10 +21,12 @@
 //! covers the volume once, `h^2` per line), a point of an edge along axis
 //! `k` counted with the share `n_k^2` of the obstacle's outward normal `n`
 //! there (the shares sum to one): the lines crossing a thin lens count,
-//! those grazing it do not. An edge is cut at the root of `e` and at the
-//! obstacle's surface (the root of its signed distance, both by Illinois
-//! regula falsi), and each piece inside the obstacle where `e > 0` is
-//! integrated by three-point Gauss-Legendre. The lattice is anchored at
+//! those grazing it do not. An edge is cut at the obstacle's surface (a
+//! ray cast, or the root of its signed distance), then the part inside at
+//! the root of `e` (Illinois regula falsi, searched there only: an edge
+//! whose skin ends outside the obstacle costs no search), and the piece
+//! inside the obstacle where `e > 0` is integrated by three-point
+//! Gauss-Legendre. The lattice is anchored at
 //! the world's origin (an obstacle takes no reaction, so nothing needs to
 //! balance). Edges are those with `e > 0` at an end and an end inside the
 //! obstacle: a lens that reaches no node along an edge is missed.
@@ -60,7 +62,7 @@ use parry3d_f64::shape::Shape;
 use rayon::prelude::*;
 
 use super::band;
-use super::energy::{edge_root, flipped, GAUSS};
+use super::energy::{edge_root, GAUSS};
 use super::ImplicitContactParams;
 use crate::contact::{Reaction, Reactions};
 use crate::error::PolygonizeError;
@@ -354,61 +356,69 @@ fn edge_integral(
     dir[axis] = h;
     let at = |t: Real| p0 + dir * t;
     let e = |t: Real| field.value(&at(t)) - ISO;
-    // Minus the signed distance: positive inside.
+    // The part of the edge inside the obstacle, `[lo, hi]`: where the
+    // surface crosses it, a ray cast from the inner end, or, failing that,
+    // the root of the signed distance.
     let inside = |t: Real| -obstacle.signed(&at(t)).0;
-    let (e0, e1, c0, c1) = (e(0.0), e(1.0), inside(0.0), inside(1.0));
-    let te = edge_root(&e, e0, e1);
-    // The surface's crossing: a ray cast from the inner end, or, failing
-    // that, the root of the signed distance.
-    let tc = ((c0 > 0.0) != (c1 > 0.0))
-        .then(|| {
-            let (a, b) = (at(0.0), at(1.0));
-            let cast = if c0 > 0.0 {
-                obstacle.exit(&a, &b)
+    let (c0, c1) = (inside(0.0), inside(1.0));
+    let (lo, hi) = match (c0 > 0.0, c1 > 0.0) {
+        (true, true) => (0.0, 1.0),
+        (false, false) => return None,
+        (true, false) => {
+            let cast = obstacle.exit(&at(0.0), &at(1.0));
+            (0.0, cast.or_else(|| edge_root(&inside, c0, c1))?)
+        }
+        (false, true) => {
+            let cast = obstacle.exit(&at(1.0), &at(0.0)).map(|t| 1.0 - t);
+            (cast.or_else(|| edge_root(&inside, c0, c1))?, 1.0)
+        }
+    };
+    // The skin's part of it, `[u, v]`: cut at the skin's root, if its
+    // excess changes sign there (the skin is monotone along an edge).
+    let (e_lo, e_hi) = (e(lo), e(hi));
+    let (u, v) = match (e_lo > 0.0, e_hi > 0.0) {
+        (true, true) => (lo, hi),
+        (false, false) => return None,
+        (positive_lo, _) => {
+            let along = |x: Real| e(lo + x * (hi - lo));
+            let root = lo + (hi - lo) * edge_root(&along, e_lo, e_hi)?;
+            if positive_lo {
+                (lo, root)
             } else {
-                obstacle.exit(&b, &a).map(|t| 1.0 - t)
-            };
-            cast.or_else(|| edge_root(&inside, c0, c1))
-        })
-        .flatten();
-    let mut cuts = vec![0.0, 1.0];
-    cuts.extend([te, tc].into_iter().flatten());
-    cuts.sort_by(Real::total_cmp);
+                (root, hi)
+            }
+        }
+    };
+    if v <= u {
+        return None;
+    }
     let mut sum = EdgeSum::default();
-    for piece in cuts.windows(2) {
-        let (u, v) = (piece[0], piece[1]);
-        let in_skin = (e0 > 0.0) != flipped(te, u);
-        let in_obstacle = (c0 > 0.0) != flipped(tc, u);
-        if v <= u || !(in_skin && in_obstacle) {
+    for (x, w) in GAUSS {
+        let point = at(u + x * (v - u));
+        let (s, normal) = obstacle.signed(&point);
+        // The axis's share n_k^2 of the obstacle's normal.
+        let share = normal.map_or(1.0 / 3.0, |n| n[axis] * n[axis]);
+        let weight = scale * w * (v - u) * share;
+        let start = sum.terms.len();
+        let mut f = 0.0;
+        field.for_each_near(&point, |_, prim| {
+            let (fi, gi) = prim.field_and_gradient(&point);
+            f += fi;
+            if gradient && gi != Vec3::zeros() {
+                let force = gi * weight;
+                let lever = point - prim.particle_position();
+                sum.terms
+                    .push((prim.particle(), force, lever.cross(&force)));
+            }
+        });
+        let excess = f - ISO;
+        if excess <= 0.0 {
+            // Only where the field is not monotone along the edge.
+            sum.terms.truncate(start);
             continue;
         }
-        for (x, w) in GAUSS {
-            let point = at(u + x * (v - u));
-            let (s, normal) = obstacle.signed(&point);
-            // The axis's share n_k^2 of the obstacle's normal.
-            let share = normal.map_or(1.0 / 3.0, |n| n[axis] * n[axis]);
-            let weight = scale * w * (v - u) * share;
-            let start = sum.terms.len();
-            let mut f = 0.0;
-            field.for_each_near(&point, |_, prim| {
-                let (fi, gi) = prim.field_and_gradient(&point);
-                f += fi;
-                if gradient && gi != Vec3::zeros() {
-                    let force = gi * weight;
-                    let lever = point - prim.particle_position();
-                    sum.terms
-                        .push((prim.particle(), force, lever.cross(&force)));
-                }
-            });
-            let excess = f - ISO;
-            if excess <= 0.0 {
-                // Only where the field is not monotone along the edge.
-                sum.terms.truncate(start);
-                continue;
-            }
-            sum.energy += weight * excess;
-            sum.depth = sum.depth.max(-s);
-        }
+        sum.energy += weight * excess;
+        sum.depth = sum.depth.max(-s);
     }
     (sum.energy > 0.0).then_some(sum)
 }
