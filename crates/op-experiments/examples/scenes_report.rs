@@ -209,7 +209,7 @@ fn scaled(work: &Path, quick: bool) -> Res<Vec<Case>> {
                 .into(),
         args: vec!["run".into(), scene.display().to_string()],
         size: 0,
-        family: None,
+        family: Some("skinned solid torus (one size: building and one polygonization)"),
     });
     for n in take(&[10_000, 100_000, 1_000_000]) {
         let path = work.join(format!("torus_{n}.xyz"));
