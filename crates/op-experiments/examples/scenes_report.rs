@@ -729,10 +729,12 @@ fn scaled_table(
     Ok(())
 }
 
-/// The families of the scaled-up cases, in case order.
+/// The families of the scaled-up cases of at least two sizes (an
+/// exponent needs two), in case order.
 fn families(cases: &[Case]) -> Vec<&'static str> {
     let mut families: Vec<&str> = cases.iter().filter_map(|c| c.family).collect();
     families.dedup();
+    families.retain(|f| cases.iter().filter(|c| c.family == Some(f)).count() >= 2);
     families
 }
 

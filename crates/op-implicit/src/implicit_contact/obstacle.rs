@@ -54,7 +54,7 @@
 
 use std::collections::BTreeMap;
 
-use op_dynamics::{Point3, Real, Vec3, MIN_PARALLEL_LEN};
+use op_dynamics::{Point3, Real, Vec3};
 use op_modeling::tools::signed_distance;
 use parry3d_f64::math::{Pose, Vector};
 use parry3d_f64::query::Ray;
@@ -212,16 +212,6 @@ fn lattice(
     Ok(Some(Grid { lo: start, h, dims }))
 }
 
-/// The minimum number of items per parallel task: all of them (one task,
-/// on the calling thread) for a small skin.
-fn min_len(field: &Field, items: usize) -> usize {
-    if field.primitives().len() >= MIN_PARALLEL_LEN {
-        1
-    } else {
-        items.max(1)
-    }
-}
-
 /// The edges `(node, axis)` of `grid` along which the skin can be inside
 /// the obstacle: `e > 0` at an end and an end inside (module doc,
 /// **Band**), in increasing node and axis.
@@ -229,9 +219,13 @@ fn edges(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>) -> Vec<(usize, usi
     let lists = BlockLists::filtered(field, grid, |c, r| obstacle.may_reach_inside(c, r + grid.h));
     let n_blocks: usize = grid.blocks().iter().product();
     let arch = pulp::Arch::new();
+    // A block each task, even for a small skin: a block that passes the
+    // tests below is splatted, tens of microseconds of work, more than
+    // waking a thread costs (sheet_on_sphere's 100-particle skin: contact
+    // 1.44 s at 1 thread, 1.06-1.23 s at 2, 1.53-1.58 s at 2 with one task
+    // for a skin under MIN_PARALLEL_LEN primitives).
     let mut edges: Vec<(usize, usize)> = (0..n_blocks)
         .into_par_iter()
-        .with_min_len(min_len(field, n_blocks))
         .flat_map_iter(|b| {
             let block = grid.block(b);
             let list = lists.of(b);
@@ -288,6 +282,10 @@ fn insides(grid: &Grid, block: &Block, values: &[Real], obstacle: &Obstacle<'_>)
     out
 }
 
+/// The least number of edges a parallel task integrates: each costs about
+/// twenty field values (a root search and three Gauss points).
+const EDGES_PER_TASK: usize = 16;
+
 /// One quadrature point's force and torque on the particle of one
 /// primitive (module doc, **Gradient**).
 type Term = (u32, Vec3, Vec3);
@@ -322,7 +320,7 @@ fn sweep(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>, k: Real, gradient:
     let scale = k * grid.h.powi(3);
     let sums: Vec<EdgeSum> = edges
         .par_iter()
-        .with_min_len(min_len(field, edges.len()))
+        .with_min_len(EDGES_PER_TASK)
         .filter_map(|&(i, axis)| {
             let p0 = band::node(grid, i);
             edge_integral(field, obstacle, (&p0, axis, grid.h), scale, gradient)
