@@ -26,10 +26,10 @@
 //! the root of `e` (Illinois regula falsi, searched there only: an edge
 //! whose skin ends outside the obstacle costs no search), and the piece
 //! inside the obstacle where `e > 0` is integrated by three-point
-//! Gauss-Legendre. The lattice is anchored at
-//! the world's origin (an obstacle takes no reaction, so nothing needs to
-//! balance). Edges are those with `e > 0` at an end and an end inside the
-//! obstacle: a lens that reaches no node along an edge is missed.
+//! Gauss-Legendre. The lattice is anchored at the world's origin (an
+//! obstacle takes no reaction, so nothing needs to balance). Edges are
+//! those with `e > 0` at an end and an end inside the obstacle: a lens
+//! that reaches no node along an edge is missed.
 //!
 //! **Gradient.** The integrand vanishes at the root of `e`, and the
 //! obstacle's surface does not move with the particles, so moving the
