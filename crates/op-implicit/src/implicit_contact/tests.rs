@@ -9,6 +9,55 @@ use op_dynamics::{Material, ParticleDesc, Particles, Quat, WorldParams};
 use op_test_support::Rng;
 use std::collections::BTreeMap;
 
+/// Velocity Verlet of unit masses (no other force) on `state`, whose
+/// particle positions `positions` gives, from `velocities`, over
+/// `duration` at step `dt`, under a contact of energy `energy` and forces
+/// `forces`: the largest drift of the total energy (kinetic plus contact)
+/// and the largest contact energy, both over the total at the start. The
+/// contact energy tests' measure of the scheme's order
+/// (`energy::tests`, `obstacle::tests`).
+pub(super) fn verlet_energy_drift<S>(
+    state: &mut S,
+    velocities: &mut [Vec3],
+    (dt, duration): (Real, Real),
+    positions: impl Fn(&mut S) -> &mut [Point3],
+    energy: impl Fn(&S) -> Real,
+    forces: impl Fn(&S) -> Vec<Vec3>,
+) -> (Real, Real) {
+    let kinetic = |v: &[Vec3]| v.iter().map(|v| 0.5 * v.norm_squared()).sum::<Real>();
+    let start = energy(state) + kinetic(velocities);
+    let (mut drift, mut deepest): (Real, Real) = (0.0, 0.0);
+    let mut f = forces(state);
+    let steps = (duration / dt).round() as usize;
+    for _ in 0..steps {
+        for (i, p) in positions(state).iter_mut().enumerate() {
+            velocities[i] += f[i] * (0.5 * dt);
+            *p += velocities[i] * dt;
+        }
+        f = forces(state);
+        for (v, f) in velocities.iter_mut().zip(&f) {
+            *v += f * (0.5 * dt);
+        }
+        let contact = energy(state);
+        drift = drift.max((contact + kinetic(velocities) - start).abs());
+        deepest = deepest.max(contact);
+    }
+    (drift / start, deepest / start)
+}
+
+/// Asserts that `drifts` ([`verlet_energy_drift`] at steps halved from one
+/// to the next) show second order: each halving divides the drift by 3 to
+/// 5.5, and the contact energy peaks above a tenth of the total (the
+/// objects `meet`).
+pub(super) fn assert_second_order(drifts: &[(Real, Real)], meet: &str) {
+    eprintln!("drift and peak contact energy over the kinetic: {drifts:?}");
+    assert!(drifts.iter().all(|d| d.1 > 0.1), "{meet}");
+    for pair in drifts.windows(2) {
+        let ratio = pair[0].0 / pair[1].0;
+        assert!((3.0..5.5).contains(&ratio), "ratio {ratio}");
+    }
+}
+
 fn world_at(points: &[Point3]) -> World {
     let mut particles = Particles::new();
     for p in points {
