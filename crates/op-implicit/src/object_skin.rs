@@ -334,7 +334,8 @@ pub enum ContactError {
         /// Why.
         source: SkinError,
     },
-    /// A skin could not be sampled near a tool.
+    /// A skin's contact energy against a tool could not be integrated:
+    /// its lattice near the tool could not be sampled.
     #[error("sampling skin {skin}: {source}")]
     Sample {
         /// The skin's name.

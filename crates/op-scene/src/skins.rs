@@ -403,7 +403,7 @@ pub(crate) fn build_skin(
 /// The slope of a skin's field at its surface: `ISO |f'(t)| / f(t)` for a
 /// skin `t` from its skeleton (the amplitude puts the iso value there),
 /// `19 / (12 R)` at the default `t = R / 2` (op-implicit `kernel`).
-pub(crate) fn surface_slope(skin: &crate::skins::SkinSpec) -> Real {
+pub(crate) fn surface_slope(skin: &SkinSpec) -> Real {
     use op_implicit::kernel::{derivative, iso_radius, value, ISO};
     let t = skin.thickness.unwrap_or(iso_radius(skin.radius));
     let f = value(t, skin.radius);

@@ -95,6 +95,18 @@ pub(super) fn lattice(
     let Some((lo, hi)) = super::common_box(a, b)? else {
         return Ok(None);
     };
+    anchored((lo, hi), &anchor(a, b), h, max_nodes).map(Some)
+}
+
+/// The lattice of cell `h` over the box `(lo, hi)` whose nodes lie at
+/// `o` plus multiples of `h`. Errors: more than `max_nodes` nodes along an
+/// axis, or a non-finite first node.
+pub(super) fn anchored(
+    (lo, hi): (Point3, Point3),
+    o: &Point3,
+    h: Real,
+    max_nodes: usize,
+) -> Result<Grid, PolygonizeError> {
     // Saturating: an astronomical box needs more nodes than any limit,
     // and says so. One more node than the box needs: the lattice's first
     // node may lie up to a cell before the box.
@@ -108,7 +120,6 @@ pub(super) fn lattice(
             max: max_nodes,
         });
     }
-    let o = anchor(a, b);
     let mut start = lo;
     let mut dims = [2; 3];
     for k in 0..3 {
@@ -121,7 +132,7 @@ pub(super) fn lattice(
         // Positions near the largest finite number: their mean overflows.
         return Err(PolygonizeError::NonFiniteRegion);
     }
-    Ok(Some(Grid { lo: start, h, dims }))
+    Ok(Grid { lo: start, h, dims })
 }
 
 /// The lattice's anchor: the mean of the carrying particles' positions

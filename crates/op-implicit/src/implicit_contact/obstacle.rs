@@ -62,7 +62,7 @@ use parry3d_f64::shape::Shape;
 use rayon::prelude::*;
 
 use super::band;
-use super::energy::{edge_root, GAUSS};
+use super::energy::{anchored, edge_root, GAUSS};
 use super::ImplicitContactParams;
 use crate::contact::{Reaction, Reactions};
 use crate::error::PolygonizeError;
@@ -167,11 +167,11 @@ impl Obstacle<'_> {
     }
 }
 
-/// The lattice of cell `h` (nodes at multiples of `h`) over the
-/// intersection of the skin's support box and the obstacle's bounding
-/// box; `None` when they do not overlap. Errors: a non-finite skin box
-/// (the obstacle's may be infinite: a half-space), or more than
-/// `max_nodes` nodes along an axis.
+/// The lattice of cell `h` (nodes at multiples of `h`, [`anchored`] at the
+/// origin) over the intersection of the skin's support box and the
+/// obstacle's bounding box; `None` when they do not overlap. Errors: a
+/// non-finite skin box (the obstacle's may be infinite: a half-space), or
+/// more than `max_nodes` nodes along an axis.
 fn lattice(
     field: &Field,
     obstacle: &Obstacle<'_>,
@@ -193,23 +193,7 @@ fn lattice(
     if (0..3).any(|k| lo[k] >= hi[k]) {
         return Ok(None);
     }
-    let mut start = lo;
-    let mut dims = [2; 3];
-    for k in 0..3 {
-        start[k] = h * (lo[k] / h).floor();
-        // Saturating: an astronomical box needs more nodes than any limit.
-        dims[k] = (((hi[k] - start[k]) / h).ceil() as usize)
-            .saturating_add(1)
-            .max(2);
-    }
-    let needed = dims.into_iter().max().unwrap_or(2);
-    if needed > max_nodes {
-        return Err(PolygonizeError::TooManyNodes {
-            needed,
-            max: max_nodes,
-        });
-    }
-    Ok(Some(Grid { lo: start, h, dims }))
+    anchored((lo, hi), &Point3::origin(), h, max_nodes).map(Some)
 }
 
 /// The edges `(node, axis)` of `grid` along which the skin can be inside
