@@ -706,6 +706,17 @@ fn random_open_saddle_keeps_its_hole_at_the_default_spacing() {
     random_samples_fit_with_the_right_topology(Shape::HoledSaddle, 500);
 }
 
+/// A thin part and sharp features: 2,000 random samples of an arrow (a
+/// shaft 0.08 thick, about 3.6 spacings; a cone head with a sharp apex
+/// and rim) fit one closed surface of χ 2 on the arrow. Measured at
+/// other counts: right at 800 (a shaft 2.3 spacings thick), 1,000 and
+/// 5,000 samples; broken into closed pieces at 400 to 700 (500: 6
+/// pieces, χ 12; `reports/fitting.md`).
+#[test]
+fn random_arrow_thin_shaft_at_the_default_spacing() {
+    random_samples_fit_with_the_right_topology(Shape::Arrow, 2000);
+}
+
 /// 5,000 samples: 9 chance holes (3.7-5.6 spacings wide, beyond the
 /// search range `d_max`) stayed open until the hole pass took the widest
 /// gap random sampling leaves at this density as its threshold.

@@ -132,7 +132,8 @@ fn shape_area(shape: Shape) -> Real {
 }
 
 /// The classes of the report, named, with their shape (the truth for the
-/// vertex-to-surface distance): `n` samples each (the last, `10 n`).
+/// vertex-to-surface distance): `n` samples each (the arrows fewer, the
+/// last `10 n`).
 pub(crate) fn classes(n: usize) -> Vec<(String, PointSet, Shape)> {
     let mut out = Vec::new();
     for (shape, share) in [
@@ -178,6 +179,15 @@ pub(crate) fn classes(n: usize) -> Vec<(String, PointSet, Shape)> {
             ),
             lines,
             Shape::Torus,
+        ));
+    }
+    // A thin part: the arrow's shaft is 0.08 thick, about 1.8, 2.3 and
+    // 3.6 default spacings at these counts.
+    for count in [500, 800, 2000] {
+        out.push((
+            format!("arrow {count} (a thin shaft, a sharp head)"),
+            Shape::Arrow.sample(count, 17),
+            Shape::Arrow,
         ));
     }
     out.push((

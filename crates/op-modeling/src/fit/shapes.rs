@@ -21,7 +21,18 @@ pub enum Shape {
     /// The saddle `z = 0.2 (x² - y²)` over `[-1, 1]²` without the disc of
     /// radius 0.35 about the z axis: open, χ = 0, 2 boundary loops.
     HoledSaddle,
+    /// An arrow along x (genus 0, χ = 2): a shaft, the capsule of radius
+    /// [`ARROW_SHAFT`] about the segment from x = -1 to x = 0.5, joined to
+    /// a head, the solid cone of base radius 0.2 at x = 0.5 and apex at
+    /// x = 1. A thin part (the shaft is 0.08 thick, a tenth of its length
+    /// and of the ellipsoid's thinnest axis) and sharp features (the apex,
+    /// the rim of the head's base). Not in [`Shape::ALL`]: the fitting
+    /// report's thin-part class.
+    Arrow,
 }
+
+/// Radius of [`Shape::Arrow`]'s shaft.
+pub const ARROW_SHAFT: Real = 0.04;
 
 impl Shape {
     /// All shapes.
@@ -39,6 +50,7 @@ impl Shape {
             Shape::Torus => "torus",
             Shape::DoubleTorus => "double torus",
             Shape::HoledSaddle => "saddle with hole",
+            Shape::Arrow => "arrow",
         }
     }
 
@@ -54,6 +66,7 @@ impl Shape {
             Shape::Torus => (0, 0),
             Shape::DoubleTorus => (-2, 0),
             Shape::HoledSaddle => (0, 2),
+            Shape::Arrow => (2, 0),
         }
     }
 
@@ -102,6 +115,10 @@ impl Shape {
                     }
                     Point3::new(x, y, 0.2 * (x * x - y * y))
                 }
+                Shape::Arrow => match arrow_point(&mut rng) {
+                    Some(p) => p,
+                    None => continue,
+                },
             };
             positions.push(p);
         }
@@ -131,6 +148,7 @@ impl Shape {
                 let f = p.z - 0.2 * (p.x * p.x - p.y * p.y);
                 f.abs() / (1.0 + 0.16 * (p.x * p.x + p.y * p.y)).sqrt()
             }
+            Shape::Arrow => arrow_sdf(p).abs(),
         }
     }
 }
@@ -188,6 +206,88 @@ fn double_torus_sdf(p: &Point3) -> Real {
     a.min(b) - h * h * k / 4.0
 }
 
+/// The arrow's head: base radius, the base's and the apex's x.
+const HEAD: (Real, Real, Real) = (0.2, 0.5, 1.0);
+
+/// The arrow's shaft: from x = -1 to the head's base.
+const SHAFT_FROM: Real = -1.0;
+
+/// A point uniform in area on the arrow's surface, or `None` when rejected
+/// (inside the other part): a part picked in proportion to its area (the
+/// shaft's capsule, the head's lateral surface, the head's base), a point
+/// uniform on it.
+fn arrow_point(rng: &mut Rng) -> Option<Point3> {
+    use std::f64::consts::{PI, TAU};
+    let (r, length) = (ARROW_SHAFT, HEAD.1 - SHAFT_FROM);
+    let (big, base, apex) = HEAD;
+    let slant = (apex - base).hypot(big);
+    let areas = [
+        TAU * r * length + 4.0 * PI * r * r,
+        PI * big * slant,
+        PI * big * big,
+    ];
+    let mut pick = rng.next() * areas.iter().sum::<Real>();
+    let phi = TAU * rng.next();
+    let p = if pick < areas[0] {
+        // The capsule: its cylinder, or a point of its two caps.
+        pick = rng.next() * areas[0];
+        if pick < TAU * r * length {
+            let x = SHAFT_FROM + length * rng.next();
+            Point3::new(x, r * phi.cos(), r * phi.sin())
+        } else {
+            let u = rng.unit() * r;
+            let end = if u.x < 0.0 { SHAFT_FROM } else { base };
+            Point3::new(end, 0.0, 0.0) + u
+        }
+    } else if pick < areas[0] + areas[1] {
+        // The cone: area grows linearly from the apex.
+        let t = rng.next().sqrt();
+        let rho = big * t;
+        Point3::new(apex - (apex - base) * t, rho * phi.cos(), rho * phi.sin())
+    } else {
+        let rho = big * rng.next().sqrt();
+        Point3::new(base, rho * phi.cos(), rho * phi.sin())
+    };
+    // Keep the union's surface only: not strictly inside the other part.
+    let inside_other = if pick < areas[0] {
+        head_sdf(&p) < -1e-12
+    } else {
+        shaft_sdf(&p) < -1e-12
+    };
+    (!inside_other).then_some(p)
+}
+
+/// Signed distance to the arrow's shaft (the capsule).
+fn shaft_sdf(p: &Point3) -> Real {
+    let x = p.x.clamp(SHAFT_FROM, HEAD.1);
+    (p - Point3::new(x, 0.0, 0.0)).norm() - ARROW_SHAFT
+}
+
+/// Signed distance to the arrow's head (the solid cone), from the triangle
+/// it sweeps in the (x, distance from the axis) half-plane.
+fn head_sdf(p: &Point3) -> Real {
+    let (big, base, apex) = HEAD;
+    let q = (p.x, p.y.hypot(p.z));
+    let to_segment = |a: (Real, Real), b: (Real, Real)| {
+        let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+        let t = (((q.0 - a.0) * dx + (q.1 - a.1) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+        (q.0 - a.0 - t * dx).hypot(q.1 - a.1 - t * dy)
+    };
+    let d = to_segment((base, 0.0), (base, big)).min(to_segment((base, big), (apex, 0.0)));
+    let inside = q.0 > base && q.1 < big * (apex - q.0) / (apex - base);
+    if inside {
+        -d
+    } else {
+        d
+    }
+}
+
+/// Signed distance to the arrow: the union of its shaft and head (exact
+/// outside and on the surface).
+fn arrow_sdf(p: &Point3) -> Real {
+    shaft_sdf(p).min(head_sdf(p))
+}
+
 /// Central-difference gradient of `f`.
 fn gradient(p: &Point3, f: fn(&Point3) -> Real) -> Vec3 {
     let e = 1e-6;
@@ -236,7 +336,7 @@ mod tests {
 
     #[test]
     fn samples_lie_on_their_surfaces() {
-        for shape in Shape::ALL {
+        for shape in Shape::ALL.into_iter().chain([Shape::Arrow]) {
             let s = shape.sample(300, 1);
             assert_eq!(s.positions.len(), 300);
             let worst = s
