@@ -180,51 +180,42 @@ fn rms_and_max(d: &[Real]) -> (Real, Real) {
 
 /// Distance from each of `samples` to the triangles (infinite when there is
 /// no triangle).
+///
+/// The triangles are binned by their centroids in grids ([`Bins`]): most
+/// in a grid of the longest edge of all but the longest hundredth
+/// ([`SMALL_SHARE`]), the rest (the fans that close holes, a few times
+/// longer) in a grid of the longest edge of all. A sample looks in its 27
+/// cells of each; what it finds is exact when it is within a third of the
+/// small grid's cell (module docs of [`Bins`]), and otherwise it checks
+/// every triangle. One grid of the longest edge (as before) made each
+/// sample test a few hundred triangles on a million random samples of
+/// the torus (cells 4.3 times the median longest edge: 41 s of its 92 s).
 pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 3]]) -> Vec<Real> {
     if faces.is_empty() {
         return vec![Real::INFINITY; samples.len()];
     }
-    // Triangles binned by their bounding boxes in a grid of the longest
-    // edge; a sample looks in its cell's 27 cells first, all triangles when
-    // that finds none.
-    let cell = faces
+    let longest: Vec<Real> = faces
         .par_iter()
         .map(|f| {
             (0..3)
                 .map(|k| (vertices[f[k] as usize] - vertices[f[(k + 1) % 3] as usize]).norm())
                 .fold(0.0, Real::max)
         })
-        .reduce(|| 0.0, Real::max)
-        .max(1e-12);
-    let key = |p: &Vec3| [p.x, p.y, p.z].map(|c| (c / cell).floor() as i64);
-    // The triangles sorted by the cell of their centroid (a parallel sort
-    // of distinct pairs), each cell's run found through a map.
-    let mut binned: Vec<([i64; 3], u32)> = faces
-        .par_iter()
-        .enumerate()
-        .map(|(t, f)| {
-            let c = f
-                .iter()
-                .fold(Vec3::zeros(), |s, &v| s + vertices[v as usize].coords)
-                / 3.0;
-            (key(&c), t as u32)
-        })
         .collect();
-    binned.par_sort_unstable();
-    let mut bins: HashMap<[i64; 3], (usize, usize)> = HashMap::new();
-    let mut start = 0;
-    for k in 1..=binned.len() {
-        if k == binned.len() || binned[k].0 != binned[start].0 {
-            bins.insert(binned[start].0, (start, k));
-            start = k;
-        }
-    }
-    let bin = |k: &[i64; 3]| {
-        bins.get(k)
-            .map_or(&[][..], |&(a, b)| &binned[a..b])
-            .iter()
-            .map(|&(_, t)| t as usize)
+    let mut sorted = longest.clone();
+    sorted.par_sort_unstable_by(Real::total_cmp);
+    let small_cell = sorted[((sorted.len() - 1) as Real * SMALL_SHARE) as usize].max(1e-12);
+    let (small, big): (Vec<u32>, Vec<u32>) =
+        (0..faces.len() as u32).partition(|&t| longest[t as usize] <= small_cell);
+    let cell_of = |set: &[u32]| {
+        set.iter()
+            .map(|&t| longest[t as usize])
+            .fold(1e-12, Real::max)
     };
+    let grids = [
+        Bins::new(vertices, faces, small, cell_of),
+        Bins::new(vertices, faces, big, cell_of),
+    ];
     let tri_distance = |p: &Point3, t: usize| {
         let f = faces[t];
         point_triangle_distance(
@@ -236,33 +227,96 @@ pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 
     };
     // Each sample on its own: in parallel, the same at any thread count.
     let nearest = |p: &Point3| {
-        let k = key(&p.coords);
-        let mut best = Real::INFINITY;
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    for t in bin(&[
-                        k[0].saturating_add(dx),
-                        k[1].saturating_add(dy),
-                        k[2].saturating_add(dz),
-                    ]) {
-                        best = best.min(tri_distance(p, t));
-                    }
-                }
-            }
-        }
-        // A triangle whose centroid is outside the 27 cells has it at least
-        // `cell` from p, and its points within 2/3 of its longest edge
-        // (<= cell) of the centroid: at least `cell / 3` from p. Below
-        // that the nearest found is exact; otherwise check all.
-        if best > cell / 3.0 {
-            best = (0..faces.len())
+        let best = grids
+            .iter()
+            .flat_map(|g| g.near(p))
+            .map(|t| tri_distance(p, t))
+            .fold(Real::INFINITY, Real::min);
+        // Exact when no triangle outside the cells looked at can be nearer
+        // (each grid's bound is a third of its cell, the small one's the
+        // lesser); otherwise check all.
+        if best > grids[0].cell / 3.0 {
+            (0..faces.len())
                 .map(|t| tri_distance(p, t))
-                .fold(best, Real::min);
+                .fold(best, Real::min)
+        } else {
+            best
         }
-        best
     };
     samples.par_iter().map(nearest).collect()
+}
+
+/// Share of the triangles, shortest longest edge first, in the small grid
+/// of [`sample_distances`].
+const SMALL_SHARE: Real = 0.99;
+
+/// Triangles binned by the cell of their centroid in a grid of cell
+/// `cell`, at least the longest edge of each. A triangle whose centroid
+/// lies outside the 27 cells about a point's cell is at least `cell` from
+/// the point and its own points within two thirds of its longest edge
+/// (at most `cell`) of its centroid: at least `cell / 3` from the point.
+struct Bins {
+    cell: Real,
+    /// `(cell, triangle)`, sorted.
+    binned: Vec<([i64; 3], u32)>,
+    /// Each cell's run in `binned`.
+    runs: HashMap<[i64; 3], (usize, usize)>,
+}
+
+impl Bins {
+    /// Bins `set` (triangles of `faces`) in a grid of cell `cell_of(set)`.
+    fn new(
+        vertices: &[Point3],
+        faces: &[[u32; 3]],
+        set: Vec<u32>,
+        cell_of: impl Fn(&[u32]) -> Real,
+    ) -> Bins {
+        let cell = cell_of(&set);
+        // The triangles sorted by the cell of their centroid (a parallel
+        // sort of distinct pairs), each cell's run found through a map.
+        let mut binned: Vec<([i64; 3], u32)> = set
+            .into_par_iter()
+            .map(|t| {
+                let c = faces[t as usize]
+                    .iter()
+                    .fold(Vec3::zeros(), |s, &v| s + vertices[v as usize].coords)
+                    / 3.0;
+                (key(&c, cell), t)
+            })
+            .collect();
+        binned.par_sort_unstable();
+        let mut runs = HashMap::new();
+        let mut start = 0;
+        for k in 1..=binned.len() {
+            if k == binned.len() || binned[k].0 != binned[start].0 {
+                runs.insert(binned[start].0, (start, k));
+                start = k;
+            }
+        }
+        Bins { cell, binned, runs }
+    }
+
+    /// The triangles binned in the 27 cells about `p`'s (none when the
+    /// grid is empty).
+    fn near(&self, p: &Point3) -> impl Iterator<Item = usize> + '_ {
+        let k = key(&p.coords, self.cell);
+        let empty = self.binned.is_empty();
+        (0..27)
+            .filter(move |_| !empty)
+            .flat_map(move |n| {
+                let d = [n % 3, (n / 3) % 3, n / 9].map(|x| x as i64 - 1);
+                let at = [0, 1, 2].map(|j| k[j].saturating_add(d[j]));
+                self.runs
+                    .get(&at)
+                    .map_or(&[][..], |&(a, b)| &self.binned[a..b])
+            })
+            .map(|&(_, t)| t as usize)
+    }
+}
+
+/// The cell of `p` in a grid of cell `cell`.
+fn key(p: &Vec3, cell: Real) -> [i64; 3] {
+    [p.x, p.y, p.z].map(|c| (c / cell).floor() as i64)
 }
 
 /// Distance from `p` to the triangle `abc` (closest point by region,
@@ -347,6 +401,59 @@ mod tests {
             .collect();
         assert_eq!(before, after);
         assert_eq!(mesh.drop_unused_vertices(), 0);
+    }
+
+    /// [`sample_distances`] is the exact nearest distance (every triangle
+    /// tried) to the last bit: a strip of small triangles with a few
+    /// long fans among them (in the coarse grid), samples on, near and
+    /// far from them.
+    #[test]
+    fn sample_distances_are_the_nearest_of_all_triangles() {
+        let mut vertices = Vec::new();
+        let mut faces = Vec::new();
+        for i in 0..400u32 {
+            let x = i as Real * 0.1;
+            let wobble = 0.02 * (x * 3.0).sin();
+            vertices.push(Point3::new(x, 0.0, wobble));
+            vertices.push(Point3::new(x, 0.1, -wobble));
+            if i > 0 {
+                let (a, b, c, d) = (2 * i - 2, 2 * i - 1, 2 * i, 2 * i + 1);
+                faces.push([a, c, b]);
+                faces.push([b, c, d]);
+            }
+        }
+        // Three long fans, tilted, across the strip.
+        for (k, x) in [5.0, 17.3, 30.1].into_iter().enumerate() {
+            let n = vertices.len() as u32;
+            vertices.push(Point3::new(x, -2.0, 0.3 * k as Real));
+            vertices.push(Point3::new(x + 4.0, 1.0, 0.5));
+            vertices.push(Point3::new(x + 1.0, 3.0, -0.4));
+            faces.push([n, n + 1, n + 2]);
+        }
+        let samples: Vec<Point3> = (0..3000)
+            .map(|k| {
+                let t = k as Real;
+                Point3::new(
+                    (t * 0.0137) % 41.0 - 0.5,
+                    (t * 0.731).sin() * 2.5,
+                    (t * 0.377).cos() * [0.001, 0.05, 1.0, 7.0][k % 4],
+                )
+            })
+            .collect();
+        let found = sample_distances(&samples, &vertices, &faces);
+        for (p, d) in samples.iter().zip(&found) {
+            let exact = faces
+                .iter()
+                .map(|f| {
+                    let v = |k: usize| &vertices[f[k] as usize];
+                    point_triangle_distance(p, v(0), v(1), v(2))
+                })
+                .fold(Real::INFINITY, Real::min);
+            assert_eq!(d.to_bits(), exact.to_bits(), "at {p:?}");
+        }
+        assert!(sample_distances(&samples, &vertices, &[])
+            .iter()
+            .all(|d| d.is_infinite()));
     }
 
     #[test]
