@@ -24,11 +24,16 @@
 //! `performance_report child <spacing|oriented> <threads> <steps> [xv file
 //! or -] [cells]` runs one measurement and prints one `key=value` line.
 //!
+//! - **The fastest CPU pair codes** (issue 37): our spacing pass against
+//!   LAMMPS `lj/cut/opt` and GROMACS (`gmx`, when installed) on the same
+//!   block, interleaved.
+//!
 //! Modules: `child` (the measuring child process), `measure` (running
 //! both codes, the machine's load and peak), `sections` (the report's
-//! tables and paragraphs).
+//! tables and paragraphs), `fastest` (LAMMPS `lj/cut/opt` and GROMACS).
 
 mod child;
+mod fastest;
 mod measure;
 mod sections;
 
@@ -36,6 +41,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
+use fastest::{fastest_runs, fastest_section};
 use measure::{interleaved_runs, lammps_initial_state, peak_gflops, scaling_runs};
 use op_experiments::machine::load_average;
 use sections::{
@@ -116,6 +122,7 @@ fn report() -> Res<()> {
     let peak = peak_gflops();
     eprintln!("peak {peak:.1} GFLOP/s ({})", op_dynamics::simd_isa());
     let results = interleaved_runs(&dir, &peers, &xv, reps)?;
+    let fastest = fastest_runs(&dir, &peers, &xv, reps)?;
     let scaling = scaling_runs(quick)?;
     let load_after = load_average();
 
@@ -132,6 +139,7 @@ fn report() -> Res<()> {
         lammps_pairs,
     ))?);
     md.push_str(&flops_section(&results, peak)?);
+    md.push_str(&fastest_section(&fastest, &dir, lammps_pairs)?);
     let out = op_experiments::workspace_root().join("reports/performance.md");
     std::fs::write(&out, md)?;
     std::fs::remove_dir_all(&dir).ok();

@@ -16,7 +16,13 @@ fn parse(line: &str) -> Measure {
 }
 
 /// Runs this executable as a measuring child.
-fn ours(kind: &str, threads: usize, steps: usize, xv: &str, cells: usize) -> Res<Measure> {
+pub(crate) fn ours(
+    kind: &str,
+    threads: usize,
+    steps: usize,
+    xv: &str,
+    cells: usize,
+) -> Res<Measure> {
     let exe = std::env::current_exe()?;
     let out = Command::new(exe)
         .args(["child", kind])
@@ -38,7 +44,7 @@ fn ours(kind: &str, threads: usize, steps: usize, xv: &str, cells: usize) -> Res
 /// One LAMMPS run of `input` on `ranks` MPI ranks in `dir`: loop seconds,
 /// average listed neighbours per particle, neighbour-list builds, peak
 /// resident memory of the largest process (kB, `/usr/bin/time`).
-fn lammps(dir: &Path, input: &Path, ranks: usize) -> Res<Measure> {
+pub(crate) fn lammps(dir: &Path, input: &Path, ranks: usize) -> Res<Measure> {
     let log = dir.join(format!("log.{ranks}"));
     let mut cmd = Command::new("/usr/bin/time");
     cmd.current_dir(dir).args(["-f", "maxrss_kb=%M"]);

@@ -23,7 +23,7 @@ pub(crate) fn median(v: &[f64]) -> f64 {
 }
 
 /// `median [min-max]` with `digits` decimals.
-fn spread(v: &[f64], digits: usize) -> String {
+pub(crate) fn spread(v: &[f64], digits: usize) -> String {
     let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     format!("{:.digits$} [{lo:.digits$}-{hi:.digits$}]", median(v))
