@@ -7,6 +7,7 @@ use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 use op_dynamics::{Point3, Real, Vec3};
+use rayon::prelude::*;
 
 use super::spacing::{pairs, Knn};
 use super::FitError;
@@ -25,7 +26,9 @@ pub fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, Fi
         rows[i].push(j);
         rows[j].push(i);
     }
-    rows.iter_mut().for_each(|r| r.sort_unstable());
+    rows.par_iter_mut()
+        .with_min_len(1024)
+        .for_each(|r| r.sort_unstable());
     if let Some((i, row)) = rows.iter().enumerate().find(|(_, r)| r.len() < 2) {
         return Err(FitError::Input(format!(
             "sample {} has {} neighbours within {radius} spacings: cannot estimate its normal (give normals in the file, or a larger spacing)",
@@ -34,7 +37,8 @@ pub fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, Fi
         )));
     }
     let mut normals: Vec<Vec3> = rows
-        .iter()
+        .par_iter()
+        .with_min_len(1024)
         .enumerate()
         .map(|(i, row)| pca_normal(points, i, row))
         .collect();
@@ -52,6 +56,8 @@ pub fn estimate_normals(points: &[Point3], radius: Real) -> Result<Vec<Vec3>, Fi
 pub(crate) fn knn_normals(points: &[Point3], knn: &Knn) -> Vec<Vec3> {
     let n = points.len();
     let mut normals: Vec<Vec3> = (0..n)
+        .into_par_iter()
+        .with_min_len(1024)
         .map(|i| pca_normal(points, i, knn.neighbours(i)))
         .collect();
     let mut rows: Vec<Vec<usize>> = (0..n).map(|i| knn.neighbours(i).to_vec()).collect();
@@ -60,7 +66,7 @@ pub(crate) fn knn_normals(points: &[Point3], knn: &Knn) -> Vec<Vec3> {
             rows[j].push(i);
         }
     }
-    rows.iter_mut().for_each(|r| {
+    rows.par_iter_mut().with_min_len(1024).for_each(|r| {
         r.sort_unstable();
         r.dedup();
     });
@@ -186,8 +192,12 @@ fn orient(
         }
         done[start] = true;
         let mut heap = BinaryHeap::new();
-        let push = |heap: &mut BinaryHeap<Edge>, normals: &[Vec3], i: usize| {
-            for &j in &rows[i] {
+        // Edges to points already oriented are never taken: they are not
+        // pushed (the pops of the others keep their order, the edges'
+        // order being total). 200,000 random samples of the torus: the
+        // orientation 1.20-1.30 -> 0.46 s.
+        let push = |heap: &mut BinaryHeap<Edge>, normals: &[Vec3], done: &[bool], i: usize| {
+            for &j in rows[i].iter().filter(|&&j| !done[j]) {
                 let mut weight = normals[i].dot(&normals[j]).abs();
                 if tangent {
                     let e = (points[j] - points[i])
@@ -203,7 +213,7 @@ fn orient(
                 });
             }
         };
-        push(&mut heap, normals, start);
+        push(&mut heap, normals, &done, start);
         while let Some(e) = heap.pop() {
             if done[e.to] {
                 continue;
@@ -212,7 +222,7 @@ fn orient(
             if normals[e.from].dot(&normals[e.to]) < 0.0 {
                 normals[e.to] = -normals[e.to];
             }
-            push(&mut heap, normals, e.to);
+            push(&mut heap, normals, &done, e.to);
         }
     }
 }
