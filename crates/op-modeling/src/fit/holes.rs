@@ -22,6 +22,7 @@ use op_dynamics::{Point3, Real, Vec3};
 use rayon::prelude::*;
 
 use super::mesh::SurfaceMesh;
+use super::spacing::Nearest;
 use crate::disjoint_sets::DisjointSets;
 use crate::triangulation::{vertex_components, EdgeTable};
 
@@ -55,6 +56,16 @@ pub(super) fn fill_holes(
         added: HashMap::new(),
     };
     let mut closed = 0;
+    // The samples' tree, built for the first fan (a scan of every sample
+    // per fan made closing holes quadratic: 1,000,000 random samples of
+    // the torus spent most of their holes' 14 s there).
+    let tree = std::cell::OnceCell::new();
+    let nearest = |c: &Point3| {
+        tree.get_or_init(|| Nearest::new(samples))
+            .as_ref()
+            .and_then(|t| t.nearest_to(c))
+            .map(|s| (samples[s], normals[s]))
+    };
     let rims = if open {
         rims(&mesh.vertices, &mesh.faces, &loops)
     } else {
@@ -66,9 +77,9 @@ pub(super) fn fill_holes(
         }
         let before = mesh.faces.len();
         if hole.len() <= 6 {
-            close_by_ears(mesh, &mut edges, hole, samples, normals);
+            close_by_ears(mesh, &mut edges, hole, &nearest);
         } else {
-            close_by_fan(mesh, &mut edges, &hole, samples, normals);
+            close_by_fan(mesh, &mut edges, &hole, &nearest);
         }
         if mesh.faces.len() > before {
             closed += 1;
@@ -384,13 +395,16 @@ fn centroid(vertices: &[Point3], hole: &[u32]) -> Point3 {
     )
 }
 
+/// The sample nearest to a point (the first by index among equally near)
+/// and its unit normal; `None` when there is none.
+type NearestSample<'a> = dyn Fn(&Point3) -> Option<(Point3, Vec3)> + 'a;
+
 /// Closes `hole` by clipping its sharpest ear first.
 fn close_by_ears(
     mesh: &mut SurfaceMesh,
     edges: &mut EdgeCounts,
     hole: Vec<u32>,
-    samples: &[Point3],
-    normals: &[Vec3],
+    nearest: &NearestSample,
 ) {
     let n = hole
         .iter()
@@ -428,7 +442,7 @@ fn close_by_ears(
         let Some(k) = ear else {
             // No ear can be clipped without an edge in three triangles:
             // a fan from a new centre vertex (its edges are new).
-            close_by_fan(mesh, edges, &hole, samples, normals);
+            close_by_fan(mesh, edges, &hole, nearest);
             return;
         };
         let f = [hole[(k + m - 1) % m], hole[k], hole[(k + 1) % m]];
@@ -446,8 +460,7 @@ fn close_by_fan(
     mesh: &mut SurfaceMesh,
     edges: &mut EdgeCounts,
     hole: &[u32],
-    samples: &[Point3],
-    normals: &[Vec3],
+    nearest: &NearestSample,
 ) {
     let mut sorted = hole.to_vec();
     sorted.sort_unstable();
@@ -459,12 +472,8 @@ fn close_by_fan(
         return;
     }
     let mut c = centroid(&mesh.vertices, hole);
-    if let Some(s) = (0..samples.len()).min_by(|&a, &b| {
-        (samples[a] - c)
-            .norm_squared()
-            .total_cmp(&(samples[b] - c).norm_squared())
-    }) {
-        c -= normals[s] * normals[s].dot(&(c - samples[s]));
+    if let Some((sample, normal)) = nearest(&c) {
+        c -= normal * normal.dot(&(c - sample));
     }
     let n = hole
         .iter()

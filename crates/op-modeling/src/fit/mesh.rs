@@ -227,11 +227,27 @@ pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 
     };
     // Each sample on its own: in parallel, the same at any thread count.
     let nearest = |p: &Point3| {
+        // A triangle whose bounding box is no nearer than the best so far
+        // cannot be nearer (its own cell first, where the nearest
+        // usually is).
         let best = grids
             .iter()
             .flat_map(|g| g.near(p))
-            .map(|t| tri_distance(p, t))
-            .fold(Real::INFINITY, Real::min);
+            .fold(Real::INFINITY, |best, t| {
+                let f = faces[t];
+                let [a, b, c] = f.map(|v| &vertices[v as usize]);
+                let outside = (0..3)
+                    .map(|k| {
+                        let (lo, hi) = (a[k].min(b[k]).min(c[k]), a[k].max(b[k]).max(c[k]));
+                        (lo - p[k]).max(p[k] - hi).max(0.0)
+                    })
+                    .fold(0.0, |s, d| s + d * d);
+                if outside >= best * best {
+                    best
+                } else {
+                    best.min(point_triangle_distance(p, a, b, c))
+                }
+            });
         // Exact when no triangle outside the cells looked at can be nearer
         // (each grid's bound is a third of its cell, the small one's the
         // lesser); otherwise check all.
@@ -301,9 +317,11 @@ impl Bins {
     fn near(&self, p: &Point3) -> impl Iterator<Item = usize> + '_ {
         let k = key(&p.coords, self.cell);
         let empty = self.binned.is_empty();
+        // Cell 13 (offset 0, 0, 0) first.
         (0..27)
             .filter(move |_| !empty)
             .flat_map(move |n| {
+                let n = (n + 13) % 27;
                 let d = [n % 3, (n / 3) % 3, n / 9].map(|x| x as i64 - 1);
                 let at = [0, 1, 2].map(|j| k[j].saturating_add(d[j]));
                 self.runs

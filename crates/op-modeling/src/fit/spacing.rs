@@ -85,6 +85,10 @@ impl Knn {
     }
 }
 
+/// Candidates [`Nearest::nearest_to`] takes from the tree: more than can
+/// tie with the nearest within the last bit of a distance.
+const CANDIDATES: usize = 8;
+
 /// Nearest-neighbour queries over points (kiddo's immutable k-d tree).
 pub(crate) struct Nearest<'a> {
     points: &'a [Point3],
@@ -102,6 +106,25 @@ impl<'a> Nearest<'a> {
     /// The points the tree is built over.
     pub(crate) fn points(&self) -> &'a [Point3] {
         self.points
+    }
+
+    /// The point nearest to `q` (the first by index among equally near),
+    /// by the exact squared distance `(p - q).norm_squared()`: the same
+    /// point as a scan of them all, from the tree's [`CANDIDATES`] nearest
+    /// (its own distances may differ from these in the last bit); `None`
+    /// when there are none.
+    pub(crate) fn nearest_to(&self, q: &Point3) -> Option<usize> {
+        let want = NonZeroUsize::new(CANDIDATES.min(self.points.len()))?;
+        self.tree
+            .query(&[q.x, q.y, q.z])
+            .nearest_n::<SquaredEuclidean<Real>>(want)
+            .execute()
+            .into_iter()
+            .map(|r| r.item as usize)
+            .min_by(|&a, &b| {
+                let d = |j: usize| (self.points[j] - q).norm_squared();
+                d(a).total_cmp(&d(b)).then(a.cmp(&b))
+            })
     }
 
     /// The `k` nearest points to `points[i]` other than itself (fewer when
@@ -212,6 +235,36 @@ pub(super) fn first_ring_mean(points: &[Point3], ring: Real) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`Nearest::nearest_to`] picks the point a scan of them all picks
+    /// (the first of equally near ones), for queries on, near and far
+    /// from a lattice with repeated distances.
+    #[test]
+    fn nearest_to_is_the_first_nearest_of_a_scan() {
+        let pts: Vec<Point3> = (0..1000)
+            .map(|k| Point3::new((k % 10) as Real, ((k / 10) % 10) as Real, (k / 100) as Real))
+            .collect();
+        let tree = Nearest::new(&pts).unwrap();
+        for k in 0..500 {
+            let t = k as Real;
+            // Every fourth query is a lattice point or a midpoint (ties).
+            let q = match k % 4 {
+                0 => Point3::new((k % 9) as Real + 0.5, (k % 7) as Real, 3.0),
+                1 => pts[k * 2],
+                _ => Point3::new(
+                    (t * 0.37).sin() * 12.0,
+                    (t * 0.11).cos() * 9.0,
+                    t * 0.05 - 5.0,
+                ),
+            };
+            let scan = (0..pts.len()).min_by(|&a, &b| {
+                (pts[a] - q)
+                    .norm_squared()
+                    .total_cmp(&(pts[b] - q).norm_squared())
+            });
+            assert_eq!(tree.nearest_to(&q), scan, "at {q:?}");
+        }
+    }
 
     #[test]
     fn median_spacing_of_a_grid() {
