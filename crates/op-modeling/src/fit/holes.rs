@@ -58,7 +58,7 @@ pub(super) fn fill_holes(
     let mut closed = 0;
     // The samples' tree, built for the first fan (a scan of every sample
     // per fan made closing holes quadratic: 1,000,000 random samples of
-    // the torus spent most of their holes' 14 s there).
+    // the torus spent about 4 s of their holes' 14 s there).
     let tree = std::cell::OnceCell::new();
     let nearest = |c: &Point3| {
         tree.get_or_init(|| Nearest::new(samples))

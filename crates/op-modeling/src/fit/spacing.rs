@@ -85,8 +85,9 @@ impl Knn {
     }
 }
 
-/// Candidates [`Nearest::nearest_to`] takes from the tree: more than can
-/// tie with the nearest within the last bit of a distance.
+/// Candidates [`Nearest::nearest_to`] takes from the tree: the corners of
+/// a lattice cell about its centre, more than tie with the nearest within
+/// the last bit of a distance on scattered data.
 const CANDIDATES: usize = 8;
 
 /// Nearest-neighbour queries over points (kiddo's immutable k-d tree).
@@ -109,10 +110,11 @@ impl<'a> Nearest<'a> {
     }
 
     /// The point nearest to `q` (the first by index among equally near),
-    /// by the exact squared distance `(p - q).norm_squared()`: the same
-    /// point as a scan of them all, from the tree's [`CANDIDATES`] nearest
-    /// (its own distances may differ from these in the last bit); `None`
-    /// when there are none.
+    /// by the exact squared distance `(p - q).norm_squared()`, from the
+    /// tree's [`CANDIDATES`] nearest (its own distances may differ from
+    /// these in the last bit): the point a scan of them all picks unless
+    /// more than [`CANDIDATES`] points tie with it; `None` when there are
+    /// none.
     pub(crate) fn nearest_to(&self, q: &Point3) -> Option<usize> {
         let want = NonZeroUsize::new(CANDIDATES.min(self.points.len()))?;
         self.tree
