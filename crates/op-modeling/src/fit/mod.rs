@@ -13,8 +13,9 @@
 //! radius 1e-100 or 1e155 gives the unit sphere's mesh, scaled). The mesh
 //! is triangulated and measured at unit spacing and mapped back.
 //!
-//! 0. *Outliers and noise*: samples off their neighbours' surface or
-//!    isolated in space are dropped (`outliers.rs`: statistical outlier
+//! 0. *Outliers and noise*: samples off their neighbours' surface, alone
+//!    above a smooth patch of it or isolated in space are dropped
+//!    (`outliers.rs`: statistical outlier
 //!    removal, Rusu et al. 2008, with robust thresholds that keep uneven
 //!    density, sharp edges and thin parts; [`FitParams::drop_outliers`],
 //!    [`Fit::dropped_outliers`]); the rest are checked and mapped anew
