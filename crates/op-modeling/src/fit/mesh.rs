@@ -184,12 +184,14 @@ fn rms_and_max(d: &[Real]) -> (Real, Real) {
 /// The triangles are binned by their centroids in grids ([`Bins`]): most
 /// in a grid of the longest edge of all but the longest hundredth
 /// ([`SMALL_SHARE`]), the rest (the fans that close holes, a few times
-/// longer) in a grid of the longest edge of all. A sample looks in its 27
-/// cells of each; what it finds is exact when it is within a third of the
-/// small grid's cell (module docs of [`Bins`]), and otherwise it checks
-/// every triangle. One grid of the longest edge (as before) made each
-/// sample test a few hundred triangles on a million random samples of
-/// the torus (cells 4.3 times the median longest edge: 41 s of its 92 s).
+/// longer) in a grid of the longest edge of all. A sample looks through
+/// each grid's cells in shells about its own until no triangle binned
+/// farther out can be nearer than the nearest found ([`Bins::bound`]):
+/// exact, and a sample off the mesh (noise, an outlier kept, a hole left
+/// open) costs shells, not every triangle. One grid of the longest edge
+/// made each sample test a few hundred triangles on a million random
+/// samples of the torus (cells 4.3 times the median longest edge: 41 s of
+/// its 92 s).
 pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 3]]) -> Vec<Real> {
     if faces.is_empty() {
         return vec![Real::INFINITY; samples.len()];
@@ -216,48 +218,48 @@ pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 
         Bins::new(vertices, faces, small, cell_of),
         Bins::new(vertices, faces, big, cell_of),
     ];
-    let tri_distance = |p: &Point3, t: usize| {
-        let f = faces[t];
-        point_triangle_distance(
-            p,
-            &vertices[f[0] as usize],
-            &vertices[f[1] as usize],
-            &vertices[f[2] as usize],
-        )
+    // A triangle whose bounding box is no nearer than the best so far
+    // cannot be nearer.
+    let closer = |p: &Point3, best: Real, t: usize| {
+        let [a, b, c] = faces[t].map(|v| &vertices[v as usize]);
+        let outside = (0..3)
+            .map(|k| {
+                let (lo, hi) = (a[k].min(b[k]).min(c[k]), a[k].max(b[k]).max(c[k]));
+                (lo - p[k]).max(p[k] - hi).max(0.0)
+            })
+            .fold(0.0, |s, d| s + d * d);
+        if outside >= best * best {
+            best
+        } else {
+            best.min(point_triangle_distance(p, a, b, c))
+        }
     };
     // Each sample on its own: in parallel, the same at any thread count.
+    // Each grid's cells in shells about the sample's (its own cell
+    // first), until no triangle binned farther out can be nearer
+    // ([`Bins::bound`]); past as many cells as the grid has triangles,
+    // all of them.
     let nearest = |p: &Point3| {
-        // A triangle whose bounding box is no nearer than the best so far
-        // cannot be nearer (its own cell first, where the nearest
-        // usually is).
-        let best = grids
-            .iter()
-            .flat_map(|g| g.near(p))
-            .fold(Real::INFINITY, |best, t| {
-                let f = faces[t];
-                let [a, b, c] = f.map(|v| &vertices[v as usize]);
-                let outside = (0..3)
-                    .map(|k| {
-                        let (lo, hi) = (a[k].min(b[k]).min(c[k]), a[k].max(b[k]).max(c[k]));
-                        (lo - p[k]).max(p[k] - hi).max(0.0)
-                    })
-                    .fold(0.0, |s, d| s + d * d);
-                if outside >= best * best {
-                    best
-                } else {
-                    best.min(point_triangle_distance(p, a, b, c))
+        let mut best = Real::INFINITY;
+        for g in &grids {
+            for r in 0i64.. {
+                if g.binned.is_empty() {
+                    break;
                 }
-            });
-        // Exact when no triangle outside the cells looked at can be nearer
-        // (each grid's bound is a third of its cell, the small one's the
-        // lesser); otherwise check all.
-        if best > grids[0].cell / 3.0 {
-            (0..faces.len())
-                .map(|t| tri_distance(p, t))
-                .fold(best, Real::min)
-        } else {
-            best
+                if (2 * r + 1).pow(3) as usize > g.binned.len() {
+                    best = g
+                        .binned
+                        .iter()
+                        .fold(best, |b, &(_, t)| closer(p, b, t as usize));
+                    break;
+                }
+                best = g.shell(p, r).fold(best, |b, t| closer(p, b, t));
+                if best <= g.bound(r) {
+                    break;
+                }
+            }
         }
+        best
     };
     samples.par_iter().map(nearest).collect()
 }
@@ -267,10 +269,10 @@ pub fn sample_distances(samples: &[Point3], vertices: &[Point3], faces: &[[u32; 
 const SMALL_SHARE: Real = 0.99;
 
 /// Triangles binned by the cell of their centroid in a grid of cell
-/// `cell`, at least the longest edge of each. A triangle whose centroid
-/// lies outside the 27 cells about a point's cell is at least `cell` from
-/// the point and its own points within two thirds of its longest edge
-/// (at most `cell`) of its centroid: at least `cell / 3` from the point.
+/// `cell`, at least the longest edge of each: a triangle's points lie
+/// within two thirds of its longest edge (at most `cell`) of its
+/// centroid, which bounds how near a triangle binned far from a point can
+/// be ([`Bins::bound`]).
 struct Bins {
     cell: Real,
     /// `(cell, triangle)`, sorted.
@@ -312,23 +314,30 @@ impl Bins {
         Bins { cell, binned, runs }
     }
 
-    /// The triangles binned in the 27 cells about `p`'s (none when the
-    /// grid is empty).
-    fn near(&self, p: &Point3) -> impl Iterator<Item = usize> + '_ {
+    /// The triangles binned in the cells `r` cells (Chebyshev) from
+    /// `p`'s: its own cell for `r = 0`.
+    fn shell(&self, p: &Point3, r: i64) -> impl Iterator<Item = usize> + '_ {
         let k = key(&p.coords, self.cell);
-        let empty = self.binned.is_empty();
-        // Cell 13 (offset 0, 0, 0) first.
-        (0..27)
-            .filter(move |_| !empty)
-            .flat_map(move |n| {
-                let n = (n + 13) % 27;
-                let d = [n % 3, (n / 3) % 3, n / 9].map(|x| x as i64 - 1);
+        let side = -r..=r;
+        side.clone()
+            .flat_map(move |z| side.clone().map(move |y| (y, z)))
+            .flat_map(move |(y, z)| (-r..=r).map(move |x| [x, y, z]))
+            .filter(move |d| d.iter().any(|c| c.abs() == r))
+            .flat_map(move |d| {
                 let at = [0, 1, 2].map(|j| k[j].saturating_add(d[j]));
                 self.runs
                     .get(&at)
                     .map_or(&[][..], |&(a, b)| &self.binned[a..b])
             })
             .map(|&(_, t)| t as usize)
+    }
+
+    /// A lower bound on the distance from a point to any triangle binned
+    /// outside the shells `0..=r` about its cell: their centroids lie at
+    /// least `r` cells away, their points within two thirds of a cell of
+    /// the centroid.
+    fn bound(&self, r: i64) -> Real {
+        (r as Real - 2.0 / 3.0) * self.cell
     }
 }
 
