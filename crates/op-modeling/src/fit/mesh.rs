@@ -181,12 +181,12 @@ fn rms_and_max(d: &[Real]) -> (Real, Real) {
 /// Distance from each of `samples` to the triangles (infinite when there is
 /// no triangle).
 ///
-/// The triangles are binned by their centroids in grids ([`Bins`]): most
+/// The triangles are binned by their centroids in grids (`Bins`): most
 /// in a grid of the longest edge of all but the longest hundredth
-/// ([`SMALL_SHARE`]), the rest (the fans that close holes, a few times
+/// (`SMALL_SHARE`), the rest (the fans that close holes, a few times
 /// longer) in a grid of the longest edge of all. A sample looks through
 /// each grid's cells in shells about its own until no triangle binned
-/// farther out can be nearer than the nearest found ([`Bins::bound`]):
+/// farther out can be nearer than the nearest found (`Bins::bound`):
 /// exact, and a sample off the mesh (noise, an outlier kept, a hole left
 /// open) costs shells, not every triangle. One grid of the longest edge
 /// made each sample test a few hundred triangles on a million random
