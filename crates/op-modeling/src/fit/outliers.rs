@@ -210,15 +210,45 @@ fn alone_above_its_surface(nearest: &Nearest, i: usize, gap: Real) -> bool {
     if row.len() < WIDE_NEIGHBOURS {
         return false;
     }
-    let (mean, cov) = covariance(row.iter().map(|&(_, j)| &points[j]));
-    let eig = cov.symmetric_eigen();
-    let least = (0..3)
-        .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
-        .unwrap_or(0);
-    let normal: Vec3 = eig.eigenvectors.column(least).into_owned();
-    let spread = (eig.eigenvalues[least].max(0.0) / row.len() as Real).sqrt();
-    let offset = normal.dot(&(points[i].coords - mean)).abs();
+    let plane = Plane::of(row.iter().map(|&(_, j)| &points[j]));
+    let spread = (plane.least.max(0.0) / row.len() as Real).sqrt();
+    let offset = plane.offset(&points[i]);
     offset > NEAR * gap && offset > ABOVE_SPREAD * spread
+}
+
+/// The least-squares plane of some points by principal component
+/// analysis (Hoppe et al. 1992): through their mean, normal to their least
+/// principal direction.
+struct Plane {
+    mean: Vec3,
+    normal: Vec3,
+    /// The least principal variance times the number of points (the
+    /// covariance is a sum).
+    least: Real,
+    /// The sum of the principal variances (negative round-off as 0), in
+    /// the same units.
+    total: Real,
+}
+
+impl Plane {
+    fn of<'a>(points: impl Iterator<Item = &'a Point3> + Clone) -> Plane {
+        let (mean, cov) = covariance(points);
+        let eig = cov.symmetric_eigen();
+        let least = (0..3)
+            .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
+            .unwrap_or(0);
+        Plane {
+            mean,
+            normal: eig.eigenvectors.column(least).into_owned(),
+            least: eig.eigenvalues[least],
+            total: eig.eigenvalues.iter().map(|e| e.max(0.0)).sum(),
+        }
+    }
+
+    /// The distance of `p` from the plane.
+    fn offset(&self, p: &Point3) -> Real {
+        self.normal.dot(&(p.coords - self.mean)).abs()
+    }
 }
 
 /// The figures of a point's neighbourhood the tests use.
@@ -242,21 +272,15 @@ impl Neighbourhood {
         let p = points[i];
         let mean_distance =
             row.iter().map(|&j| (points[j] - p).norm()).sum::<Real>() / row.len() as Real;
-        let (mean, cov) = covariance(row.iter().map(|&j| &points[j]));
-        let eig = cov.symmetric_eigen();
-        let least = (0..3)
-            .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
-            .unwrap_or(0);
-        let normal: Vec3 = eig.eigenvectors.column(least).into_owned();
-        let total = eig.eigenvalues.iter().map(|e| e.max(0.0)).sum::<Real>();
-        let variation = if total > 0.0 {
-            eig.eigenvalues[least].max(0.0) / total
+        let plane = Plane::of(row.iter().map(|&j| &points[j]));
+        let variation = if plane.total > 0.0 {
+            plane.least.max(0.0) / plane.total
         } else {
             0.0
         };
         Neighbourhood {
             mean_distance,
-            offset: normal.dot(&(p.coords - mean)).abs(),
+            offset: plane.offset(&p),
             variation,
         }
     }
