@@ -21,7 +21,7 @@ use std::process::Command;
 
 use std::fmt::Write as _;
 
-use crate::measure::{lammps, ours};
+use crate::measure::{lammps, ours, parse};
 use crate::sections::{median, spread};
 use crate::{Measure, Res, CELLS, STEPS};
 
@@ -198,13 +198,8 @@ fn gromacs(dir: &Path, tpr: &Path, threads: usize) -> Res<Measure> {
     let [cpu, wall, ..] = times[..] else {
         return Err("GROMACS' timing line has no core and wall time".into());
     };
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let mut m: Measure = stderr
-        .lines()
-        .filter_map(|l| l.strip_prefix("maxrss_kb="))
-        .filter_map(|v| v.trim().parse().ok())
-        .map(|v| ("maxrss_kb".to_string(), v))
-        .collect();
+    // `maxrss_kb` from `/usr/bin/time`, as for LAMMPS.
+    let mut m = parse(&String::from_utf8_lossy(&out.stderr));
     m.insert("seconds".into(), wall);
     m.insert("cpu".into(), cpu);
     m.insert(
@@ -214,17 +209,14 @@ fn gromacs(dir: &Path, tpr: &Path, threads: usize) -> Res<Measure> {
     Ok(m)
 }
 
-/// The line of GROMACS' log `dir/md.1.log` that starts with `key`, less
-/// the key: what it says of itself (version, precision, SIMD, kernels).
-fn gromacs_says(dir: &Path, key: &str) -> Option<String> {
-    std::fs::read_to_string(dir.join("md.1.log"))
-        .ok()?
-        .lines()
-        .find_map(|l| {
-            l.trim_start()
-                .strip_prefix(key)
-                .map(|r| r.trim().to_string())
-        })
+/// The line of GROMACS' log `log` that starts with `key`, less the key:
+/// what it says of itself (version, precision, SIMD, kernels).
+fn gromacs_says(log: &str, key: &str) -> Option<String> {
+    log.lines().find_map(|l| {
+        l.trim_start()
+            .strip_prefix(key)
+            .map(|r| r.trim().to_string())
+    })
 }
 
 /// Pairs of atoms of the `.gro` frame `path` nearer than `cut` (nm) in its
@@ -306,7 +298,9 @@ pub(crate) fn fastest_section(runs: &FastestRuns, dir: &Path, lammps_pairs: f64)
         "\n## The fastest CPU pair codes: LAMMPS `lj/cut/opt` and GROMACS (issue 37)\n"
     )?;
     let gmx = runs[0].first().is_some_and(|r| r.2.is_some());
-    let says = |key: &str| gromacs_says(dir, key).unwrap_or_else(|| "unknown".into());
+    // The 1-thread run's log, read once for what GROMACS says of itself.
+    let log = std::fs::read_to_string(dir.join("md.1.log")).unwrap_or_default();
+    let says = |key: &str| gromacs_says(&log, key).unwrap_or_else(|| "unknown".into());
     writeln!(
         md,
         "Spacing only, the same block from the same dumped state, interleaved (ours, then \

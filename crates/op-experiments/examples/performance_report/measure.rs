@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use crate::{Measure, Res, Runs, CELLS, STEPS, WORKS};
 
-fn parse(line: &str) -> Measure {
+pub(crate) fn parse(line: &str) -> Measure {
     line.split_whitespace()
         .filter_map(|kv| kv.split_once('='))
         .filter_map(|(k, v)| Some((k.to_string(), v.parse().ok()?)))
