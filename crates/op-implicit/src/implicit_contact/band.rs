@@ -120,28 +120,119 @@ pub(super) fn crossing_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, u
 /// `a` and `b` can reach ([`overlapped`]), in increasing node and axis:
 /// the edges of the contact energy's line integrals. A block both objects
 /// reach is sampled only when both fields' upper bounds on it reach the
-/// iso value ([`box_bounds`]), and B is splatted only where A's splatted
-/// values pass it somewhere.
+/// iso value ([`box_bounds`]); A is splatted, and B only on the nodes
+/// where A passes it and their neighbours, when its bound there reaches
+/// it too: skins near each other but apart cost one splat.
 pub(super) fn overlap_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
     let arch = pulp::Arch::new();
     edges_in_active_blocks(grid, a, b, |k, lists_a, lists_b| {
         let block = grid.block(k);
         let (lo, hi) = block.bounds(grid);
-        let (list_a, list_b) = (lists_a.of(k), lists_b.of(k));
+        let (list_a, list_b) = near_each_other((a, lists_a.of(k)), (b, lists_b.of(k)), grid.h);
         let reaches = |field: &Field, list: &[u32]| {
             let (_, upper) = box_bounds(field, (&lo, &hi), list);
             upper + margin(upper) >= ISO
         };
-        if !(reaches(a, list_a) && reaches(b, list_b)) {
+        if list_a.is_empty() || !(reaches(a, &list_a) && reaches(b, &list_b)) {
             return Vec::new();
         }
-        let (va, _) = splat_block(a, grid, &block, list_a, arch);
-        if va.iter().all(|&v| v <= ISO) {
+        let (va, _) = splat_block(a, grid, &block, &list_a, arch);
+        // An edge passing the test has an end where A is positive: it lies
+        // in the box of those nodes widened by one node, where B is
+        // bounded, then splatted.
+        let Some(part) = positive_part(&block, &va) else {
+            return Vec::new();
+        };
+        let (lo, hi) = part.bounds(grid);
+        let (_, upper) = box_bounds(b, (&lo, &hi), &list_b);
+        if upper + margin(upper) < ISO {
             return Vec::new();
         }
-        let (vb, _) = splat_block(b, grid, &block, list_b, arch);
-        block_edges(grid, &va, &vb, &block, overlapped)
+        let va = restricted(&block, &va, &part);
+        let (vb, _) = splat_block(b, grid, &part, &list_b, arch);
+        block_edges(grid, &va, &vb, &part, overlapped)
     })
+}
+
+/// The most pairs of primitives [`near_each_other`] tests in a block;
+/// beyond, the lists are kept whole (the splats cost more than the pairs
+/// would save).
+const NEAR_PAIRS: usize = 1 << 14;
+
+/// A's primitives of `list_a` whose bounding sphere comes within `h` of
+/// one of `list_b`'s, and B's of `list_b` within `h` of one of those,
+/// increasing: the fields they sum are exact at both ends of every edge
+/// with A above the iso value at an end and B at an end (such an end lies
+/// in a kept sphere of each, the edge is `h` long, and every sphere
+/// reaching either end comes within `h` of those), and an edge passes
+/// [`overlapped`] with them exactly when it passes with the whole fields
+/// (a pass needs such ends). Two skins near each other but apart keep
+/// nothing.
+fn near_each_other(
+    (a, list_a): (&Field, &[u32]),
+    (b, list_b): (&Field, &[u32]),
+    h: Real,
+) -> (Vec<u32>, Vec<u32>) {
+    if list_a.len() * list_b.len() > NEAR_PAIRS {
+        return (list_a.to_vec(), list_b.to_vec());
+    }
+    // A hundredth more than the edge's length: kept spheres are a superset.
+    let pad = 1.01 * h;
+    let sphere = |field: &Field, i: u32| field.primitives()[i as usize].bounding_sphere();
+    let near = |(c, r): (Point3, Real), (d, s): (Point3, Real)| {
+        (c - d).norm_squared() < (r + s + pad) * (r + s + pad)
+    };
+    let kept_a: Vec<u32> = list_a
+        .iter()
+        .copied()
+        .filter(|&i| list_b.iter().any(|&j| near(sphere(a, i), sphere(b, j))))
+        .collect();
+    let kept_b: Vec<u32> = list_b
+        .iter()
+        .copied()
+        .filter(|&j| kept_a.iter().any(|&i| near(sphere(a, i), sphere(b, j))))
+        .collect();
+    (kept_a, kept_b)
+}
+
+/// The smallest block within `block` holding every node where `values`
+/// (x fastest) exceed the iso value and their neighbours along each axis:
+/// every edge with a positive end; `None` when there is none.
+fn positive_part(block: &Block, values: &[Real]) -> Option<Block> {
+    let nodes = block.nodes();
+    let (mut lo, mut hi) = ([usize::MAX; 3], [0; 3]);
+    for (i, _) in values.iter().enumerate().filter(|(_, &v)| v > ISO) {
+        let here = [
+            i % nodes[0],
+            (i / nodes[0]) % nodes[1],
+            i / (nodes[0] * nodes[1]),
+        ];
+        for k in 0..3 {
+            lo[k] = lo[k].min(here[k].saturating_sub(1));
+            hi[k] = hi[k].max((here[k] + 1).min(nodes[k] - 1));
+        }
+    }
+    // A node and a neighbour span a cell along each axis: the part has
+    // at least one cell along each.
+    (lo[0] != usize::MAX).then(|| Block {
+        start: [0, 1, 2].map(|k| block.start[k] + lo[k]),
+        cells: [0, 1, 2].map(|k| hi[k] - lo[k]),
+    })
+}
+
+/// The values of `block` (x fastest) at the nodes of `part`, a block
+/// within it.
+fn restricted(block: &Block, values: &[Real], part: &Block) -> Vec<Real> {
+    let (nodes, sub) = (block.nodes(), part.nodes());
+    let offset = [0, 1, 2].map(|k| part.start[k] - block.start[k]);
+    let mut out = Vec::with_capacity(part.node_count());
+    for z in 0..sub[2] {
+        for y in 0..sub[1] {
+            let row = offset[0] + nodes[0] * (offset[1] + y + nodes[1] * (offset[2] + z));
+            out.extend_from_slice(&values[row..row + sub[0]]);
+        }
+    }
+    out
 }
 
 /// The edges `per_block` lists in the blocks of `grid` that both objects'
@@ -209,6 +300,25 @@ pub(super) fn block_edges(
 /// [`crossing_edges`].
 #[cfg(test)]
 pub(super) fn crossing_edges_dense(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
+    dense_edges(grid, a, b, crossed)
+}
+
+/// Every overlapped edge of the grid, from every node: the oracle of
+/// [`overlap_edges`].
+#[cfg(test)]
+pub(super) fn overlap_edges_dense(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, usize)> {
+    dense_edges(grid, a, b, overlapped)
+}
+
+/// The edges of the grid whose ends' excesses pass `test`, from every
+/// node's evaluated field values.
+#[cfg(test)]
+fn dense_edges(
+    grid: &Grid,
+    a: &Field,
+    b: &Field,
+    test: impl Fn((Real, Real), (Real, Real)) -> bool,
+) -> Vec<(usize, usize)> {
     let n: usize = grid.dims.iter().product();
     let excess: Vec<(Real, Real)> = (0..n)
         .map(|i| {
@@ -221,7 +331,7 @@ pub(super) fn crossing_edges_dense(grid: &Grid, a: &Field, b: &Field) -> Vec<(us
     for (i, &e) in excess.iter().enumerate() {
         let ijk = coords(grid, i);
         for k in 0..3 {
-            if ijk[k] + 1 < grid.dims[k] && crossed(e, excess[i + strides[k]]) {
+            if ijk[k] + 1 < grid.dims[k] && test(e, excess[i + strides[k]]) {
                 edges.push((i, k));
             }
         }
