@@ -11,7 +11,11 @@
 //! scaled by `1/h`: the material constants are those of a unit-spacing
 //! scene, and data of any finite scale and offset fit alike (a sphere of
 //! radius 1e-100 or 1e155 gives the unit sphere's mesh, scaled). The mesh
-//! is triangulated and measured at unit spacing and mapped back.
+//! is triangulated and measured at unit spacing and mapped back. The
+//! samples are taken in Morton order (`locality.rs`): every stage queries
+//! each sample's neighbours in sample order, and neighbours in space are
+//! then neighbours in memory (a million random torus samples: 63 s in
+//! their given order, 37 s in this one).
 //!
 //! 0. *Outliers and noise*: samples off their neighbours' surface, alone
 //!    above a smooth patch of it or isolated in space are dropped
@@ -162,6 +166,7 @@ mod boundary;
 mod denoise;
 mod holes;
 mod input;
+mod locality;
 mod mesh;
 mod neighbourhood;
 mod noise;
@@ -374,6 +379,9 @@ pub fn fit_with_stages(
 ) -> Result<(Fit, StageSeconds), FitError> {
     params.validate()?;
     let mut stages = Stages::start();
+    // Neighbours in space next to each other in memory (`locality.rs`).
+    let ordered = locality::in_curve_order(data);
+    let data = ordered.as_ref().unwrap_or(data);
     let checked = Input::check(data)?;
     let (data, dropped_outliers, checked) = if params.drop_outliers {
         without_outliers(data, checked)?
