@@ -308,8 +308,8 @@ impl PosedPrimitive {
     /// The map from world points to the primitive's frame, `x -> M (x -
     /// t)`, as the rotation matrix `M` and the translation `t`: one matrix
     /// product per point where [`PosedPrimitive::field`] rotates by a
-    /// quaternion, for fields sampled at many points
-    /// ([`PosedPrimitive::field_in_frame`]).
+    /// quaternion, for fields sampled at many points (the polygonizer's
+    /// splat).
     #[inline]
     pub(crate) fn world_to_frame(&self) -> (nalgebra::Matrix3<Real>, Vec3) {
         let m = self
@@ -321,10 +321,17 @@ impl PosedPrimitive {
         (m, self.pose.translation.vector)
     }
 
+    /// `1 / R^2`, `R` the support radius.
+    #[inline]
+    pub(crate) fn inv_radius2(&self) -> Real {
+        self.inv_radius2
+    }
+
     /// The field at the point `local` of the primitive's frame
     /// ([`PosedPrimitive::world_to_frame`]): [`PosedPrimitive::field`]
-    /// without the world transform, to round-off.
-    #[inline]
+    /// without the world transform, to round-off. The oracle of the
+    /// polygonizer's splat, which evaluates it a row at a time.
+    #[cfg(test)]
     pub(crate) fn field_in_frame(&self, local: &Vec3) -> Real {
         let (d2, _) = self.shape.distance2_and_gradient(local);
         self.weight * kernel::value_sq(d2 * self.inv_radius2)

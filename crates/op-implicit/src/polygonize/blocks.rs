@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use crate::field::{Field, ScalarField};
 use crate::grid::{bucket, CellBox};
 use crate::kernel::value_sq;
-use crate::primitives::Skeleton;
+use crate::primitives::{PosedPrimitive, Skeleton};
 
 /// Cells per block along x, y, z: long along x, the rows the primitives
 /// are splatted along, so a row's setup is shared by more nodes.
@@ -408,26 +408,9 @@ fn splat(s: Splat<'_>) -> usize {
         if !matches!(prim.shape(), Skeleton::Point) {
             // Other skeletons: the nodes of the bounding box's rows that
             // meet the bounding sphere, mapped into the primitive's frame
-            // by one matrix product each.
-            let (m, t) = prim.world_to_frame();
-            for (k, z) in zs.iter().enumerate().take(k1 + 1).skip(k0) {
-                let dz = z - c.z;
-                if dz * dz >= r2 {
-                    continue;
-                }
-                for (j, y) in ys.iter().enumerate().take(j1 + 1).skip(j0) {
-                    let dy = y - c.y;
-                    if dy * dy + dz * dz >= r2 {
-                        continue;
-                    }
-                    let row = (k * ny + j) * nx;
-                    for (v, x) in values[row + i0..=row + i1].iter_mut().zip(&xs[i0..=i1]) {
-                        let local = m * (Vec3::new(*x, *y, *z) - t);
-                        *v += prim.field_in_frame(&local);
-                    }
-                    evaluations += i1 + 1 - i0;
-                }
-            }
+            // (`skeleton_rows`).
+            evaluations +=
+                skeleton_rows(prim, [xs, ys, zs], (c, r), [i0, i1, j0, j1, k0, k1], values);
             continue;
         }
         // A point primitive: w f(s), s = |p - c|^2 / r^2, over the nodes of
@@ -461,6 +444,108 @@ fn splat(s: Splat<'_>) -> usize {
                 }
                 evaluations += dx2.len();
             }
+        }
+    }
+    evaluations
+}
+
+/// The field of `prim`, a skeleton other than a point, added to the
+/// nodes `i0..=i1` of the rows `(j, k)` in `j0..=j1`, `k0..=k1` of a
+/// block (node coordinates `xs`, `ys`, `zs`; values x fastest) that meet
+/// its bounding sphere `(c, r)`; returns the nodes evaluated. Each node is
+/// mapped into the primitive's frame by the same operations, in the same
+/// order, as `m * (p - t)` and the skeleton's squared distance and kernel
+/// evaluated at one point (`PosedPrimitive::field_in_frame`; the
+/// column products summed left to right, the clamp as a maximum and a
+/// minimum, the squared distance `(x^2 + y^2) + z^2`, the kernel without a
+/// branch), so the bits are those of evaluating each node alone, and the
+/// row loop has no branch and vectorizes.
+#[inline(always)]
+fn skeleton_rows(
+    prim: &PosedPrimitive,
+    [xs, ys, zs]: [&[Real]; 3],
+    (c, r): (Point3, Real),
+    [i0, i1, j0, j1, k0, k1]: [usize; 6],
+    values: &mut [Real],
+) -> usize {
+    match *prim.shape() {
+        Skeleton::Point => unreachable!("point primitives are splatted by `splat`"),
+        Skeleton::Segment { half_length: a } => rows(
+            prim,
+            [xs, ys, zs],
+            (c, r),
+            [i0, i1, j0, j1, k0, k1],
+            values,
+            |x, y, z| {
+                let dx = x - x.max(-a).min(a);
+                (dx * dx + y * y) + z * z
+            },
+        ),
+        Skeleton::Rectangle {
+            half_extents: [a, b],
+        } => rows(
+            prim,
+            [xs, ys, zs],
+            (c, r),
+            [i0, i1, j0, j1, k0, k1],
+            values,
+            |x, y, z| {
+                let (dx, dy) = (x - x.max(-a).min(a), y - y.max(-b).min(b));
+                (dx * dx + dy * dy) + z * z
+            },
+        ),
+        Skeleton::Ellipsoid { scales } => rows(
+            prim,
+            [xs, ys, zs],
+            (c, r),
+            [i0, i1, j0, j1, k0, k1],
+            values,
+            |x, y, z| {
+                let (qx, qy, qz) = (x / scales.x, y / scales.y, z / scales.z);
+                (qx * qx + qy * qy) + qz * qz
+            },
+        ),
+    }
+}
+
+/// [`skeleton_rows`] for the squared distance `d2` in the primitive's
+/// frame.
+#[inline(always)]
+fn rows(
+    prim: &PosedPrimitive,
+    [xs, ys, zs]: [&[Real]; 3],
+    (c, r): (Point3, Real),
+    [i0, i1, j0, j1, k0, k1]: [usize; 6],
+    values: &mut [Real],
+    d2: impl Fn(Real, Real, Real) -> Real,
+) -> usize {
+    let (nx, ny) = (xs.len(), ys.len());
+    let (m, t) = prim.world_to_frame();
+    let (w, inv, r2) = (prim.weight(), prim.inv_radius2(), r * r);
+    let mut evaluations = 0;
+    for (k, z) in zs.iter().enumerate().take(k1 + 1).skip(k0) {
+        let dz = z - c.z;
+        if dz * dz >= r2 {
+            continue;
+        }
+        let oz = z - t.z;
+        let from_z = [m[(0, 2)] * oz, m[(1, 2)] * oz, m[(2, 2)] * oz];
+        for (j, y) in ys.iter().enumerate().take(j1 + 1).skip(j0) {
+            let dy = y - c.y;
+            if dy * dy + dz * dz >= r2 {
+                continue;
+            }
+            let oy = y - t.y;
+            let from_y = [m[(0, 1)] * oy, m[(1, 1)] * oy, m[(2, 1)] * oy];
+            let row = (k * ny + j) * nx;
+            for (v, x) in values[row + i0..=row + i1].iter_mut().zip(&xs[i0..=i1]) {
+                let ox = x - t.x;
+                let local = |a: usize| (m[(a, 0)] * ox + from_y[a]) + from_z[a];
+                let s = d2(local(0), local(1), local(2)) * inv;
+                let f = 1.0 + s * (-22.0 / 9.0 + s * (17.0 / 9.0 - s * (4.0 / 9.0)));
+                *v += w * if s < 1.0 { f } else { 0.0 };
+            }
+            evaluations += i1 + 1 - i0;
         }
     }
     evaluations

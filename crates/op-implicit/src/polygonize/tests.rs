@@ -391,3 +391,82 @@ fn empty_field_and_bad_parameters() {
         Err(PolygonizeError::TooManyNodes { .. })
     ));
 }
+
+/// The splat of a skeleton other than a point gives each node the bits of
+/// mapping it alone into the primitive's frame (`m * (p - t)`) and
+/// evaluating its field there ([`PosedPrimitive::field_in_frame`]),
+/// summed in increasing primitive order: segments, rectangles and
+/// ellipsoids at random poses, weights and radii, over a block.
+#[test]
+fn skeleton_rows_are_each_node_alone_bit_for_bit() {
+    use crate::polygonize::blocks::{splat_block, Block, Grid};
+    let mut rng = op_test_support::Rng::new(5);
+    let mut primitives = Vec::new();
+    for i in 0..24u32 {
+        let local = rng.vec3(0.3);
+        let radius = rng.uniform(0.3, 1.0);
+        let shape = match i % 3 {
+            0 => Primitive::segment(-local, local, radius),
+            1 => Primitive::rectangle(
+                local,
+                rng.quat(3.0),
+                [rng.uniform(0.0, 0.4), rng.uniform(0.0, 0.4)],
+                radius,
+            ),
+            _ => Primitive::ellipsoid(
+                local,
+                rng.quat(3.0),
+                Vec3::new(
+                    rng.uniform(0.5, 1.5),
+                    rng.uniform(0.5, 1.5),
+                    rng.uniform(0.5, 1.5),
+                ),
+                radius,
+            ),
+        };
+        let posed = shape.with_weight(rng.uniform(0.5, 2.0)).posed(
+            i,
+            &Point3::from(rng.vec3(1.5)),
+            &rng.quat(3.0),
+        );
+        primitives.push(posed);
+    }
+    let field = Field::new(primitives);
+    let grid = Grid {
+        lo: Point3::new(-2.1, -2.05, -2.02),
+        h: 0.13,
+        dims: [34, 34, 34],
+    };
+    let block = Block {
+        start: [3, 5, 2],
+        cells: [16, 8, 8],
+    };
+    let list: Vec<u32> = (0..field.primitives().len() as u32).collect();
+    let (values, evaluations) = splat_block(&field, &grid, &block, &list, pulp::Arch::new());
+    assert!(evaluations > 2_000, "{evaluations} evaluations");
+    let nodes = block.nodes();
+    let mut nonzero = 0;
+    for k in 0..nodes[2] {
+        for j in 0..nodes[1] {
+            for i in 0..nodes[0] {
+                let p = grid.node(block.start[0] + i, block.start[1] + j, block.start[2] + k);
+                let mut expected = 0.0;
+                for prim in field.primitives() {
+                    let (c, r) = prim.bounding_sphere();
+                    if (p - c).norm_squared() < r * r {
+                        let (m, t) = prim.world_to_frame();
+                        expected += prim.field_in_frame(&(m * (p.coords - t)));
+                    }
+                }
+                let got = values[i + nodes[0] * (j + nodes[1] * k)];
+                assert_eq!(
+                    got.to_bits(),
+                    expected.to_bits(),
+                    "node ({i}, {j}, {k}): {got} vs {expected}"
+                );
+                nonzero += usize::from(got != 0.0);
+            }
+        }
+    }
+    assert!(nonzero > 500, "{nonzero} nodes reached");
+}
