@@ -138,6 +138,15 @@ impl Obstacle<'_> {
         }
     }
 
+    /// Whether `x` lies strictly inside (signed distance below 0; a point
+    /// on the surface is not): a containment test first, cheaper than the
+    /// signed distance, which is computed only for the points it keeps.
+    fn contains(&self, x: &Point3) -> bool {
+        self.shape
+            .contains_point(self.pose, Vector::new(x.x, x.y, x.z))
+            && self.signed(x).0 < 0.0
+    }
+
     /// Whether the ball of centre `c` and radius `r` may reach inside (a
     /// signed distance moves by at most the distance moved).
     fn may_reach_inside(&self, c: &Point3, r: Real) -> bool {
@@ -237,10 +246,10 @@ fn edges(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>) -> Vec<(usize, usi
     edges
 }
 
-/// Per node of `block` (values `values`, x fastest): `ISO - s`, `s` the
-/// obstacle's signed distance, at every node with `e > 0` there or at a
-/// neighbour along an axis, and 0 (outside, as far as the edges' test
-/// goes) elsewhere.
+/// Per node of `block` (values `values`, x fastest), the obstacle as a
+/// second field for the edges' test, which reads only its side of the iso
+/// value: above it (`ISO + 1`) at every node inside the obstacle with
+/// `e > 0` there or at a neighbour along an axis, below it (0) elsewhere.
 fn insides(grid: &Grid, block: &Block, values: &[Real], obstacle: &Obstacle<'_>) -> Vec<Real> {
     let nodes = block.nodes();
     let strides = [1, nodes[0], nodes[0] * nodes[1]];
@@ -258,7 +267,9 @@ fn insides(grid: &Grid, block: &Block, values: &[Real], obstacle: &Obstacle<'_>)
                     });
                 if needed {
                     let [a, b, c] = [0, 1, 2].map(|k| block.start[k] + here[k]);
-                    out[i] = ISO - obstacle.signed(&grid.node(a, b, c)).0;
+                    if obstacle.contains(&grid.node(a, b, c)) {
+                        out[i] = ISO + 1.0;
+                    }
                 }
             }
         }
@@ -342,17 +353,14 @@ fn edge_integral(
     // surface crosses it, a ray cast from the inner end, or, failing that,
     // the root of the signed distance.
     let inside = |t: Real| -obstacle.signed(&at(t)).0;
-    let (c0, c1) = (inside(0.0), inside(1.0));
-    let (lo, hi) = match (c0 > 0.0, c1 > 0.0) {
+    let root = || edge_root(&inside, inside(0.0), inside(1.0));
+    let (lo, hi) = match (obstacle.contains(&at(0.0)), obstacle.contains(&at(1.0))) {
         (true, true) => (0.0, 1.0),
         (false, false) => return None,
-        (true, false) => {
-            let cast = obstacle.exit(&at(0.0), &at(1.0));
-            (0.0, cast.or_else(|| edge_root(&inside, c0, c1))?)
-        }
+        (true, false) => (0.0, obstacle.exit(&at(0.0), &at(1.0)).or_else(root)?),
         (false, true) => {
             let cast = obstacle.exit(&at(1.0), &at(0.0)).map(|t| 1.0 - t);
-            (cast.or_else(|| edge_root(&inside, c0, c1))?, 1.0)
+            (cast.or_else(root)?, 1.0)
         }
     };
     // The skin's part of it, `[u, v]`: cut at the skin's root, if its
