@@ -15,6 +15,13 @@ use rayon::prelude::*;
 /// this many per sphere (plus a constant) by coarsening the grid.
 const MAX_CELLS_PER_SPHERE: usize = 64;
 
+/// Up to this many spheres, the grid is one cell listing them all: a
+/// lookup scans them all, which costs about what the lists would save,
+/// and the grid costs nothing to build (a small skin is posed at every
+/// contact evaluation: ball_vs_spiral's skins of 10 and 4 primitives
+/// spent a quarter of their contact time building grids).
+const ONE_CELL: usize = 16;
+
 /// The grid: origin, cell size, dimensions, and the CSR lists.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct CellGrid {
@@ -44,6 +51,10 @@ impl CellGrid {
         mean_radius /= spheres.len() as Real;
         let extent = hi - lo;
         let mut cell = mean_radius.max(1e-9 * extent.max()).max(Real::MIN_POSITIVE);
+        if spheres.len() <= ONE_CELL {
+            // Twice the extent: the box's far corner falls in the first cell.
+            cell = cell.max(2.0 * extent.max());
+        }
         let budget = MAX_CELLS_PER_SPHERE * spheres.len() + 1024;
         let dims_for = |cell: Real| -> [usize; 3] {
             [0, 1, 2].map(|k| ((extent[k] / cell).floor() as usize + 1).max(1))
