@@ -155,8 +155,8 @@ pub(super) fn overlap_edges(grid: &Grid, a: &Field, b: &Field) -> Vec<(usize, us
 }
 
 /// The most pairs of primitives [`near_each_other`] tests in a block;
-/// beyond, the lists are kept whole (the splats cost more than the pairs
-/// would save).
+/// beyond, the lists are kept whole (testing every pair would cost about
+/// what splatting the block does).
 const NEAR_PAIRS: usize = 1 << 14;
 
 /// A's primitives of `list_a` whose bounding sphere comes within `h` of
