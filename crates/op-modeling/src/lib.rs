@@ -18,6 +18,7 @@
 //!   manifold).
 #![warn(missing_docs)]
 
+pub mod cell_map;
 pub mod creation;
 pub mod disjoint_sets;
 pub mod fit;

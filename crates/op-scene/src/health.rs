@@ -31,6 +31,8 @@
 //! energy its own inputs can give it rather than against nothing.
 
 use op_dynamics::{Divergence, Point3, Real, Vec3};
+use op_modeling::cell_map::CellMap;
+use rayon::prelude::*;
 
 use crate::built_scene::{BuiltObject, BuiltScene};
 
@@ -181,17 +183,22 @@ impl Health {
             .filter(|a| a.is_finite())
             .fold(0.0, Real::max);
         let accel = Vec3::from(ext.gravity).norm() + window;
+        let ranges: Vec<Real> = scene
+            .objects
+            .iter()
+            .map(|o| object_range(scene, o))
+            .collect();
+        let counts = piece_counts(scene, &ranges);
         let objects = scene
             .objects
             .iter()
-            .map(|o| {
-                let range = object_range(scene, o);
-                ObjectHealth {
-                    range,
-                    pairs: rest_pairs(o),
-                    pieces_start: (range > 0.0).then(|| pieces(scene, o, range)),
-                    stretch_max: 0.0,
-                }
+            .zip(ranges)
+            .zip(counts)
+            .map(|((o, range), pieces_start)| ObjectHealth {
+                range,
+                pairs: rest_pairs(o),
+                pieces_start,
+                stretch_max: 0.0,
             })
             .collect();
         Health {
@@ -264,12 +271,14 @@ impl Health {
     pub fn finish(&self, scene: &BuiltScene) -> (Vec<ObjectFindings>, Vec<String>, Vec<String>) {
         let mut warnings = Vec::new();
         let mut breakups = Vec::new();
+        let ranges: Vec<Real> = self.objects.iter().map(|h| h.range).collect();
+        let counts = piece_counts(scene, &ranges);
         let findings = scene
             .objects
             .iter()
             .zip(&self.objects)
-            .map(|(o, h)| {
-                let now = (h.range > 0.0).then(|| pieces(scene, o, h.range));
+            .zip(counts)
+            .map(|((o, h), now)| {
                 if let (Some(start), Some(end)) = (h.pieces_start, now) {
                     if end > start {
                         breakups.push(format!(
@@ -378,13 +387,36 @@ fn rest_pairs(o: &BuiltObject) -> Vec<(u32, u32, Real)> {
     pairs
 }
 
+/// Per object of `scene`, its [`pieces`] at its interaction range
+/// (`ranges`, in object order; `None` where it is 0), the objects side by
+/// side: each count is its own grid over its own particles (two skinned
+/// balls of 144,605 particles: 0.19 s each).
+fn piece_counts(scene: &BuiltScene, ranges: &[Real]) -> Vec<Option<usize>> {
+    let p = scene.world.particles();
+    let objects: Vec<(Vec<u32>, Real)> = scene
+        .objects
+        .iter()
+        .zip(ranges)
+        .map(|(o, &range)| (o.all_ids().collect(), range))
+        .collect();
+    objects
+        .par_iter()
+        .map(|(ids, range)| (*range > 0.0).then(|| pieces_of(p, ids, *range)))
+        .collect()
+}
+
 /// Connected components of the object's current particles, joined when
 /// closer than `range`.
 pub fn pieces(scene: &BuiltScene, o: &BuiltObject, range: Real) -> usize {
-    let p = scene.world.particles();
-    let points: Vec<(u32, Point3)> = o
-        .all_ids()
-        .filter_map(|id| p.slot_of(id).map(|s| (id, p.positions()[s])))
+    let ids: Vec<u32> = o.all_ids().collect();
+    pieces_of(scene.world.particles(), &ids, range)
+}
+
+/// [`pieces`] of the particles `ids` of `p`.
+fn pieces_of(p: &op_dynamics::Particles, ids: &[u32], range: Real) -> usize {
+    let points: Vec<(u32, Point3)> = ids
+        .iter()
+        .filter_map(|&id| p.slot_of(id).map(|s| (id, p.positions()[s])))
         .collect();
     let mut sets = op_modeling::disjoint_sets::DisjointSets::new(points.len());
     close_pairs(&points, range, |a, b, _| {
@@ -397,7 +429,6 @@ pub fn pieces(scene: &BuiltScene, o: &BuiltObject, range: Real) -> usize {
 /// closer than `reach`, in a deterministic order, by a hash grid of cell
 /// size `reach`. Points with non-finite coordinates are their own pieces.
 fn close_pairs(points: &[(u32, Point3)], reach: Real, mut f: impl FnMut(usize, usize, Real)) {
-    use std::collections::HashMap;
     let cell = |x: &Point3| -> Option<[i64; 3]> {
         let c = [x.x / reach, x.y / reach, x.z / reach];
         // Beyond ±2^52 cells the grid cannot tell neighbours apart; such
@@ -406,7 +437,10 @@ fn close_pairs(points: &[(u32, Point3)], reach: Real, mut f: impl FnMut(usize, u
             .all(|v| v.is_finite() && v.abs() < 4.5e15)
             .then(|| c.map(|v| v.floor() as i64))
     };
-    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    // A multiply-xor hash of the cells (op_modeling::cell_map): each point
+    // looks up 27 of them (289,210 particles in two objects: the four
+    // piece counts of a run took 0.85 s with SipHash).
+    let mut grid: CellMap<Vec<usize>> = CellMap::default();
     for (k, (_, x)) in points.iter().enumerate() {
         if let Some(c) = cell(x) {
             grid.entry(c).or_default().push(k);

@@ -1,10 +1,8 @@
 //! The triangulated surface and its distance to the samples.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use rayon::prelude::*;
 
+use crate::cell_map::CellMap;
 use crate::triangulation::{triangulate_points, EdgeTable, Triangulation, TriangulationParams};
 use op_dynamics::{Point3, Real, Vec3};
 
@@ -279,32 +277,9 @@ struct Bins {
     /// `(cell, triangle)`, sorted.
     binned: Vec<([i64; 3], u32)>,
     /// Each cell's run in `binned`.
-    runs: HashMap<[i64; 3], (usize, usize), BuildHasherDefault<CellHasher>>,
-}
-
-/// The hasher of [`Bins`]' cell keys: a multiply-xor of their words
-/// (FxHash's), several times cheaper than the default SipHash on the tens
-/// of millions of lookups a million samples make (keys are grid cells,
-/// not chosen by anyone).
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl Hasher for CellHasher {
-    fn write(&mut self, bytes: &[u8]) {
-        for chunk in bytes.chunks(8) {
-            let mut word = [0u8; 8];
-            word[..chunk.len()].copy_from_slice(chunk);
-            self.write_u64(u64::from_le_bytes(word));
-        }
-    }
-
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
-
-    fn finish(&self) -> u64 {
-        self.0
-    }
+    /// (Cells are hashed by [`crate::cell_map::CellHasher`]: a million
+    /// samples make tens of millions of lookups.)
+    runs: CellMap<(usize, usize)>,
 }
 
 impl Bins {
@@ -329,7 +304,7 @@ impl Bins {
             })
             .collect();
         binned.par_sort_unstable();
-        let mut runs = HashMap::default();
+        let mut runs = CellMap::default();
         let mut start = 0;
         for k in 1..=binned.len() {
             if k == binned.len() || binned[k].0 != binned[start].0 {
