@@ -438,9 +438,7 @@ fn splat(s: Splat<'_>) -> usize {
                 }
                 let row = (k * ny + j) * nx;
                 for (v, &d) in values[row + i0..=row + i1].iter_mut().zip(dx2) {
-                    let s = (d + dyz) * inv;
-                    let f = 1.0 + s * (-22.0 / 9.0 + s * (17.0 / 9.0 - s * (4.0 / 9.0)));
-                    *v += w * if s < 1.0 { f } else { 0.0 };
+                    *v += w * kernel_row((d + dyz) * inv);
                 }
                 evaluations += dx2.len();
             }
@@ -541,14 +539,25 @@ fn rows(
             for (v, x) in values[row + i0..=row + i1].iter_mut().zip(&xs[i0..=i1]) {
                 let ox = x - t.x;
                 let local = |a: usize| (m[(a, 0)] * ox + from_y[a]) + from_z[a];
-                let s = d2(local(0), local(1), local(2)) * inv;
-                let f = 1.0 + s * (-22.0 / 9.0 + s * (17.0 / 9.0 - s * (4.0 / 9.0)));
-                *v += w * if s < 1.0 { f } else { 0.0 };
+                *v += w * kernel_row(d2(local(0), local(1), local(2)) * inv);
             }
             evaluations += i1 + 1 - i0;
         }
     }
     evaluations
+}
+
+/// [`value_sq`] written without a branch, so the splat's row loops
+/// vectorize: the same operations, so the same bits, for every `s` but
+/// NaN.
+#[inline(always)]
+fn kernel_row(s: Real) -> Real {
+    let f = 1.0 + s * (-22.0 / 9.0 + s * (17.0 / 9.0 - s * (4.0 / 9.0)));
+    if s < 1.0 {
+        f
+    } else {
+        0.0
+    }
 }
 
 /// Samples block `b` of any field at every node (no band: the field's
