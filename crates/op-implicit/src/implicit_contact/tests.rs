@@ -462,6 +462,18 @@ fn ribbon_and_clump(rng: &mut Rng, centre: Point3) -> (Field, Field) {
     (a, b)
 }
 
+/// The narrow band tests' skins: two blobs, a rectangle and a point, and
+/// six clumps pressed into a long ribbon at random places (seed `seed`).
+fn band_cases(seed: u64) -> Vec<(Field, Field)> {
+    let mut rng = Rng::new(seed);
+    let mut cases = vec![blobs(), rectangle_and_point()];
+    for _ in 0..6 {
+        let centre = Point3::new(rng.uniform(-5.0, 5.0), rng.uniform(-0.5, 0.5), 0.6);
+        cases.push(ribbon_and_clump(&mut rng, centre));
+    }
+    cases
+}
+
 /// The narrow band ([`super::band`]) samples exactly what the scan of
 /// every node of the common box samples, bit for bit, and in the same
 /// order: two blobs, a rectangle and a point, and a clump pressed into a
@@ -469,12 +481,7 @@ fn ribbon_and_clump(rng: &mut Rng, centre: Point3) -> (Field, Field) {
 /// most of it is away from the ribbon), at two cell sizes.
 #[test]
 fn the_band_samples_what_every_node_samples() {
-    let mut rng = Rng::new(41);
-    let mut cases = vec![blobs(), rectangle_and_point()];
-    for _ in 0..6 {
-        let centre = Point3::new(rng.uniform(-5.0, 5.0), rng.uniform(-0.5, 0.5), 0.6);
-        cases.push(ribbon_and_clump(&mut rng, centre));
-    }
+    let cases = band_cases(41);
     let mut compared = 0;
     for (n, (a, b)) in cases.iter().enumerate() {
         let pair = ContactPair::new(a, b);
@@ -511,12 +518,7 @@ fn the_band_samples_what_every_node_samples() {
 /// may be listed by one and not the other.
 #[test]
 fn the_overlap_band_lists_what_every_node_lists() {
-    let mut rng = Rng::new(43);
-    let mut cases = vec![blobs(), rectangle_and_point()];
-    for _ in 0..6 {
-        let centre = Point3::new(rng.uniform(-5.0, 5.0), rng.uniform(-0.5, 0.5), 0.6);
-        cases.push(ribbon_and_clump(&mut rng, centre));
-    }
+    let cases = band_cases(43);
     let mut compared = 0;
     for (n, (a, b)) in cases.iter().enumerate() {
         let pair = ContactPair::new(a, b);
@@ -605,12 +607,7 @@ fn iterations_of_the_crossing() {
         );
         assert!(n <= 25, "{name}: {n} evaluations (bisection: 50)");
     }
-    let mut rng = Rng::new(41);
-    let mut cases = vec![blobs(), rectangle_and_point()];
-    for _ in 0..6 {
-        let centre = Point3::new(rng.uniform(-5.0, 5.0), rng.uniform(-0.5, 0.5), 0.6);
-        cases.push(ribbon_and_clump(&mut rng, centre));
-    }
+    let cases = band_cases(41);
     let (mut edges, mut evaluations, mut most, mut worst) = (0, 0, 0, 0.0 as Real);
     for (a, b) in &cases {
         let pair = ContactPair::new(a, b);
