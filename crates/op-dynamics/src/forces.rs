@@ -67,6 +67,9 @@ pub enum Kernel {
 mod blocks;
 pub(crate) use blocks::SPLIT_MIN;
 use blocks::{accumulate, BlockScratch, OrientedPair, PairSource, Scalar, SpacingPair, Sums};
+mod cluster_spacing;
+pub use cluster_spacing::Precision;
+use cluster_spacing::{cluster_spacing_pass, ClusterScratch};
 mod uniform_spacing;
 use uniform_spacing::uniform_spacing_pass;
 mod uniform_oriented;
@@ -78,6 +81,8 @@ mod pass_bits;
 #[derive(Default)]
 pub(crate) struct ForceScratch {
     blocks: Vec<BlockScratch>,
+    /// The mixed-precision cluster kernel's scratch.
+    clusters: ClusterScratch<f32>,
     normals: Vec<Vec3>,
     tangents: Vec<Vec3>,
     /// Potential energy attributed to each particle (its row's pairs).
@@ -109,6 +114,8 @@ pub(crate) struct ForceContext<'a> {
     pub memory: bool,
     /// Some particle has a fixed position or orientation.
     pub has_fixed: bool,
+    /// Arithmetic of the cluster kernels.
+    pub precision: Precision,
     pub neighbours: Option<&'a mut NeighbourList>,
     /// The bond store (`None`: no particle has a bonded material).
     pub bonds: Option<&'a Bonds>,
@@ -139,6 +146,8 @@ pub(crate) struct ForceModel {
     pub memory: bool,
     /// Some particle has a fixed position or orientation.
     pub has_fixed: bool,
+    /// Arithmetic of the cluster kernels.
+    pub precision: Precision,
     pub neighbours: Option<NeighbourList>,
     /// The bond store (`None`: no particle has a bonded material).
     pub bonds: Option<Bonds>,
@@ -149,6 +158,13 @@ pub(crate) struct ForceModel {
 }
 
 impl ForceScratch {
+    /// Drops what was derived from the neighbour list (the cluster pairs):
+    /// the world restored another list, which may carry the same build
+    /// count as the one they came from.
+    pub fn forget_lists(&mut self) {
+        self.clusters = ClusterScratch::default();
+    }
+
     /// Total potential energy of the last evaluation: the per-particle
     /// energies summed in slot order. Summed when asked (a serial pass
     /// over every particle, which the steps themselves never read).
@@ -175,6 +191,7 @@ impl ForceModel {
             heated: self.heated,
             memory: self.memory,
             has_fixed: self.has_fixed,
+            precision: self.precision,
             neighbours: self.neighbours.as_mut(),
             bonds: self.bonds.as_ref(),
             external,
@@ -242,6 +259,7 @@ impl ForceContext<'_> {
     fn pair_pass(&mut self, s: StateRef<'_>, forces: &mut [Vec3], torques: &mut [Vec3]) {
         let ForceScratch {
             blocks,
+            clusters,
             normals,
             tangents,
             energies,
@@ -276,7 +294,7 @@ impl ForceContext<'_> {
             energies,
         };
         if self.kernel == Kernel::Spacing {
-            pass.spacing(blocks, out);
+            pass.spacing(blocks, clusters, self.precision, out);
         } else {
             pass.oriented(blocks, normals, tangents, out);
         }
@@ -347,7 +365,13 @@ struct PairPass<'p> {
 impl PairPass<'_> {
     /// The spacing kernel: bonded pairs, one uniform material's dedicated
     /// loop, or the general spacing pair.
-    fn spacing(self, blocks: &mut Vec<BlockScratch>, out: Sums<'_>) {
+    fn spacing(
+        self,
+        blocks: &mut Vec<BlockScratch>,
+        clusters: &mut ClusterScratch<f32>,
+        precision: Precision,
+        out: Sums<'_>,
+    ) {
         let PairPass {
             a,
             m,
@@ -361,6 +385,14 @@ impl PairPass<'_> {
         if let Some(b) = bonds {
             let pair = |i: usize, j: usize| spacing_pair(a, m, b, heated, cutoff2, s, i, j);
             accumulate::<false, _>(list, blocks, Scalar(pair), out);
+        } else if let (Precision::Mixed, true, Some(lj)) = (
+            precision,
+            uniform_spacing(a) && !heated,
+            m[0].lennard_jones_12_6(),
+        ) {
+            // One 12-6 Lennard-Jones material, every pair complete, in
+            // mixed precision: the cluster-pair tiles in `f32` lanes.
+            cluster_spacing_pass(lj, cutoff2, s.positions, list, clusters, out);
         } else if uniform_spacing(a) && !heated {
             // One material, every pair complete: a dedicated
             // loop per spacing potential (monomorphized, no

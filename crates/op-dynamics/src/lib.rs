@@ -56,6 +56,7 @@ pub use diagnostics::Diagnostics;
 pub use error::ParamError;
 pub use external::{ExternalParams, ForceWindow};
 pub use flags::Flags;
+pub use forces::Precision;
 pub use heat::{HeatParams, HeatResponse};
 pub use integrators::{AdaptiveParams, Scheme};
 pub use interactions::Material;

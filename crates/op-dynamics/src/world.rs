@@ -171,6 +171,7 @@ impl World {
                 heated: config.heated,
                 memory: config.memory,
                 has_fixed: config.has_fixed,
+                precision: params.precision,
                 neighbours,
                 bonds,
                 tools: None,

@@ -34,6 +34,7 @@ use super::conormality;
 use super::coplanarity;
 use super::cutoff::smooth_rise;
 use super::form;
+use super::lennard_jones::LennardJones;
 use super::pair::{OrientationGrad, PairGeometry, TermGrad};
 use super::repulsion::{Repulsion, RepulsionParams};
 use super::spacing::{Spacing, SpacingKernel};
@@ -278,6 +279,16 @@ impl PreparedMaterial {
     /// The spacing potential, if any.
     pub fn spacing(&self) -> Option<&SpacingKernel> {
         self.spacing.as_ref()
+    }
+
+    /// The spacing potential when it is 12-6 Lennard-Jones (the potential
+    /// of the SIMD and cluster kernels).
+    #[inline]
+    pub fn lennard_jones_12_6(&self) -> Option<&LennardJones> {
+        match &self.spacing {
+            Some(SpacingKernel::LennardJones(l)) if l.is_12_6() => Some(l),
+            _ => None,
+        }
     }
 
     /// True when some orientation term (co-planarity, co-normality,

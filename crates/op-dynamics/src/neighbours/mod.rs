@@ -8,6 +8,8 @@
 //!   backends give identical lists.
 //! - [`NeighbourList`]: the cached list of a simulation, rebuilt only when
 //!   the two largest displacements add up to more than the skin.
+//! - [`ClusterPairs`]: the same list over clusters of [`CLUSTER`]
+//!   consecutive particles, full rows, for tile kernels.
 //! - [`spatial_order`]: a Morton permutation that puts particles in spatial
 //!   memory order (the world re-sorts at rebuilds).
 //!
@@ -23,6 +25,7 @@
 
 mod all_pairs;
 mod cell_list;
+mod clusters;
 mod csr;
 mod kd_tree;
 mod morton;
@@ -34,6 +37,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 pub use all_pairs::all_pairs;
+pub use clusters::{ClusterPairs, CLUSTER};
 pub use csr::PairList;
 pub use morton::spatial_order;
 

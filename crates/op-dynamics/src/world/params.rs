@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{self, ParamError};
 use crate::external::ExternalParams;
+use crate::forces::Precision;
 use crate::heat::HeatParams;
 use crate::integrators::Scheme;
 use crate::math::Real;
@@ -79,6 +80,11 @@ pub struct WorldParams {
     pub external: ExternalParams,
     /// Divergence detection.
     pub divergence: DivergenceParams,
+    /// Arithmetic of the pair kernels ([`Precision`]): `double` (the
+    /// default) or `mixed` (`f32` pair lanes in the cluster kernels, sums
+    /// and integration in `f64`). Default: double.
+    #[serde(skip_serializing_if = "is_double")]
+    pub precision: Precision,
     /// Heat conduction and cooling ([`crate::heat`]), or `None` for
     /// constant temperatures. Required by heater and knife tools.
     /// Default: `None`.
@@ -94,9 +100,14 @@ impl Default for WorldParams {
             neighbours: NeighbourParams::default(),
             external: ExternalParams::default(),
             divergence: DivergenceParams::default(),
+            precision: Precision::Double,
             heat: None,
         }
     }
+}
+
+fn is_double(p: &Precision) -> bool {
+    *p == Precision::Double
 }
 
 impl WorldParams {

@@ -89,6 +89,7 @@ impl World {
         }
         self.apply_config(&config);
         self.model.neighbours = state.neighbours;
+        self.model.scratch.forget_lists();
         self.model.bonds = state.bonds;
         self.particles = state.particles;
         self.integrator = state.integrator;

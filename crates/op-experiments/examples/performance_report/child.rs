@@ -5,8 +5,8 @@
 
 use op_dynamics::interactions::{LennardJonesParams, Spacing, WeightParams};
 use op_dynamics::{
-    Material, NeighbourParams, ParticleDesc, Particles, Point3, Quat, Real, Scheme, Vec3, World,
-    WorldParams,
+    Material, NeighbourParams, ParticleDesc, Particles, Point3, Precision, Quat, Real, Scheme,
+    Vec3, World, WorldParams,
 };
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -133,7 +133,7 @@ fn material(oriented: bool) -> Material {
     }
 }
 
-fn world(oriented: bool, xv: Option<&Path>, cells: usize) -> Res<World> {
+fn world(oriented: bool, precision: Precision, xv: Option<&Path>, cells: usize) -> Res<World> {
     let mut particles = Particles::new();
     let mut rng = Rng(98934);
     for (p, v) in initial_state(xv, cells)? {
@@ -158,6 +158,7 @@ fn world(oriented: bool, xv: Option<&Path>, cells: usize) -> Res<World> {
                 / CUTOFF,
             ..Default::default()
         },
+        precision,
         ..Default::default()
     };
     Ok(World::new(particles, &[material(oriented)], params)?)
@@ -203,6 +204,12 @@ fn pairs_within(w: &World) -> usize {
 /// One measurement: prints `key=value` pairs on one line.
 pub(crate) fn child(args: &[String]) -> Res<()> {
     let oriented = args[0] == "oriented";
+    // `spacing-mixed`: the spacing block in mixed precision.
+    let precision = if args[0] == "spacing-mixed" {
+        Precision::Mixed
+    } else {
+        Precision::Double
+    };
     let threads: usize = args[1].parse()?;
     let steps: usize = args[2].parse()?;
     let xv = args.get(3).filter(|a| *a != "-").map(PathBuf::from);
@@ -210,7 +217,7 @@ pub(crate) fn child(args: &[String]) -> Res<()> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build_global()?;
-    let mut w = world(oriented, xv.as_deref(), cells)?;
+    let mut w = world(oriented, precision, xv.as_deref(), cells)?;
     w.step()?;
     let pairs = pairs_within(&w);
     let listed = w.neighbours().map_or(0, |l| l.pairs().num_pairs());

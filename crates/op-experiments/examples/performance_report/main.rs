@@ -21,12 +21,14 @@
 //! (`/usr/bin/lmp`, see `../shared/peers/`) must be installed; without it
 //! only our figures are written. About ten minutes on a 2-core machine.
 //!
-//! `performance_report child <spacing|oriented> <threads> <steps> [xv file
-//! or -] [cells]` runs one measurement and prints one `key=value` line.
+//! `performance_report child <spacing|spacing-mixed|oriented> <threads>
+//! <steps> [xv file or -] [cells]` runs one measurement and prints one
+//! `key=value` line (`spacing-mixed`: the spacing block in mixed
+//! precision).
 //!
-//! - **The fastest CPU pair codes** (issue 37): our spacing pass against
-//!   LAMMPS `lj/cut/opt` and GROMACS (`gmx`, when installed) on the same
-//!   block, interleaved.
+//! - **The fastest CPU pair codes** (issue 37): our spacing pass, in double
+//!   and in mixed precision, against LAMMPS `lj/cut/opt` and GROMACS
+//!   (`gmx`, when installed) on the same block, interleaved.
 //!
 //! Modules: `child` (the measuring child process), `measure` (running
 //! both codes, the machine's load and peak), `sections` (the report's

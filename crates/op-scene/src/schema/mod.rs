@@ -244,6 +244,12 @@ pub struct WorldSettings {
     /// [`DivergenceSettings::default`].
     #[serde(default)]
     pub divergence: DivergenceSettings,
+    /// Arithmetic of the pair kernels (op-dynamics
+    /// [`op_dynamics::Precision`]): `double`, or `mixed` for `f32` pair
+    /// lanes with `f64` sums and integration in the kernels that have them
+    /// (12-6 Lennard-Jones spacing of one material). Default: double.
+    #[serde(default)]
+    pub precision: op_dynamics::Precision,
     /// Heat conduction and cooling (op-dynamics [`op_dynamics::HeatParams`],
     /// seed 000 §6, §8), needed by heater and knife tools. Default: none
     /// (temperatures stay as set).
@@ -268,6 +274,7 @@ impl Default for WorldSettings {
             linear_damping: Damping::Value(0.0),
             angular_damping: 0.0,
             divergence: DivergenceSettings::default(),
+            precision: op_dynamics::Precision::Double,
             heat: None,
         }
     }
@@ -292,6 +299,7 @@ impl WorldSettings {
             divergence: op_dynamics::world::DivergenceParams {
                 max_speed: self.divergence.max_speed,
             },
+            precision: self.precision,
             heat: self.heat.clone(),
         }
     }
