@@ -34,7 +34,10 @@
 //! run time ([`crate::lanes`]), which add up to the scalar loop's bits.
 //! Oriented worlds of one such material (no heat, bonds, friction or spin)
 //! evaluate the full oriented pair in lanes the same way
-//! (`uniform_oriented`). Worlds with a bond memory
+//! (`uniform_oriented`). In mixed precision ([`Precision::Mixed`]),
+//! spacing-only worlds of one 12-6 material run cluster-pair tiles in
+//! `f32` lanes instead (`cluster_spacing`), summed by blocks and an
+//! ordered merge of their own. Worlds with a bond memory
 //! ([`crate::bond_memory`]) add it in one pass over the bonds after the
 //! pairs.
 
@@ -363,8 +366,9 @@ struct PairPass<'p> {
 }
 
 impl PairPass<'_> {
-    /// The spacing kernel: bonded pairs, one uniform material's dedicated
-    /// loop, or the general spacing pair.
+    /// The spacing kernel: bonded pairs, one 12-6 material's cluster tiles
+    /// in mixed precision, one uniform material's dedicated loop, or the
+    /// general spacing pair.
     fn spacing(
         self,
         blocks: &mut Vec<BlockScratch>,
