@@ -1,10 +1,28 @@
-//! Test support of the uniform passes: a jittered block of particles and
-//! the bits of what a pass sums, at a given thread count (the lanes
-//! against the scalar pair, one against two threads).
+//! Test support of the uniform passes: the 12-6 material they run, a
+//! jittered block of particles and the bits of what a pass sums, at a
+//! given thread count (the lanes against the scalar pair, one against two
+//! threads).
 
 use super::{BlockScratch, Sums};
 use crate::interactions::test_support::Rng;
+use crate::interactions::{LennardJonesParams, Material, PreparedMaterial, Spacing};
 use crate::math::{Point3, Real, Vec3};
+
+/// 12-6 Lennard-Jones with its well at 1.12 (`r0 = 2^(1/6)`), cut off at
+/// 2.5 with a taper over the last 10%: the material of the SIMD and
+/// cluster kernels.
+pub(super) fn lj_12_6_material() -> PreparedMaterial {
+    Material {
+        spacing: Some(Spacing::LennardJones(LennardJonesParams {
+            r0: (2.0 as Real).powf(1.0 / 6.0),
+            taper: 0.1,
+            ..Default::default()
+        })),
+        ..Material::empty()
+    }
+    .prepare()
+    .unwrap()
+}
 
 /// `side³` particles on a cubic lattice of spacing 1.1, each coordinate
 /// jittered by up to ±0.1.

@@ -131,9 +131,8 @@ pub(super) fn uniform_spacing_pass(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::forces::pass_bits::{jittered_block, pass_bits};
+    use crate::forces::pass_bits::{jittered_block, lj_12_6_material, pass_bits};
     use crate::interactions::test_support::Rng;
-    use crate::interactions::{LennardJonesParams, Material, Spacing};
     use crate::neighbours::NeighbourBackend;
 
     /// The dispatched SIMD pass and the scalar loop give the same bits:
@@ -142,16 +141,7 @@ mod tests {
     /// skin pairs included, at one and two threads.
     #[test]
     fn lanes_pass_equals_the_scalar_pass_bit_for_bit() {
-        let m = Material {
-            spacing: Some(Spacing::LennardJones(LennardJonesParams {
-                r0: (2.0 as Real).powf(1.0 / 6.0),
-                taper: 0.1,
-                ..Default::default()
-            })),
-            ..Material::empty()
-        }
-        .prepare()
-        .unwrap();
+        let m = lj_12_6_material();
         let p = jittered_block(17, &mut Rng::new(0x2545_f491));
         let cutoff = m.cutoff();
         let mut list = NeighbourList::new(NeighbourBackend::CellList, cutoff, 0.3);

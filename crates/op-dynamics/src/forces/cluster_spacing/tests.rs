@@ -2,24 +2,10 @@
 //! thread counts.
 
 use super::*;
-use crate::forces::pass_bits::{jittered_block, pass_bits};
+use crate::forces::pass_bits::{jittered_block, lj_12_6_material, pass_bits};
 use crate::forces::uniform_spacing::uniform_spacing_pass;
 use crate::interactions::test_support::Rng;
-use crate::interactions::{LennardJonesParams, Material, PreparedMaterial, Spacing};
 use crate::neighbours::NeighbourBackend;
-
-fn material() -> PreparedMaterial {
-    Material {
-        spacing: Some(Spacing::LennardJones(LennardJonesParams {
-            r0: (2.0 as Real).powf(1.0 / 6.0),
-            taper: 0.1,
-            ..Default::default()
-        })),
-        ..Material::empty()
-    }
-    .prepare()
-    .unwrap()
-}
 
 /// A jittered block of `side³` particles less the last few (a padded
 /// last cluster), with a coincident pair and a NaN particle, its list.
@@ -28,7 +14,7 @@ fn block(side: usize) -> (Vec<Point3>, NeighbourList, Real) {
     p.truncate(p.len() - 3);
     p[10] = p[11];
     p[20].x = Real::NAN;
-    let m = material();
+    let m = lj_12_6_material();
     let cutoff = m.cutoff();
     let mut list = NeighbourList::new(NeighbourBackend::CellList, cutoff, 0.3);
     list.update(&p);
@@ -51,7 +37,7 @@ fn cluster_bits(
     lanes: Lanes,
     threads: usize,
 ) -> Vec<u64> {
-    let m = material();
+    let m = lj_12_6_material();
     let lj = m.lennard_jones_12_6().unwrap();
     pass_bits(p.len(), threads, |_, out| match lanes {
         Lanes::F64 => {
@@ -78,7 +64,7 @@ fn reals(bits: &[u64]) -> Vec<Real> {
 fn cluster_pass_agrees_with_the_scalar_pass() {
     let (p, list, cutoff) = block(13);
     let n = p.len();
-    let m = material();
+    let m = lj_12_6_material();
     let scalar = reals(&pass_bits(n, 1, |blocks, out| {
         uniform_spacing_pass(&m, cutoff * cutoff, &p, &list, blocks, out, false)
     }));

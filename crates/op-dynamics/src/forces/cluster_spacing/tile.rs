@@ -446,8 +446,8 @@ fn tile_f32<'j, S: pulp::Simd, const SELF: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::forces::pass_bits::lj_12_6_material;
     use crate::interactions::test_support::Rng;
-    use crate::interactions::{LennardJonesParams, Material, Spacing};
 
     /// Both tiles of one pair of clusters, at the best instruction set:
     /// the explicit `f32` SIMD one and the plain one in `f32` lanes.
@@ -485,16 +485,7 @@ mod tests {
     /// (NaN) slot and a coincident pair; far tiles add nothing in both.
     #[test]
     fn explicit_simd_tile_equals_the_plain_tile_bit_for_bit() {
-        let lj = Material {
-            spacing: Some(Spacing::LennardJones(LennardJonesParams {
-                r0: (2.0 as Real).powf(1.0 / 6.0),
-                taper: 0.1,
-                ..Default::default()
-            })),
-            ..Material::empty()
-        }
-        .prepare()
-        .unwrap();
+        let lj = lj_12_6_material();
         let cutoff = lj.cutoff();
         let c = Constants::<f32>::of(lj.lennard_jones_12_6().unwrap(), cutoff * cutoff);
         let mut rng = Rng::new(0x5eed);
