@@ -46,7 +46,7 @@ use crate::contributors::{Contribution, Contributor, ContributorInput};
 use crate::external::{ExternalAccumulator, ExternalParams, ForceWindows, UniformField};
 use crate::flags::Flags;
 use crate::integrators::StateRef;
-use crate::interactions::{Coupling, PreparedMaterial};
+use crate::interactions::{Coupling, LennardJones, PreparedMaterial};
 use crate::math::{Real, Vec3};
 use crate::neighbours::NeighbourList;
 use crate::particles::Attributes;
@@ -389,11 +389,7 @@ impl PairPass<'_> {
         if let Some(b) = bonds {
             let pair = |i: usize, j: usize| spacing_pair(a, m, b, heated, cutoff2, s, i, j);
             accumulate::<false, _>(list, blocks, Scalar(pair), out);
-        } else if let (Precision::Mixed, true, Some(lj)) = (
-            precision,
-            uniform_spacing(a) && !heated,
-            m[0].lennard_jones_12_6(),
-        ) {
+        } else if let Some(lj) = cluster_material(precision, Kernel::Spacing, a, m, heated, false) {
             // One 12-6 Lennard-Jones material, every pair complete, in
             // mixed precision: the cluster-pair tiles in `f32` lanes.
             cluster_spacing_pass(lj, cutoff2, s.positions, list, clusters, out);
@@ -521,6 +517,27 @@ pub(crate) fn coupling(
             !(a.flags[i].contains(Flags::UNORIENTED) || a.flags[j].contains(Flags::UNORIENTED));
         Coupling::Complete { oriented }
     }
+}
+
+/// The 12-6 Lennard-Jones material whose pairs run on the cluster tiles
+/// (`cluster_spacing`): that of a world in mixed precision whose kernel is
+/// the spacing one, of one such material, every pair complete, without
+/// heat or bonds; `None` for every other world (it runs in double
+/// precision).
+pub(crate) fn cluster_material<'m>(
+    precision: Precision,
+    kernel: Kernel,
+    a: &Attributes<'_>,
+    m: &'m [PreparedMaterial],
+    heated: bool,
+    bonded: bool,
+) -> Option<&'m LennardJones> {
+    let eligible = precision == Precision::Mixed
+        && kernel == Kernel::Spacing
+        && !heated
+        && !bonded
+        && uniform_spacing(a);
+    eligible.then(|| m.first()?.lennard_jones_12_6()).flatten()
 }
 
 /// True when every particle has material 0, object 0's id and type

@@ -230,6 +230,23 @@ impl World {
         &self.model.materials
     }
 
+    /// Whether the pairs run in mixed precision: the world asked for it
+    /// ([`WorldParams::precision`]) and its particles are a spacing-only
+    /// set of one 12-6 Lennard-Jones material without heat or bonds, the
+    /// worlds the cluster kernel serves. Other worlds run in double
+    /// precision whatever they asked.
+    pub fn runs_mixed_precision(&self) -> bool {
+        crate::forces::cluster_material(
+            self.params.precision,
+            self.model.kernel,
+            &self.particles.attributes(),
+            &self.model.materials,
+            self.model.heated,
+            self.model.bonds.is_some(),
+        )
+        .is_some()
+    }
+
     /// The pair kernel chosen from the enabled terms.
     pub fn kernel(&self) -> Kernel {
         self.model.kernel

@@ -166,3 +166,25 @@ fn restoring_another_state_forgets_the_cluster_pairs() {
     fresh.restore(other).unwrap();
     assert_eq!(run(&mut a), run(&mut fresh));
 }
+
+/// Which worlds run in mixed precision: the 12-6 block that asked; not
+/// the same block in double precision, nor a mixed one of another spacing
+/// potential (cohesion) or with orientation terms, which run in double.
+#[test]
+fn only_spacing_only_12_6_worlds_run_mixed() {
+    assert!(world(Precision::Mixed).runs_mixed_precision());
+    assert!(!world(Precision::Double).runs_mixed_precision());
+    let params = WorldParams {
+        precision: Precision::Mixed,
+        ..Default::default()
+    };
+    let oriented = Material {
+        coplanarity: 1.0,
+        ..lj()
+    };
+    let cohesion = op_test_support::spacing_material();
+    for m in [oriented, cohesion] {
+        let w = World::new(block(4, false), &[m], params.clone()).unwrap();
+        assert!(!w.runs_mixed_precision(), "{m:?}");
+    }
+}

@@ -93,7 +93,8 @@ impl Scene {
     /// [`Scene::build`], then the stable-step estimate
     /// ([`crate::stability`], kept in [`BuiltScene::step_estimate`]): a
     /// `dt` above the recommended step becomes the first of the run's
-    /// warnings ([`BuiltScene::step_warnings`]). What `opsim run`
+    /// warnings ([`BuiltScene::step_warnings`]), and `precision: mixed` on
+    /// a world that runs in double precision another. What `opsim run`
     /// uses. The estimate is advice: a sample that cannot be built (the
     /// full scene could) only means there is no estimate.
     pub fn build_for_run(
@@ -117,6 +118,17 @@ impl Scene {
         built
             .setup_seconds
             .push(("estimate".into(), clock.elapsed().as_secs_f64()));
+        if self.world.precision == op_dynamics::Precision::Mixed
+            && !built.world().runs_mixed_precision()
+        {
+            built.step_warnings.push(
+                "world.precision: mixed has no effect on this scene, which runs in double \
+                 precision: mixed precision computes the pairs of spacing-only worlds of one \
+                 12-6 Lennard-Jones material (no orientation terms, heat, bonds or other \
+                 materials)"
+                    .into(),
+            );
+        }
         Ok(built)
     }
 

@@ -563,3 +563,37 @@ fn every_example_scene_survives_ron_and_json_round_trips() {
         }
     }
 }
+
+/// `precision: mixed` reaches the world: the shipped Lennard-Jones ball
+/// runs in mixed precision without a warning; the same ball with an
+/// orientation term cannot, runs in double precision, and the run says so.
+#[test]
+fn mixed_precision_runs_or_says_why_not() {
+    let path = scenes_dir().join("lj_ball_mixed.ron");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let run = |text: &str| {
+        let scene = parse_scene(text, Format::Ron, "<test>").unwrap_or_else(|e| panic!("{e}"));
+        scene
+            .build_for_run(None, None)
+            .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let ball = run(&text);
+    assert!(ball.world().runs_mixed_precision());
+    assert!(
+        ball.step_warnings().is_empty(),
+        "{:?}",
+        ball.step_warnings()
+    );
+    let oriented = text.replace("\"argon\": (", "\"argon\": (\n            coplanarity: 1,");
+    assert_ne!(oriented, text);
+    let built = run(&oriented);
+    assert!(!built.world().runs_mixed_precision());
+    assert!(
+        built
+            .step_warnings()
+            .iter()
+            .any(|w| w.starts_with("world.precision: mixed has no effect")),
+        "{:?}",
+        built.step_warnings()
+    );
+}
