@@ -123,7 +123,8 @@ impl ClusterPairs {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::{Point3, Real};
+    use crate::interactions::test_support::Rng;
+    use crate::math::Point3;
     use crate::neighbours::NeighbourBackend;
 
     /// Every listed particle pair has its cluster pair in the row of its
@@ -132,16 +133,16 @@ mod tests {
     /// (compared with a brute-force set).
     #[test]
     fn rows_are_the_cluster_pairs_of_the_particle_pairs() {
-        let mut seed = 0x2545_f491_u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as Real / (1u64 << 53) as Real
-        };
+        let mut rng = Rng::new(0x2545_f491);
         // 1,001 particles: the last cluster is padded.
         let p: Vec<Point3> = (0..1001)
-            .map(|_| Point3::new(10.0 * rnd(), 10.0 * rnd(), 3.0 * rnd()))
+            .map(|_| {
+                Point3::new(
+                    rng.range(0.0, 10.0),
+                    rng.range(0.0, 10.0),
+                    rng.range(0.0, 3.0),
+                )
+            })
             .collect();
         let mut list = NeighbourList::new(NeighbourBackend::CellList, 1.0, 0.2);
         list.update(&p);
