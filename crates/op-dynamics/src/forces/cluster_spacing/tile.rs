@@ -29,8 +29,10 @@ pub(crate) trait Lane:
     fn of(x: Real) -> Self;
     /// The lane value as a `Real` (exact).
     fn real(self) -> Real;
+    #[cfg(test)]
     fn sqrt(self) -> Self;
-    /// The tile kernel of this lane type ([`tile`], [`tile_f32`]).
+    /// The tile kernel of this lane type: [`tile_f32`] for `f32`, the
+    /// plain `tile` for `f64` (tests only).
     fn tile<'j, S: pulp::Simd, const SELF: bool>(
         simd: S,
         c: &Constants<Self>,
@@ -41,6 +43,9 @@ pub(crate) trait Lane:
     ) -> bool;
 }
 
+/// `f64` lanes: the tests' exact check of the cluster machinery against
+/// the row kernel (the world runs the row kernel in double precision).
+#[cfg(test)]
 impl Lane for f64 {
     const NAN: Self = f64::NAN;
     #[inline(always)]
@@ -78,6 +83,7 @@ impl Lane for f32 {
     fn real(self) -> Real {
         Real::from(self)
     }
+    #[cfg(test)]
     #[inline(always)]
     fn sqrt(self) -> Self {
         f32::sqrt(self)
@@ -127,6 +133,7 @@ impl<F: Lane> Constants<F> {
     }
 }
 
+#[cfg(test)]
 #[inline(always)]
 fn pick<F: Copy>(m: bool, a: F, b: F) -> F {
     if m {
@@ -140,7 +147,8 @@ fn pick<F: Copy>(m: bool, a: F, b: F) -> F {
 /// squared distance `d2`, and whether the pair contributes (not beyond
 /// the cut-off, coincident or NaN; zeros where it does not). The operations of
 /// [`LennardJones::eval_sq_12_6_select`] and the taper's select form, in
-/// order, every case computed.
+/// order, every case computed. The plain tile's pair (tests only).
+#[cfg(test)]
 #[inline(always)]
 fn lj_pair<F: Lane>(c: &Constants<F>, d2: F) -> (F, F, bool) {
     let zero = F::of(0.0);
@@ -221,7 +229,10 @@ pub(crate) type PartnerForces = [Real; 3 * CLUSTER];
 /// false), subtracts each lane's force from the partner's lanes
 /// (`partner`); for the cluster against itself (`SELF`, every pair in two
 /// lanes) half of each energy and nothing for the partner. Returns false,
-/// having added nothing, when no lane is within the cut-off.
+/// having added nothing, when no lane is within the cut-off. Plain Rust
+/// in any lane type: the oracle of [`tile_f32`] and the `f64` lanes of
+/// the tests.
+#[cfg(test)]
 #[inline(always)]
 fn tile<'j, F: Lane, const SELF: bool>(
     c: &Constants<F>,
@@ -330,9 +341,10 @@ impl<F: Lane> Lanes3<F> {
     }
 }
 
-/// [`tile`] for `f32` lanes in explicit SIMD of the instruction set `S`
-/// (the compiler's own vectorization of [`tile`] keeps `f32` at 256 bits
-/// on AVX-512): the same operations in the same order, so the same bits.
+/// The tile for `f32` lanes in explicit SIMD of the instruction set `S`:
+/// the plain `tile` (tests) in the same operations and order, so the same
+/// bits; the compiler's own vectorization of that plain code kept `f32`
+/// at 256 bits on AVX-512.
 #[inline(always)]
 fn tile_f32<'j, S: pulp::Simd, const SELF: bool>(
     simd: S,
