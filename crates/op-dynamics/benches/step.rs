@@ -118,7 +118,7 @@ fn bench_step(c: &mut Criterion) {
         for (name, m, params) in cases {
             let mut w = World::new(sheet(n), &[m], params).unwrap();
             w.step().unwrap();
-            let pairs = w.neighbours().map_or(0, |l| l.pairs().num_pairs());
+            let pairs = w.neighbour_pairs().map_or(0, |l| l.num_pairs());
             eprintln!(
                 "{name} n={n}: {pairs} listed pairs ({:.1} per particle)",
                 pairs as Real / n as Real

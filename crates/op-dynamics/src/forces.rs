@@ -279,7 +279,22 @@ impl ForceContext<'_> {
             (_, Some(list)) => list,
         };
         let clock = std::time::Instant::now();
-        list.update(s.positions);
+        // The cluster kernel searches its own rows from the reference
+        // positions: its worlds never search the particle rows.
+        let clustered = cluster_material(
+            self.precision,
+            self.kernel,
+            &self.attributes,
+            self.materials,
+            self.heated,
+            self.bonds.is_some(),
+        )
+        .is_some();
+        if clustered {
+            list.update_reference(s.positions);
+        } else {
+            list.update(s.positions);
+        }
         *neighbour_seconds += clock.elapsed().as_secs_f64();
         let pass = PairPass {
             a: &self.attributes,

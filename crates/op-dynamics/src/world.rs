@@ -10,7 +10,7 @@ use crate::forces::{ForceModel, ForceScratch, Kernel};
 use crate::integrators::Integrator;
 use crate::interactions::{Material, PreparedMaterial};
 use crate::math::{Point3, Real, Vec3};
-use crate::neighbours::NeighbourList;
+use crate::neighbours::{NeighbourList, PairList};
 use crate::particles::Particles;
 use crate::tooling::ToolSet;
 
@@ -258,9 +258,23 @@ impl World {
         self.model.bonds.as_ref()
     }
 
-    /// The neighbour list, if any interaction is enabled.
+    /// The neighbour list, if any interaction is enabled. Its particle
+    /// rows ([`NeighbourList::pairs`]) are empty in worlds that run the
+    /// cluster kernel ([`World::runs_mixed_precision`]), which never
+    /// search them: [`World::neighbour_pairs`] searches them on request.
     pub fn neighbours(&self) -> Option<&NeighbourList> {
         self.model.neighbours.as_ref()
+    }
+
+    /// The particle pairs of the neighbour list's last build (every pair
+    /// within `cutoff + skin` of its reference positions), searched now if
+    /// the world's kernel did not need them ([`NeighbourList::ensure_rows`]).
+    /// Changes neither the list's reference positions nor its rebuilds, so
+    /// the trajectory is the same whether or not it is called.
+    pub fn neighbour_pairs(&mut self) -> Option<&PairList> {
+        let list = self.model.neighbours.as_mut()?;
+        list.ensure_rows();
+        Some(list.pairs())
     }
 
     /// Gives the world its tools (seed 000 §6; op-modeling `tools`), in

@@ -188,3 +188,45 @@ fn only_spacing_only_12_6_worlds_run_mixed() {
         assert!(!w.runs_mixed_precision(), "{m:?}");
     }
 }
+
+/// A mixed world never searches the particle rows of its neighbour list
+/// (the cluster kernel searches its own from the reference positions);
+/// asking for them ([`World::neighbour_pairs`]) gives the list a search
+/// of the reference positions gives, and leaves the trajectory unchanged.
+/// A double world keeps its rows.
+#[test]
+fn mixed_worlds_search_particle_rows_only_on_request() {
+    let mut quiet = world(Precision::Mixed);
+    let mut asked = world(Precision::Mixed);
+    for step in 0..300 {
+        quiet.step().unwrap();
+        asked.step().unwrap();
+        if step % 25 != 0 {
+            continue;
+        }
+        let rows = asked.neighbour_pairs().unwrap().clone();
+        let list = asked.neighbours().unwrap();
+        assert!(list.has_rows());
+        let mut want = op_dynamics::neighbours::PairList::new();
+        op_dynamics::neighbours::search(
+            list.backend(),
+            list.reference_positions(),
+            list.radius(),
+            &mut want,
+        );
+        assert_eq!(
+            rows.iter_pairs().collect::<Vec<_>>(),
+            want.iter_pairs().collect::<Vec<_>>()
+        );
+    }
+    let list = quiet.neighbours().unwrap();
+    assert!(list.rebuilds() > 2, "{} rebuilds", list.rebuilds());
+    assert!(!list.has_rows(), "a mixed world searched its particle rows");
+    assert_eq!(list.pairs().num_pairs(), 0);
+    assert_eq!(bits(&quiet), bits(&asked));
+    let mut double = world(Precision::Double);
+    for _ in 0..10 {
+        double.step().unwrap();
+        assert!(double.neighbours().unwrap().has_rows());
+    }
+}

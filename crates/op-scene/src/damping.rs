@@ -578,9 +578,8 @@ fn first_guess(
         return Ok((Err(too_large), 0));
     }
     let mut m = modes(built.world_mut(), basis, true);
-    let w = built.world();
-    let pairs =
-        w.neighbours().map_or(0, |n| n.pairs().num_pairs()) + w.bonds().map_or(0, |b| b.len());
+    let w = built.world_mut();
+    let pairs = w.neighbour_pairs().map_or(0, |p| p.num_pairs()) + w.bonds().map_or(0, |b| b.len());
     let largest = m.omega2.iter().fold(0.0, |a: Real, l| a.max(l.abs()));
     let Some(k) = m.omega2.iter().position(|l| l.abs() > ZERO * largest) else {
         return Ok((Err(ModeError::NoMode), pairs));

@@ -372,10 +372,7 @@ pub fn sample(scene: &Scene, base_dir: Option<&Path>) -> Result<Sample, SceneErr
     // pairs are bounded too.
     for _ in 0..16 {
         built.world.evaluate_forces();
-        let pairs = built
-            .world
-            .neighbours()
-            .map_or(0, |l| l.pairs().num_pairs());
+        let pairs = built.world.neighbour_pairs().map_or(0, |l| l.num_pairs());
         if pairs <= SAMPLE_PAIRS || (n <= SAMPLE_PARTICLES_MIN && keep <= 1) {
             break;
         }

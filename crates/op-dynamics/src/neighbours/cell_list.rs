@@ -198,6 +198,63 @@ pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) 
     out.scratch.grid = s;
 }
 
+/// Fills `rows` (one per cluster of `cluster` consecutive particles) with
+/// the cluster rows of [`ClusterPairs`](super::ClusterPairs) straight from
+/// the positions: row `c` lists `c`, then every cluster `d > c` with some
+/// particle within `radius` (inclusive, the pair test of every backend)
+/// of some particle of `c`, ascending. The same rows as the clusters of
+/// the half list of [`cell_list`], without building that list.
+///
+/// Each particle of `c` scans the cells of its stencil; a cluster found
+/// once is stamped and its other particles skipped, so a row costs about
+/// one pair test per candidate cluster rather than one per candidate
+/// particle pair. Rows are independent (one per task), hence the same at
+/// any thread count.
+pub(super) fn cluster_rows(
+    positions: &[Point3],
+    radius: Real,
+    cluster: usize,
+    scratch: &mut GridScratch,
+    rows: &mut [Vec<u32>],
+) {
+    let n = positions.len();
+    let nc = rows.len();
+    assert!(
+        (1..=4).contains(&cluster),
+        "cluster_rows: clusters of 1 to 4 particles"
+    );
+    debug_assert_eq!(nc, n.div_ceil(cluster));
+    let (min, max, finite) = finite_bounds(positions);
+    let searched = squared_radius(radius).filter(|_| finite >= 2);
+    let Some(r2) = searched else {
+        rows.par_iter_mut().enumerate().for_each(|(c, row)| {
+            row.clear();
+            row.push(c as u32);
+        });
+        return;
+    };
+    let (grid, reach) = choose_grid(min, max, radius, n);
+    scratch.assign_cells(positions, &grid);
+    scratch.sort_into_cells(positions, &grid, finite);
+    let search = RowSearch {
+        positions,
+        r2,
+        grid,
+        reach,
+        scratch,
+    };
+    rows.par_iter_mut().enumerate().for_each_init(
+        || vec![u32::MAX; nc],
+        |stamp, (c, row)| {
+            row.clear();
+            row.push(c as u32);
+            let members = cluster * c..(cluster * (c + 1)).min(n);
+            search.cluster_candidates(members, cluster, c as u32, stamp, row);
+            row[1..].sort_unstable();
+        },
+    );
+}
+
 /// The grid of the search and how many cells around its own each particle
 /// scans.
 fn choose_grid(min: [Real; 3], max: [Real; 3], radius: Real, n: usize) -> (Grid, usize) {
@@ -330,6 +387,70 @@ impl RowSearch<'_> {
             }
         }
         row.truncate(len);
+    }
+
+    /// Appends to `row` the clusters `d > c` (of `cluster <= 4`
+    /// particles, `members` the slots of `c`) that hold a particle within
+    /// the radius of some member, stamping each (`stamp[d] = c`) so that
+    /// its other particles are skipped. Scans once the cells around the
+    /// bounding box of the members; each candidate is tested against the
+    /// four members at once (missing and non-finite members never pass).
+    #[inline(always)]
+    fn cluster_candidates(
+        &self,
+        members: std::ops::Range<usize>,
+        cluster: usize,
+        c: u32,
+        stamp: &mut [u32],
+        row: &mut Vec<u32>,
+    ) {
+        let RowSearch {
+            positions,
+            r2,
+            grid,
+            scratch,
+            ..
+        } = *self;
+        let mut m = [[Real::NAN; 3]; 4];
+        let (mut lo, mut hi) = ([Real::INFINITY; 3], [Real::NEG_INFINITY; 3]);
+        for (k, i) in members.enumerate() {
+            if scratch.cell_of[i] != NO_CELL {
+                m[k] = arr(&positions[i]);
+                for a in 0..3 {
+                    lo[a] = lo[a].min(m[k][a]);
+                    hi[a] = hi[a].max(m[k][a]);
+                }
+            }
+        }
+        if lo[0] > hi[0] {
+            return;
+        }
+        // Every particle within the radius of a member lies within the
+        // members' box grown by the radius (and a round-off margin).
+        let radius = r2.sqrt() * (1.0 + MARGIN);
+        let grow = |x: Real| radius + 4.0 * Real::EPSILON * x.abs();
+        let from = [0, 1, 2].map(|a| grid.coord(lo[a] - grow(lo[a]), a));
+        let to = [0, 1, 2].map(|a| grid.coord(hi[a] + grow(hi[a]), a));
+        for z in from[2]..=to[2] {
+            for y in from[1]..=to[1] {
+                let a = scratch.cell_start[grid.cell_id([from[0], y, z])] as usize;
+                let b = scratch.cell_start[grid.cell_id([to[0], y, z]) + 1] as usize;
+                for (q, &j) in scratch.sorted_pos[a..b]
+                    .iter()
+                    .zip(&scratch.sorted_idx[a..b])
+                {
+                    let d = j / cluster as u32;
+                    if d <= c || stamp[d as usize] == c {
+                        continue;
+                    }
+                    let near = m.iter().fold(false, |any, p| any | (dist2(p, q) <= r2));
+                    if near {
+                        stamp[d as usize] = c;
+                        row.push(d);
+                    }
+                }
+            }
+        }
     }
 }
 

@@ -147,6 +147,11 @@ pub struct NeighbourList {
     /// Positions at the last build.
     reference: Vec<Point3>,
     pairs: PairList,
+    /// Whether `pairs` holds the rows of the current build (false after
+    /// [`NeighbourList::rebuild_reference`], until
+    /// [`NeighbourList::ensure_rows`]).
+    #[serde(default = "rows_by_default")]
+    rows: bool,
     built: bool,
     rebuilds: u64,
     /// The bound `d1 + d2` (the two largest displacements from the
@@ -188,6 +193,7 @@ impl NeighbourList {
             skin,
             reference: Vec::new(),
             pairs: PairList::new(),
+            rows: true,
             built: false,
             rebuilds: 0,
             last_shift: 0.0,
@@ -200,9 +206,23 @@ impl NeighbourList {
     /// Returns true when it rebuilt.
     pub fn update(&mut self, positions: &[Point3]) -> bool {
         if !self.needs_rebuild(positions) {
+            self.ensure_rows();
             return false;
         }
         self.rebuild(positions);
+        true
+    }
+
+    /// [`update`](Self::update) for consumers that read only the reference
+    /// positions (the cluster kernel builds its own rows from them,
+    /// [`ClusterPairs`]): a rebuild takes the new reference positions
+    /// without searching the particle rows ([`rebuild_reference`](Self::rebuild_reference)).
+    /// The rebuild decision, and so the trajectory, is that of `update`.
+    pub fn update_reference(&mut self, positions: &[Point3]) -> bool {
+        if !self.needs_rebuild(positions) {
+            return false;
+        }
+        self.rebuild_reference(positions);
         true
     }
 
@@ -297,11 +317,42 @@ impl NeighbourList {
     /// reference positions. The incoming index is not built
     /// ([`NeighbourList::build_incoming`]).
     pub fn rebuild(&mut self, positions: &[Point3]) {
-        search_rows(self.backend, positions, self.radius(), &mut self.pairs);
+        self.rebuild_reference(positions);
+        self.ensure_rows();
+    }
+
+    /// Takes `positions` as the new reference positions, like
+    /// [`rebuild`](Self::rebuild), but leaves the particle rows empty
+    /// until [`ensure_rows`](Self::ensure_rows) (or
+    /// [`update`](Self::update)) searches them: a rebuild for consumers of
+    /// the reference positions only.
+    pub fn rebuild_reference(&mut self, positions: &[Point3]) {
         copy_positions(&mut self.reference, positions);
+        self.pairs.set_empty(positions.len());
+        self.rows = false;
         self.built = true;
         self.rebuilds += 1;
         self.last_shift = 0.0;
+    }
+
+    /// Searches the particle rows of the current build if
+    /// [`rebuild_reference`](Self::rebuild_reference) left them empty:
+    /// every pair within `cutoff + skin` of the reference positions, the
+    /// same list a [`rebuild`](Self::rebuild) would have made then. Does not
+    /// count as a rebuild.
+    pub fn ensure_rows(&mut self) {
+        if self.rows {
+            return;
+        }
+        let radius = self.radius();
+        search_rows(self.backend, &self.reference, radius, &mut self.pairs);
+        self.rows = true;
+    }
+
+    /// Whether [`pairs`](Self::pairs) holds the rows of the current build
+    /// (see [`ensure_rows`](Self::ensure_rows)).
+    pub fn has_rows(&self) -> bool {
+        self.rows
     }
 
     /// Builds the incoming index of the current list if it is not built
@@ -311,7 +362,9 @@ impl NeighbourList {
         self.pairs.build_incoming();
     }
 
-    /// The half list of the last build (empty before the first).
+    /// The half list of the last build (empty before the first, and after
+    /// a [`rebuild_reference`](Self::rebuild_reference) until
+    /// [`ensure_rows`](Self::ensure_rows)).
     pub fn pairs(&self) -> &PairList {
         &self.pairs
     }
@@ -352,6 +405,12 @@ impl NeighbourList {
     pub fn reference_positions(&self) -> &[Point3] {
         &self.reference
     }
+}
+
+/// Lists read from checkpoints written before rows could be left
+/// unsearched hold their rows.
+fn rows_by_default() -> bool {
+    true
 }
 
 /// The two largest of `a >= b` and `x`, in order.

@@ -125,7 +125,7 @@ impl World {
             if self.params.neighbours.reorder && list.rebuild_due(self.particles.positions()) {
                 let order = spatial_order(self.particles.positions(), list.cutoff() + list.skin());
                 self.particles.permute(&order);
-                list.rebuild(self.particles.positions());
+                list.rebuild_reference(self.particles.positions());
                 self.integrator.permute(&order);
                 report.reordered = true;
             }

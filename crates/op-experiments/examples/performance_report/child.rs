@@ -192,10 +192,10 @@ fn cpu_seconds() -> f64 {
 }
 
 /// Pairs within the cut-off at the current positions.
-fn pairs_within(w: &World) -> usize {
+fn pairs_within(w: &mut World) -> usize {
+    let pairs = w.neighbour_pairs().expect("a neighbour list").clone();
     let p = w.particles().positions();
-    let list = w.neighbours().expect("a neighbour list");
-    list.pairs()
+    pairs
         .iter_pairs()
         .filter(|&(i, j)| (p[j] - p[i]).norm_squared() < CUTOFF * CUTOFF)
         .count()
@@ -219,8 +219,8 @@ pub(crate) fn child(args: &[String]) -> Res<()> {
         .build_global()?;
     let mut w = world(oriented, precision, xv.as_deref(), cells)?;
     w.step()?;
-    let pairs = pairs_within(&w);
-    let listed = w.neighbours().map_or(0, |l| l.pairs().num_pairs());
+    let pairs = pairs_within(&mut w);
+    let listed = w.neighbour_pairs().map_or(0, |l| l.num_pairs());
     let rebuilds0 = w.neighbours().map_or(0, |l| l.rebuilds());
     let mut neighbour_s = 0.0;
     let cpu0 = cpu_seconds();
