@@ -1,5 +1,7 @@
 //! Cluster pair lists (the nbnxm scheme of GROMACS, Páll & Hess 2013):
-//! the particles, kept in spatial (Morton) order by the world, are cut
+//! the particles, kept by the world in column order
+//! ([`cluster_order`](super::cluster_order): columns along z, each sorted
+//! by z, so four consecutive slots are close in all three axes), are cut
 //! into clusters of [`CLUSTER`] consecutive slots, and the list holds, for
 //! every cluster, the clusters it must be paired with. A kernel then
 //! evaluates a cluster against a cluster as a `CLUSTER x CLUSTER` tile:

@@ -11,7 +11,9 @@
 //! - [`ClusterPairs`]: the same list over clusters of [`CLUSTER`]
 //!   consecutive particles, full rows, for tile kernels.
 //! - [`spatial_order`]: a Morton permutation that puts particles in spatial
-//!   memory order (the world re-sorts at rebuilds).
+//!   memory order (the world re-sorts at rebuilds); [`cluster_order`]:
+//!   columns sorted along z, for compact clusters (worlds on the cluster
+//!   kernel).
 //!
 //! **Pair test**, shared bit for bit by every backend: `(i, j)` is a pair
 //! when `dx*dx + dy*dy + dz*dz <= radius^2` with `d = p_j - p_i` (inclusive;
@@ -39,7 +41,7 @@ use serde::{Deserialize, Serialize};
 pub use all_pairs::all_pairs;
 pub use clusters::{ClusterPairs, CLUSTER};
 pub use csr::PairList;
-pub use morton::spatial_order;
+pub use morton::{cluster_order, spatial_order};
 
 use crate::error::{self, ParamError};
 use crate::math::{Point3, Real};

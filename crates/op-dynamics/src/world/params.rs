@@ -27,7 +27,8 @@ pub struct NeighbourParams {
     /// ([`crate::World::new`] checks it). Default: 0.2.
     #[schemars(extend("exclusiveMinimum" = 0), range(max = MAX_SKIN))]
     pub skin: Real,
-    /// Re-sort particles in spatial (Morton) order at each rebuild.
+    /// Re-sort particles in spatial (Morton) order at each rebuild (column
+    /// order in mixed precision, for compact clusters).
     /// Default: true.
     pub reorder: bool,
 }

@@ -5,14 +5,15 @@ use super::{AfterStep, Divergence, StepReport, World};
 use crate::contributors::Contributor;
 use crate::forces::Kernel;
 use crate::math::Real;
-use crate::neighbours::{copy_positions, spatial_order};
+use crate::neighbours::{cluster_order, copy_positions, spatial_order, CLUSTER};
 
 impl World {
     /// Advances by one step: the configured `dt`, or the adaptive
     /// controller's suggestion (at most `dt`).
     ///
     /// Stages, in order: (1) re-sort particles in spatial order when the
-    /// neighbour list is about to be rebuilt; (2) integrate, each force
+    /// neighbour list is about to be rebuilt (Morton order, or column order
+    /// in worlds on the cluster kernel, [`World::runs_mixed_precision`]); (2) integrate, each force
     /// evaluation updating the neighbour list (list-only rebuild when a
     /// stage moved particles past the skin bound), running the pair kernel
     /// and gathering per particle, adding external actions; (3) clear the
@@ -121,9 +122,16 @@ impl World {
             ..StepReport::default()
         };
         let clock = std::time::Instant::now();
+        let clustered = self.runs_mixed_precision();
         if let Some(list) = self.model.neighbours.as_mut() {
             if self.params.neighbours.reorder && list.rebuild_due(self.particles.positions()) {
-                let order = spatial_order(self.particles.positions(), list.cutoff() + list.skin());
+                // Worlds on the cluster kernel keep compact clusters;
+                // the others keep Morton order.
+                let order = if clustered {
+                    cluster_order(self.particles.positions(), CLUSTER)
+                } else {
+                    spatial_order(self.particles.positions(), list.cutoff() + list.skin())
+                };
                 self.particles.permute(&order);
                 list.rebuild_reference(self.particles.positions());
                 self.integrator.permute(&order);
