@@ -123,11 +123,12 @@ pub fn cluster_order(positions: &[Point3], cluster: usize) -> Vec<u32> {
             0
         }
     };
-    let mut keyed: Vec<(u64, u64, u32)> = positions
+    // One key: the column's 42-bit Z-order code, then 21 bits of z.
+    let mut keyed: Vec<(u64, u32)> = positions
         .par_iter()
         .enumerate()
         .map(|(i, p)| {
-            let (column, z) = if is_finite(p) {
+            let key = if is_finite(p) {
                 let a = arr(p);
                 let (x, y) = (quantize(a[0] - lo[0], side), quantize(a[1] - lo[1], side));
                 let z = quantize(a[2] - lo[2], dz);
@@ -135,16 +136,16 @@ pub fn cluster_order(positions: &[Point3], cluster: usize) -> Vec<u32> {
                 // Z-order meet at the same end, so a cluster that spans
                 // two columns stays short.
                 let z = if x % 2 == 1 { max_coord - z } else { z };
-                (spread2(x) | (spread2(y) << 1), z)
+                ((spread2(x) | (spread2(y) << 1)) << BITS) | z
             } else {
-                (u64::MAX, u64::MAX)
+                u64::MAX
             };
-            (column, z, i as u32)
+            (key, i as u32)
         })
         .collect();
     // Keys with the index appended are unique: any sort gives one result.
     keyed.par_sort_unstable();
-    keyed.par_iter().map(|&(_, _, i)| i).collect()
+    keyed.par_iter().map(|&(_, i)| i).collect()
 }
 
 /// Spreads the low 21 bits of `x` to every second bit.

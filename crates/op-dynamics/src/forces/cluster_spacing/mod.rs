@@ -95,6 +95,11 @@ const BLOCK: usize = 64;
 #[derive(Default)]
 pub(crate) struct Halo {
     entries: Vec<(u32, PartnerForces)>,
+    /// Scratch: the entries in the block's visiting order, and their
+    /// `(target, position)` keys (sorting the small keys, then gathering
+    /// the entries, moves each entry once).
+    visited: Vec<(u32, PartnerForces)>,
+    keys: Vec<(u32, u32)>,
 }
 
 /// Per-thread scratch of [`block_rows`]: a map from cluster to its
@@ -124,7 +129,7 @@ fn block_rows<F: Lane, S: pulp::Simd>(
 ) {
     let c0 = b * BLOCK;
     let c1 = c0 + forces.len().div_ceil(CLUSTER);
-    halo.entries.clear();
+    halo.visited.clear();
     let Touched { slot, sums } = touched;
     sums.clear();
     for ci in c0..c1 {
@@ -159,10 +164,20 @@ fn block_rows<F: Lane, S: pulp::Simd>(
         if t < c1 {
             add_partner(forces, CLUSTER * (t - c0), &fj);
         } else {
-            halo.entries.push((t as u32, fj));
+            halo.visited.push((t as u32, fj));
         }
     }
-    halo.entries.sort_unstable_by_key(|h| h.0);
+    // Ascending targets (each appears once: the order is unique).
+    let Halo {
+        entries,
+        visited,
+        keys,
+    } = halo;
+    keys.clear();
+    keys.extend(visited.iter().enumerate().map(|(k, h)| (h.0, k as u32)));
+    keys.sort_unstable();
+    entries.clear();
+    entries.extend(keys.iter().map(|&(_, k)| visited[k as usize]));
 }
 
 /// Adds the partner forces `fj` to the particles from slot `at` of
