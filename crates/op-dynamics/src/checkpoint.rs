@@ -9,7 +9,9 @@
 //! integrator's carried state (velocity Verlet's cached forces and angular
 //! momenta, the adaptive controller's suggestion and its first-same-as-last
 //! stage), the neighbour list (its reference positions and pairs: the same
-//! pairs in the same order give the same sums to the last bit), the bonds
+//! pairs in the same order give the same sums to the last bit; worlds on
+//! the cluster kernel hold no pairs, their cluster rows being searched
+//! again from the reference positions), the bonds
 //! and their remembered offsets, the pending external forces, the tools'
 //! state ([`crate::ToolSet::save_state`]), the time, the step count and the
 //! next step size. [`crate::World::restore`] puts it into a world built from the
@@ -34,8 +36,10 @@ use crate::particles::Particles;
 
 /// Version of the layout of [`WorldState`]: bumped whenever a field of it,
 /// or of the types it holds, changes, so that a checkpoint of another
-/// layout is refused instead of misread.
-pub const STATE_VERSION: u32 = 3;
+/// layout is refused instead of misread. Version 4: the neighbour list
+/// records whether it holds its particle rows (worlds on the cluster
+/// kernel leave them unsearched, and their checkpoints without them).
+pub const STATE_VERSION: u32 = 4;
 
 /// Encodes `value` (postcard).
 pub fn encode<T: Serialize>(value: &T) -> Vec<u8> {

@@ -152,7 +152,6 @@ pub struct NeighbourList {
     /// Whether `pairs` holds the rows of the current build (false after
     /// [`NeighbourList::rebuild_reference`], until
     /// [`NeighbourList::ensure_rows`]).
-    #[serde(default = "rows_by_default")]
     rows: bool,
     built: bool,
     rebuilds: u64,
@@ -407,12 +406,6 @@ impl NeighbourList {
     pub fn reference_positions(&self) -> &[Point3] {
         &self.reference
     }
-}
-
-/// Lists read from checkpoints written before rows could be left
-/// unsearched hold their rows.
-fn rows_by_default() -> bool {
-    true
 }
 
 /// The two largest of `a >= b` and `x`, in order.
