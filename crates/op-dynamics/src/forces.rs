@@ -288,9 +288,8 @@ impl ForceContext<'_> {
             self.materials,
             self.heated,
             self.bonds.is_some(),
-        )
-        .is_some();
-        if clustered {
+        );
+        if clustered.is_some() {
             list.update_reference(s.positions);
         } else {
             list.update(s.positions);
@@ -312,7 +311,7 @@ impl ForceContext<'_> {
             energies,
         };
         if self.kernel == Kernel::Spacing {
-            pass.spacing(blocks, clusters, self.precision, out);
+            pass.spacing(blocks, clusters, clustered, out);
         } else {
             pass.oriented(blocks, normals, tangents, out);
         }
@@ -382,13 +381,14 @@ struct PairPass<'p> {
 
 impl PairPass<'_> {
     /// The spacing kernel: bonded pairs, one 12-6 material's cluster tiles
-    /// in mixed precision, one uniform material's dedicated loop, or the
-    /// general spacing pair.
+    /// in mixed precision (`clustered`: that material, from
+    /// [`cluster_material`]), one uniform material's dedicated loop, or
+    /// the general spacing pair.
     fn spacing(
         self,
         blocks: &mut Vec<BlockScratch>,
         clusters: &mut ClusterScratch<f32>,
-        precision: Precision,
+        clustered: Option<&LennardJones>,
         out: Sums<'_>,
     ) {
         let PairPass {
@@ -404,7 +404,7 @@ impl PairPass<'_> {
         if let Some(b) = bonds {
             let pair = |i: usize, j: usize| spacing_pair(a, m, b, heated, cutoff2, s, i, j);
             accumulate::<false, _>(list, blocks, Scalar(pair), out);
-        } else if let Some(lj) = cluster_material(precision, Kernel::Spacing, a, m, heated, false) {
+        } else if let Some(lj) = clustered {
             // One 12-6 Lennard-Jones material, every pair complete, in
             // mixed precision: the cluster-pair tiles in `f32` lanes.
             cluster_spacing_pass(lj, cutoff2, s.positions, list, clusters, out);

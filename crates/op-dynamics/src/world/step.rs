@@ -122,15 +122,19 @@ impl World {
             ..StepReport::default()
         };
         let clock = std::time::Instant::now();
-        let clustered = self.runs_mixed_precision();
-        if let Some(list) = self.model.neighbours.as_mut() {
-            if self.params.neighbours.reorder && list.rebuild_due(self.particles.positions()) {
-                // Worlds on the cluster kernel keep compact clusters;
-                // the others keep Morton order.
+        let positions = self.particles.positions();
+        let due = self.params.neighbours.reorder
+            && (self.model.neighbours.as_mut()).is_some_and(|list| list.rebuild_due(positions));
+        if due {
+            // Worlds on the cluster kernel keep compact clusters; the
+            // others keep Morton order.
+            let clustered = self.runs_mixed_precision();
+            if let Some(list) = self.model.neighbours.as_mut() {
+                let p = self.particles.positions();
                 let order = if clustered {
-                    cluster_order(self.particles.positions(), CLUSTER)
+                    cluster_order(p, CLUSTER)
                 } else {
-                    spatial_order(self.particles.positions(), list.cutoff() + list.skin())
+                    spatial_order(p, list.cutoff() + list.skin())
                 };
                 self.particles.permute(&order);
                 list.rebuild_reference(self.particles.positions());
