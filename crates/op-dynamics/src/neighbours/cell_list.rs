@@ -174,27 +174,11 @@ pub(super) fn finite_bounds(positions: &[Point3]) -> ([Real; 3], [Real; 3], usiz
 /// [`all_pairs`](super::all_pairs).
 pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) {
     let n = positions.len();
-    let Some(r2) = squared_radius(radius) else {
-        out.set_empty(n);
-        return;
-    };
-    let (min, max, finite) = finite_bounds(positions);
-    if finite < 2 {
-        out.set_empty(n);
-        return;
-    }
-    let (grid, reach) = choose_grid(min, max, radius, n);
     let mut s = std::mem::take(&mut out.scratch.grid);
-    s.assign_cells(positions, &grid);
-    s.sort_into_cells(positions, &grid, finite);
-    let search = RowSearch {
-        positions,
-        r2,
-        grid,
-        reach,
-        scratch: &s,
-    };
-    out.build_parallel(n, |i, row| search.row(i, row));
+    match RowSearch::prepare(positions, radius, &mut s) {
+        Some(search) => out.build_parallel(n, |i, row| search.row(i, row)),
+        None => out.set_empty(n),
+    }
     out.scratch.grid = s;
 }
 
@@ -205,11 +189,10 @@ pub(crate) fn cell_list(positions: &[Point3], radius: Real, out: &mut PairList) 
 /// of some particle of `c`, ascending. The same rows as the clusters of
 /// the half list of [`cell_list`], without building that list.
 ///
-/// Each particle of `c` scans the cells of its stencil; a cluster found
-/// once is stamped and its other particles skipped, so a row costs about
-/// one pair test per candidate cluster rather than one per candidate
-/// particle pair. Rows are independent (one per task), hence the same at
-/// any thread count.
+/// Each row scans once the cells around the box of its cluster's
+/// particles, testing every candidate particle against all of them; a
+/// cluster found once is stamped and its other particles skipped. Rows
+/// are independent (one per task), hence the same at any thread count.
 pub(super) fn cluster_rows(
     positions: &[Point3],
     radius: Real,
@@ -224,24 +207,12 @@ pub(super) fn cluster_rows(
         "cluster_rows: clusters of 1 to 4 particles"
     );
     debug_assert_eq!(nc, n.div_ceil(cluster));
-    let (min, max, finite) = finite_bounds(positions);
-    let searched = squared_radius(radius).filter(|_| finite >= 2);
-    let Some(r2) = searched else {
+    let Some(search) = RowSearch::prepare(positions, radius, scratch) else {
         rows.par_iter_mut().enumerate().for_each(|(c, row)| {
             row.clear();
             row.push(c as u32);
         });
         return;
-    };
-    let (grid, reach) = choose_grid(min, max, radius, n);
-    scratch.assign_cells(positions, &grid);
-    scratch.sort_into_cells(positions, &grid, finite);
-    let search = RowSearch {
-        positions,
-        r2,
-        grid,
-        reach,
-        scratch,
     };
     rows.par_iter_mut().enumerate().for_each_init(
         || vec![u32::MAX; nc],
@@ -332,7 +303,32 @@ struct RowSearch<'a> {
     scratch: &'a GridScratch,
 }
 
-impl RowSearch<'_> {
+impl<'a> RowSearch<'a> {
+    /// Sorts the finite `positions` into the cells of a search of
+    /// `radius` (in `scratch`), or `None` when the search finds no pairs
+    /// (a NaN or negative radius, fewer than two finite positions).
+    fn prepare(
+        positions: &'a [Point3],
+        radius: Real,
+        scratch: &'a mut GridScratch,
+    ) -> Option<Self> {
+        let r2 = squared_radius(radius)?;
+        let (min, max, finite) = finite_bounds(positions);
+        if finite < 2 {
+            return None;
+        }
+        let (grid, reach) = choose_grid(min, max, radius, positions.len());
+        scratch.assign_cells(positions, &grid);
+        scratch.sort_into_cells(positions, &grid, finite);
+        Some(RowSearch {
+            positions,
+            r2,
+            grid,
+            reach,
+            scratch,
+        })
+    }
+
     /// Appends to `row` the particles `j > i` within the radius of `i`,
     /// scanning the cells within `reach` of its own.
     #[inline(always)]

@@ -43,28 +43,35 @@ pub fn spatial_order(positions: &[Point3], cell: Real) -> Vec<u32> {
         h = cell;
     }
     let h = h.max(Real::MIN_POSITIVE);
+    order_by(positions, |a| {
+        let c = [0, 1, 2].map(|k| quantize(a[k] - lo[k], h));
+        spread(c[0]) | (spread(c[1]) << 1) | (spread(c[2]) << 2)
+    })
+}
+
+/// The cell coordinate of `x` (an offset from the box's low corner) in
+/// cells of side `h`, clamped to `0..2^21` (NaN lands in cell 0).
+fn quantize(x: Real, h: Real) -> u64 {
     let max_coord = (1u64 << BITS) - 1;
+    let f = x / h;
+    if f >= max_coord as Real {
+        max_coord
+    } else if f > 0.0 {
+        f as u64
+    } else {
+        0
+    }
+}
+
+/// The permutation that sorts the particles by `key` of their position
+/// (below `u64::MAX`), non-finite positions last, ties in index order.
+fn order_by(positions: &[Point3], key: impl Fn([Real; 3]) -> u64 + Sync) -> Vec<u32> {
     let mut keyed: Vec<(u64, u32)> = positions
         .par_iter()
         .enumerate()
         .map(|(i, p)| {
-            let key = if is_finite(p) {
-                let a = arr(p);
-                let c = [0, 1, 2].map(|k| {
-                    let f = (a[k] - lo[k]) / h;
-                    if f >= max_coord as Real {
-                        max_coord
-                    } else if f > 0.0 {
-                        f as u64
-                    } else {
-                        0
-                    }
-                });
-                spread(c[0]) | (spread(c[1]) << 1) | (spread(c[2]) << 2)
-            } else {
-                u64::MAX
-            };
-            (key, i as u32)
+            let k = if is_finite(p) { key(arr(p)) } else { u64::MAX };
+            (k, i as u32)
         })
         .collect();
     // Keys with the index appended are unique: any sort gives one result.
@@ -113,39 +120,16 @@ pub fn cluster_order(positions: &[Point3], cluster: usize) -> Vec<u32> {
         .max(Real::MIN_POSITIVE);
     let dz = (ext[2] / AXIS_CELLS).max(Real::MIN_POSITIVE);
     let max_coord = (1u64 << BITS) - 1;
-    let quantize = |x: Real, h: Real| {
-        let f = x / h;
-        if f >= max_coord as Real {
-            max_coord
-        } else if f > 0.0 {
-            f as u64
-        } else {
-            0
-        }
-    };
     // One key: the column's 42-bit Z-order code, then 21 bits of z.
-    let mut keyed: Vec<(u64, u32)> = positions
-        .par_iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let key = if is_finite(p) {
-                let a = arr(p);
-                let (x, y) = (quantize(a[0] - lo[0], side), quantize(a[1] - lo[1], side));
-                let z = quantize(a[2] - lo[2], dz);
-                // Columns of odd x run down: consecutive columns in
-                // Z-order meet at the same end, so a cluster that spans
-                // two columns stays short.
-                let z = if x % 2 == 1 { max_coord - z } else { z };
-                ((spread2(x) | (spread2(y) << 1)) << BITS) | z
-            } else {
-                u64::MAX
-            };
-            (key, i as u32)
-        })
-        .collect();
-    // Keys with the index appended are unique: any sort gives one result.
-    keyed.par_sort_unstable();
-    keyed.par_iter().map(|&(_, i)| i).collect()
+    order_by(positions, |a| {
+        let (x, y) = (quantize(a[0] - lo[0], side), quantize(a[1] - lo[1], side));
+        let z = quantize(a[2] - lo[2], dz);
+        // Columns of odd x run down: consecutive columns in Z-order meet
+        // at the same end, so a cluster that spans two columns stays
+        // short.
+        let z = if x % 2 == 1 { max_coord - z } else { z };
+        ((spread2(x) | (spread2(y) << 1)) << BITS) | z
+    })
 }
 
 /// Spreads the low 21 bits of `x` to every second bit.
