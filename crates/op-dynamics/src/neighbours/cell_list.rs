@@ -36,7 +36,7 @@ const MAX_CELLS_PER_PARTICLE: usize = 32;
 const NO_CELL: u32 = u32::MAX;
 
 /// Reusable buffers of the cell list.
-#[derive(Default)]
+#[derive(Clone, Debug, Default)]
 pub(crate) struct GridScratch {
     /// Cell of each particle (`NO_CELL` when its position is not finite).
     cell_of: Vec<u32>,

@@ -40,7 +40,7 @@ pub const CLUSTER: usize = 4;
 /// particle of `c` and some particle of `d` form a listed pair. Cluster `c` holds the
 /// slots `CLUSTER * c .. CLUSTER * (c + 1)`; the last one is padded past
 /// the particle count.
-#[derive(Default)]
+#[derive(Clone, Debug, Default)]
 pub struct ClusterPairs {
     /// The build of the list these rows are of: its build count and
     /// particle count (a different pair means a rebuild).

@@ -9,7 +9,7 @@
 //! - [`NeighbourList`]: the cached list of a simulation, rebuilt only when
 //!   the two largest displacements add up to more than the skin.
 //! - [`ClusterPairs`]: the same list over clusters of [`CLUSTER`]
-//!   consecutive particles, full rows, for tile kernels.
+//!   consecutive particles, half rows, for tile kernels.
 //! - [`spatial_order`]: a Morton permutation that puts particles in spatial
 //!   memory order (the world re-sorts at rebuilds); [`cluster_order`]:
 //!   columns sorted along z, for compact clusters (worlds on the cluster

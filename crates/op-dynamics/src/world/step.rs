@@ -12,8 +12,9 @@ impl World {
     /// controller's suggestion (at most `dt`).
     ///
     /// Stages, in order: (1) re-sort particles in spatial order when the
-    /// neighbour list is about to be rebuilt (Morton order, or column order
-    /// in worlds on the cluster kernel, [`World::runs_mixed_precision`]); (2) integrate, each force
+    /// neighbour list is about to be rebuilt (Morton order, or column
+    /// order in worlds on the cluster kernel,
+    /// [`World::runs_mixed_precision`]); (2) integrate, each force
     /// evaluation updating the neighbour list (list-only rebuild when a
     /// stage moved particles past the skin bound), running the pair kernel
     /// and gathering per particle, adding external actions; (3) clear the
@@ -124,7 +125,11 @@ impl World {
         let clock = std::time::Instant::now();
         let positions = self.particles.positions();
         let due = self.params.neighbours.reorder
-            && (self.model.neighbours.as_mut()).is_some_and(|list| list.rebuild_due(positions));
+            && self
+                .model
+                .neighbours
+                .as_mut()
+                .is_some_and(|list| list.rebuild_due(positions));
         if due {
             // Worlds on the cluster kernel keep compact clusters; the
             // others keep Morton order.
