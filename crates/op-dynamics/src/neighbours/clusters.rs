@@ -16,10 +16,10 @@
 //! half list holds, with the same pair test, so the list covers every pair
 //! the particle list covers, with the same rebuild rule, and is rebuilt
 //! whenever that list is. The rows are searched straight from the
-//! reference positions (a cell list over particles whose stencil scans
-//! stop testing a cluster once it is found), so a world that runs only
-//! the cluster kernel never builds the particle rows
-//! ([`NeighbourList::update_reference`]).
+//! reference positions (a cell list over particles, scanned once around
+//! each cluster's box, a partner cluster tested no further once found),
+//! so a world that runs only the cluster kernel never builds the
+//! particle rows ([`NeighbourList::update_reference`]).
 //!
 //! **Half rows.** Like the particle list, a cluster's row holds the
 //! partner clusters at or after it (ascending, itself first): each
