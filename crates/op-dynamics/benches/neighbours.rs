@@ -7,16 +7,24 @@
 //! - `volume`: a jittered cubic lattice,
 //!
 //! each in spatial (Morton) order and in random order. Also the cost of the
-//! skin check of `NeighbourList::update` when nothing needs rebuilding.
+//! skin check of `NeighbourList::update` when nothing needs rebuilding, and
+//! of the cluster rows of the cluster kernel (`ClusterPairs::build`): 32k
+//! particles placed uniformly at random at the density of the LJ melt
+//! (0.8442), radius 2.8 (cut-off 2.5 plus skin 0.3), in column order
+//! (`cluster_order`, as the world keeps them) and in random order.
 //!
-//! Run: `cargo bench -p op-dynamics --bench neighbours` (about 2 minutes).
+//! Run: `cargo bench -p op-dynamics --bench neighbours` (about 2 minutes;
+//! `-- cluster_rows` for the cluster rows only).
 //! Medians: `target/criterion/<group>/<id>/new/estimates.json`.
 
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, SamplingMode};
 use op_dynamics::math::{Point3, Quat, Real, Vec3};
-use op_dynamics::neighbours::{search, spatial_order, NeighbourBackend, NeighbourList, PairList};
+use op_dynamics::neighbours::{
+    cluster_order, search, spatial_order, ClusterPairs, NeighbourBackend, NeighbourList, PairList,
+    CLUSTER,
+};
 use op_test_support::Rng;
 
 const RADIUS: Real = 2.5;
@@ -112,11 +120,43 @@ fn skin_check(c: &mut Criterion) {
     group.finish();
 }
 
+fn cluster_rows(c: &mut Criterion) {
+    let n = 32_000;
+    let side = (n as Real / 0.8442).cbrt();
+    let mut rng = Rng::new(11);
+    let melt: Vec<Point3> = (0..n)
+        .map(|_| {
+            Point3::new(
+                rng.uniform(0.0, side),
+                rng.uniform(0.0, side),
+                rng.uniform(0.0, side),
+            )
+        })
+        .collect();
+    let columns: Vec<Point3> = cluster_order(&melt, CLUSTER)
+        .iter()
+        .map(|&i| melt[i as usize])
+        .collect();
+    let mut group = c.benchmark_group("cluster_rows");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_millis(1500));
+    for (order, pts) in [("columns", &columns), ("random", &melt)] {
+        let mut rows = ClusterPairs::new();
+        group.bench_with_input(BenchmarkId::new("32k", order), pts, |b, pts| {
+            b.iter(|| rows.build(pts, 2.8));
+        });
+    }
+    group.finish();
+}
+
 // A plain `main` instead of `criterion_group!`/`criterion_main!`, whose
 // generated public function would trip `missing_docs`.
 fn main() {
     let mut c = Criterion::default().configure_from_args();
     build_lists(&mut c);
     skin_check(&mut c);
+    cluster_rows(&mut c);
     c.final_summary();
 }
