@@ -48,6 +48,36 @@ pub fn encode<T: Serialize>(value: &T) -> Vec<u8> {
     postcard::to_stdvec(value).unwrap_or_else(|e| panic!("checkpoint encoding failed: {e}"))
 }
 
+/// [`encode`] of a world state in parts, encoded side by side (a large
+/// world's state is mostly its particles, bonds and neighbour list, each
+/// of tens of megabytes): the parts one after another are its encoding,
+/// since postcard writes a struct as its fields one after another,
+/// without lengths or tags. Left in parts, for a writer that needs no
+/// copy of the whole.
+pub fn encode_state(state: &WorldState) -> Vec<Vec<u8>> {
+    use rayon::prelude::*;
+    let s = state;
+    let parts: Vec<Vec<u8>> = (0..6)
+        .into_par_iter()
+        .map(|k| match k {
+            0 => encode(&s.particles),
+            1 => encode(&s.integrator),
+            2 => encode(&s.neighbours),
+            3 => encode(&s.bonds),
+            4 => encode(&(&s.tools, &s.accumulator, &s.forces, &s.torques)),
+            _ => encode(&(
+                &s.prev_positions,
+                s.time,
+                s.steps,
+                s.dt_next,
+                s.may_rotate,
+                s.forced_in_a_row,
+            )),
+        })
+        .collect();
+    parts
+}
+
 /// Decodes what [`encode`] wrote; the whole input must be used.
 pub fn decode<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, StateError> {
     let (value, rest) =

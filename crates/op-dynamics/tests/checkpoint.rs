@@ -6,7 +6,7 @@
 //! rebuilds; a state of another world is refused and leaves the world as
 //! it was.
 
-use op_dynamics::checkpoint::{decode, encode, WorldState};
+use op_dynamics::checkpoint::{decode, encode, encode_state, WorldState};
 use op_dynamics::{
     AdaptiveParams, ExternalParams, Material, Particles, Scheme, World, WorldParams,
 };
@@ -63,7 +63,13 @@ fn a_restored_world_steps_bit_for_bit_as_the_saved_one() {
             for _ in 0..40 {
                 original.step().unwrap();
             }
-            let saved: WorldState = decode(&encode(&original.state())).unwrap();
+            let state = original.state();
+            let bytes = encode(&state);
+            assert!(
+                encode_state(&state).concat() == bytes,
+                "{scheme:?}: the state's parts encoded side by side are its encoding"
+            );
+            let saved: WorldState = decode(&bytes).unwrap();
             let mut restored = world(&p, material, scheme);
             restored.restore(saved).unwrap();
             assert_eq!(bits(&original), bits(&restored), "{scheme:?}: restored");
