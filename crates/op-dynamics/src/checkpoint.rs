@@ -53,29 +53,54 @@ pub fn encode<T: Serialize>(value: &T) -> Vec<u8> {
 /// of tens of megabytes): the parts one after another are its encoding,
 /// since postcard writes a struct as its fields one after another,
 /// without lengths or tags. Left in parts, for a writer that needs no
-/// copy of the whole.
+/// copy of the whole. [`crate::World::encode_state`] gives the same parts
+/// without taking the state.
 pub fn encode_state(state: &WorldState) -> Vec<Vec<u8>> {
-    use rayon::prelude::*;
     let s = state;
-    let parts: Vec<Vec<u8>> = (0..6)
+    encode_parts(StateRef {
+        particles: &s.particles,
+        integrator: &s.integrator,
+        neighbours: &s.neighbours,
+        bonds: &s.bonds,
+        tools: s.tools.clone(),
+        accumulator: &s.accumulator,
+        forces: &s.forces,
+        torques: &s.torques,
+        prev_positions: &s.prev_positions,
+        scalars: (s.time, s.steps, s.dt_next, s.may_rotate, s.forced_in_a_row),
+    })
+}
+
+/// A world state's fields, borrowed (the tools' state is made on demand):
+/// what [`encode_parts`] writes.
+pub(crate) struct StateRef<'a> {
+    pub particles: &'a Particles,
+    pub integrator: &'a Integrator,
+    pub neighbours: &'a Option<NeighbourList>,
+    pub bonds: &'a Option<Bonds>,
+    pub tools: Option<Vec<u8>>,
+    pub accumulator: &'a ExternalAccumulator,
+    pub forces: &'a [Vec3],
+    pub torques: &'a [Vec3],
+    pub prev_positions: &'a [Point3],
+    /// `time`, `steps`, `dt_next`, `may_rotate`, `forced_in_a_row`.
+    pub scalars: (Real, u64, Real, bool, u32),
+}
+
+/// The parts of [`encode_state`], in [`WorldState`]'s field order.
+pub(crate) fn encode_parts(s: StateRef<'_>) -> Vec<Vec<u8>> {
+    use rayon::prelude::*;
+    (0..6)
         .into_par_iter()
         .map(|k| match k {
-            0 => encode(&s.particles),
-            1 => encode(&s.integrator),
-            2 => encode(&s.neighbours),
-            3 => encode(&s.bonds),
-            4 => encode(&(&s.tools, &s.accumulator, &s.forces, &s.torques)),
-            _ => encode(&(
-                &s.prev_positions,
-                s.time,
-                s.steps,
-                s.dt_next,
-                s.may_rotate,
-                s.forced_in_a_row,
-            )),
+            0 => encode(s.particles),
+            1 => encode(s.integrator),
+            2 => encode(s.neighbours),
+            3 => encode(s.bonds),
+            4 => encode(&(&s.tools, s.accumulator, s.forces, s.torques)),
+            _ => encode(&(s.prev_positions, s.scalars)),
         })
-        .collect();
-    parts
+        .collect()
 }
 
 /// Decodes what [`encode`] wrote; the whole input must be used.

@@ -69,6 +69,10 @@ fn a_restored_world_steps_bit_for_bit_as_the_saved_one() {
                 encode_state(&state).concat() == bytes,
                 "{scheme:?}: the state's parts encoded side by side are its encoding"
             );
+            assert!(
+                original.encode_state().concat() == bytes,
+                "{scheme:?}: the world's own parts are the state's encoding"
+            );
             let saved: WorldState = decode(&bytes).unwrap();
             let mut restored = world(&p, material, scheme);
             restored.restore(saved).unwrap();

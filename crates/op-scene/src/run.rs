@@ -412,7 +412,7 @@ impl Run {
             stages: self.tally.stage_table(scene, carried),
         };
         Checkpoint::take(scene, self, (k, t0), inputs, so_far)
-            .write(path)
+            .write(&scene.world, path)
             .map_err(io(path))
     }
 }

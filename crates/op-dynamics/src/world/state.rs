@@ -1,7 +1,7 @@
 //! Taking and restoring a world's state ([`crate::checkpoint`]).
 
 use super::{Config, World};
-use crate::checkpoint::{StateError, WorldState};
+use crate::checkpoint::{encode_parts, StateError, StateRef, WorldState};
 
 impl World {
     /// Everything the world changes as it steps, to restore later with
@@ -23,6 +23,30 @@ impl World {
             may_rotate: self.may_rotate,
             forced_in_a_row: self.forced_in_a_row,
         }
+    }
+
+    /// [`crate::checkpoint::encode_state`] of [`World::state`], without
+    /// taking (copying) the state: the parts of its encoding, encoded side
+    /// by side.
+    pub fn encode_state(&self) -> Vec<Vec<u8>> {
+        encode_parts(StateRef {
+            particles: &self.particles,
+            integrator: &self.integrator,
+            neighbours: &self.model.neighbours,
+            bonds: &self.model.bonds,
+            tools: self.model.tools.as_ref().map(|t| t.save_state()),
+            accumulator: &self.accumulator,
+            forces: &self.forces,
+            torques: &self.torques,
+            prev_positions: &self.prev_positions,
+            scalars: (
+                self.time,
+                self.steps,
+                self.dt_next,
+                self.may_rotate,
+                self.forced_in_a_row,
+            ),
+        })
     }
 
     /// Puts back a state taken by [`World::state`] from a world built from
