@@ -127,9 +127,10 @@ const CHUNK: usize = 1 << 20;
 /// The checkpoint's integrity check (not a cryptographic hash): the
 /// payload cut into chunks of 1 MiB, each hashed by a four-lane
 /// multiply-xor over its 64-bit words (in parallel), then [`fnv1a`] of the
-/// length and the chunks' hashes. Any one changed byte changes it (every step of both
-/// hashes is a bijection of the state for a fixed input, and of the input
-/// for a fixed state). The same value at any thread count.
+/// length and the chunks' hashes. A changed byte always changes its
+/// lane's value (every round is a bijection of the lane for a fixed word,
+/// and of the word for a fixed lane), and so the checksum but for a
+/// 64-bit collision. The same value at any thread count.
 pub fn checksum(bytes: &[u8]) -> u64 {
     checksum_parts(&[bytes])
 }
@@ -186,7 +187,8 @@ fn checksum_parts(parts: &[&[u8]]) -> u64 {
 /// multiply per byte), the bytes past the last whole round folded in by
 /// FNV-1a, the lanes combined by FNV-1a.
 fn chunk_hash(chunk: &[u8]) -> u64 {
-    const PRIME: u64 = 0x9e37_79b9_7f4a_7c15 | 1;
+    // Odd, so that multiplying by it is a bijection of the lane.
+    const PRIME: u64 = 0x9e37_79b9_7f4a_7c15;
     let mut lanes: [u64; 4] = [1, 2, 3, 4].map(|k| 0xcbf2_9ce4_8422_2325_u64.wrapping_mul(k));
     let mut rounds = chunk.chunks_exact(32);
     for round in &mut rounds {
