@@ -67,11 +67,13 @@ fn shuffled(pts: &[Point3], rng: &mut Rng) -> Vec<Point3> {
     v
 }
 
+/// `pts` in the order `order` (a permutation of their indices).
+fn permuted(pts: &[Point3], order: &[u32]) -> Vec<Point3> {
+    order.iter().map(|&i| pts[i as usize]).collect()
+}
+
 fn morton(pts: &[Point3]) -> Vec<Point3> {
-    spatial_order(pts, RADIUS)
-        .iter()
-        .map(|&i| pts[i as usize])
-        .collect()
+    permuted(pts, &spatial_order(pts, RADIUS))
 }
 
 fn build_lists(c: &mut Criterion) {
@@ -133,10 +135,7 @@ fn cluster_rows(c: &mut Criterion) {
             )
         })
         .collect();
-    let columns: Vec<Point3> = cluster_order(&melt, CLUSTER)
-        .iter()
-        .map(|&i| melt[i as usize])
-        .collect();
+    let columns = permuted(&melt, &cluster_order(&melt, CLUSTER));
     let mut group = c.benchmark_group("cluster_rows");
     group
         .sample_size(20)

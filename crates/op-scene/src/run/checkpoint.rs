@@ -297,6 +297,43 @@ impl<W> Checkpoint<W> {
 }
 
 impl Checkpoint<()> {
+    /// The checkpoint of `scene` and the runner after frame `frame`, whose
+    /// files are all on disk; the world's state is left to
+    /// [`Checkpoint::write`], which encodes it from the world.
+    pub fn take(
+        scene: &BuiltScene,
+        run: &Run,
+        at: (usize, Real),
+        inputs: u64,
+        carried: Carried,
+    ) -> Self {
+        Checkpoint {
+            inputs,
+            scene: scene.name.clone(),
+            frame: at.0,
+            t0: at.1,
+            world: (),
+            driver: scene.driver.states(),
+            objects: scene.objects.clone(),
+            skins: scene.skins.iter().map(|s| s.state()).collect(),
+            contact: scene.contact,
+            creation: scene
+                .creation
+                .as_ref()
+                .map(|c| (c.next_step, c.fit.as_ref().map(|f| f.released))),
+            settled: scene.settled,
+            tally: run.tally.snapshot(),
+            health: run.health.clone(),
+            watch: run.watch.clone(),
+            metrics: run.metrics.as_ref().map(|m| m.text.clone()),
+            writer: run.writer.state(),
+            warnings: run.warnings.clone(),
+            wall_seconds: carried.wall_seconds,
+            setup_seconds: carried.setup_seconds,
+            stages: carried.stages,
+        }
+    }
+
     /// Writes the checkpoint, with the state of `world`, to `path`
     /// atomically.
     pub fn write(&self, world: &op_dynamics::World, path: &Path) -> std::io::Result<()> {
@@ -375,42 +412,6 @@ pub(super) struct Carried {
 }
 
 impl Checkpoint {
-    /// The checkpoint of `scene` and the runner after frame `frame`, whose
-    /// files are all on disk.
-    pub fn take(
-        scene: &BuiltScene,
-        run: &Run,
-        at: (usize, Real),
-        inputs: u64,
-        carried: Carried,
-    ) -> Checkpoint<()> {
-        Checkpoint {
-            inputs,
-            scene: scene.name.clone(),
-            frame: at.0,
-            t0: at.1,
-            world: (),
-            driver: scene.driver.states(),
-            objects: scene.objects.clone(),
-            skins: scene.skins.iter().map(|s| s.state()).collect(),
-            contact: scene.contact,
-            creation: scene
-                .creation
-                .as_ref()
-                .map(|c| (c.next_step, c.fit.as_ref().map(|f| f.released))),
-            settled: scene.settled,
-            tally: run.tally.snapshot(),
-            health: run.health.clone(),
-            watch: run.watch.clone(),
-            metrics: run.metrics.as_ref().map(|m| m.text.clone()),
-            writer: run.writer.state(),
-            warnings: run.warnings.clone(),
-            wall_seconds: carried.wall_seconds,
-            setup_seconds: carried.setup_seconds,
-            stages: carried.stages,
-        }
-    }
-
     /// Puts the checkpoint back into `scene` (built from the same scene
     /// file as the run it was taken of) and the runner; returns the frame
     /// to go on from, the world time of frame 0 and what the resumed run
