@@ -26,10 +26,9 @@ use std::f64::consts::{FRAC_PI_3, TAU};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::{child_of, world_tangent, Accepted};
+use super::{child_of, world_tangent, Accepted, Neighbourhood};
 use op_dynamics::error::{self, ParamError};
 use op_dynamics::math::Real;
-use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
 use op_dynamics::particles::{ParticleDesc, Particles};
 
 /// Parameters of the growing rule; lengths are fractions of `r0`, angles
@@ -77,6 +76,14 @@ impl Default for GrowingParams {
 }
 
 impl GrowingParams {
+    /// The radius around a particle that holds everything the rule reads
+    /// of it (absolute, for spacing `r0`): its neighbours (`radius`) and
+    /// every particle that can block a candidate at `r0` from it (`r0 +
+    /// clearance`).
+    pub(crate) fn search_radius(&self, r0: Real) -> Real {
+        (self.radius * r0).max(r0 + self.clearance * r0)
+    }
+
     /// Checks ranges: positive radius, ordered counts, gaps in (0, 2π],
     /// clearance in (0, 1].
     pub fn validate(&self) -> Result<(), ParamError> {
@@ -112,33 +119,33 @@ impl GrowingParams {
 }
 
 /// Offers the growing candidates of `p` to `accepted`, by parent id then
-/// angle.
-pub(crate) fn candidates(p: &Particles, r0: Real, params: &GrowingParams, accepted: &mut Accepted) {
+/// angle, reading the neighbours of `near` (searched at least as far as
+/// [`GrowingParams::search_radius`]).
+pub(crate) fn candidates(
+    p: &Particles,
+    near: &Neighbourhood,
+    r0: Real,
+    params: &GrowingParams,
+    accepted: &mut Accepted,
+) {
     let pos = p.positions();
     let radius = params.radius * r0;
     let clearance = params.clearance * r0;
-    let mut half = PairList::new();
-    search(
-        NeighbourBackend::CellList,
-        pos,
-        radius.max(r0 + clearance),
-        &mut half,
-    );
-    let full = half.full_rows();
     let ids = p.ids();
     let mut found: Vec<(u32, Vec<ParticleDesc>)> = (0..p.len())
         .into_par_iter()
-        .filter_map(|i| {
+        .map_init(Vec::new, |around: &mut Vec<u32>, i| {
             if !pos[i].iter().all(|c| c.is_finite()) {
                 return None;
             }
+            near.around_into(i, params.search_radius(r0), around);
             let n = p.normal(i);
             let x = {
                 let t = world_tangent(p, i);
                 (t - n * n.dot(&t)).normalize()
             };
             let y = n.cross(&x);
-            let mut angles: Vec<Real> = full[i]
+            let mut angles: Vec<Real> = around
                 .iter()
                 .map(|&k| k as usize)
                 .filter(|&k| {
@@ -159,7 +166,7 @@ pub(crate) fn candidates(p: &Particles, r0: Real, params: &GrowingParams, accept
                 .into_iter()
                 .filter_map(|theta| {
                     let c = pos[i] + r0 * (theta.cos() * x + theta.sin() * y);
-                    let blocked = full[i]
+                    let blocked = around
                         .iter()
                         .any(|&k| (pos[k as usize] - c).norm_squared() < clearance * clearance);
                     if blocked {
@@ -174,6 +181,7 @@ pub(crate) fn candidates(p: &Particles, r0: Real, params: &GrowingParams, accept
                 .collect();
             (!out.is_empty()).then_some((ids[i], out))
         })
+        .flatten_iter()
         .collect();
     found.sort_by_key(|(id, _)| *id);
     for d in found.into_iter().flat_map(|(_, v)| v) {

@@ -27,9 +27,13 @@
 //! dropped when it falls too close to one accepted before it (within
 //! `d_min / 2` for stretching, `clearance * r0` for growing). The result
 //! does not depend on the thread count or on the particles' slot order.
+//! Stretching and growing read one neighbour search, made at the larger
+//! of their radii and narrowed to each rule's own by the search's test, so
+//! each sees what a search of its own would give.
 
 pub mod growing;
 pub mod merging;
+mod neighbourhood;
 pub mod stretching;
 
 use std::collections::HashMap;
@@ -41,6 +45,8 @@ use op_dynamics::flags::Flags;
 use op_dynamics::math::{tangent_axis, Point3, Quat, Real, Vec3};
 use op_dynamics::particles::{ParticleDesc, Particles};
 use op_dynamics::world::{World, WorldError};
+
+use neighbourhood::Neighbourhood;
 
 pub use growing::GrowingParams;
 pub use merging::MergingParams;
@@ -145,11 +151,22 @@ impl CreationParams {
         .into_iter()
         .fold(0.0, Real::max);
         let mut accepted = Accepted::new(reach * self.r0);
+        let radius = [
+            self.stretching.as_ref().map(|s| s.search_radius(self.r0)),
+            self.growing.as_ref().map(|g| g.search_radius(self.r0)),
+        ]
+        .into_iter()
+        .flatten()
+        .reduce(Real::max);
+        let Some(radius) = radius else {
+            return Ok(Vec::new());
+        };
+        let near = Neighbourhood::new(particles.positions(), radius);
         if let Some(s) = &self.stretching {
-            stretching::candidates(particles, self.r0, s, &mut accepted);
+            stretching::candidates(particles, &near, self.r0, s, &mut accepted);
         }
         if let Some(g) = &self.growing {
-            growing::candidates(particles, self.r0, g, &mut accepted);
+            growing::candidates(particles, &near, self.r0, g, &mut accepted);
         }
         let mut out = accepted.into_descs();
         out.truncate(room);

@@ -39,10 +39,9 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::{child_of, world_tangent, Accepted};
+use super::{child_of, world_tangent, Accepted, Neighbourhood};
 use op_dynamics::error::{self, ParamError};
 use op_dynamics::math::{Point3, Real, Vec3};
-use op_dynamics::neighbours::{search, NeighbourBackend, PairList};
 use op_dynamics::particles::{ParticleDesc, Particles};
 
 /// Parameters of the stretching rule, lengths as fractions of `r0`.
@@ -88,6 +87,14 @@ impl Default for StretchingParams {
 }
 
 impl StretchingParams {
+    /// The radius around a particle that holds everything the rule reads
+    /// of it (absolute, for spacing `r0`): its pairs (`d_max`) and the
+    /// particles within `reach` of a pair's midpoint (`reach + d_max / 2`).
+    pub(crate) fn search_radius(&self, r0: Real) -> Real {
+        let (d_max, reach) = (self.d_max * r0, self.reach * r0);
+        d_max.max(reach + 0.5 * d_max)
+    }
+
     /// Checks `0 < d_min <= d_max` and `reach > d_max / 2`, all finite.
     pub fn validate(&self) -> Result<(), ParamError> {
         error::positive("d_min", self.d_min)?;
@@ -117,19 +124,19 @@ impl StretchingParams {
     }
 }
 
-/// Offers the stretching candidates of `p` to `accepted`, in pair-id order.
+/// Offers the stretching candidates of `p` to `accepted`, in pair-id order,
+/// reading the neighbours of `near` (searched at least as far as
+/// [`StretchingParams::search_radius`]).
 pub(crate) fn candidates(
     p: &Particles,
+    near: &Neighbourhood,
     r0: Real,
     params: &StretchingParams,
     accepted: &mut Accepted,
 ) {
     let (d_min, d_max, reach) = (params.d_min * r0, params.d_max * r0, params.reach * r0);
     let pos = p.positions();
-    let radius = d_max.max(reach + 0.5 * d_max);
-    let mut half = PairList::new();
-    search(NeighbourBackend::CellList, pos, radius, &mut half);
-    let full = half.full_rows();
+    let radius = params.search_radius(r0);
     let ids = p.ids();
     let temperatures = p.temperatures();
     let hot = |k: usize| params.min_temperature.is_none_or(|t| temperatures[k] >= t);
@@ -137,10 +144,11 @@ pub(crate) fn candidates(
     let one_sheet = |i: usize, j: usize| p.normal(i).dot(&p.normal(j)) >= cos_max;
     let mut found: Vec<((u32, u32), ParticleDesc)> = (0..p.len())
         .into_par_iter()
-        .flat_map_iter(|i| {
+        .map_init(Vec::new, |around: &mut Vec<u32>, i| {
             let mut out = Vec::new();
-            for &j in half.row(i) {
-                let j = j as usize;
+            // The neighbours of `i`, gathered on its first stretching pair.
+            let mut gathered = false;
+            for j in near.above(i, radius) {
                 let d2 = (pos[j] - pos[i]).norm_squared();
                 if d2 < d_min * d_min
                     || d2 > d_max * d_max
@@ -150,9 +158,13 @@ pub(crate) fn candidates(
                 {
                     continue;
                 }
+                if !gathered {
+                    near.around_into(i, radius, around);
+                    gathered = true;
+                }
                 let m = Point3::from((pos[i].coords + pos[j].coords) * 0.5);
                 // Anything within d_min/2 of m is within d_max of i.
-                let occupied = full[i].iter().any(|&k| {
+                let occupied = around.iter().any(|&k| {
                     let k = k as usize;
                     k != j && (pos[k] - m).norm_squared() < 0.25 * d_min * d_min
                 });
@@ -160,12 +172,17 @@ pub(crate) fn candidates(
                     continue;
                 }
                 let (a, b) = if ids[i] < ids[j] { (i, j) } else { (j, i) };
-                let Some(d) = averaged(p, &full[a], a, m, reach) else {
+                let averaged = if a == i {
+                    averaged(p, around.iter().map(|&k| k as usize), a, m, reach)
+                } else {
+                    averaged(p, near.around(a, radius), a, m, reach)
+                };
+                let Some(d) = averaged else {
                     continue;
                 };
                 // The averaged position left the midpoint along the normal:
                 // its own ball of d_min/2 must be empty too.
-                let crowded = full[i]
+                let crowded = around
                     .iter()
                     .map(|&k| k as usize)
                     .chain([i, j])
@@ -176,6 +193,7 @@ pub(crate) fn candidates(
             }
             out
         })
+        .flatten_iter()
         .collect();
     found.sort_by_key(|(key, _)| *key);
     for (_, d) in found {
@@ -189,14 +207,14 @@ pub(crate) fn candidates(
 /// slots. None when the averaged normal vanishes.
 fn averaged(
     p: &Particles,
-    near: &[u32],
+    near: impl Iterator<Item = usize>,
     parent: usize,
     m: Point3,
     reach: Real,
 ) -> Option<ParticleDesc> {
     let object = p.objects()[parent];
     let mut around: Vec<(u32, usize, Real)> = std::iter::once(parent)
-        .chain(near.iter().map(|&k| k as usize))
+        .chain(near)
         .filter_map(|k| {
             let r2 = (p.positions()[k] - m).norm_squared();
             (p.objects()[k] == object && r2 < reach * reach).then_some((p.ids()[k], k, r2))
