@@ -420,8 +420,8 @@ impl PairPass<'_> {
     }
 
     /// The oriented kernel: the particle frames, then bonded pairs, one
-    /// uniform material's SIMD lanes or scalar loop, or the general
-    /// oriented pair.
+    /// uniform material's SIMD lanes or scalar loop (heated or not), or the
+    /// general oriented pair.
     fn oriented(
         self,
         blocks: &mut Vec<BlockScratch>,
@@ -462,6 +462,13 @@ impl PairPass<'_> {
         } else if !heated && uniform_oriented(a) {
             let pair = |i: usize, j: usize| {
                 oriented_pair::<true>(a, m, &Unbonded, friction, false, cutoff2, nv, tv, s, i, j)
+            };
+            accumulate::<true, _>(list, blocks, Scalar(pair), out);
+        } else if uniform_oriented(a) {
+            // Heated, of one material: the same pair without the per-pair
+            // lookups (sculpting one piece of clay, seed 000 §8).
+            let pair = |i: usize, j: usize| {
+                oriented_pair::<true>(a, m, &Unbonded, friction, true, cutoff2, nv, tv, s, i, j)
             };
             accumulate::<true, _>(list, blocks, Scalar(pair), out);
         } else {
