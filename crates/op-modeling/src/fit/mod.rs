@@ -538,8 +538,9 @@ pub fn fit_with_stages(
     }
     // The final pass: close the holes narrower than the open-surface
     // threshold.
+    let before = (mesh.vertices.clone(), mesh.faces.clone());
     close_holes(&mut mesh, params, open, &seeds, &seed_normals, rest);
-    mesh.measure(&unit);
+    mesh.measure_since(&unit, (&before.0, &before.1), &distances);
     stages.lap("holes and distances");
     let thin_features = to_data(&mut mesh, thin, &frame, h, centroid, diagonal)?;
     Ok((
