@@ -528,3 +528,39 @@ fn a_dent_the_normals_did_not_follow_stays_closed() {
         "the dent's walls are kept through the fitted normals"
     );
 }
+
+/// The crowded edges kept from round to round are those an edge table of
+/// the triangles left would find: edges falling to two holders leave,
+/// corners keep their order, and an edge never crowded never enters.
+#[test]
+fn crowded_edges_after_drops_are_those_of_the_triangles_left() {
+    let mut rng = Rng::new(7);
+    // Fans of 3-6 triangles on a few edges among 60 points, plus scattered
+    // triangles, as vertex sets, ascending and distinct.
+    let mut keys: Vec<[u32; 3]> = Vec::new();
+    for e in 0..8u32 {
+        let (p, q) = (e, e + 20);
+        for r in 0..(3 + e % 4) {
+            keys.push(sorted([p, q, 40 + (e * 3 + r) % 20]));
+        }
+    }
+    for _ in 0..200 {
+        let t = [0, 1, 2].map(|_| rng.uniform(0.0, 60.0) as u32);
+        if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+            keys.push(sorted(t));
+        }
+    }
+    keys.sort_unstable();
+    keys.dedup();
+    let crowded = crowded_edges(&keys);
+    assert!(crowded.len() >= 8, "{} crowded edges", crowded.len());
+    let dropped: BTreeSet<[u32; 3]> = keys.iter().step_by(3).copied().collect();
+    let left: Vec<[u32; 3]> = keys
+        .iter()
+        .filter(|k| !dropped.contains(*k))
+        .copied()
+        .collect();
+    let kept = still_crowded(crowded.clone(), &dropped);
+    assert_eq!(kept, crowded_edges(&left));
+    assert!(kept.len() < crowded.len(), "some edges fell to two");
+}
