@@ -36,6 +36,20 @@ impl Hasher for CellHasher {
     }
 }
 
+/// Each cell's run `(start, end)` in `sorted`, entries sorted by their
+/// cell (the first of each pair).
+pub fn runs<T>(sorted: &[([i64; 3], T)]) -> CellMap<(usize, usize)> {
+    let mut runs = CellMap::default();
+    let mut start = 0;
+    for k in 1..=sorted.len() {
+        if k == sorted.len() || sorted[k].0 != sorted[start].0 {
+            runs.insert(sorted[start].0, (start, k));
+            start = k;
+        }
+    }
+    runs
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -454,14 +454,7 @@ impl Bins {
             })
             .collect();
         binned.par_sort_unstable();
-        let mut runs = CellMap::default();
-        let mut start = 0;
-        for k in 1..=binned.len() {
-            if k == binned.len() || binned[k].0 != binned[start].0 {
-                runs.insert(binned[start].0, (start, k));
-                start = k;
-            }
-        }
+        let runs = crate::cell_map::runs(&binned);
         Bins { cell, binned, runs }
     }
 

@@ -82,14 +82,7 @@ impl Grid {
             .map(|(i, p)| (cell_of(p, cell), i))
             .collect();
         keyed.par_sort_unstable();
-        let mut runs = CellMap::default();
-        let mut start = 0;
-        for k in 1..=keyed.len() {
-            if k == keyed.len() || keyed[k].0 != keyed[start].0 {
-                runs.insert(keyed[start].0, (start, k));
-                start = k;
-            }
-        }
+        let runs = crate::cell_map::runs(&keyed);
         Grid {
             cell,
             search,
