@@ -55,8 +55,8 @@ impl DataNeighbourhood {
 #[derive(Clone, Debug)]
 pub(super) struct Grid {
     cell: Real,
-    /// The farthest a query looks, a little over the reach (cells hold
-    /// every point within it).
+    /// The half-width of the box about a query whose cells it reads, a
+    /// little over the reach.
     search: Real,
     /// The points with their indices, by cell, ascending indices in each.
     sorted: Vec<(Point3, usize)>,
@@ -102,7 +102,10 @@ impl Grid {
     /// of `p`, and some farther.
     fn around<'a>(&'a self, p: &Point3) -> impl Iterator<Item = &'a (Point3, usize)> + 'a {
         let lo = cell_of(&(p - Vec3::repeat(self.search)), self.cell);
+        // Two cells at most (so even where coordinates are too large for
+        // the quotients to keep their units).
         let hi = cell_of(&(p + Vec3::repeat(self.search)), self.cell);
+        let hi = [0, 1, 2].map(|a| hi[a].min(lo[a].saturating_add(1)));
         (lo[0]..=hi[0]).flat_map(move |x| {
             (lo[1]..=hi[1]).flat_map(move |y| {
                 (lo[2]..=hi[2]).flat_map(move |z| {
