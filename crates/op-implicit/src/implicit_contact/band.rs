@@ -37,7 +37,7 @@ use crate::polygonize::blocks::{
 /// Node `i`'s index along each axis of `grid` (node `i` is
 /// `(i % nx, (i / nx) % ny, i / (nx ny))`).
 #[inline]
-fn coords(grid: &Grid, i: usize) -> [usize; 3] {
+pub(super) fn coords(grid: &Grid, i: usize) -> [usize; 3] {
     let [nx, ny, _] = grid.dims;
     [i % nx, (i / nx) % ny, i / (nx * ny)]
 }

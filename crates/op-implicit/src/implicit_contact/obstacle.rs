@@ -205,10 +205,23 @@ fn lattice(
     anchored((lo, hi), &Point3::origin(), h, max_nodes).map(Some)
 }
 
-/// The edges `(node, axis)` of `grid` along which the skin can be inside
-/// the obstacle: `e > 0` at an end and an end inside (module doc,
-/// **Band**), in increasing node and axis.
-fn edges(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>) -> Vec<(usize, usize)> {
+/// A lattice edge along which the skin can be inside the obstacle, with
+/// what sampling its block found at its two ends.
+#[derive(Clone, Copy, Debug)]
+struct Edge {
+    /// Its first node (linear index in the lattice).
+    node: usize,
+    /// The axis it runs along to its second node.
+    axis: usize,
+    /// Whether its ends, the first node then the second, lie inside the
+    /// obstacle.
+    ends: [bool; 2],
+}
+
+/// The edges of `grid` along which the skin can be inside the obstacle:
+/// `e > 0` at an end and an end inside (module doc, **Band**), in
+/// increasing node and axis.
+fn edges(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>) -> Vec<Edge> {
     let lists = BlockLists::filtered(field, grid, |c, r| obstacle.may_reach_inside(c, r + grid.h));
     let n_blocks: usize = grid.blocks().iter().product();
     let arch = pulp::Arch::new();
@@ -217,7 +230,7 @@ fn edges(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>) -> Vec<(usize, usi
     // waking a thread costs (sheet_on_sphere's 100-particle skin: contact
     // 1.44 s at 1 thread, 1.06-1.23 s at 2, 1.53-1.58 s at 2 with one task
     // for a skin under MIN_PARALLEL_LEN primitives).
-    let mut edges: Vec<(usize, usize)> = (0..n_blocks)
+    let mut edges: Vec<Edge> = (0..n_blocks)
         .into_par_iter()
         .flat_map_iter(|b| {
             let block = grid.block(b);
@@ -238,11 +251,29 @@ fn edges(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>) -> Vec<(usize, usi
             // The obstacle as a second "field" whose excess is minus the
             // signed distance, computed where an edge has e > 0 at an end.
             let inside = insides(grid, &block, &values, obstacle);
+            let nodes = block.nodes();
+            let strides = [1, nodes[0], nodes[0] * nodes[1]];
+            // Both ends of an edge the test keeps were tested for
+            // containment (`insides`: each has e > 0 or a neighbour with).
+            let end = |l: usize| inside[l] > ISO;
             band::block_edges(grid, &values, &inside, &block, band::overlapped)
+                .into_iter()
+                .map(|(node, axis)| {
+                    let at = band::coords(grid, node);
+                    let l: usize = (0..3).map(|k| (at[k] - block.start[k]) * strides[k]).sum();
+                    Edge {
+                        node,
+                        axis,
+                        ends: [end(l), end(l + strides[axis])],
+                    }
+                })
+                .collect::<Vec<_>>()
         })
         .collect();
-    edges.sort_unstable();
-    edges.dedup();
+    // An edge on a face two blocks share is found in both, with the same
+    // flags (a node's containment does not depend on its block).
+    edges.sort_unstable_by_key(|e| (e.node, e.axis));
+    edges.dedup_by_key(|e| (e.node, e.axis));
     edges
 }
 
@@ -316,10 +347,7 @@ fn sweep(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>, k: Real, gradient:
     let sums: Vec<EdgeSum> = edges
         .par_iter()
         .with_min_len(EDGES_PER_TASK)
-        .filter_map(|&(i, axis)| {
-            let p0 = band::node(grid, i);
-            edge_integral(field, obstacle, (&p0, axis, grid.h), scale, gradient)
-        })
+        .filter_map(|edge| edge_integral(field, obstacle, grid, edge, scale, gradient))
         .collect();
     let mut out = Sweep::default();
     for s in sums {
@@ -335,26 +363,49 @@ fn sweep(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>, k: Real, gradient:
     out
 }
 
-/// The integral of `scale * max(0, e)` inside the obstacle along the edge
-/// from `p0` along `axis`, of length `h`, with its gradient terms when
-/// `gradient` (module doc); `None` when it is zero.
+/// The integral of `scale * max(0, e)` inside the obstacle along `edge`
+/// of `grid`, with its gradient terms when `gradient` (module doc);
+/// `None` when it is zero.
 fn edge_integral(
     field: &Field,
     obstacle: &Obstacle<'_>,
-    (p0, axis, h): (&Point3, usize, Real),
+    grid: &Grid,
+    edge: &Edge,
     scale: Real,
     gradient: bool,
 ) -> Option<EdgeSum> {
+    let (p0, axis) = (band::node(grid, edge.node), edge.axis);
     let mut dir = Vec3::zeros();
-    dir[axis] = h;
+    dir[axis] = grid.h;
     let at = |t: Real| p0 + dir * t;
+    // The ends as the lattice has them: where an end of the edge is its
+    // node (always, on a lattice whose nodes' coordinates are exact, as
+    // for cells of a power of two), the edges' pass already found whether
+    // it is inside. (Not the field: the splat's sum may differ from
+    // `Field::value` in the last bits.)
+    let ends = {
+        let mut next = band::coords(grid, edge.node);
+        next[axis] += 1;
+        [p0, grid.node(next[0], next[1], next[2])]
+    };
+    let known = |t: Real| -> Option<bool> {
+        let end = if t == 0.0 { 0 } else { 1 };
+        (t == end as Real && at(t) == ends[end]).then_some(edge.ends[end])
+    };
     let e = |t: Real| field.value(&at(t)) - ISO;
+    let contains = |t: Real| match known(t) {
+        Some(inside) => {
+            debug_assert_eq!(inside, obstacle.contains(&at(t)));
+            inside
+        }
+        None => obstacle.contains(&at(t)),
+    };
     // The part of the edge inside the obstacle, `[lo, hi]`: where the
     // surface crosses it, a ray cast from the inner end, or, failing that,
     // the root of the signed distance.
     let inside = |t: Real| -obstacle.signed(&at(t)).0;
     let root = || edge_root(&inside, inside(0.0), inside(1.0));
-    let (lo, hi) = match (obstacle.contains(&at(0.0)), obstacle.contains(&at(1.0))) {
+    let (lo, hi) = match (contains(0.0), contains(1.0)) {
         (true, true) => (0.0, 1.0),
         (false, false) => return None,
         (true, false) => (0.0, obstacle.exit(&at(0.0), &at(1.0)).or_else(root)?),

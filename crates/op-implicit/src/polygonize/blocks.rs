@@ -11,9 +11,13 @@
 //! below or both above the iso value has all its nodes on one side and no
 //! crossing, and is skipped. The rest are sampled by splatting (each
 //! primitive adds its field to the nodes of the block inside its bounding
-//! sphere, in increasing primitive index: the same sum, term by term, as
-//! [`Field::value`]), so blocks far from every primitive cost nothing and
-//! a node shared by two blocks gets the same bits in both.
+//! sphere, in increasing primitive index: the terms of [`Field::value`]'s
+//! sum in its order, so blocks far from every primitive cost nothing and
+//! a node shared by two blocks gets the same bits in both. A point
+//! primitive's term has [`Field::value`]'s bits; another skeleton's maps
+//! the node into its frame with the rotation matrix where
+//! [`Field::value`] rotates by the quaternion, so the two may differ in
+//! the last bits).
 
 use op_dynamics::{Point3, Real, Vec3};
 
