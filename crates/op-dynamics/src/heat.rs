@@ -241,6 +241,14 @@ pub(crate) fn advance(
     }
 }
 
+/// The fewest pairs whose conduction weights one parallel task computes:
+/// a weight is a distance and a division, a few nanoseconds, so a task of
+/// [`crate::MIN_PARALLEL_LEN`] pairs cost less than waking the other
+/// thread for it (fig_07_knife's 192 particles and about 2,000 pairs: its
+/// heat stage took 0.087-0.089 s at 2 threads against 0.051-0.068 s at 1,
+/// the second thread woken at every step).
+const PAIRS_PER_TASK: usize = 16 * crate::MIN_PARALLEL_LEN;
+
 /// Explicit conduction over `dt`, sub-stepped for monotonicity. Each
 /// particle gathers its pairs in a fixed order (those where it is second,
 /// ascending, then its own row): the same sums at any thread count.
@@ -265,7 +273,7 @@ fn conduct(
     weights
         .par_iter_mut()
         .enumerate()
-        .with_min_len(crate::MIN_PARALLEL_LEN)
+        .with_min_len(PAIRS_PER_TASK)
         .for_each(|(k, w)| {
             let r = (positions[targets[k] as usize] - positions[sources[k] as usize]).norm();
             *w = (1.0 - r / cutoff).max(0.0);
