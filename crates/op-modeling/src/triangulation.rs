@@ -330,8 +330,13 @@ fn sphere_rule(
         .into_par_iter()
         .map(|i| ctx.triangles_of(i))
         .collect();
-    let mut out: Vec<[u32; 3]> = per.into_iter().flatten().map(canonical).collect();
-    out.sort_unstable();
+    // In parallel: the order they are gathered in does not matter, and
+    // equal triangles are the same bits, so the sorted list is the same.
+    let mut out: Vec<[u32; 3]> = per
+        .into_par_iter()
+        .flat_map_iter(|ts| ts.into_iter().map(canonical))
+        .collect();
+    out.par_sort_unstable();
     Ok(out)
 }
 
