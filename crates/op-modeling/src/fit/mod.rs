@@ -188,6 +188,7 @@ use std::collections::HashSet;
 use std::time::Instant;
 
 use op_dynamics::{ParamError, Point3, Real, Vec3, WorldError};
+use rayon::prelude::*;
 
 use input::median_of;
 use input::Input;
@@ -308,7 +309,7 @@ impl Fit {
             .into_iter()
             .flatten()
             .collect();
-        roots.sort_unstable();
+        roots.par_sort_unstable();
         roots.dedup();
         roots.len()
     }

@@ -9,6 +9,8 @@
 //! any thread count: what a map from edges to triangle lists filled in
 //! triangle order holds, without a hash or a list per edge.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use rayon::prelude::*;
 
 /// Fewest triangles whose half-edges are sorted in parallel: below, the
@@ -56,10 +58,10 @@ impl EdgeTable {
                 .flat_map_iter(half)
                 .collect();
             pairs.par_sort_unstable();
-        } else {
-            pairs = triangles.iter().enumerate().flat_map(half).collect();
-            pairs.sort_unstable();
+            return Self::from_sorted_in_parallel(&pairs);
         }
+        pairs = triangles.iter().enumerate().flat_map(half).collect();
+        pairs.sort_unstable();
         let mut keys = Vec::new();
         let mut starts = Vec::new();
         let mut slots = Vec::with_capacity(pairs.len());
@@ -78,6 +80,34 @@ impl EdgeTable {
             starts,
             slots,
             edge_of,
+        }
+    }
+
+    /// The table of the sorted `(edge key, slot)` pairs of every triangle
+    /// side, built in parallel: the serial loop's table (each edge's run
+    /// starts at the first pair of its key; every slot, a side, appears
+    /// once, so each is written once).
+    fn from_sorted_in_parallel(pairs: &[(u64, u32)]) -> Self {
+        let n = pairs.len();
+        let mut starts: Vec<u32> = (0..n)
+            .into_par_iter()
+            .filter(|&i| i == 0 || pairs[i].0 != pairs[i - 1].0)
+            .map(|i| i as u32)
+            .collect();
+        let keys: Vec<u64> = starts.par_iter().map(|&i| pairs[i as usize].0).collect();
+        starts.push(n as u32);
+        let slots: Vec<u32> = pairs.par_iter().map(|p| p.1).collect();
+        let edge_of: Vec<AtomicU32> = (0..n).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+        (0..keys.len()).into_par_iter().for_each(|e| {
+            for &s in &slots[starts[e] as usize..starts[e + 1] as usize] {
+                edge_of[s as usize].store(e as u32, Ordering::Relaxed);
+            }
+        });
+        EdgeTable {
+            keys,
+            starts,
+            slots,
+            edge_of: edge_of.into_par_iter().map(AtomicU32::into_inner).collect(),
         }
     }
 

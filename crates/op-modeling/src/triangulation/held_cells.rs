@@ -95,6 +95,8 @@ pub(super) fn close_held_cells(
     }
     if !added.is_empty() {
         tris.extend(added);
-        tris.sort_unstable();
+        // Equal triangles are the same bits: the parallel sort gives the
+        // serial one's list.
+        tris.par_sort_unstable();
     }
 }
