@@ -13,8 +13,8 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use rayon::prelude::*;
 
-/// Fewest triangles whose half-edges are sorted in parallel: below, the
-/// pool's fork-join costs more than the sort saves.
+/// Fewest triangles whose half-edges are sorted and grouped into edges in
+/// parallel: below, the pool's fork-join costs more than it saves.
 const PARALLEL_TRIANGLES: usize = 4096;
 
 /// The key of the undirected edge `{a, b}`.
