@@ -374,38 +374,37 @@ fn edge_integral(
     scale: Real,
     gradient: bool,
 ) -> Option<EdgeSum> {
-    let (p0, axis) = (band::node(grid, edge.node), edge.axis);
+    let axis = edge.axis;
+    // The edge's two nodes, as the lattice places them.
+    let first = band::coords(grid, edge.node);
+    let mut second = first;
+    second[axis] += 1;
+    let ends = [first, second].map(|[x, y, z]| grid.node(x, y, z));
+    let p0 = ends[0];
     let mut dir = Vec3::zeros();
     dir[axis] = grid.h;
     let at = |t: Real| p0 + dir * t;
-    // The ends as the lattice has them: where an end of the edge is its
-    // node (always, on a lattice whose nodes' coordinates are exact, as
-    // for cells of a power of two), the edges' pass already found whether
-    // it is inside. (Not the field: the splat's sum may differ from
-    // `Field::value` in the last bits.)
-    let ends = {
-        let mut next = band::coords(grid, edge.node);
-        next[axis] += 1;
-        [p0, grid.node(next[0], next[1], next[2])]
-    };
-    let known = |t: Real| -> Option<bool> {
-        let end = if t == 0.0 { 0 } else { 1 };
-        (t == end as Real && at(t) == ends[end]).then_some(edge.ends[end])
-    };
     let e = |t: Real| field.value(&at(t)) - ISO;
-    let contains = |t: Real| match known(t) {
-        Some(inside) => {
-            debug_assert_eq!(inside, obstacle.contains(&at(t)));
-            inside
+    // Whether end `k` (at `t = k`) is inside: where it is its node
+    // (always, on a lattice whose nodes' coordinates are exact, as for
+    // cells of a power of two), as the edges' pass found it. (Not the
+    // field: the splat's sum may differ from `Field::value` in the last
+    // bits.)
+    let contains = |k: usize| {
+        let p = at(k as Real);
+        if p == ends[k] {
+            debug_assert_eq!(edge.ends[k], obstacle.contains(&p));
+            edge.ends[k]
+        } else {
+            obstacle.contains(&p)
         }
-        None => obstacle.contains(&at(t)),
     };
     // The part of the edge inside the obstacle, `[lo, hi]`: where the
     // surface crosses it, a ray cast from the inner end, or, failing that,
     // the root of the signed distance.
     let inside = |t: Real| -obstacle.signed(&at(t)).0;
     let root = || edge_root(&inside, inside(0.0), inside(1.0));
-    let (lo, hi) = match (contains(0.0), contains(1.0)) {
+    let (lo, hi) = match (contains(0), contains(1)) {
         (true, true) => (0.0, 1.0),
         (false, false) => return None,
         (true, false) => (0.0, obstacle.exit(&at(0.0), &at(1.0)).or_else(root)?),

@@ -50,9 +50,8 @@ impl EdgeTable {
             let f = *f;
             (0..3).map(move |k| (key(f[k], f[(k + 1) % 3]), (3 * t + k) as u32))
         };
-        let mut pairs: Vec<(u64, u32)>;
         if triangles.len() >= PARALLEL_TRIANGLES {
-            pairs = triangles
+            let mut pairs: Vec<(u64, u32)> = triangles
                 .par_iter()
                 .enumerate()
                 .flat_map_iter(half)
@@ -60,7 +59,7 @@ impl EdgeTable {
             pairs.par_sort_unstable();
             return Self::from_sorted_in_parallel(&pairs);
         }
-        pairs = triangles.iter().enumerate().flat_map(half).collect();
+        let mut pairs: Vec<(u64, u32)> = triangles.iter().enumerate().flat_map(half).collect();
         pairs.sort_unstable();
         let mut keys = Vec::new();
         let mut starts = Vec::new();
