@@ -63,18 +63,53 @@ fn reals(bits: &[u64]) -> Vec<Real> {
 #[test]
 fn cluster_pass_agrees_with_the_scalar_pass() {
     let (p, list, cutoff) = block(13);
+    assert_agrees_with_the_scalar_pass(&p, &list, cutoff, 1e-5);
+}
+
+/// The same where a block's halo targets lie far apart in index (a slab
+/// whose lower half is the first block and whose upper half comes last,
+/// an unrelated lump between them): the first block's few halo targets
+/// span more clusters than it scans, so it sorts them instead of reading
+/// them off its slot map, while the other blocks read theirs.
+#[test]
+fn cluster_pass_agrees_with_the_scalar_pass_across_far_halos() {
+    // 8 x 8 x 8, z slowest: the first 256 particles (one block) are the
+    // lower half.
+    let slab = jittered_block(8, &mut Rng::new(0x0dd5));
+    let lump = jittered_block(14, &mut Rng::new(7));
+    let mut p = slab[..256].to_vec();
+    p.extend(lump.iter().map(|q| q + Vec3::new(20.0, 0.0, 0.0)));
+    p.extend_from_slice(&slab[256..]);
+    let m = lj_12_6_material();
+    let cutoff = m.cutoff();
+    let mut list = NeighbourList::new(NeighbourBackend::CellList, cutoff, 0.3);
+    list.update(&p);
+    // Coordinates up to 36 (the block's reach 14): a coarser `f32`
+    // quantization; the `f64` lanes check the merge to 1e-12.
+    assert_agrees_with_the_scalar_pass(&p, &list, cutoff, 1e-4);
+}
+
+/// The checks of [`cluster_pass_agrees_with_the_scalar_pass`], mixed
+/// precision within `f32_tol` of the largest force, and the same bits at
+/// one and two threads.
+fn assert_agrees_with_the_scalar_pass(
+    p: &[Point3],
+    list: &NeighbourList,
+    cutoff: Real,
+    f32_tol: Real,
+) {
     let n = p.len();
     let m = lj_12_6_material();
     let scalar = reals(&pass_bits(n, 1, |blocks, out| {
-        uniform_spacing_pass(&m, cutoff * cutoff, &p, &list, blocks, out, false)
+        uniform_spacing_pass(&m, cutoff * cutoff, p, list, blocks, out, false)
     }));
     let scale = scalar[..3 * n]
         .iter()
         .fold(0.0, |a: Real, &b| a.max(b.abs()));
     assert!(scale > 1.0, "{scale}");
     let energy = |v: &[Real]| v[6 * n..].iter().sum::<Real>();
-    for (lanes, tol) in [(Lanes::F64, 1e-12), (Lanes::F32, 1e-5)] {
-        let c = reals(&cluster_bits(&p, &list, cutoff, lanes, 1));
+    for (lanes, tol) in [(Lanes::F64, 1e-12), (Lanes::F32, f32_tol)] {
+        let c = reals(&cluster_bits(p, list, cutoff, lanes, 1));
         for k in 0..3 * n {
             assert!(
                 (c[k] - scalar[k]).abs() <= tol * scale,
@@ -88,6 +123,11 @@ fn cluster_pass_agrees_with_the_scalar_pass() {
         assert!(
             (ec - es).abs() <= tol * es.abs(),
             "{lanes:?} energy {ec} vs {es}"
+        );
+        assert_eq!(
+            cluster_bits(p, list, cutoff, lanes, 1),
+            cluster_bits(p, list, cutoff, lanes, 2),
+            "{lanes:?}: 1 and 2 threads"
         );
     }
 }
