@@ -68,9 +68,10 @@ fn cluster_pass_agrees_with_the_scalar_pass() {
 
 /// The same where a block's halo targets lie far apart in index (a slab
 /// whose lower half is the first block and whose upper half comes last,
-/// an unrelated lump between them): the first block's few halo targets
-/// span more clusters than it scans, so it sorts them instead of reading
-/// them off its slot map, while the other blocks read theirs.
+/// an unrelated lump between them): the first block's 32 halo targets
+/// span 717 clusters, more than `HALO_SCAN` per target, so it sorts them
+/// instead of reading them off its slot map, while the other blocks read
+/// theirs.
 #[test]
 fn cluster_pass_agrees_with_the_scalar_pass_across_far_halos() {
     // 8 x 8 x 8, z slowest: the first 256 particles (one block) are the
