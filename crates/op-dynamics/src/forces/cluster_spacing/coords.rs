@@ -31,12 +31,22 @@ impl<F: Lane> ClusterCoords<F> {
             .zip(self.z.par_chunks_mut(SLOTS))
             .enumerate()
             .for_each(|(k, ((x, y), z))| {
-                for s in 0..x.len() {
-                    let i = (k * SLOTS + s) / TILE * CLUSTER + s % CLUSTER;
-                    let q = p.get(i).map(|q| q - origin);
-                    x[s] = q.map_or(F::NAN, |q| F::of(q.x));
-                    y[s] = q.map_or(F::NAN, |q| F::of(q.y));
-                    z[s] = q.map_or(F::NAN, |q| F::of(q.z));
+                // Each particle converted once, then repeated over its
+                // cluster's `CLUSTER` slot groups.
+                let first = k * SLOTS / TILE;
+                for (c, ((x, y), z)) in x
+                    .chunks_exact_mut(TILE)
+                    .zip(y.chunks_exact_mut(TILE))
+                    .zip(z.chunks_exact_mut(TILE))
+                    .enumerate()
+                {
+                    for m in 0..CLUSTER {
+                        let q = p.get((first + c) * CLUSTER + m).map(|q| q - origin);
+                        let q = q.map_or([F::NAN; 3], |q| [F::of(q.x), F::of(q.y), F::of(q.z)]);
+                        for r in (m..TILE).step_by(CLUSTER) {
+                            (x[r], y[r], z[r]) = (q[0], q[1], q[2]);
+                        }
+                    }
                 }
             });
     }
