@@ -128,8 +128,8 @@ enum Command {
     /// Fit a particle surface to a point set (seed 000 §7) and write its
     /// triangle mesh; prints one JSON line of figures.
     Fit {
-        /// Samples: .xyz (`x y z [nx ny nz]` per line), .ply (ascii or
-        /// binary_little_endian) or .obj (`v`, optional `vn`).
+        /// Samples: .xyz or .pwn (`x y z [nx ny nz]` per line), .ply (ascii
+        /// or binary_little_endian) or .obj (`v`, optional `vn`).
         points: PathBuf,
         /// Output mesh (.obj), written atomically, in the samples' own
         /// coordinates (no axis change, so it overlays the input; run

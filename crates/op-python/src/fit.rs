@@ -54,7 +54,7 @@ impl PyFit {
     }
 }
 
-/// The samples: a points file (.xyz, .ply, .obj, as `opsim fit` reads
+/// The samples: a points file (.xyz, .pwn, .ply, .obj, as `opsim fit` reads
 /// it) or an (n, 3) array with optional (n, 3) normals.
 fn samples(points: &Bound<'_, PyAny>, normals: Option<&Bound<'_, PyAny>>) -> PyResult<PointSet> {
     if let Ok(path) = points.extract::<PathBuf>() {
@@ -90,7 +90,7 @@ fn samples(points: &Bound<'_, PyAny>, normals: Option<&Bound<'_, PyAny>>) -> PyR
 }
 
 /// Fits a surface of oriented particles to a point set and triangulates
-/// it, as `opsim fit` does: `points` is a points file (.xyz, .ply, .obj)
+/// it, as `opsim fit` does: `points` is a points file (.xyz, .pwn, .ply, .obj)
 /// or an (n, 3) array (optional `normals`, (n, 3)); `spacing` the sample
 /// spacing (default: the median nearest-sample distance); `open` `True`
 /// for open data (only gaps within the search range are filled), `False`

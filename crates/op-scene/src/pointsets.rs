@@ -1,5 +1,6 @@
 //! Point sets read from files for point-set interpolation (seed 000 §7,
-//! README "Running scenes", `opsim fit`): `.xyz` text, `.ply` (ascii and
+//! README "Running scenes", `opsim fit`): `.xyz` text (and `.pwn`, CGAL's
+//! points with normals, the same text), `.ply` (ascii and
 //! binary_little_endian) and `.obj` (`v` and `vn` lines).
 //!
 //! Entry points: [`read_point_set`] (by extension) and the parsers
@@ -110,11 +111,11 @@ fn read_points_at_most(path: &Path, max_points: usize) -> Result<PointSet, Point
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    if !matches!(ext.as_str(), "xyz" | "ply" | "obj") {
+    if !matches!(ext.as_str(), "xyz" | "pwn" | "ply" | "obj") {
         return Err(format_err(
             &file,
             None,
-            format!("unknown point-set format `.{ext}`: use .xyz, .ply or .obj"),
+            format!("unknown point-set format `.{ext}`: use .xyz (or .pwn), .ply or .obj"),
         ));
     }
     let bytes = match read_regular_file(path, MAX_POINT_FILE_BYTES) {
@@ -141,7 +142,8 @@ fn read_points_at_most(path: &Path, max_points: usize) -> Result<PointSet, Point
             }
             let text = std::str::from_utf8(bytes)
                 .map_err(|e| format_err(&file, None, format!("not UTF-8 text: {e}")))?;
-            if ext == "xyz" {
+            if ext != "obj" {
+                // `.xyz`, or `.pwn`: `x y z nx ny nz` per line.
                 parse_xyz(text, &file)?
             } else {
                 parse_obj(text, &file)?
@@ -489,6 +491,26 @@ mod tests {
         let big = String::from_utf8_lossy(&bytes).replace("little", "big");
         let e = parse_ply(big.as_bytes(), "c.ply").unwrap_err().to_string();
         assert!(e.starts_with("c.ply:2:"), "{e}");
+    }
+
+    /// CGAL's `.pwn` (points with normals, as its example data ships
+    /// them: `oni.pwn`) is `.xyz` text under another name.
+    #[test]
+    fn pwn_files_read_as_xyz() {
+        let d = temp_dir("pwn");
+        let path = d.join("oni.PWN");
+        std::fs::write(
+            &path,
+            "-0.12 -0.04 -0.22 -0.51 -0.56 -0.64\n0.1 0.2 0.3 0 0 2\n",
+        )
+        .unwrap();
+        let s = read_point_set(&path).unwrap();
+        assert_eq!(s.positions[1], Point3::new(0.1, 0.2, 0.3));
+        assert_eq!(s.normals.unwrap()[1], Vec3::z());
+        std::fs::write(&path, "0 0 0 0 0 1\n1 0 0 0 1\n").unwrap();
+        let e = read_point_set(&path).unwrap_err().to_string();
+        assert!(e.contains("oni.PWN:2"), "{e}");
+        std::fs::remove_dir_all(&d).unwrap();
     }
 
     #[test]
