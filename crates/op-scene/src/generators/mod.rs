@@ -262,7 +262,8 @@ pub enum Generator {
     },
     /// Points read from a file by [`crate::pointsets::read_point_set`]'s
     /// reader: `.xyz` text (`x y z [nx ny nz]` per line, normals for every
-    /// point or none, `#` comments, blank lines skipped), `.ply` (ascii or
+    /// point or none, `#` comments, blank lines skipped; CGAL's `.pwn` is
+    /// the same text), `.ply` (ascii or
     /// binary little-endian) or `.obj` (`v` / `vn` lines). Normals default
     /// to +z (a fit estimates them instead: [`crate::schema::fit`]),
     /// curvature 0.
