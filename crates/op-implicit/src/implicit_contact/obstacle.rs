@@ -218,63 +218,70 @@ struct Edge {
     ends: [bool; 2],
 }
 
-/// The edges of `grid` along which the skin can be inside the obstacle:
-/// `e > 0` at an end and an end inside (module doc, **Band**), in
-/// increasing node and axis.
-fn edges(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>) -> Vec<Edge> {
-    let lists = BlockLists::filtered(field, grid, |c, r| obstacle.may_reach_inside(c, r + grid.h));
-    let n_blocks: usize = grid.blocks().iter().product();
-    let arch = pulp::Arch::new();
-    // A block each task, even for a small skin: a block that passes the
-    // tests below is splatted, tens of microseconds of work, more than
-    // waking a thread costs (sheet_on_sphere's 100-particle skin: contact
-    // 1.44 s at 1 thread, 1.06-1.23 s at 2, 1.53-1.58 s at 2 with one task
-    // for a skin under MIN_PARALLEL_LEN primitives).
-    let mut edges: Vec<Edge> = (0..n_blocks)
-        .into_par_iter()
-        .flat_map_iter(|b| {
-            let block = grid.block(b);
-            let list = lists.of(b);
-            let (lo, hi) = block.bounds(grid);
-            let centre = lo + (hi - lo) * 0.5;
-            if list.is_empty() || !obstacle.may_reach_inside(&centre, 0.5 * (hi - lo).norm()) {
-                return Vec::new();
-            }
-            let (_, upper) = box_bounds(field, (&lo, &hi), list);
-            if upper + margin(upper) < ISO {
-                return Vec::new();
-            }
-            let (values, _) = splat_block(field, grid, &block, list, arch);
-            if values.iter().all(|&v| v <= ISO) {
-                return Vec::new();
-            }
-            // The obstacle as a second "field" whose excess is minus the
-            // signed distance, computed where an edge has e > 0 at an end.
-            let inside = insides(grid, &block, &values, obstacle);
-            let nodes = block.nodes();
-            let strides = [1, nodes[0], nodes[0] * nodes[1]];
-            // Both ends of an edge the test keeps were tested for
-            // containment (`insides`: each has e > 0 or a neighbour with).
-            let end = |l: usize| inside[l] > ISO;
-            band::block_edges(grid, &values, &inside, &block, band::overlapped)
-                .into_iter()
-                .map(|(node, axis)| {
-                    let at = band::coords(grid, node);
-                    let l: usize = (0..3).map(|k| (at[k] - block.start[k]) * strides[k]).sum();
-                    Edge {
-                        node,
-                        axis,
-                        ends: [end(l), end(l + strides[axis])],
-                    }
-                })
-                .collect::<Vec<_>>()
+/// The edges of block `b` of `grid` along which the skin can be inside
+/// the obstacle: `e > 0` at an end and an end inside (module doc,
+/// **Band**), in increasing node and axis, less those it shares with a
+/// later block (an edge on a face two blocks share belongs to the block
+/// whose first node is its first node: [`owns`]). `lists` are the
+/// primitives that may reach inside, per block.
+fn block_edges(
+    grid: &Grid,
+    field: &Field,
+    obstacle: &Obstacle<'_>,
+    lists: &BlockLists,
+    b: usize,
+    arch: pulp::Arch,
+) -> Vec<Edge> {
+    let block = grid.block(b);
+    let list = lists.of(b);
+    let (lo, hi) = block.bounds(grid);
+    let centre = lo + (hi - lo) * 0.5;
+    if list.is_empty() || !obstacle.may_reach_inside(&centre, 0.5 * (hi - lo).norm()) {
+        return Vec::new();
+    }
+    let (_, upper) = box_bounds(field, (&lo, &hi), list);
+    if upper + margin(upper) < ISO {
+        return Vec::new();
+    }
+    let (values, _) = splat_block(field, grid, &block, list, arch);
+    if values.iter().all(|&v| v <= ISO) {
+        return Vec::new();
+    }
+    // The obstacle as a second "field" whose excess is minus the signed
+    // distance, computed where an edge has e > 0 at an end.
+    let inside = insides(grid, &block, &values, obstacle);
+    let nodes = block.nodes();
+    let strides = [1, nodes[0], nodes[0] * nodes[1]];
+    // Both ends of an edge the test keeps were tested for containment
+    // (`insides`: each has e > 0 or a neighbour with).
+    let end = |l: usize| inside[l] > ISO;
+    band::block_edges(grid, &values, &inside, &block, band::overlapped)
+        .into_iter()
+        .filter_map(|(node, axis)| {
+            let at = band::coords(grid, node);
+            let here = [0, 1, 2].map(|k| at[k] - block.start[k]);
+            owns(grid, &block, here).then(|| {
+                let l: usize = (0..3).map(|k| here[k] * strides[k]).sum();
+                Edge {
+                    node,
+                    axis,
+                    ends: [end(l), end(l + strides[axis])],
+                }
+            })
         })
-        .collect();
-    // An edge on a face two blocks share is found in both, with the same
-    // flags (a node's containment does not depend on its block).
-    edges.sort_unstable_by_key(|e| (e.node, e.axis));
-    edges.dedup_by_key(|e| (e.node, e.axis));
-    edges
+        .collect()
+}
+
+/// Whether `block` owns the edges from its node `here` (block
+/// coordinates): those on its faces with a later block belong to that
+/// block, which finds them too, with the same flags. A block whose
+/// neighbour across such a face is passed over finds none there: its
+/// nodes on the face are outside the obstacle or have `e <= 0` (the
+/// neighbour's tests), and a node's value and containment do not depend
+/// on its block (each block's list holds every primitive reaching its
+/// face nodes).
+fn owns(grid: &Grid, block: &Block, here: [usize; 3]) -> bool {
+    (0..3).all(|k| here[k] < block.cells[k] || block.start[k] + here[k] + 1 == grid.dims[k])
 }
 
 /// Per node of `block` (values `values`, x fastest), the obstacle as a
@@ -340,17 +347,36 @@ struct Sweep {
 }
 
 /// `E_h` over `grid` for stiffness `k`, with the gradient's terms when
-/// `gradient` (module doc).
+/// `gradient` (module doc). Each block finds its edges and integrates
+/// them in one task, its edges themselves split among the threads (a
+/// small skin reaches a handful of blocks); the sums are then added in
+/// edge order, so the bits do not depend on the thread count.
 fn sweep(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>, k: Real, gradient: bool) -> Sweep {
-    let edges = edges(grid, field, obstacle);
+    let lists = BlockLists::filtered(field, grid, |c, r| obstacle.may_reach_inside(c, r + grid.h));
+    let n_blocks: usize = grid.blocks().iter().product();
+    let arch = pulp::Arch::new();
     let scale = k * grid.h.powi(3);
-    let sums: Vec<EdgeSum> = edges
-        .par_iter()
-        .with_min_len(EDGES_PER_TASK)
-        .filter_map(|edge| edge_integral(field, obstacle, grid, edge, scale, gradient))
+    // A block each task, even for a small skin: a block that passes the
+    // tests of `block_edges` is splatted, tens of microseconds of work,
+    // more than waking a thread costs (sheet_on_sphere's 100-particle
+    // skin: contact 1.44 s at 1 thread, 1.06-1.23 s at 2, 1.53-1.58 s at
+    // 2 with one task for a skin under MIN_PARALLEL_LEN primitives).
+    let mut sums: Vec<((usize, usize), EdgeSum)> = (0..n_blocks)
+        .into_par_iter()
+        .flat_map_iter(|b| {
+            block_edges(grid, field, obstacle, &lists, b, arch)
+                .par_iter()
+                .with_min_len(EDGES_PER_TASK)
+                .filter_map(|edge| {
+                    edge_integral(field, obstacle, grid, edge, scale, gradient)
+                        .map(|sum| ((edge.node, edge.axis), sum))
+                })
+                .collect::<Vec<_>>()
+        })
         .collect();
+    sums.sort_unstable_by_key(|(key, _)| *key);
     let mut out = Sweep::default();
-    for s in sums {
+    for (_, s) in sums {
         out.energy += s.energy;
         out.edges += 1;
         out.depth = out.depth.max(s.depth);

@@ -2,7 +2,8 @@
 //! gradient (finite differences in every particle's position and
 //! orientation), the energy converges to the integral it approximates,
 //! velocity Verlet conserves the energy with contact to second order in
-//! the step, and the sums do not depend on the thread count.
+//! the step, the sums do not depend on the thread count, and each lattice
+//! edge is found by one block.
 
 use crate::field::Field;
 use crate::kernel::ISO;
@@ -297,14 +298,11 @@ fn verlet_conserves_energy_with_obstacle_contact_at_second_order() {
     crate::implicit_contact::tests::assert_second_order(&drifts, "the blobs bounce");
 }
 
-/// A skin of more particles than the parallel threshold gets the same
-/// bits at 1 and 3 threads; a skin away from the obstacle gets nothing,
-/// and a bad cell size is an error.
-#[test]
-fn the_sums_do_not_depend_on_the_thread_count() {
-    let mut rng = Rng::new(3);
+/// A skin of squares on a grid, pressed into the tilted box's top face,
+/// a little wavy (seeded): 1200 particles 0.1 apart.
+fn mat(rng: &mut Rng) -> Skin {
     let n = 1200;
-    let s = Skin {
+    Skin {
         positions: (0..n)
             .map(|i| {
                 let (x, y) = ((i % 40) as Real * 0.1 - 2.0, (i / 40) as Real * 0.1 - 1.5);
@@ -313,7 +311,87 @@ fn the_sums_do_not_depend_on_the_thread_count() {
             .collect(),
         orientations: (0..n).map(|_| rng.quat(0.3)).collect(),
         primitives: vec![Primitive::square(Vec3::z(), 0.05, 0.15); n],
+    }
+}
+
+/// Each lattice edge is integrated once: the edges the blocks own
+/// (`block_edges`, every block's merged) are, with their ends' flags,
+/// those of an oracle that splats every block whole from every primitive,
+/// tests every node for containment and merges the blocks' edges without
+/// duplicates. The skin spans many blocks, so many edges lie on faces two
+/// blocks share.
+#[test]
+fn each_edge_is_found_by_one_block() {
+    use super::band;
+    use crate::polygonize::blocks::{splat_block, BlockLists};
+
+    let s = mat(&mut Rng::new(3));
+    let field = s.field();
+    let (c, cp) = tilted_box();
+    let obstacle = super::Obstacle {
+        shape: &c,
+        pose: &cp,
     };
+    let grid = super::lattice(&field, &obstacle, PARAMS.cell_size, 512)
+        .unwrap()
+        .unwrap();
+    let n_blocks: usize = grid.blocks().iter().product();
+    let arch = pulp::Arch::new();
+    let lists =
+        BlockLists::filtered(&field, &grid, |c, r| obstacle.may_reach_inside(c, r + grid.h));
+    let per_block: Vec<Vec<(usize, usize, [bool; 2])>> = (0..n_blocks)
+        .map(|b| {
+            super::block_edges(&grid, &field, &obstacle, &lists, b, arch)
+                .into_iter()
+                .map(|e| (e.node, e.axis, e.ends))
+                .collect()
+        })
+        .collect();
+    assert!(per_block.iter().filter(|e| !e.is_empty()).count() >= 6);
+    let mut owned: Vec<_> = per_block.concat();
+    owned.sort_unstable();
+
+    let all = BlockLists::new(&field, &grid);
+    let mut dense = Vec::new();
+    for b in 0..n_blocks {
+        let block = grid.block(b);
+        let (values, _) = splat_block(&field, &grid, &block, all.of(b), arch);
+        let nodes = block.nodes();
+        let mut inside = Vec::with_capacity(values.len());
+        for z in 0..nodes[2] {
+            for y in 0..nodes[1] {
+                for x in 0..nodes[0] {
+                    let p = grid.node(block.start[0] + x, block.start[1] + y, block.start[2] + z);
+                    inside.push(if obstacle.contains(&p) { ISO + 1.0 } else { 0.0 });
+                }
+            }
+        }
+        let strides = [1, nodes[0], nodes[0] * nodes[1]];
+        for (node, axis) in band::block_edges(&grid, &values, &inside, &block, band::overlapped) {
+            let at = band::coords(&grid, node);
+            let l: usize = (0..3).map(|k| (at[k] - block.start[k]) * strides[k]).sum();
+            let end = |l: usize| inside[l] > ISO;
+            dense.push((node, axis, [end(l), end(l + strides[axis])]));
+        }
+    }
+    dense.sort_unstable();
+    dense.dedup();
+    assert!(dense.len() > 1000, "{} edges", dense.len());
+    let first_difference = owned.iter().zip(&dense).position(|(a, b)| a != b);
+    assert!(
+        owned == dense,
+        "{} edges owned, {} in the oracle; first difference at {first_difference:?}",
+        owned.len(),
+        dense.len()
+    );
+}
+
+/// A skin of more particles than the parallel threshold gets the same
+/// bits at 1 and 3 threads; a skin away from the obstacle gets nothing,
+/// and a bad cell size is an error.
+#[test]
+fn the_sums_do_not_depend_on_the_thread_count() {
+    let s = mat(&mut Rng::new(3));
     let (c, cp) = tilted_box();
     let obstacle: Obstacle<'_> = (&c, cp);
     let run = |threads: usize| {
