@@ -52,6 +52,23 @@ pub enum Skeleton {
 }
 
 impl Skeleton {
+    /// Squared (scaled) distance from local point `p`: the first part of
+    /// [`Skeleton::distance2_and_gradient`], the same operations, so the
+    /// same bits.
+    #[inline]
+    pub fn distance2(&self, p: &Vec3) -> Real {
+        match *self {
+            Skeleton::Point => p.norm_squared(),
+            Skeleton::Segment { half_length } => {
+                Vec3::new(p.x - p.x.clamp(-half_length, half_length), p.y, p.z).norm_squared()
+            }
+            Skeleton::Rectangle {
+                half_extents: [a, b],
+            } => Vec3::new(p.x - p.x.clamp(-a, a), p.y - p.y.clamp(-b, b), p.z).norm_squared(),
+            Skeleton::Ellipsoid { scales } => p.component_div(&scales).norm_squared(),
+        }
+    }
+
     /// Squared (scaled) distance from local point `p` and its gradient with
     /// respect to `p`.
     #[inline]
@@ -343,6 +360,18 @@ impl PosedPrimitive {
         (Point3::from(self.pose.translation.vector), self.bound)
     }
 
+    /// Squared (scaled) distance from world point `p`: the first part of
+    /// [`PosedPrimitive::distance2_and_gradient`], the same operations, so
+    /// the same bits, without turning the gradient back into the world.
+    #[inline]
+    pub fn distance2(&self, p: &Point3) -> Real {
+        if let Skeleton::Point = self.shape {
+            return (p.coords - self.pose.translation.vector).norm_squared();
+        }
+        let local = self.pose.inverse_transform_point(p).coords;
+        self.shape.distance2(&local)
+    }
+
     /// Squared (scaled) distance from world point `p` and its world-frame
     /// gradient.
     #[inline]
@@ -407,7 +436,7 @@ impl PosedPrimitive {
     /// The primitive's field at `p` (no gradient).
     #[inline]
     pub fn field(&self, p: &Point3) -> Real {
-        let (d2, _) = self.distance2_and_gradient(p);
+        let d2 = self.distance2(p);
         self.weight * kernel::value_sq(d2 * self.inv_radius2)
     }
 }
