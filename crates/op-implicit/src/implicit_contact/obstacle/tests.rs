@@ -337,8 +337,9 @@ fn each_edge_is_found_by_one_block() {
         .unwrap();
     let n_blocks: usize = grid.blocks().iter().product();
     let arch = pulp::Arch::new();
-    let lists =
-        BlockLists::filtered(&field, &grid, |c, r| obstacle.may_reach_inside(c, r + grid.h));
+    let lists = BlockLists::filtered(&field, &grid, |c, r| {
+        obstacle.may_reach_inside(c, r + grid.h)
+    });
     let per_block: Vec<Vec<(usize, usize, [bool; 2])>> = (0..n_blocks)
         .map(|b| {
             super::block_edges(&grid, &field, &obstacle, &lists, b, arch)
@@ -362,7 +363,11 @@ fn each_edge_is_found_by_one_block() {
             for y in 0..nodes[1] {
                 for x in 0..nodes[0] {
                     let p = grid.node(block.start[0] + x, block.start[1] + y, block.start[2] + z);
-                    inside.push(if obstacle.contains(&p) { ISO + 1.0 } else { 0.0 });
+                    inside.push(if obstacle.contains(&p) {
+                        ISO + 1.0
+                    } else {
+                        0.0
+                    });
                 }
             }
         }
