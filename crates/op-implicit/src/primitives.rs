@@ -52,28 +52,13 @@ pub enum Skeleton {
 }
 
 impl Skeleton {
-    /// Squared (scaled) distance from local point `p`: the first part of
-    /// [`Skeleton::distance2_and_gradient`], the same operations, so the
-    /// same bits.
+    /// The (scaled) offset of local point `p` from the skeleton, whose
+    /// squared length is the squared distance: from the nearest point of a
+    /// point, segment or rectangle; `p` divided by the scales for an
+    /// ellipsoid.
     #[inline]
-    pub fn distance2(&self, p: &Vec3) -> Real {
+    fn offset(&self, p: &Vec3) -> Vec3 {
         match *self {
-            Skeleton::Point => p.norm_squared(),
-            Skeleton::Segment { half_length } => {
-                Vec3::new(p.x - p.x.clamp(-half_length, half_length), p.y, p.z).norm_squared()
-            }
-            Skeleton::Rectangle {
-                half_extents: [a, b],
-            } => Vec3::new(p.x - p.x.clamp(-a, a), p.y - p.y.clamp(-b, b), p.z).norm_squared(),
-            Skeleton::Ellipsoid { scales } => p.component_div(&scales).norm_squared(),
-        }
-    }
-
-    /// Squared (scaled) distance from local point `p` and its gradient with
-    /// respect to `p`.
-    #[inline]
-    pub fn distance2_and_gradient(&self, p: &Vec3) -> (Real, Vec3) {
-        let diff = match *self {
             Skeleton::Point => *p,
             Skeleton::Segment { half_length } => {
                 Vec3::new(p.x - p.x.clamp(-half_length, half_length), p.y, p.z)
@@ -81,13 +66,27 @@ impl Skeleton {
             Skeleton::Rectangle {
                 half_extents: [a, b],
             } => Vec3::new(p.x - p.x.clamp(-a, a), p.y - p.y.clamp(-b, b), p.z),
-            Skeleton::Ellipsoid { scales } => {
-                let q = p.component_div(&scales);
-                let g = q.component_div(&scales) * 2.0;
-                return (q.norm_squared(), g);
-            }
+            Skeleton::Ellipsoid { scales } => p.component_div(&scales),
+        }
+    }
+
+    /// Squared (scaled) distance from local point `p`: the first part of
+    /// [`Skeleton::distance2_and_gradient`], so the same bits.
+    #[inline]
+    pub fn distance2(&self, p: &Vec3) -> Real {
+        self.offset(p).norm_squared()
+    }
+
+    /// Squared (scaled) distance from local point `p` and its gradient with
+    /// respect to `p`.
+    #[inline]
+    pub fn distance2_and_gradient(&self, p: &Vec3) -> (Real, Vec3) {
+        let q = self.offset(p);
+        let g = match *self {
+            Skeleton::Ellipsoid { scales } => q.component_div(&scales) * 2.0,
+            _ => q * 2.0,
         };
-        (diff.norm_squared(), diff * 2.0)
+        (q.norm_squared(), g)
     }
 
     /// The Hessian of the squared (scaled) distance at local point `p`,
@@ -361,8 +360,8 @@ impl PosedPrimitive {
     }
 
     /// Squared (scaled) distance from world point `p`: the first part of
-    /// [`PosedPrimitive::distance2_and_gradient`], the same operations, so
-    /// the same bits, without turning the gradient back into the world.
+    /// [`PosedPrimitive::distance2_and_gradient`], so the same bits,
+    /// without turning the gradient back into the world.
     #[inline]
     pub fn distance2(&self, p: &Point3) -> Real {
         if let Skeleton::Point = self.shape {

@@ -224,7 +224,7 @@ struct Edge {
 /// later block (an edge on a face two blocks share belongs to the block
 /// whose first node is its first node: [`owns`]). `lists` are the
 /// primitives that may reach inside, per block.
-fn block_edges(
+fn owned_edges(
     grid: &Grid,
     field: &Field,
     obstacle: &Obstacle<'_>,
@@ -357,14 +357,14 @@ fn sweep(grid: &Grid, field: &Field, obstacle: &Obstacle<'_>, k: Real, gradient:
     let arch = pulp::Arch::new();
     let scale = k * grid.h.powi(3);
     // A block each task, even for a small skin: a block that passes the
-    // tests of `block_edges` is splatted, tens of microseconds of work,
+    // tests of `owned_edges` is splatted, tens of microseconds of work,
     // more than waking a thread costs (sheet_on_sphere's 100-particle
     // skin: contact 1.44 s at 1 thread, 1.06-1.23 s at 2, 1.53-1.58 s at
     // 2 with one task for a skin under MIN_PARALLEL_LEN primitives).
     let mut sums: Vec<((usize, usize), EdgeSum)> = (0..n_blocks)
         .into_par_iter()
         .flat_map_iter(|b| {
-            block_edges(grid, field, obstacle, &lists, b, arch)
+            owned_edges(grid, field, obstacle, &lists, b, arch)
                 .par_iter()
                 .with_min_len(EDGES_PER_TASK)
                 .filter_map(|edge| {

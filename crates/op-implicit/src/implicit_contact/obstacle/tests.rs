@@ -315,7 +315,7 @@ fn mat(rng: &mut Rng) -> Skin {
 }
 
 /// Each lattice edge is integrated once: the edges the blocks own
-/// (`block_edges`, every block's merged) are, with their ends' flags,
+/// (`owned_edges`, every block's merged) are, with their ends' flags,
 /// those of an oracle that splats every block whole from every primitive,
 /// tests every node for containment and merges the blocks' edges without
 /// duplicates. The skin spans many blocks, so many edges lie on faces two
@@ -342,7 +342,7 @@ fn each_edge_is_found_by_one_block() {
     });
     let per_block: Vec<Vec<(usize, usize, [bool; 2])>> = (0..n_blocks)
         .map(|b| {
-            super::block_edges(&grid, &field, &obstacle, &lists, b, arch)
+            super::owned_edges(&grid, &field, &obstacle, &lists, b, arch)
                 .into_iter()
                 .map(|e| (e.node, e.axis, e.ends))
                 .collect()
