@@ -390,7 +390,7 @@ impl PySimulation {
             .map_err(|e| {
                 PyRuntimeError::new_err(format!("cannot polygonize {}: {e}", skin.name))
             })?;
-        mesh_tuple(py, geometry::mesh_geometry(&skin.name, &mesh))
+        mesh_tuple(py, geometry::mesh_geometry(&skin.name, mesh))
     }
 
     /// The triangulation of the object `name`'s particles (seed 000 §5,

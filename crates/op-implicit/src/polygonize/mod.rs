@@ -24,7 +24,6 @@ mod tables;
 use op_dynamics::{Point3, Real, Vec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
 use crate::contact::ClippedField;
 use crate::error::PolygonizeError;
@@ -109,6 +108,11 @@ impl Mesh {
     /// Triangles as vertex indices, counter-clockwise seen from outside.
     pub fn triangles(&self) -> &[[u32; 3]] {
         &self.triangles
+    }
+
+    /// The positions, normals and triangles, moved out (no copy).
+    pub fn into_parts(self) -> (Vec<Point3>, Vec<Vec3>, Vec<[u32; 3]>) {
+        (self.positions, self.normals, self.triangles)
     }
 
     /// Whether the mesh is empty (no triangles).
@@ -452,54 +456,110 @@ fn vertices(
         blocks: n_blocks,
         ..Default::default()
     };
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    let mut welded: HashMap<u64, u32, BuildHasherDefault<EdgeKeyHasher>> = HashMap::default();
-    let mut local = Vec::new();
-    for (piece, nodes, evaluations) in &pieces {
+    for (_, nodes, evaluations) in &pieces {
         stats.sampled_blocks += usize::from(*nodes > 0);
         stats.sampled_nodes += nodes;
         stats.field_evaluations += evaluations;
-        local.clear();
-        for (&(key, shared), p) in piece.keys.iter().zip(&piece.positions) {
-            let next = positions.len() as u32;
-            let index = if shared {
-                *welded.entry(key).or_insert(next)
-            } else {
-                next
-            };
-            if index == next {
-                positions.push(*p);
-            }
-            local.push(index);
-        }
-        triangles.extend(piece.triangles.iter().map(|t| t.map(|i| local[i as usize])));
     }
+    let pieces: Vec<Piece> = pieces.into_iter().map(|(piece, _, _)| piece).collect();
+    let (positions, triangles) = weld(&pieces);
     (positions, triangles, stats)
 }
 
-/// Hashes a grid edge key for welding: the keys are distinct integers
-/// from a trusted source, so one multiplication by 2^64 / phi (Knuth's
-/// Fibonacci hashing) with the high half folded into the low bits spreads
-/// them (no hash-flooding resistance needed, unlike the default SipHash).
-#[derive(Default)]
-struct EdgeKeyHasher(u64);
-
-impl Hasher for EdgeKeyHasher {
-    fn finish(&self) -> u64 {
-        self.0
+/// Merges the pieces in block order (stage 4 of the module doc): each
+/// crossing point on a shared edge is the first piece's to hold that
+/// edge, and the others' triangles use it; every other point is its
+/// piece's own. The vertices are numbered in piece order, each piece's in
+/// its order, skipping those welded to an earlier piece's: the numbering a
+/// serial pass with a map from edge to vertex gives, found in parallel
+/// (the shared points sorted by edge, then piece, the first of each edge
+/// its owner), so the same at any thread count. Serial, the map took a
+/// tenth of a skinned cloth's export at 2 threads.
+fn weld(pieces: &[Piece]) -> (Vec<Point3>, Vec<[u32; 3]>) {
+    // Where each piece's points start in the concatenation of all points.
+    let mut start = Vec::with_capacity(pieces.len() + 1);
+    start.push(0usize);
+    for piece in pieces {
+        start.push(start[start.len() - 1] + piece.positions.len());
     }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(self.0 ^ u64::from(b));
+    let total = start[pieces.len()];
+    // The shared points as (edge, point), in piece order within an edge.
+    let mut shared: Vec<(u64, u32)> = pieces
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(p, piece)| {
+            let at = start[p];
+            piece
+                .keys
+                .iter()
+                .enumerate()
+                .filter(|(_, (_, shared))| *shared)
+                .map(move |(k, &(key, _))| (key, (at + k) as u32))
+        })
+        .collect();
+    shared.par_sort_unstable();
+    // Each point's owner: itself, or the first point of its edge.
+    let mut owner: Vec<u32> = (0..total as u32).into_par_iter().collect();
+    let mut first = 0;
+    for k in 1..=shared.len() {
+        if k == shared.len() || shared[k].0 != shared[first].0 {
+            for &(_, q) in &shared[first + 1..k] {
+                owner[q as usize] = shared[first].1;
+            }
+            first = k;
         }
     }
-
-    fn write_u64(&mut self, key: u64) {
-        let h = key.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-        self.0 = h ^ (h >> 32);
+    // Vertex numbers: each owned point's rank among the owned points, in
+    // order; every point takes its owner's.
+    let owned = |q: usize| owner[q] as usize == q;
+    let owned_per_piece: Vec<usize> = (0..pieces.len())
+        .into_par_iter()
+        .map(|p| (start[p]..start[p + 1]).filter(|&q| owned(q)).count())
+        .collect();
+    let mut base = Vec::with_capacity(pieces.len());
+    let mut next = 0usize;
+    for n in &owned_per_piece {
+        base.push(next as u32);
+        next += n;
     }
+    let rank: Vec<u32> = (0..pieces.len())
+        .into_par_iter()
+        .flat_map_iter(|p| {
+            let mut n = base[p];
+            (start[p]..start[p + 1]).map(move |q| {
+                let rank = n;
+                n += u32::from(owned(q));
+                rank
+            })
+        })
+        .collect();
+    let numbers: Vec<u32> = (0..total)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|q| rank[owner[q] as usize])
+        .collect();
+    let positions: Vec<Point3> = pieces
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(p, piece)| {
+            let at = start[p];
+            piece
+                .positions
+                .iter()
+                .enumerate()
+                .filter(move |(k, _)| owned(at + k))
+                .map(|(_, x)| *x)
+        })
+        .collect();
+    let triangles: Vec<[u32; 3]> = pieces
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(p, piece)| {
+            let local = &numbers[start[p]..start[p + 1]];
+            piece.triangles.iter().map(|t| t.map(|i| local[i as usize]))
+        })
+        .collect();
+    (positions, triangles)
 }
 
 /// Where the gradient vanishes (a clipped field exactly on a collider's

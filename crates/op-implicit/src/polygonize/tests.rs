@@ -470,3 +470,74 @@ fn skeleton_rows_are_each_node_alone_bit_for_bit() {
     }
     assert!(nonzero > 500, "{nonzero} nodes reached");
 }
+
+/// The parallel weld numbers the vertices as the serial pass with a map
+/// from edge to vertex does: random pieces whose shared edges recur in up
+/// to four pieces (as an edge on a block corner does), each edge at most
+/// once per piece, some pieces empty.
+#[test]
+fn weld_numbers_vertices_as_a_serial_map_does() {
+    let mut state = 0x9e37_79b9_u64;
+    let mut next = |m: u64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state % m
+    };
+    let pieces: Vec<Piece> = (0..300)
+        .map(|p: usize| {
+            let mut piece = Piece::default();
+            if next(5) == 0 {
+                return piece;
+            }
+            let mut keys = std::collections::BTreeSet::new();
+            for _ in 0..next(40) {
+                // Shared edges near the piece's index recur in later pieces.
+                let shared = next(3) != 0;
+                let key = if shared {
+                    (p / 4 * 8) as u64 + next(64)
+                } else {
+                    1 << 40 | (p * 100 + keys.len()) as u64
+                };
+                if keys.insert(key) {
+                    piece.keys.push((key, shared));
+                    piece
+                        .positions
+                        .push(Point3::new(key as Real, p as Real, 0.0));
+                }
+            }
+            let n = piece.positions.len() as u64;
+            if n > 0 {
+                for _ in 0..next(30) {
+                    piece
+                        .triangles
+                        .push([next(n), next(n), next(n)].map(|i| i as u32));
+                }
+            }
+            piece
+        })
+        .collect();
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    let mut welded = HashMap::new();
+    for piece in &pieces {
+        let mut local = Vec::new();
+        for (&(key, shared), p) in piece.keys.iter().zip(&piece.positions) {
+            let fresh = positions.len() as u32;
+            let index = if shared {
+                *welded.entry(key).or_insert(fresh)
+            } else {
+                fresh
+            };
+            if index == fresh {
+                positions.push(*p);
+            }
+            local.push(index);
+        }
+        triangles.extend(piece.triangles.iter().map(|t| t.map(|i| local[i as usize])));
+    }
+    assert!(positions.len() > 1000 && welded.len() > 300);
+    let (p, t) = weld(&pieces);
+    assert_eq!(p, positions);
+    assert_eq!(t, triangles);
+}

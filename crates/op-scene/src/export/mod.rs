@@ -705,7 +705,7 @@ fn prepare_sequence(
             let mesh = skin
                 .mesh_in(skins, skin_tools, world.time())
                 .map_err(|e| failure(first, std::io::Error::other(e)))?;
-            geometry::mesh_geometry(&skin.name, &mesh)
+            geometry::mesh_geometry(&skin.name, mesh)
         }
     };
     let mut files = Vec::with_capacity(formats.len());
