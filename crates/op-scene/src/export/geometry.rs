@@ -79,8 +79,7 @@ impl FrameMesh {
         if all_used && !any_degenerate {
             return;
         }
-        self.triangles
-            .retain(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
+        self.triangles.retain(|t| !degenerate(t));
         let mut new_index = vec![u32::MAX; self.vertices.len()];
         for t in &self.triangles {
             for &v in t {
