@@ -473,8 +473,8 @@ fn vertices(
 /// its order, skipping those welded to an earlier piece's: the numbering a
 /// serial pass with a map from edge to vertex gives, found in parallel
 /// (the shared points sorted by edge, then piece, the first of each edge
-/// its owner), so the same at any thread count. Serial, the map took a
-/// tenth of a skinned cloth's export at 2 threads.
+/// its owner), so the same at any thread count. Serial, the map took 4%
+/// of a skinned cloth's export at 2 threads.
 fn weld(pieces: &[Piece]) -> (Vec<Point3>, Vec<[u32; 3]>) {
     // Where each piece's points start in the concatenation of all points.
     let mut start = Vec::with_capacity(pieces.len() + 1);
