@@ -388,13 +388,29 @@ impl PosedPrimitive {
 
     /// The primitive's field at `p` ([`kernel::value_sq`] of
     /// `d^2 / R^2`) and its world gradient. Zero outside the support.
+    ///
+    /// The operations of [`PosedPrimitive::distance2_and_gradient`], but
+    /// the local gradient is turned back into the world frame (a
+    /// quaternion rotation) only inside the support: a point the pruning
+    /// grid hands over lies in the bounding sphere, and about half of a
+    /// flat skeleton's bounding sphere is outside its support.
     #[inline]
     pub fn field_and_gradient(&self, p: &Point3) -> (Real, Vec3) {
-        let (d2, g) = self.distance2_and_gradient(p);
-        let s = d2 * self.inv_radius2;
+        let (s, g) = if let Skeleton::Point = self.shape {
+            let d = p.coords - self.pose.translation.vector;
+            (d.norm_squared() * self.inv_radius2, d * 2.0)
+        } else {
+            let local = self.pose.inverse_transform_point(p).coords;
+            let (d2, g) = self.shape.distance2_and_gradient(&local);
+            (d2 * self.inv_radius2, g)
+        };
         if s >= 1.0 {
             return (0.0, Vec3::zeros());
         }
+        let g = match self.shape {
+            Skeleton::Point => g,
+            _ => self.pose.rotation * g,
+        };
         (
             self.weight * kernel::value_sq(s),
             g * (self.weight * kernel::derivative_sq(s) * self.inv_radius2),
@@ -470,6 +486,14 @@ mod tests {
                 let (d2, g) = posed.distance2_and_gradient(&p);
                 let (f, gf) = posed.field_and_gradient(&p);
                 assert_eq!(f, posed.field(&p));
+                // The gradient is distance2_and_gradient's, scaled: the
+                // same bits (only where it is rotated back differs).
+                let s = d2 * posed.inv_radius2;
+                let scaled = match s < 1.0 {
+                    true => g * (posed.weight * kernel::derivative_sq(s) * posed.inv_radius2),
+                    false => Vec3::zeros(),
+                };
+                assert_eq!(gf, scaled, "{prim:?}");
                 for k in 0..3 {
                     let mut e = Vec3::zeros();
                     e[k] = h;
