@@ -135,7 +135,7 @@ impl ContactForces {
             .with_min_len(if large { 1 } else { self.skins.len().max(1) })
             .map(|s| {
                 s.state
-                    .posed_uncompensated(|id| state(id).map(|p| (p.position, p.orientation)))
+                    .posed_unlisted(|id| state(id).map(|p| (p.position, p.orientation)))
                     .map_err(|source| ContactError::Pose {
                         skin: s.name.clone(),
                         source,
@@ -148,7 +148,10 @@ impl ContactForces {
             .with_min_len(if large { 1 } else { self.skins.len().max(1) })
             .zip(&self.skins)
             .zip(&regions)
-            .for_each(|((field, skin), regions)| skin.state.compensate(field, regions.as_deref()));
+            .for_each(|((field, skin), regions)| {
+                field.list_within(regions.as_deref());
+                skin.state.compensate(field, regions.as_deref());
+            });
         let mut figures = ContactFigures::default();
         for tool in &self.tools {
             for &k in &tool.skins {

@@ -35,6 +35,17 @@ pub(crate) struct CellGrid {
 impl CellGrid {
     /// Builds the grid over `spheres` (centre, radius).
     pub(crate) fn new(spheres: &[(Point3, Real)]) -> Self {
+        Self::new_listing(spheres, |_| true)
+    }
+
+    /// The grid of [`CellGrid::new`] (the same origin, cells and
+    /// dimensions), its cells listing only the spheres `keep` accepts (by
+    /// index): a lookup then hands over those of the spheres around the
+    /// point, in the same order.
+    pub(crate) fn new_listing(
+        spheres: &[(Point3, Real)],
+        keep: impl Fn(usize) -> bool + Sync,
+    ) -> Self {
         if spheres.is_empty() {
             return CellGrid::default();
         }
@@ -77,10 +88,11 @@ impl CellGrid {
         let boxes: Vec<Option<CellBox>> = spheres
             .par_iter()
             .with_min_len(MIN_PARALLEL_LEN)
-            .map(|(c, r)| {
+            .enumerate()
+            .map(|(i, (c, r))| {
                 let lo = [0, 1, 2].map(|k| grid.cell_coord(c[k] - r, k));
                 let hi = [0, 1, 2].map(|k| grid.cell_coord(c[k] + r, k));
-                Some([0, 1, 2].map(|k| (lo[k], hi[k])))
+                keep(i).then(|| [0, 1, 2].map(|k| (lo[k], hi[k])))
             })
             .collect();
         (grid.starts, grid.items) = bucket(dims, &boxes);

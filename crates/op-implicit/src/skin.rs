@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 use crate::error::SkinError;
 use crate::field::Field;
-use crate::primitives::Primitive;
+use crate::primitives::{PosedPrimitive, Primitive};
 use crate::stretch::StretchCompensation;
 
 /// The part of a [`Skin`] that changes during a run ([`Skin::state`]).
@@ -33,15 +33,32 @@ impl SkinState {
     /// particle (position and orientation by id), before the stretch
     /// compensation ([`SkinState::compensate`] adds it). Errors: the first
     /// primitive on a particle `pose` does not know.
-    ///
-    /// The primitives are collected in place (an indexed collect; a
-    /// collect into `Result` gathers pieces and copies them, 1.6% of a
-    /// skinned cloth's run), a primitive on an unknown particle posed at
-    /// the origin until the error is returned.
     pub fn posed_uncompensated(
         &self,
         pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
     ) -> Result<Field, SkinError> {
+        Ok(Field::new(self.posed(pose)?))
+    }
+
+    /// [`SkinState::posed_uncompensated`] without its pruning grid, for a
+    /// caller that lists it where it will read it
+    /// ([`Field::list_within`]): until then every value is 0.
+    pub(crate) fn posed_unlisted(
+        &self,
+        pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
+    ) -> Result<Field, SkinError> {
+        Ok(Field::new_within(self.posed(pose)?, Some(&[])))
+    }
+
+    /// The attachments posed where `pose` puts each particle, collected
+    /// in place (an indexed collect; a collect into `Result` gathers
+    /// pieces and copies them, 1.6% of a skinned cloth's run), a primitive
+    /// on an unknown particle posed at the origin until the error is
+    /// returned.
+    fn posed(
+        &self,
+        pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
+    ) -> Result<Vec<PosedPrimitive>, SkinError> {
         let unknown = AtomicUsize::new(usize::MAX);
         let posed: Vec<_> = self
             .attachments
@@ -57,7 +74,7 @@ impl SkinState {
             })
             .collect();
         match unknown.into_inner() {
-            usize::MAX => Ok(Field::new(posed)),
+            usize::MAX => Ok(posed),
             index => Err(SkinError::UnknownParticle {
                 index,
                 id: self.attachments[index].0,
