@@ -211,8 +211,9 @@ impl ContactForces {
     /// and the common box of the supports of each skin it overlaps, each
     /// padded by three cells (the sampling grids reach a cell beyond their
     /// box, and their blocks list the primitives a cell beyond their
-    /// nodes). The stretch compensation is computed there only: elsewhere
-    /// the weights are never read.
+    /// nodes). The stretch compensation is computed there only, and the
+    /// pruning grid lists only the primitives near them
+    /// ([`Field::list_within`]): elsewhere the field is never read.
     fn regions(&self, t: Real, fields: &[Field]) -> Vec<Option<Vec<(Point3, Point3)>>> {
         let mut regions: Vec<Option<Vec<(Point3, Point3)>>> = vec![Some(Vec::new()); fields.len()];
         // A box, padded; `None` or a non-finite box: everywhere.
