@@ -83,13 +83,7 @@ impl Field {
                     .fold(0.0, |m: Real, (p, (c, r))| {
                         m.max(r + (c - p.particle_position()).norm())
                     });
-                let m = 2.0 * reach;
-                CellGrid::new_listing(spheres, |i| {
-                    let (c, r) = spheres[i];
-                    regions.iter().any(|(lo, hi)| {
-                        (0..3).all(|k| c[k] - r <= hi[k] + m && lo[k] - m <= c[k] + r)
-                    })
-                })
+                CellGrid::new_listing(spheres, |i| box_meets(regions, spheres[i], 2.0 * reach))
             }
         };
     }
@@ -196,6 +190,18 @@ impl Field {
         }
         Some((lo, hi))
     }
+}
+
+/// Whether the box of the sphere `(c, r)` comes within `margin` of one of
+/// the boxes `regions` along every axis (meets it when `margin` is 0).
+pub(crate) fn box_meets(
+    regions: &[(Point3, Point3)],
+    (c, r): (Point3, Real),
+    margin: Real,
+) -> bool {
+    regions
+        .iter()
+        .any(|(lo, hi)| (0..3).all(|k| c[k] - r <= hi[k] + margin && lo[k] - margin <= c[k] + r))
 }
 
 /// The primitives' bounding spheres, in order.
@@ -336,11 +342,8 @@ mod tests {
             "test points mostly in the support: {nonzero}"
         );
         let mut particles = 0;
-        for (p, (c, r)) in whole.primitives().iter().zip(whole.spheres()) {
-            let meets = regions
-                .iter()
-                .any(|(lo, hi)| (0..3).all(|k| c[k] - r <= hi[k] && lo[k] <= c[k] + r));
-            if meets {
+        for (p, &sphere) in whole.primitives().iter().zip(whole.spheres()) {
+            if box_meets(&regions, sphere, 0.0) {
                 let x = p.particle_position();
                 assert_eq!(within.value_and_gradient(x), whole.value_and_gradient(x));
                 particles += 1;

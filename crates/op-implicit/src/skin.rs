@@ -37,7 +37,7 @@ impl SkinState {
         &self,
         pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
     ) -> Result<Field, SkinError> {
-        Ok(Field::new(self.posed(pose)?))
+        Ok(Field::new(pose_attachments(&self.attachments, pose)?))
     }
 
     /// [`SkinState::posed_uncompensated`] without its pruning grid, for a
@@ -47,39 +47,10 @@ impl SkinState {
         &self,
         pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
     ) -> Result<Field, SkinError> {
-        Ok(Field::new_within(self.posed(pose)?, Some(&[])))
-    }
-
-    /// The attachments posed where `pose` puts each particle, collected
-    /// in place (an indexed collect; a collect into `Result` gathers
-    /// pieces and copies them, 1.6% of a skinned cloth's run), a primitive
-    /// on an unknown particle posed at the origin until the error is
-    /// returned.
-    fn posed(
-        &self,
-        pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
-    ) -> Result<Vec<PosedPrimitive>, SkinError> {
-        let unknown = AtomicUsize::new(usize::MAX);
-        let posed: Vec<_> = self
-            .attachments
-            .par_iter()
-            .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
-            .enumerate()
-            .map(|(index, &(id, prim))| {
-                let (position, orientation) = pose(id).unwrap_or_else(|| {
-                    unknown.fetch_min(index, Ordering::Relaxed);
-                    (Point3::origin(), Quat::identity())
-                });
-                prim.posed(id, &position, &orientation)
-            })
-            .collect();
-        match unknown.into_inner() {
-            usize::MAX => Ok(posed),
-            index => Err(SkinError::UnknownParticle {
-                index,
-                id: self.attachments[index].0,
-            }),
-        }
+        Ok(Field::new_within(
+            pose_attachments(&self.attachments, pose)?,
+            Some(&[]),
+        ))
     }
 
     /// Applies the stretch compensation's held references to `field`
@@ -137,18 +108,10 @@ impl Skin {
     pub fn repose_particles(&mut self, particles: &Particles) -> Result<(), SkinError> {
         let positions = particles.positions();
         let orientations = particles.orientations();
-        let posed = self
-            .attachments
-            .iter()
-            .enumerate()
-            .map(|(index, &(id, prim))| {
-                let slot = particles
-                    .slot_of(id)
-                    .filter(|&s| s < positions.len())
-                    .ok_or(SkinError::UnknownParticle { index, id })?;
-                Ok(prim.posed(id, &positions[slot], &orientations[slot]))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let posed = pose_attachments(&self.attachments, |id| {
+            let slot = particles.slot_of(id).filter(|&s| s < positions.len())?;
+            Some((positions[slot], orientations[slot]))
+        })?;
         self.field = Field::new(posed);
         if let Some(stretch) = self.stretch.as_mut() {
             stretch.apply(&mut self.field);
@@ -238,6 +201,37 @@ impl Skin {
     /// `attachments()[i]` posed.
     pub fn field(&self) -> &Field {
         &self.field
+    }
+}
+
+/// `attachments` posed where `pose` puts each particle, collected in place
+/// (an indexed collect; a collect into `Result` gathers pieces and copies
+/// them, 1.6% of a skinned cloth's run), a primitive on an unknown particle
+/// posed at the origin until the error, the first such primitive, is
+/// returned.
+fn pose_attachments(
+    attachments: &[(u32, Primitive)],
+    pose: impl Fn(u32) -> Option<(Point3, Quat)> + Sync,
+) -> Result<Vec<PosedPrimitive>, SkinError> {
+    let unknown = AtomicUsize::new(usize::MAX);
+    let posed: Vec<_> = attachments
+        .par_iter()
+        .with_min_len(op_dynamics::MIN_PARALLEL_LEN)
+        .enumerate()
+        .map(|(index, &(id, prim))| {
+            let (position, orientation) = pose(id).unwrap_or_else(|| {
+                unknown.fetch_min(index, Ordering::Relaxed);
+                (Point3::origin(), Quat::identity())
+            });
+            prim.posed(id, &position, &orientation)
+        })
+        .collect();
+    match unknown.into_inner() {
+        usize::MAX => Ok(posed),
+        index => Err(SkinError::UnknownParticle {
+            index,
+            id: attachments[index].0,
+        }),
     }
 }
 

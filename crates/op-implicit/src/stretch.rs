@@ -34,7 +34,7 @@ use std::collections::BTreeMap;
 use op_dynamics::{Point3, Real};
 use rayon::prelude::*;
 
-use crate::field::Field;
+use crate::field::{box_meets, Field};
 use crate::primitives::PosedPrimitive;
 
 /// The reference densities of a skin's primitives (module doc).
@@ -101,13 +101,7 @@ impl StretchCompensation {
     /// its particle.
     pub fn apply_held_within(&self, field: &mut Field, regions: Option<&[(Point3, Point3)]>) {
         let within = |p: &PosedPrimitive| {
-            let Some(regions) = regions else {
-                return true;
-            };
-            let (c, r) = p.bounding_sphere();
-            regions
-                .iter()
-                .any(|(lo, hi)| (0..3).all(|k| c[k] - r <= hi[k] && lo[k] <= c[k] + r))
+            regions.is_none_or(|regions| box_meets(regions, p.bounding_sphere(), 0.0))
         };
         let now = densities_within(field, within);
         match self {
