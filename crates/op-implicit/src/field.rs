@@ -18,6 +18,66 @@ use crate::primitives::PosedPrimitive;
 /// A field value and its gradient.
 pub type ValueGradient = (Real, Vec3);
 
+/// The most primitives [`Along`] keeps for a box (more: it looks them up
+/// per point).
+const ALONG_MAX: usize = 64;
+
+/// The field inside a box ([`Field::along`]): when the box lies in one
+/// cell of the pruning grid, the cell's primitives whose bounding sphere
+/// reaches into it, listed once, so that the many points a root search
+/// or a quadrature reads there skip the lookup and the spheres that miss
+/// the box; otherwise the lookup of every point. At any point of the box
+/// it visits the primitives [`Field::for_each_near`] visits, in the same
+/// order: the same values, bit for bit.
+pub(crate) struct Along<'a> {
+    field: &'a Field,
+    /// The box's corners.
+    lo: Point3,
+    hi: Point3,
+    /// The primitives that may reach the box, in increasing index, and
+    /// how many there are.
+    near: Option<([u32; ALONG_MAX], usize)>,
+}
+
+impl Along<'_> {
+    /// [`Field::for_each_near`] at `p` (looked up in the grid when `p`
+    /// is not in the box: a point rounded just past its end).
+    #[inline]
+    pub(crate) fn for_each_near(&self, p: &Point3, mut visit: impl FnMut(usize, &PosedPrimitive)) {
+        let Some((items, len)) = &self.near else {
+            return self.field.for_each_near(p, visit);
+        };
+        if !(0..3).all(|k| self.lo[k] <= p[k] && p[k] <= self.hi[k]) {
+            return self.field.for_each_near(p, visit);
+        }
+        for &i in &items[..*len] {
+            let (c, r) = self.field.spheres[i as usize];
+            if (p - c).norm_squared() < r * r {
+                visit(i as usize, &self.field.primitives[i as usize]);
+            }
+        }
+    }
+
+    /// [`Field::value`] at `p`.
+    pub(crate) fn value(&self, p: &Point3) -> Real {
+        let mut f = 0.0;
+        self.for_each_near(p, |_, prim| f += prim.field(p));
+        f
+    }
+
+    /// [`Field::value_and_gradient`] at `p`.
+    pub(crate) fn value_and_gradient(&self, p: &Point3) -> ValueGradient {
+        let mut f = 0.0;
+        let mut g = Vec3::zeros();
+        self.for_each_near(p, |_, prim| {
+            let (fi, gi) = prim.field_and_gradient(p);
+            f += fi;
+            g += gi;
+        });
+        (f, g)
+    }
+}
+
 /// The summed field of a set of posed primitives, with a pruning grid.
 #[derive(Clone, Debug, Default)]
 pub struct Field {
@@ -118,6 +178,41 @@ impl Field {
             if (p - c).norm_squared() < r * r {
                 visit(i as usize, &self.primitives[i as usize]);
             }
+        }
+    }
+
+    /// The field read inside the box with opposite corners `a` and `b`
+    /// (a lattice edge, where the contact's root searches and quadrature
+    /// points lie): [`Along`].
+    pub(crate) fn along(&self, a: &Point3, b: &Point3) -> Along<'_> {
+        let (lo, hi) = (a.inf(b), a.sup(b));
+        let mut near = None;
+        if let (Some(cell), Some(other)) = (self.grid.cell_of(&lo), self.grid.cell_of(&hi)) {
+            let candidates = self.grid.items_of(cell);
+            if cell == other && candidates.len() <= ALONG_MAX {
+                let mut items = [0; ALONG_MAX];
+                let mut len = 0;
+                for &i in candidates {
+                    let (c, r) = self.spheres[i as usize];
+                    // The box's point nearest the centre: no point of the
+                    // box is nearer, in rounded arithmetic too (each
+                    // difference, square and sum is monotone), so a sphere
+                    // that fails the lookup's test here fails it at every
+                    // point of the box.
+                    let q = c.sup(&lo).inf(&hi);
+                    if (q - c).norm_squared() < r * r {
+                        items[len] = i;
+                        len += 1;
+                    }
+                }
+                near = Some((items, len));
+            }
+        }
+        Along {
+            field: self,
+            lo,
+            hi,
+            near,
         }
     }
 
@@ -365,6 +460,47 @@ mod tests {
         let none = Field::new_within(whole.primitives().to_vec(), Some(&[]));
         assert_eq!(none.value(&p), 0.0);
         assert_eq!(none.support_box(), whole.support_box());
+    }
+
+    /// Along a lattice edge, [`Field::along`] visits what the lookup
+    /// visits at every point, in the same order (so the same bits), for
+    /// a skin of many cells and for one of a single cell, and it drops
+    /// most of the cell's candidates; a point past the edge is looked up.
+    #[test]
+    fn along_an_edge_is_the_field_there() {
+        let mut rng = Rng::new(5);
+        let (mut listed, mut candidates, mut boxes_in_a_cell) = (0, 0, 0);
+        for field in [random_field(3, 600), random_field(6, 12)] {
+            for _ in 0..400 {
+                let p0 = Point3::from(rng.vec3(1.0) * 3.0);
+                let mut dir = Vec3::zeros();
+                dir[rng.below(3)] = 0.25;
+                let at = |t: Real| p0 + dir * t;
+                let along = field.along(&at(0.0), &at(1.0));
+                if let Some((_, len)) = along.near {
+                    boxes_in_a_cell += 1;
+                    listed += len;
+                    candidates += field.grid.candidates(&p0).len();
+                }
+                for t in (0..=20).map(|i| i as Real / 20.0).chain([1.0 + 1e-9]) {
+                    let p = at(t);
+                    let (mut seen, mut expected) = (Vec::new(), Vec::new());
+                    along.for_each_near(&p, |i, _| seen.push(i));
+                    field.for_each_near(&p, |i, _| expected.push(i));
+                    assert_eq!(seen, expected, "t = {t}");
+                    assert_eq!(along.value(&p).to_bits(), field.value(&p).to_bits());
+                    assert_eq!(along.value_and_gradient(&p), field.value_and_gradient(&p));
+                }
+            }
+        }
+        assert!(
+            boxes_in_a_cell > 500,
+            "{boxes_in_a_cell} edges within a cell"
+        );
+        assert!(
+            2 * listed < candidates,
+            "{listed} of {candidates} candidates kept"
+        );
     }
 
     #[test]

@@ -108,19 +108,33 @@ impl CellGrid {
     /// order (empty outside the grid).
     #[inline]
     pub(crate) fn candidates(&self, p: &Point3) -> &[u32] {
+        self.cell_of(p).map_or(&[], |cell| self.items_of(cell))
+    }
+
+    /// The cell holding `p` (`None` outside the grid, or for a grid
+    /// without cells). Monotone along each axis: the points of a box
+    /// whose two opposite corners fall in one cell all fall in it.
+    #[inline]
+    pub(crate) fn cell_of(&self, p: &Point3) -> Option<usize> {
         if self.starts.is_empty() {
-            return &[];
+            return None;
         }
         let mut idx = [0usize; 3];
         for k in 0..3 {
             // Truncation is the floor on the grid (c >= 0).
             let c = (p[k] - self.origin[k]) * self.inv_cell;
             if !(c >= 0.0 && c < self.dims[k] as Real) {
-                return &[];
+                return None;
             }
             idx[k] = c as usize;
         }
-        let cell = (idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0];
+        Some((idx[2] * self.dims[1] + idx[1]) * self.dims[0] + idx[0])
+    }
+
+    /// The spheres listed in `cell` ([`CellGrid::cell_of`]), in increasing
+    /// order.
+    #[inline]
+    pub(crate) fn items_of(&self, cell: usize) -> &[u32] {
         &self.items[self.starts[cell] as usize..self.starts[cell + 1] as usize]
     }
 }

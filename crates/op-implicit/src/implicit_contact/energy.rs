@@ -78,7 +78,7 @@ use rayon::prelude::*;
 use super::band;
 use crate::contact::{Reaction, Reactions};
 use crate::error::PolygonizeError;
-use crate::field::Field;
+use crate::field::{Along, Field};
 use crate::kernel::ISO;
 use crate::polygonize::blocks::Grid;
 
@@ -251,6 +251,9 @@ fn edge_integral(
     let mut dir = Vec3::zeros();
     dir[axis] = h;
     let at = |t: Real| p0 + dir * t;
+    // Every point read lies between the edge's ends as `at` places them.
+    let (a, b) = (a.along(&at(0.0), &at(1.0)), b.along(&at(0.0), &at(1.0)));
+    let (a, b) = (&a, &b);
     let ea = |t: Real| a.value(&at(t)) - ISO;
     let eb = |t: Real| b.value(&at(t)) - ISO;
     let (a0, a1, b0, b1) = (ea(0.0), ea(1.0), eb(0.0), eb(1.0));
@@ -332,7 +335,7 @@ struct Near {
 
 /// The field of `field` at `point` and its gradient; with `hessians`,
 /// `out` lists the primitives reaching the point ([`Near`]).
-fn near(field: &Field, point: &Point3, hessians: bool, out: &mut Vec<Near>) -> (Real, Vec3) {
+fn near(field: &Along<'_>, point: &Point3, hessians: bool, out: &mut Vec<Near>) -> (Real, Vec3) {
     out.clear();
     if !hessians {
         return field.value_and_gradient(point);

@@ -410,6 +410,8 @@ fn edge_integral(
     let mut dir = Vec3::zeros();
     dir[axis] = grid.h;
     let at = |t: Real| p0 + dir * t;
+    // Every point read lies between the edge's ends as `at` places them.
+    let field = field.along(&at(0.0), &at(1.0));
     let e = |t: Real| field.value(&at(t)) - ISO;
     // Whether end `k` (at `t = k`) is inside: where it is its node
     // (always, on a lattice whose nodes' coordinates are exact, as for
