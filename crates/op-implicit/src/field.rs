@@ -57,16 +57,37 @@ impl Along<'_> {
             }
         }
     }
+}
 
-    /// [`Field::value`] at `p`.
-    pub(crate) fn value(&self, p: &Point3) -> Real {
+impl Sums for Along<'_> {
+    fn for_each_near(&self, p: &Point3, visit: impl FnMut(usize, &PosedPrimitive)) {
+        Along::for_each_near(self, p, visit)
+    }
+}
+
+impl Sums for Field {
+    fn for_each_near(&self, p: &Point3, visit: impl FnMut(usize, &PosedPrimitive)) {
+        Field::for_each_near(self, p, visit)
+    }
+}
+
+/// The sums of the primitives that a reader of the field visits at a
+/// point, in its order: [`Field`]'s, and [`Along`]'s (the same).
+pub(crate) trait Sums {
+    /// Visits the primitives that may reach `p`, in increasing index.
+    fn for_each_near(&self, p: &Point3, visit: impl FnMut(usize, &PosedPrimitive));
+
+    /// The field at `p`.
+    #[inline]
+    fn value(&self, p: &Point3) -> Real {
         let mut f = 0.0;
         self.for_each_near(p, |_, prim| f += prim.field(p));
         f
     }
 
-    /// [`Field::value_and_gradient`] at `p`.
-    pub(crate) fn value_and_gradient(&self, p: &Point3) -> ValueGradient {
+    /// The field at `p` and its analytic gradient.
+    #[inline]
+    fn value_and_gradient(&self, p: &Point3) -> ValueGradient {
         let mut f = 0.0;
         let mut g = Vec3::zeros();
         self.for_each_near(p, |_, prim| {
@@ -218,21 +239,12 @@ impl Field {
 
     /// The field at `p`.
     pub fn value(&self, p: &Point3) -> Real {
-        let mut f = 0.0;
-        self.for_each_near(p, |_, prim| f += prim.field(p));
-        f
+        Sums::value(self, p)
     }
 
     /// The field at `p` and its analytic gradient.
     pub fn value_and_gradient(&self, p: &Point3) -> ValueGradient {
-        let mut f = 0.0;
-        let mut g = Vec3::zeros();
-        self.for_each_near(p, |_, prim| {
-            let (fi, gi) = prim.field_and_gradient(p);
-            f += fi;
-            g += gi;
-        });
-        (f, g)
+        Sums::value_and_gradient(self, p)
     }
 
     /// The unpruned sum over every primitive: the test oracle for the

@@ -78,7 +78,7 @@ use rayon::prelude::*;
 use super::band;
 use crate::contact::{Reaction, Reactions};
 use crate::error::PolygonizeError;
-use crate::field::{Along, Field};
+use crate::field::{Along, Field, Sums};
 use crate::kernel::ISO;
 use crate::polygonize::blocks::Grid;
 

@@ -66,7 +66,7 @@ use super::energy::{anchored, edge_root, GAUSS};
 use super::ImplicitContactParams;
 use crate::contact::{Reaction, Reactions};
 use crate::error::PolygonizeError;
-use crate::field::Field;
+use crate::field::{Field, Sums};
 use crate::kernel::ISO;
 use crate::polygonize::blocks::{box_bounds, margin, splat_block, Block, BlockLists, Grid};
 
