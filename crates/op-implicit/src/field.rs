@@ -43,18 +43,12 @@ impl Along<'_> {
     /// [`Field::for_each_near`] at `p` (looked up in the grid when `p`
     /// is not in the box: a point rounded just past its end).
     #[inline]
-    pub(crate) fn for_each_near(&self, p: &Point3, mut visit: impl FnMut(usize, &PosedPrimitive)) {
-        let Some((items, len)) = &self.near else {
-            return self.field.for_each_near(p, visit);
-        };
-        if !(0..3).all(|k| self.lo[k] <= p[k] && p[k] <= self.hi[k]) {
-            return self.field.for_each_near(p, visit);
-        }
-        for &i in &items[..*len] {
-            let (c, r) = self.field.spheres[i as usize];
-            if (p - c).norm_squared() < r * r {
-                visit(i as usize, &self.field.primitives[i as usize]);
+    pub(crate) fn for_each_near(&self, p: &Point3, visit: impl FnMut(usize, &PosedPrimitive)) {
+        match &self.near {
+            Some((items, len)) if (0..3).all(|k| self.lo[k] <= p[k] && p[k] <= self.hi[k]) => {
+                self.field.visit_near(&items[..*len], p, visit)
             }
+            _ => self.field.for_each_near(p, visit),
         }
     }
 }
@@ -110,13 +104,7 @@ pub struct Field {
 impl Field {
     /// Builds the field of `primitives` (and its pruning grid).
     pub fn new(primitives: Vec<PosedPrimitive>) -> Self {
-        let spheres = bounding_spheres(&primitives);
-        let grid = CellGrid::new(&spheres);
-        Field {
-            primitives,
-            spheres,
-            grid,
-        }
+        Self::new_within(primitives, None)
     }
 
     /// The field of `primitives` read only in the boxes `regions` (all
@@ -193,8 +181,16 @@ impl Field {
     /// sphere contains `p` (a superset of those with `p` in their support),
     /// in increasing index.
     #[inline]
-    pub fn for_each_near(&self, p: &Point3, mut visit: impl FnMut(usize, &PosedPrimitive)) {
-        for &i in self.grid.candidates(p) {
+    pub fn for_each_near(&self, p: &Point3, visit: impl FnMut(usize, &PosedPrimitive)) {
+        self.visit_near(self.grid.candidates(p), p, visit);
+    }
+
+    /// Calls `visit(index, primitive)` for those of the primitives
+    /// `items` (increasing) whose bounding sphere contains `p`, in order:
+    /// the test of every lookup ([`Field::for_each_near`], [`Along`]).
+    #[inline]
+    fn visit_near(&self, items: &[u32], p: &Point3, mut visit: impl FnMut(usize, &PosedPrimitive)) {
+        for &i in items {
             let (c, r) = self.spheres[i as usize];
             if (p - c).norm_squared() < r * r {
                 visit(i as usize, &self.primitives[i as usize]);

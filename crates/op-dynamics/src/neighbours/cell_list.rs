@@ -256,6 +256,16 @@ fn choose_grid(min: [Real; 3], max: [Real; 3], radius: Real, n: usize) -> (Grid,
 }
 
 impl GridScratch {
+    /// The slots `a..b` of cells `x0..=x1` of the line `[y, z]` of
+    /// `grid` (contiguous in cell order).
+    #[inline(always)]
+    fn line(&self, grid: &Grid, (x0, x1): (usize, usize), [y, z]: [usize; 2]) -> (usize, usize) {
+        (
+            self.cell_start[grid.cell_id([x0, y, z])] as usize,
+            self.cell_start[grid.cell_id([x1, y, z]) + 1] as usize,
+        )
+    }
+
     /// The position in slot `slot` of the cell order.
     #[inline(always)]
     fn position(&self, slot: usize) -> [Real; 3] {
@@ -456,8 +466,7 @@ impl<'a> RowSearch<'a> {
         let mut candidates = 0;
         for z in zs {
             for y in ys.clone() {
-                let a = scratch.cell_start[grid.cell_id([x0, y, z])] as usize;
-                let b = scratch.cell_start[grid.cell_id([x1, y, z]) + 1] as usize;
+                let (a, b) = scratch.line(&grid, (x0, x1), [y, z]);
                 lines[count] = (a, b);
                 count += 1;
                 candidates += b - a;
@@ -537,8 +546,7 @@ impl<'a> RowSearch<'a> {
         let to = [0, 1, 2].map(|a| grid.coord(hi[a] + grow(hi[a]), a));
         for z in from[2]..=to[2] {
             for y in from[1]..=to[1] {
-                let a = scratch.cell_start[grid.cell_id([from[0], y, z])] as usize;
-                let b = scratch.cell_start[grid.cell_id([to[0], y, z]) + 1] as usize;
+                let (a, b) = scratch.line(&grid, (from[0], to[0]), [y, z]);
                 for (slot, &j) in (a..b).zip(&scratch.sorted_idx[a..b]) {
                     let q = &scratch.position(slot);
                     let d = j / K as u32;
