@@ -13,20 +13,22 @@
 //! corners, otherwise by a fan from a new vertex at its centroid moved
 //! onto the tangent plane of the nearest sample. An ear whose new edge
 //! already exists is skipped (it would make an edge in three triangles).
-//! Pinched vertices are then split and specks dropped
-//! ([`split_pinched_vertices`], [`drop_specks`]).
+//! Pinched vertices are split before and after (`pinches.rs`), pieces
+//! touching only at one joined across its wedge first, and specks
+//! dropped ([`drop_specks`]).
 
 use std::collections::{BTreeMap, HashMap};
 
 use op_dynamics::{Point3, Real, Vec3};
-use rayon::prelude::*;
 
 use super::mesh::SurfaceMesh;
+use super::pinches::{join_at_pinches, split_pinched_vertices};
 use super::spacing::Nearest;
-use crate::disjoint_sets::DisjointSets;
 use crate::triangulation::{vertex_components, EdgeTable};
 
-/// Closes the holes of `mesh` narrower than `max_width` (unit spacing);
+/// Closes the holes of `mesh` narrower than `max_width` (unit spacing),
+/// after joining the pieces that touch at a pinched vertex across a
+/// wedge at most `join_radius` wide ([`join_at_pinches`]);
 /// `samples` with unit `normals` place the centre vertices of large
 /// holes. For `open` data the longest loop of each piece is its rim, not
 /// a hole, and is never closed (however narrow a sheet it bounds). The triangles are first wound consistently
@@ -38,6 +40,7 @@ use crate::triangulation::{vertex_components, EdgeTable};
 pub(super) fn fill_holes(
     mesh: &mut SurfaceMesh,
     max_width: Real,
+    join_radius: Real,
     open: bool,
     samples: &[Point3],
     normals: &[Vec3],
@@ -46,9 +49,12 @@ pub(super) fn fill_holes(
     let table = drop_overfull_edges(&mut mesh.faces);
     let (_, table) = super::winding::cut_crosscaps(mesh, table);
     // Splitting renumbers corners: the table holds while nothing split.
-    let table = match split_pinched_vertices(mesh) {
-        0 => table,
-        _ => EdgeTable::new(&mesh.faces),
+    let copies = split_pinched_vertices(mesh);
+    let table = if copies.is_empty() {
+        table
+    } else {
+        join_at_pinches(mesh, &copies, join_radius);
+        EdgeTable::new(&mesh.faces)
     };
     let loops = boundary_loops_of(&mesh.faces, &table);
     let mut edges = EdgeCounts {
@@ -110,102 +116,6 @@ fn drop_specks(faces: &mut Vec<[u32; 3]>, min_vertices: usize) -> usize {
     let before = faces.len();
     faces.retain(|f| piece[f[0] as usize].is_some_and(|p| size[&p] >= min_vertices));
     before - faces.len()
-}
-
-/// Gives each fan but the first of a pinched vertex a vertex of its own
-/// (same position and normal). A vertex's fan is its triangles joined
-/// through the edges at it; on a surface it is one disc (inside) or one
-/// half-disc (on a boundary). Two fans meeting at one vertex (two sheets
-/// or two corners of holes touching at a point) make the mesh no surface
-/// there and add 1 to `V - E + F` per extra fan; apart they are the
-/// surface the triangles describe. Fans are ordered by their first
-/// triangle: deterministic. Returns the number of vertices added.
-fn split_pinched_vertices(mesh: &mut SurfaceMesh) -> usize {
-    // The triangles around each vertex, ascending (CSR).
-    let n = mesh.vertices.len();
-    let mut starts = vec![0usize; n + 1];
-    for f in &mesh.faces {
-        for &v in f {
-            starts[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..n {
-        starts[v + 1] += starts[v];
-    }
-    let mut around = vec![0usize; starts[n]];
-    let mut next = starts.clone();
-    for (t, f) in mesh.faces.iter().enumerate() {
-        for &v in f {
-            around[next[v as usize]] = t;
-            next[v as usize] += 1;
-        }
-    }
-    let fan_of = |v: usize| &around[starts[v]..starts[v + 1]];
-    // Which vertices are pinched in the triangles as they are, in
-    // parallel. Splitting a vertex renumbers corners of its triangles only,
-    // so a vertex none of whose triangles was rewritten keeps this answer;
-    // the others are looked at again in order below.
-    let faces = &mesh.faces;
-    let pinched: Vec<bool> = (0..n)
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|v| {
-            let fan = fan_of(v);
-            fan.len() >= 2 && fans(faces, v, fan).count() > 1
-        })
-        .collect();
-    let mut rewritten = vec![false; mesh.faces.len()];
-    let mut added = 0;
-    for (v, &was_pinched) in pinched.iter().enumerate() {
-        let fan = fan_of(v);
-        if fan.len() < 2 || !(was_pinched || fan.iter().any(|&t| rewritten[t])) {
-            continue;
-        }
-        let mut fans = fans(&mesh.faces, v, fan);
-        // Roots are the smallest member of each fan: fan order is
-        // first-triangle order (`fan` is sorted).
-        let mut new_index: BTreeMap<usize, u32> = BTreeMap::new();
-        for (k, &t) in fan.iter().enumerate() {
-            let r = fans.root(k);
-            if r == 0 {
-                continue;
-            }
-            let w = *new_index.entry(r).or_insert_with(|| {
-                mesh.vertices.push(mesh.vertices[v]);
-                mesh.normals.push(mesh.normals[v]);
-                added += 1;
-                (mesh.vertices.len() - 1) as u32
-            });
-            for c in mesh.faces[t].iter_mut() {
-                if *c as usize == v {
-                    *c = w;
-                }
-            }
-            rewritten[t] = true;
-        }
-    }
-    added
-}
-
-/// The fans of vertex `v` (its triangles `fan`, ascending) as disjoint
-/// sets over the positions in `fan`: union-find through the edges at `v`
-/// the triangles share.
-fn fans(faces: &[[u32; 3]], v: usize, fan: &[usize]) -> DisjointSets {
-    let mut fans = DisjointSets::new(fan.len());
-    let mut by_other: BTreeMap<u32, usize> = BTreeMap::new();
-    for (k, &t) in fan.iter().enumerate() {
-        for &u in &faces[t] {
-            if u as usize == v {
-                continue;
-            }
-            if let Some(&j) = by_other.get(&u) {
-                fans.union(j, k);
-            } else {
-                by_other.insert(u, k);
-            }
-        }
-    }
-    fans
 }
 
 /// Median of the Gamma(6, 1) distribution: for samples spread uniformly at
@@ -525,48 +435,12 @@ mod tests {
         assert_eq!(boundary_loops(&mesh.faces).len(), 1);
         // Open data: the only loop is the piece's rim, kept.
         let mut open = mesh.clone();
-        assert_eq!(fill_holes(&mut open, 10.0, true, &[], &[], 3), 0);
+        assert_eq!(fill_holes(&mut open, 10.0, 2.0, true, &[], &[], 3), 0);
         assert_eq!(boundary_loops(&open.faces).len(), 1);
-        assert_eq!(fill_holes(&mut mesh, 10.0, false, &[], &[], 3), 1);
+        assert_eq!(fill_holes(&mut mesh, 10.0, 2.0, false, &[], &[], 3), 1);
         assert!(boundary_loops(&mesh.faces).is_empty());
         let table = EdgeTable::new(&mesh.faces);
         assert!((0..table.len()).all(|e| table.count(e) == 2));
-    }
-
-    /// Two triangles touching at one corner (a bow tie): the shared
-    /// vertex is split, `V - E + F` goes from 1 to 2 (two discs), and the
-    /// geometry is unchanged.
-    #[test]
-    fn a_pinched_vertex_is_split() {
-        let vertices = vec![
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(1.0, 0.0, 0.0),
-            Point3::new(1.0, 1.0, 0.0),
-            Point3::new(-1.0, 0.0, 0.0),
-            Point3::new(-1.0, -1.0, 0.0),
-        ];
-        let mut mesh = SurfaceMesh {
-            normals: vec![Vec3::z(); 5],
-            vertices,
-            faces: vec![[0, 1, 2], [0, 3, 4]],
-            euler_characteristic: 0,
-            boundary_loops: 0,
-            rms_distance: 0.0,
-            max_distance: 0.0,
-        };
-        assert_eq!(split_pinched_vertices(&mut mesh), 1);
-        assert_eq!(mesh.faces, vec![[0, 1, 2], [5, 3, 4]]);
-        assert_eq!(mesh.vertices[5], mesh.vertices[0]);
-        mesh.measure(&[]);
-        assert_eq!(mesh.euler_characteristic, 2);
-        // A closed fan is one fan: nothing to split.
-        let mut fan = SurfaceMesh {
-            faces: vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1]],
-            ..mesh.clone()
-        };
-        fan.vertices.truncate(5);
-        fan.normals.truncate(5);
-        assert_eq!(split_pinched_vertices(&mut fan), 0);
     }
 
     /// The chance gap width grows with the number of samples and scales
