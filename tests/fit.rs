@@ -710,8 +710,10 @@ fn random_open_saddle_keeps_its_hole_at_the_default_spacing() {
 /// shaft 0.08 thick, about 3.6 spacings; a cone head with a sharp apex
 /// and rim) fit one closed surface of χ 2 on the arrow. Measured at
 /// other counts: right at 800 (a shaft 2.3 spacings thick), 1,000 and
-/// 5,000 samples; broken into closed pieces at 400 to 700 (500: 6
-/// pieces, χ 12; `reports/fitting.md`).
+/// 5,000 samples; broken into closed pieces at 400 to 700: 500 samples
+/// made 7 pieces (χ 12) until pieces touching at a pinched vertex were
+/// joined (`fit/pinches.rs`), now 2; at 600 samples, seeds 17 to 23: 1-2
+/// pieces (4 of 7 right), before 2-6 (none right).
 #[test]
 fn random_arrow_thin_shaft_at_the_default_spacing() {
     random_samples_fit_with_the_right_topology(Shape::Arrow, 2000);
