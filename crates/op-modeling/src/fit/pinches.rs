@@ -242,39 +242,39 @@ mod tests {
 
     use super::*;
 
+    /// A flat mesh facing +z: `xy` points in the plane z = 0.
+    fn flat(xy: &[(Real, Real)], faces: Vec<[u32; 3]>) -> SurfaceMesh {
+        SurfaceMesh {
+            vertices: xy.iter().map(|&(x, y)| Point3::new(x, y, 0.0)).collect(),
+            normals: vec![Vec3::z(); xy.len()],
+            faces,
+            euler_characteristic: 0,
+            boundary_loops: 0,
+            rms_distance: 0.0,
+            max_distance: 0.0,
+        }
+    }
+
     /// Two triangles touching at one corner (a bow tie): the shared
     /// vertex is split, `V - E + F` goes from 1 to 2 (two discs), and the
     /// geometry is unchanged.
     #[test]
     fn a_pinched_vertex_is_split() {
-        let vertices = vec![
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(1.0, 0.0, 0.0),
-            Point3::new(1.0, 1.0, 0.0),
-            Point3::new(-1.0, 0.0, 0.0),
-            Point3::new(-1.0, -1.0, 0.0),
+        let square = [
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.0, 1.0),
+            (-1.0, 0.0),
+            (-1.0, -1.0),
         ];
-        let mut mesh = SurfaceMesh {
-            normals: vec![Vec3::z(); 5],
-            vertices,
-            faces: vec![[0, 1, 2], [0, 3, 4]],
-            euler_characteristic: 0,
-            boundary_loops: 0,
-            rms_distance: 0.0,
-            max_distance: 0.0,
-        };
+        let mut mesh = flat(&square, vec![[0, 1, 2], [0, 3, 4]]);
         assert_eq!(split_pinched_vertices(&mut mesh), vec![(0, 5)]);
         assert_eq!(mesh.faces, vec![[0, 1, 2], [5, 3, 4]]);
         assert_eq!(mesh.vertices[5], mesh.vertices[0]);
         mesh.measure(&[]);
         assert_eq!(mesh.euler_characteristic, 2);
         // A closed fan is one fan: nothing to split.
-        let mut fan = SurfaceMesh {
-            faces: vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1]],
-            ..mesh.clone()
-        };
-        fan.vertices.truncate(5);
-        fan.normals.truncate(5);
+        let mut fan = flat(&square, vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1]]);
         assert!(split_pinched_vertices(&mut fan).is_empty());
     }
 
@@ -286,22 +286,8 @@ mod tests {
     fn pieces_touching_at_a_vertex_are_joined_across_the_wedge() {
         // Fan A: (0,0,0) with (1,0,0), (1,1,0); fan B: (0,0,0) with
         // (-0.2,1,0), (-1,1,0): the wedge (1,1)-(-0.2,1) is 1.2 wide.
-        let vertices = vec![
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(1.0, 0.0, 0.0),
-            Point3::new(1.0, 1.0, 0.0),
-            Point3::new(-0.2, 1.0, 0.0),
-            Point3::new(-1.0, 1.0, 0.0),
-        ];
-        let mesh = SurfaceMesh {
-            normals: vec![Vec3::z(); 5],
-            vertices,
-            faces: vec![[0, 1, 2], [0, 3, 4]],
-            euler_characteristic: 0,
-            boundary_loops: 0,
-            rms_distance: 0.0,
-            max_distance: 0.0,
-        };
+        let xy = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (-0.2, 1.0), (-1.0, 1.0)];
+        let mesh = flat(&xy, vec![[0, 1, 2], [0, 3, 4]]);
         let mut joined = mesh.clone();
         let copies = split_pinched_vertices(&mut joined);
         assert_eq!(copies, vec![(0, 5)]);
@@ -320,17 +306,8 @@ mod tests {
         // Two pieces touching at two vertices, 0 and 2: the first join
         // makes them one piece, and the second pinch stays split (a
         // second triangle would make a handle).
-        let mut twice = SurfaceMesh {
-            vertices: vec![
-                Point3::new(0.0, 0.0, 0.0),
-                Point3::new(1.0, 0.0, 0.0),
-                Point3::new(1.0, 1.0, 0.0),
-                Point3::new(0.2, 0.3, 0.0),
-                Point3::new(-1.0, 1.0, 0.0),
-            ],
-            faces: vec![[0, 1, 2], [0, 3, 4], [4, 3, 2]],
-            ..mesh.clone()
-        };
+        let xy = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.2, 0.3), (-1.0, 1.0)];
+        let mut twice = flat(&xy, vec![[0, 1, 2], [0, 3, 4], [4, 3, 2]]);
         let copies = split_pinched_vertices(&mut twice);
         assert_eq!(copies, vec![(0, 5), (2, 6)]);
         assert_eq!(join_at_pinches(&mut twice, &copies, 1.5), 1);
