@@ -114,8 +114,9 @@
 //!    a hole. Pinched vertices (two fans
 //!    meeting at a point) are split, and two pieces that touched only
 //!    there are joined by one triangle across the wedge between their
-//!    fans when it is narrower than the triangulation radius
-//!    (`pinches.rs`: a crease of a scan sharper than 90°, whose sides the
+//!    fans when it is narrower than the triangulation radius, and the
+//!    slit beside it zipped (`pinches.rs`: a crease of a scan sharper
+//!    than 90°, whose sides the
 //!    side test keeps apart; CGAL's `hippo1` went from 7 pieces to the
 //!    5 its samples make); pieces with fewer vertices than
 //!    [`FitParams::neighbours`] are dropped. Without the chance-gap width, 9

@@ -2,7 +2,10 @@
 //! sheets, or two corners of holes, touching at a point), where the mesh
 //! is no surface. They are split ([`split_pinched_vertices`]), and two
 //! pieces that touch only there are joined by one triangle across the
-//! wedge between their fans ([`join_at_pinches`]).
+//! wedge between their fans ([`join_at_pinches`]); the slit beyond it,
+//! where their rims run side by side, is zipped with triangles
+//! (zippering, Turk and Levoy 1994) while the rims stay within the
+//! triangulation radius of each other.
 //!
 //! The join is for scans: at a crease sharper than 90° the two sheets'
 //! normals are more than 90° apart, and the triangulation's side test
@@ -10,9 +13,12 @@
 //! joins no particle of one sheet to one of the other; only the sample on
 //! the crease, in both sheets' triangles, holds them together. On CGAL's
 //! scanned hippo (`hippo1`), the head hung on the body by such a vertex
-//! and counted as a piece of its own.
+//! and counted as a piece of its own. On two sheets meeting at 60°
+//! through one crease sample (`tests/fit.rs`), the zip took the rim
+//! edges along the crease from 72 to 45: it stops where an ear would
+//! face away from its corners' normals.
 
-use std::collections::{BTreeMap, HashMap, HashSet};
+use std::collections::{BTreeMap, HashSet};
 
 use op_dynamics::Real;
 use rayon::prelude::*;
@@ -126,10 +132,11 @@ fn fans(faces: &[[u32; 3]], v: usize, fan: &[usize]) -> DisjointSets {
 /// the triangle `(v, a, b)` is wound as both fans are), `|a b|` is at
 /// most `radius` (the triangulation's) and the triangle faces along its
 /// corners' normals, the triangle on the shortest such pair is added and
-/// the copy merged back into `v`: one vertex again, with one fan, and the
-/// wedge's first triangle. Fans of one piece stay apart (a triangle
-/// between them would make a handle or a pinched tube). Returns the
-/// number of joins.
+/// the copy merged back into `v`: one vertex again, with one fan. Fans of
+/// one piece stay apart (a triangle between them would make a handle or
+/// a pinched tube). The slit left on either side of the join, where the
+/// two pieces' rims run side by side along the crease, is then zipped
+/// ([`Zipper::zip`]). Returns the number of joins.
 pub(super) fn join_at_pinches(
     mesh: &mut SurfaceMesh,
     copies: &[(u32, u32)],
@@ -140,21 +147,7 @@ pub(super) fn join_at_pinches(
     }
     let piece = vertex_components(&mesh.faces);
     let mut pieces = DisjointSets::new(piece.len());
-    // Directed edges of the triangles, and the triangles at each vertex
-    // of a pinch (the only ones rewritten).
-    let mut directed: HashSet<(u32, u32)> = HashSet::new();
-    let mut at: HashMap<u32, Vec<usize>> = copies
-        .iter()
-        .flat_map(|&(v, w)| [(v, Vec::new()), (w, Vec::new())])
-        .collect();
-    for (t, f) in mesh.faces.iter().enumerate() {
-        for k in 0..3 {
-            directed.insert((f[k], f[(k + 1) % 3]));
-            if let Some(list) = at.get_mut(&f[k]) {
-                list.push(t);
-            }
-        }
-    }
+    let mut zipper = Zipper::new(mesh, radius);
     let mut joined = 0;
     for &(v, w) in copies {
         let (Some(pv), Some(pw)) = (piece[v as usize], piece[w as usize]) else {
@@ -163,46 +156,20 @@ pub(super) fn join_at_pinches(
         if pieces.root(pv as usize) == pieces.root(pw as usize) {
             continue;
         }
-        // Boundary edges at x: `into` (y -> x, no x -> y), `out_of`.
-        let ends = |x: u32, into: bool| -> Vec<u32> {
-            let mut out: Vec<u32> = at[&x]
-                .iter()
-                .flat_map(|&t| {
-                    let f = mesh.faces[t];
-                    let k = f.iter().position(|&c| c == x).unwrap_or(0);
-                    [f[(k + 1) % 3], f[(k + 2) % 3]]
-                })
-                .filter(|&y| {
-                    let (e, back) = if into {
-                        ((y, x), (x, y))
-                    } else {
-                        ((x, y), (y, x))
-                    };
-                    directed.contains(&e) && !directed.contains(&back)
-                })
-                .collect();
-            out.sort_unstable();
-            out.dedup();
-            out
-        };
-        let p = |x: u32| mesh.vertices[x as usize];
-        let n = |x: u32| mesh.normals[x as usize];
         let mut best: Option<(Real, u32, u32)> = None;
         for (from, to) in [(v, w), (w, v)] {
-            for a in ends(from, true) {
-                for b in ends(to, false) {
+            for a in zipper.ends(mesh, from, true) {
+                for b in zipper.ends(mesh, to, false) {
                     // Each edge of (v, a, b) once in its direction, at
                     // v and at the copy merged into it.
-                    let taken = [(a, b), (v, a), (w, a), (b, v), (b, w)];
-                    if a == b || taken.iter().any(|e| directed.contains(e)) {
+                    let taken = [(v, a), (w, a), (b, v), (b, w)];
+                    if taken.iter().any(|e| zipper.directed.contains(e)) {
                         continue;
                     }
-                    let d = (p(b) - p(a)).norm();
-                    let facing = (p(a) - p(v))
-                        .cross(&(p(b) - p(v)))
-                        .dot(&(n(v) + n(a) + n(b)));
-                    if d <= radius && facing > 0.0 && best.is_none_or(|(bd, ..)| d < bd) {
-                        best = Some((d, a, b));
+                    if let Some(d) = zipper.fits(mesh, [v, a, b], (a, b)) {
+                        if best.is_none_or(|(bd, ..)| d < bd) {
+                            best = Some((d, a, b));
+                        }
                     }
                 }
             }
@@ -210,30 +177,152 @@ pub(super) fn join_at_pinches(
         let Some((_, a, b)) = best else {
             continue;
         };
-        for &t in &at[&w] {
+        zipper.merge(mesh, w, v);
+        zipper.add(mesh, [v, a, b]);
+        pieces.union(pv as usize, pw as usize);
+        joined += 1;
+        // The slit beyond (a, b), and the one on the other side of v.
+        zipper.zip(mesh, a, b);
+        if let ([p], [q]) = (
+            &zipper.ends(mesh, v, true)[..],
+            &zipper.ends(mesh, v, false)[..],
+        ) {
+            let (p, q) = (*p, *q);
+            if zipper.fits(mesh, [v, p, q], (p, q)).is_some() {
+                zipper.add(mesh, [v, p, q]);
+                zipper.zip(mesh, p, q);
+            }
+        }
+    }
+    joined
+}
+
+/// The triangles of a mesh being joined and zipped: the directed edges
+/// of its triangles and the triangles at each vertex.
+struct Zipper {
+    directed: HashSet<(u32, u32)>,
+    around: Vec<Vec<usize>>,
+    radius: Real,
+}
+
+impl Zipper {
+    fn new(mesh: &SurfaceMesh, radius: Real) -> Self {
+        let mut zipper = Zipper {
+            directed: HashSet::new(),
+            around: vec![Vec::new(); mesh.vertices.len()],
+            radius,
+        };
+        for (t, f) in mesh.faces.iter().enumerate() {
+            zipper.index(t, *f);
+        }
+        zipper
+    }
+
+    fn index(&mut self, t: usize, f: [u32; 3]) {
+        for k in 0..3 {
+            self.directed.insert((f[k], f[(k + 1) % 3]));
+            self.around[f[k] as usize].push(t);
+        }
+    }
+
+    /// The other ends of the boundary edges at `x`: those into `x`
+    /// (`y -> x` with no `x -> y`) or out of it, ascending.
+    fn ends(&self, mesh: &SurfaceMesh, x: u32, into: bool) -> Vec<u32> {
+        let mut out: Vec<u32> = self.around[x as usize]
+            .iter()
+            .flat_map(|&t| {
+                let f = mesh.faces[t];
+                let k = f.iter().position(|&c| c == x).unwrap_or(0);
+                [f[(k + 1) % 3], f[(k + 2) % 3]]
+            })
+            .filter(|&y| {
+                let (e, back) = if into {
+                    ((y, x), (x, y))
+                } else {
+                    ((x, y), (y, x))
+                };
+                self.directed.contains(&e) && !self.directed.contains(&back)
+            })
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// The length of `f`'s new edge `new` when `f` may be added: three
+    /// corners, no edge of it already in a triangle in its direction,
+    /// the new edge at most the radius long, and the triangle facing
+    /// along the sum of its corners' normals.
+    fn fits(&self, mesh: &SurfaceMesh, f: [u32; 3], new: (u32, u32)) -> Option<Real> {
+        if f[0] == f[1] || f[1] == f[2] || f[2] == f[0] {
+            return None;
+        }
+        if (0..3).any(|k| self.directed.contains(&(f[k], f[(k + 1) % 3]))) {
+            return None;
+        }
+        let p = |x: u32| mesh.vertices[x as usize];
+        let n = |x: u32| mesh.normals[x as usize];
+        let d = (p(new.1) - p(new.0)).norm();
+        let facing = (p(f[1]) - p(f[0]))
+            .cross(&(p(f[2]) - p(f[0])))
+            .dot(&(n(f[0]) + n(f[1]) + n(f[2])));
+        (d <= self.radius && facing > 0.0).then_some(d)
+    }
+
+    fn add(&mut self, mesh: &mut SurfaceMesh, f: [u32; 3]) {
+        self.index(mesh.faces.len(), f);
+        mesh.faces.push(f);
+    }
+
+    /// Renames `w` to `v` in `w`'s triangles.
+    fn merge(&mut self, mesh: &mut SurfaceMesh, w: u32, v: u32) {
+        for t in std::mem::take(&mut self.around[w as usize]) {
             let f = mesh.faces[t];
             for k in 0..3 {
-                directed.remove(&(f[k], f[(k + 1) % 3]));
+                self.directed.remove(&(f[k], f[(k + 1) % 3]));
             }
             let f = f.map(|c| if c == w { v } else { c });
             for k in 0..3 {
-                directed.insert((f[k], f[(k + 1) % 3]));
+                self.directed.insert((f[k], f[(k + 1) % 3]));
             }
             mesh.faces[t] = f;
+            self.around[v as usize].push(t);
         }
-        let moved = at.remove(&w).unwrap_or_default();
-        let list = at.entry(v).or_default();
-        list.extend(moved);
-        list.push(mesh.faces.len());
-        let f = [v, a, b];
-        for k in 0..3 {
-            directed.insert((f[k], f[(k + 1) % 3]));
-        }
-        mesh.faces.push(f);
-        pieces.union(pv as usize, pw as usize);
-        joined += 1;
     }
-    joined
+
+    /// Zips the slit beyond the boundary edge `a -> b` that joins two
+    /// rims (Turk and Levoy's zippering, 1994): while the rim runs
+    /// `x -> a -> b -> y` with one boundary edge at each of `a` and `b`,
+    /// the ear at `a` (triangle `(a, x, b)`) or at `b` (`(b, a, y)`) with
+    /// the shorter new edge is added when it fits ([`Zipper::fits`]), and
+    /// the zip goes on from that edge. It stops where the rims part (no
+    /// ear's new edge within the radius) or meet.
+    fn zip(&mut self, mesh: &mut SurfaceMesh, mut a: u32, mut b: u32) {
+        for _ in 0..mesh.faces.len() {
+            let boundary = self.directed.contains(&(a, b)) && !self.directed.contains(&(b, a));
+            let (xs, ys) = (self.ends(mesh, a, true), self.ends(mesh, b, false));
+            let (&[x], &[y], true) = (&xs[..], &ys[..], boundary) else {
+                return;
+            };
+            let at_a = self.fits(mesh, [a, x, b], (x, b));
+            let at_b = self.fits(mesh, [b, a, y], (a, y));
+            match (at_a, at_b) {
+                (Some(da), Some(db)) if db < da => {
+                    self.add(mesh, [b, a, y]);
+                    b = y;
+                }
+                (Some(_), _) => {
+                    self.add(mesh, [a, x, b]);
+                    a = x;
+                }
+                (None, Some(_)) => {
+                    self.add(mesh, [b, a, y]);
+                    b = y;
+                }
+                (None, None) => return,
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -315,5 +404,63 @@ mod tests {
             twice.faces,
             vec![[0, 1, 2], [0, 3, 4], [4, 3, 6], [0, 2, 3]]
         );
+    }
+
+    /// Two strips whose rims run side by side 0.6 apart (rows y = 0.3
+    /// and y = -0.3, x = 1 to 3) and touch at the vertex (0, 0): the
+    /// join at the vertex, then the zip along the slit, make one strip
+    /// (a disc: one rim, χ 1, 6 + 6 + 1 + 4 triangles). The zip stops at
+    /// the strips' ends, and with a radius under the ears' new edges
+    /// (1.17) only the join is made.
+    #[test]
+    fn the_slit_beside_a_join_is_zipped() {
+        let xy = [
+            (0.0, 0.0),
+            (1.0, 0.3),
+            (2.0, 0.3),
+            (3.0, 0.3),
+            (0.0, 1.0),
+            (1.0, 1.0),
+            (2.0, 1.0),
+            (3.0, 1.0),
+            (1.0, -0.3),
+            (2.0, -0.3),
+            (3.0, -0.3),
+            (0.0, -1.0),
+            (1.0, -1.0),
+            (2.0, -1.0),
+            (3.0, -1.0),
+        ];
+        // Upper strip: rows 1-3 (y 0.3) and 4-7 (y 1); lower strip: rows
+        // 8-10 (y -0.3) and 11-14 (y -1); both through vertex 0.
+        let faces = vec![
+            [0, 1, 5],
+            [0, 5, 4],
+            [1, 2, 6],
+            [1, 6, 5],
+            [2, 3, 7],
+            [2, 7, 6],
+            [0, 11, 12],
+            [0, 12, 8],
+            [8, 12, 13],
+            [8, 13, 9],
+            [9, 13, 14],
+            [9, 14, 10],
+        ];
+        let mesh = flat(&xy, faces);
+        let mut zipped = mesh.clone();
+        let copies = split_pinched_vertices(&mut zipped);
+        assert_eq!(copies.len(), 1);
+        assert_eq!(join_at_pinches(&mut zipped, &copies, 1.5), 1);
+        assert_eq!(zipped.faces.len(), 17);
+        zipped.drop_unused_vertices();
+        zipped.measure(&[]);
+        assert_eq!((zipped.euler_characteristic, zipped.boundary_loops), (1, 1));
+        assert!(split_pinched_vertices(&mut zipped).is_empty());
+
+        let mut joined = mesh.clone();
+        let copies = split_pinched_vertices(&mut joined);
+        assert_eq!(join_at_pinches(&mut joined, &copies, 1.1), 1);
+        assert_eq!(joined.faces.len(), 13);
     }
 }
