@@ -160,10 +160,9 @@ pub(super) fn join_at_pinches(
         for (from, to) in [(v, w), (w, v)] {
             for a in zipper.ends(mesh, from, true) {
                 for b in zipper.ends(mesh, to, false) {
-                    // Each edge of (v, a, b) once in its direction, at
-                    // v and at the copy merged into it.
-                    let taken = [(v, a), (w, a), (b, v), (b, w)];
-                    if taken.iter().any(|e| zipper.directed.contains(e)) {
+                    // The edges (v, a) and (b, v) at the copy merged
+                    // into v (`fits` looks at v's own).
+                    if [(w, a), (b, w)].iter().any(|e| zipper.directed.contains(e)) {
                         continue;
                     }
                     if let Some(d) = zipper.fits(mesh, [v, a, b], (a, b)) {
@@ -197,6 +196,11 @@ pub(super) fn join_at_pinches(
     joined
 }
 
+/// The directed sides of triangle `f`, in its winding.
+fn sides(f: [u32; 3]) -> [(u32, u32); 3] {
+    [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])]
+}
+
 /// The triangles of a mesh being joined and zipped: the directed edges
 /// of its triangles and the triangles at each vertex.
 struct Zipper {
@@ -219,9 +223,9 @@ impl Zipper {
     }
 
     fn index(&mut self, t: usize, f: [u32; 3]) {
-        for k in 0..3 {
-            self.directed.insert((f[k], f[(k + 1) % 3]));
-            self.around[f[k] as usize].push(t);
+        self.directed.extend(sides(f));
+        for c in f {
+            self.around[c as usize].push(t);
         }
     }
 
@@ -257,7 +261,7 @@ impl Zipper {
         if f[0] == f[1] || f[1] == f[2] || f[2] == f[0] {
             return None;
         }
-        if (0..3).any(|k| self.directed.contains(&(f[k], f[(k + 1) % 3]))) {
+        if sides(f).iter().any(|e| self.directed.contains(e)) {
             return None;
         }
         let p = |x: u32| mesh.vertices[x as usize];
@@ -278,13 +282,11 @@ impl Zipper {
     fn merge(&mut self, mesh: &mut SurfaceMesh, w: u32, v: u32) {
         for t in std::mem::take(&mut self.around[w as usize]) {
             let f = mesh.faces[t];
-            for k in 0..3 {
-                self.directed.remove(&(f[k], f[(k + 1) % 3]));
+            for e in sides(f) {
+                self.directed.remove(&e);
             }
             let f = f.map(|c| if c == w { v } else { c });
-            for k in 0..3 {
-                self.directed.insert((f[k], f[(k + 1) % 3]));
-            }
+            self.directed.extend(sides(f));
             mesh.faces[t] = f;
             self.around[v as usize].push(t);
         }
@@ -304,22 +306,21 @@ impl Zipper {
             let (&[x], &[y], true) = (&xs[..], &ys[..], boundary) else {
                 return;
             };
-            let at_a = self.fits(mesh, [a, x, b], (x, b));
-            let at_b = self.fits(mesh, [b, a, y], (a, y));
-            match (at_a, at_b) {
-                (Some(da), Some(db)) if db < da => {
-                    self.add(mesh, [b, a, y]);
-                    b = y;
-                }
-                (Some(_), _) => {
-                    self.add(mesh, [a, x, b]);
-                    a = x;
-                }
-                (None, Some(_)) => {
-                    self.add(mesh, [b, a, y]);
-                    b = y;
-                }
+            let at_b = match (
+                self.fits(mesh, [a, x, b], (x, b)),
+                self.fits(mesh, [b, a, y], (a, y)),
+            ) {
+                (Some(da), Some(db)) => db < da,
+                (Some(_), None) => false,
+                (None, Some(_)) => true,
                 (None, None) => return,
+            };
+            if at_b {
+                self.add(mesh, [b, a, y]);
+                b = y;
+            } else {
+                self.add(mesh, [a, x, b]);
+                a = x;
             }
         }
     }
