@@ -7,6 +7,8 @@ use op_dynamics::{Point3, Real, Vec3};
 use op_scene::fit::shapes::Shape;
 use op_scene::pointsets::PointSet;
 
+use super::targets::Truth;
+
 /// A small deterministic generator (xorshift64).
 struct Rng(u64);
 
@@ -134,7 +136,7 @@ fn shape_area(shape: Shape) -> Real {
 /// The classes of the report, named, with their shape (the truth for the
 /// vertex-to-surface distance): `n` samples each (the arrows fewer, the
 /// last `10 n`).
-pub(crate) fn classes(n: usize) -> Vec<(String, PointSet, Shape)> {
+pub(crate) fn classes(n: usize) -> Vec<(String, PointSet, Shape, Truth)> {
     let mut out = Vec::new();
     for (shape, share) in [
         (Shape::Torus, 0.0025),
@@ -152,6 +154,12 @@ pub(crate) fn classes(n: usize) -> Vec<(String, PointSet, Shape)> {
             ),
             noisy(shape, n, share),
             shape,
+            // The targets hold up to 0.5% of noise.
+            if share <= 0.005 {
+                Truth::of(shape)
+            } else {
+                Truth::of(shape).beyond()
+            },
         ));
     }
     for share in [0.01, 0.05] {
@@ -159,6 +167,7 @@ pub(crate) fn classes(n: usize) -> Vec<(String, PointSet, Shape)> {
             format!("torus {n} + {}% uniform outliers", 100.0 * share),
             with_outliers(Shape::Torus, n, share),
             Shape::Torus,
+            Truth::of(Shape::Torus).with_outliers(),
         ));
     }
     let step = density_step(Shape::Torus, n, 10.0);
@@ -169,6 +178,7 @@ pub(crate) fn classes(n: usize) -> Vec<(String, PointSet, Shape)> {
         ),
         step,
         Shape::Torus,
+        Truth::of(Shape::Torus),
     ));
     for ratio in [5.0, 10.0] {
         let lines = scan_lines(Shape::Torus, n, ratio);
@@ -179,6 +189,7 @@ pub(crate) fn classes(n: usize) -> Vec<(String, PointSet, Shape)> {
             ),
             lines,
             Shape::Torus,
+            Truth::of(Shape::Torus),
         ));
     }
     // A thin part: the arrow's shaft is 0.08 thick, about 1.8, 2.3 and
@@ -188,12 +199,14 @@ pub(crate) fn classes(n: usize) -> Vec<(String, PointSet, Shape)> {
             format!("arrow {count} (a thin shaft, a sharp head)"),
             Shape::Arrow.sample(count, 17),
             Shape::Arrow,
+            Truth::of(Shape::Arrow),
         ));
     }
     out.push((
         format!("torus {}, Gaussian noise 0.5% of the diagonal", 10 * n),
         noisy(Shape::Torus, 10 * n, 0.005),
         Shape::Torus,
+        Truth::of(Shape::Torus),
     ));
     out
 }
