@@ -14,7 +14,12 @@
 //! [min-max] over the repetitions (`OP_REPS`, default 3); the stage
 //! shares and seconds come from each run's `summary.json` (`stages`, which
 //! add up to `wall_seconds`); peak memory is the child's maximum resident
-//! set from `/usr/bin/time` when it is installed. For each scaled-up
+//! set from `/usr/bin/time` when it is installed, and so are its CPU
+//! seconds (user and system): divided by the process's wall time, the
+//! cores it kept busy on average. At 1 thread a value above one is work
+//! beside the pool (the frame writer's own thread, the kernel's file
+//! work); at 2 threads what falls short of two is time a thread waited,
+//! the serial part of the run. For each scaled-up
 //! family the report fits the exponent `a` of `t ~ N^a` (least squares on
 //! the logarithms) to the wall time and to its largest stages.
 //! `OP_QUICK=1` runs only the smallest scaled-up size of each family and
@@ -56,6 +61,8 @@ struct Sample {
     wall: f64,
     stages: BTreeMap<String, f64>,
     peak_mb: Option<f64>,
+    /// CPU seconds (user + system) over the process's wall seconds.
+    cores_busy: Option<f64>,
     exit: i32,
     particles: usize,
 }
@@ -368,7 +375,7 @@ fn measure(opsim: &Path, case: &Case, threads: usize, work: &Path) -> Res<Sample
     let time = Path::new("/usr/bin/time");
     let mut cmd = if time.exists() {
         let mut c = Command::new(time);
-        c.args(["-f", "peak-kb %M"]).arg(opsim);
+        c.args(["-f", "peak-kb %M\ncpu-s %U %S"]).arg(opsim);
         c
     } else {
         Command::new(opsim)
@@ -393,9 +400,19 @@ fn measure(opsim: &Path, case: &Case, threads: usize, work: &Path) -> Res<Sample
         .find_map(|l| l.strip_prefix("peak-kb "))
         .and_then(|v| v.trim().parse::<f64>().ok())
         .map(|kb| kb / 1024.0);
+    let cpu: Option<f64> = stderr
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix("cpu-s "))
+        .and_then(|v| {
+            v.split_whitespace()
+                .map(|x| x.parse::<f64>().ok())
+                .sum::<Option<f64>>()
+        });
     let mut sample = Sample {
         wall: elapsed,
         peak_mb,
+        cores_busy: cpu.map(|c| c / elapsed),
         exit: output.status.code().unwrap_or(-1),
         ..Sample::default()
     };
@@ -560,7 +577,11 @@ fn intro(
          process at {}, interleaved over {reps} repetition(s); seconds are medians [min-max], \
          speed-ups are per-repetition ratios to {}. A run's wall time is its `summary.json` \
          `wall_seconds` (building the scene included), whose `stages` add up to it; \
-         `opsim fit` is timed as a whole process.\n",
+         `opsim fit` is timed as a whole process. Cores busy: the process's CPU seconds \
+         (user and system, `/usr/bin/time`) over its wall seconds, the median: above 1 at \
+         1 thread for work beside the pool (the frame writer's thread, the kernel's file \
+         work); at 2 threads, what falls short of 2 is time a thread waited (the serial \
+         part of the run).\n",
         started.elapsed().as_secs_f64(),
         flags.join(", "),
         threads_label(threads[0]),
@@ -695,11 +716,12 @@ fn scaled_table(
     writeln!(
         md,
         "| case | particles |{head} build | contact | integrate | export | largest stages at {} \
-         | peak memory at {} threads (MB) |",
+         | cores busy at {} threads | peak memory at {} threads (MB) |",
         threads_label(threads[0]),
+        counts.join(" / "),
         counts.join(" / ")
     )?;
-    writeln!(md, "|---|---|{rule}---|---|---|---|---|---|")?;
+    writeln!(md, "|---|---|{rule}---|---|---|---|---|---|---|")?;
     for (case, per_thread) in cases.iter().zip(results) {
         if case.family.is_none() || per_thread[0].is_empty() {
             continue;
@@ -710,11 +732,19 @@ fn scaled_table(
                 .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))
                 .map_or("n/a".to_string(), |v| format!("{v:.0}"))
         };
+        // The median over the repetitions.
+        let busy = |xs: &[Sample]| {
+            let mut v: Vec<f64> = xs.iter().filter_map(|x| x.cores_busy).collect();
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2)
+                .map_or("n/a".to_string(), |b| format!("{b:.2}"))
+        };
         let one = &per_thread[0];
         let peaks: Vec<String> = per_thread.iter().map(|s| peak(s)).collect();
+        let busies: Vec<String> = per_thread.iter().map(|s| busy(s)).collect();
         writeln!(
             md,
-            "| {} | {} |{} {:.2} | {:.2} | {:.2} | {:.2} | {} | {} |",
+            "| {} | {} |{} {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} |",
             case.label,
             one[0].particles,
             thread_cells(per_thread),
@@ -723,6 +753,7 @@ fn scaled_table(
             stage(one, "integrate"),
             stage(one, "export"),
             top_stages(one),
+            busies.join(" / "),
             peaks.join(" / "),
         )?;
     }
