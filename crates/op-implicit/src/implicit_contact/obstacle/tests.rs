@@ -328,10 +328,7 @@ fn each_edge_is_found_by_one_block() {
     let s = mat(&mut Rng::new(3));
     let field = s.field();
     let (c, cp) = tilted_box();
-    let obstacle = super::Obstacle {
-        shape: &c,
-        pose: &cp,
-    };
+    let obstacle = super::Obstacle::new(&c, &cp);
     let grid = super::lattice(&field, &obstacle, PARAMS.cell_size, 512)
         .unwrap()
         .unwrap();
