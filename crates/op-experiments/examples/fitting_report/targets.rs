@@ -102,8 +102,8 @@ pub(crate) struct FitFacts {
 }
 
 /// The link distance, in spacings, of the samples' clusters: a gap wider
-/// than about three spacings is beyond the triangulation's reach (its
-/// radius is under two) and no hole-filling pass bridges it.
+/// than three spacings is beyond the triangulation's reach (its radius is
+/// two spacings), and the hole pass joins pieces only where they touch.
 pub(crate) const LINK_SPACINGS: Real = 3.0;
 
 /// The clusters of `points` under single linkage at distance `link`

@@ -130,6 +130,7 @@ struct Obstacle<'a> {
 }
 
 impl<'a> Obstacle<'a> {
+    /// `shape` at `pose`, its bounding box computed once.
     fn new(shape: &'a dyn Shape, pose: &'a Pose) -> Self {
         let aabb = shape.compute_aabb(pose);
         Obstacle {

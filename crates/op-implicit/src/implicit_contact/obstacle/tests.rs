@@ -423,3 +423,41 @@ fn the_sums_do_not_depend_on_the_thread_count() {
         .reactions(&bad)
         .is_err());
 }
+
+/// The bounding-box shortcut of `may_reach_inside` answers as the signed
+/// distance alone does, for balls near and far from a tilted box, a ball
+/// and a half-space (whose box is infinite), including balls just
+/// touching the box's faces.
+#[test]
+fn the_box_shortcut_answers_as_the_signed_distance() {
+    let (c, cp) = tilted_box();
+    let ball = Ball::new(1.5);
+    let half = HalfSpace::new(Vector::new(0.1, -0.2, 1.0).normalize());
+    let at = Pose::from_parts(Vector::new(0.3, -0.1, 0.2), Rotation::IDENTITY);
+    let shapes: [(&dyn Shape, &Pose); 3] = [(&c, &cp), (&ball, &at), (&half, &at)];
+    let mut rng = Rng::new(17);
+    for (shape, pose) in shapes {
+        let obstacle = super::Obstacle::new(shape, pose);
+        let (lo, hi) = obstacle.bounding_box();
+        for _ in 0..4000 {
+            let r = rng.uniform(0.0, 1.0);
+            let mut x = Point3::new(
+                rng.uniform(-5.0, 5.0),
+                rng.uniform(-5.0, 5.0),
+                rng.uniform(-5.0, 5.0),
+            );
+            // A quarter of the balls sit just beyond the box's +x face,
+            // centred on it in y and z (where the ball obstacle touches its
+            // box): there the shortcut's margin decides.
+            if rng.uniform(0.0, 1.0) < 0.25 && hi.x.is_finite() {
+                x = Point3::new(
+                    hi.x + r + rng.uniform(-1e-3, 1e-3),
+                    0.5 * (lo.y + hi.y),
+                    0.5 * (lo.z + hi.z),
+                );
+            }
+            let by_distance = obstacle.signed(&x).0 <= r + 1e-9 * (1.0 + r);
+            assert_eq!(obstacle.may_reach_inside(&x, r), by_distance, "{x} {r}");
+        }
+    }
+}
