@@ -378,10 +378,11 @@ fn rest_pairs(o: &BuiltObject) -> Vec<(u32, u32, Real)> {
         return Vec::new();
     }
     let mut pairs = Vec::new();
-    let points: Vec<(u32, Point3)> = o.ids.iter().copied().zip(o.rest.iter().copied()).collect();
-    close_pairs(&points, reach, |a, b, d| {
+    // Rest positions pair with ids in order (as far as both go).
+    let n = o.ids.len().min(o.rest.len());
+    close_pairs(&o.rest[..n], reach, |a, b, d| {
         if d > 0.0 {
-            pairs.push((points[a].0, points[b].0, d));
+            pairs.push((o.ids[a], o.ids[b], d));
         }
     });
     pairs
@@ -414,12 +415,19 @@ pub fn pieces(scene: &BuiltScene, o: &BuiltObject, range: Real) -> usize {
 
 /// [`pieces`] of the particles `ids` of `p`.
 fn pieces_of(p: &op_dynamics::Particles, ids: &[u32], range: Real) -> usize {
-    let points: Vec<(u32, Point3)> = ids
+    let points: Vec<Point3> = ids
         .iter()
-        .filter_map(|&id| p.slot_of(id).map(|s| (id, p.positions()[s])))
+        .filter_map(|&id| p.slot_of(id).map(|s| p.positions()[s]))
         .collect();
+    point_pieces(&points, range)
+}
+
+/// Connected components of `points`, two joined when closer than `range`
+/// (single linkage); a point with non-finite coordinates is a piece of
+/// its own.
+pub fn point_pieces(points: &[Point3], range: Real) -> usize {
     let mut sets = op_modeling::disjoint_sets::DisjointSets::new(points.len());
-    close_pairs(&points, range, |a, b, _| {
+    close_pairs(points, range, |a, b, _| {
         sets.union(a, b);
     });
     sets.count()
@@ -428,7 +436,7 @@ fn pieces_of(p: &op_dynamics::Particles, ids: &[u32], range: Real) -> usize {
 /// Calls `f(a, b, distance)` for every pair of `points` (indices, `a < b`)
 /// closer than `reach`, in a deterministic order, by a hash grid of cell
 /// size `reach`. Points with non-finite coordinates are their own pieces.
-fn close_pairs(points: &[(u32, Point3)], reach: Real, mut f: impl FnMut(usize, usize, Real)) {
+fn close_pairs(points: &[Point3], reach: Real, mut f: impl FnMut(usize, usize, Real)) {
     let cell = |x: &Point3| -> Option<[i64; 3]> {
         let c = [x.x / reach, x.y / reach, x.z / reach];
         // Beyond ±2^52 cells the grid cannot tell neighbours apart; such
@@ -441,12 +449,12 @@ fn close_pairs(points: &[(u32, Point3)], reach: Real, mut f: impl FnMut(usize, u
     // looks up 27 of them (two objects of 144,605 particles: the four
     // piece counts of a run took 0.85 s with SipHash, 0.75 s with it).
     let mut grid: CellMap<Vec<usize>> = CellMap::default();
-    for (k, (_, x)) in points.iter().enumerate() {
+    for (k, x) in points.iter().enumerate() {
         if let Some(c) = cell(x) {
             grid.entry(c).or_default().push(k);
         }
     }
-    for (a, (_, x)) in points.iter().enumerate() {
+    for (a, x) in points.iter().enumerate() {
         let Some(c) = cell(x) else { continue };
         for dx in -1..=1 {
             for dy in -1..=1 {
@@ -458,7 +466,7 @@ fn close_pairs(points: &[(u32, Point3)], reach: Real, mut f: impl FnMut(usize, u
                         if b <= a {
                             continue;
                         }
-                        let d = (points[b].1 - x).norm();
+                        let d = (points[b] - x).norm();
                         if d < reach {
                             f(a, b, d);
                         }
@@ -601,10 +609,9 @@ mod tests {
 
     #[test]
     fn close_pairs_and_bounds() {
-        let pts: Vec<(u32, Point3)> = [0.0, 0.5, 1.0, 3.0, 3.4]
+        let pts: Vec<Point3> = [0.0, 0.5, 1.0, 3.0, 3.4]
             .iter()
-            .enumerate()
-            .map(|(k, &x)| (k as u32, Point3::new(x, 0.0, 0.0)))
+            .map(|&x| Point3::new(x, 0.0, 0.0))
             .collect();
         let mut found = Vec::new();
         close_pairs(&pts, 0.6, |a, b, _| found.push((a, b)));

@@ -206,8 +206,13 @@ fn ours(data: &str, set: &PointSet, shape: Option<Shape>, truth: Truth) -> Row {
                     .iter()
                     .map(|t| t.thickness / f.spacing)
                     .min_by(Real::total_cmp),
-                clusters: (row.pieces > 1)
-                    .then(|| targets::clusters(&set.positions, targets::LINK_SPACINGS * f.spacing)),
+                // The samples' single-linkage pieces (op_scene::health).
+                clusters: (row.pieces > 1).then(|| {
+                    op_scene::health::point_pieces(
+                        &set.positions,
+                        targets::LINK_SPACINGS * f.spacing,
+                    )
+                }),
             });
             row
         }

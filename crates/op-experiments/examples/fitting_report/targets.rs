@@ -11,11 +11,9 @@
 //! miss is printed with its size and with the figures that bear on it
 //! (the samples' own clusters, the thin features the fit names).
 
-use std::collections::HashMap;
 use std::fmt::Write as _;
 
-use op_dynamics::{Point3, Real};
-use op_modeling::disjoint_sets::DisjointSets;
+use op_dynamics::Real;
 use op_scene::fit::shapes::Shape;
 
 use super::Row;
@@ -105,37 +103,6 @@ pub(crate) struct FitFacts {
 /// than three spacings is beyond the triangulation's reach (its radius is
 /// two spacings), and the hole pass joins pieces only where they touch.
 pub(crate) const LINK_SPACINGS: Real = 3.0;
-
-/// The clusters of `points` under single linkage at distance `link`
-/// (a grid of cell `link`, pairs in neighbouring cells joined).
-pub(crate) fn clusters(points: &[Point3], link: Real) -> usize {
-    let cell = |p: &Point3| p.coords.map(|x| (x / link).floor() as i64);
-    let mut cells: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
-    for (i, p) in points.iter().enumerate() {
-        let c = cell(p);
-        cells.entry([c.x, c.y, c.z]).or_default().push(i);
-    }
-    let mut sets = DisjointSets::new(points.len());
-    for (c, members) in &cells {
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(others) = cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
-                        continue;
-                    };
-                    for &i in members {
-                        for &j in others {
-                            if i < j && (points[i] - points[j]).norm() <= link {
-                                sets.union(i, j);
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-    sets.count()
-}
 
 /// One target's verdict: met or not, and the cell's text.
 struct Check {
