@@ -522,44 +522,70 @@ fn weld(pieces: &[Piece]) -> (Vec<Point3>, Vec<[u32; 3]>) {
         base.push(next as u32);
         next += n;
     }
-    let rank: Vec<u32> = (0..pieces.len())
+    // The outputs are filled in place, each piece its own slice of them
+    // (a collect of a flattened iterator gathers per-task vectors and
+    // appends them on one thread, touching the memory twice): zeroed
+    // vectors of plain numbers come from the allocator zeroed, their pages
+    // touched by the parallel fill.
+    let sizes: Vec<usize> = pieces.iter().map(|p| p.positions.len()).collect();
+    let mut rank = vec![0u32; total];
+    pieces_of(&mut rank, &sizes)
         .into_par_iter()
-        .flat_map_iter(|p| {
+        .enumerate()
+        .for_each(|(p, out)| {
             let mut n = base[p];
-            (start[p]..start[p + 1]).map(move |q| {
-                let rank = n;
+            for (slot, q) in out.iter_mut().zip(start[p]..) {
+                *slot = n;
                 n += u32::from(owned(q));
-                rank
-            })
-        })
-        .collect();
+            }
+        });
     let numbers: Vec<u32> = (0..total)
         .into_par_iter()
         .with_min_len(4096)
         .map(|q| rank[owner[q] as usize])
         .collect();
-    let positions: Vec<Point3> = pieces
-        .par_iter()
+    // Each owned point as its piece (high half) and index in the piece
+    // (low half), in vertex order; the positions collected from them.
+    let mut sources = vec![0u64; next];
+    pieces_of(&mut sources, &owned_per_piece)
+        .into_par_iter()
         .enumerate()
-        .flat_map_iter(|(p, piece)| {
+        .for_each(|(p, out)| {
             let at = start[p];
-            piece
-                .positions
-                .iter()
-                .enumerate()
-                .filter(move |(k, _)| owned(at + k))
-                .map(|(_, x)| *x)
-        })
-        .collect();
-    let triangles: Vec<[u32; 3]> = pieces
+            let kept = (0..sizes[p]).filter(|&k| owned(at + k));
+            for (slot, k) in out.iter_mut().zip(kept) {
+                *slot = ((p as u64) << 32) | k as u64;
+            }
+        });
+    let positions: Vec<Point3> = sources
         .par_iter()
-        .enumerate()
-        .flat_map_iter(|(p, piece)| {
-            let local = &numbers[start[p]..start[p + 1]];
-            piece.triangles.iter().map(|t| t.map(|i| local[i as usize]))
-        })
+        .with_min_len(4096)
+        .map(|&s| pieces[(s >> 32) as usize].positions[(s & 0xffff_ffff) as usize])
         .collect();
+    let counts: Vec<usize> = pieces.iter().map(|p| p.triangles.len()).collect();
+    let mut triangles = vec![[0u32; 3]; counts.iter().sum()];
+    pieces_of(&mut triangles, &counts)
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(p, out)| {
+            let local = &numbers[start[p]..start[p + 1]];
+            for (slot, t) in out.iter_mut().zip(&pieces[p].triangles) {
+                *slot = t.map(|i| local[i as usize]);
+            }
+        });
     (positions, triangles)
+}
+
+/// `all` cut into consecutive slices of `counts[p]` elements, one per
+/// piece `p` (the counts sum to its length).
+fn pieces_of<'a, T>(mut all: &'a mut [T], counts: &[usize]) -> Vec<&'a mut [T]> {
+    let mut out = Vec::with_capacity(counts.len());
+    for &n in counts {
+        let (head, tail) = std::mem::take(&mut all).split_at_mut(n);
+        out.push(head);
+        all = tail;
+    }
+    out
 }
 
 /// Where the gradient vanishes (a clipped field exactly on a collider's

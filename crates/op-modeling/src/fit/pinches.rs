@@ -158,8 +158,9 @@ pub(super) fn join_at_pinches(
         }
         let mut best: Option<(Real, u32, u32)> = None;
         for (from, to) in [(v, w), (w, v)] {
+            let into = zipper.ends(mesh, to, false);
             for a in zipper.ends(mesh, from, true) {
-                for b in zipper.ends(mesh, to, false) {
+                for &b in &into {
                     // The edges (v, a) and (b, v) at the copy merged
                     // into v (`fits` looks at v's own).
                     if [(w, a), (b, w)].iter().any(|e| zipper.directed.contains(e)) {
