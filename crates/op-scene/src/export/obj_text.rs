@@ -86,6 +86,11 @@ impl Line {
         &self.buf[..self.len]
     }
 
+    /// Empties the line for the next one (its buffer is reused).
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+
     fn byte(&mut self, b: u8) {
         self.buf[self.len] = b;
         self.len += 1;
@@ -94,11 +99,7 @@ impl Line {
     /// `n` in decimal, as `{}` writes it.
     fn decimal(&mut self, n: u64) {
         let digits = n.checked_ilog10().unwrap_or(0) as usize + 1;
-        let mut rest = n;
-        for k in (0..digits).rev() {
-            self.buf[self.len + k] = b'0' + (rest % 10) as u8;
-            rest /= 10;
-        }
+        digits_into(&mut self.buf[self.len..self.len + digits], n);
         self.len += digits;
     }
 
@@ -110,12 +111,33 @@ impl Line {
         let micro = micro_units(x.abs());
         self.decimal(micro / 1_000_000);
         self.byte(b'.');
-        let mut rest = micro % 1_000_000;
-        for k in (0..6).rev() {
-            self.buf[self.len + k] = b'0' + (rest % 10) as u8;
-            rest /= 10;
-        }
+        digits_into(&mut self.buf[self.len..self.len + 6], micro % 1_000_000);
         self.len += 6;
+    }
+}
+
+/// The two-digit decimal strings `00` to `99`, one after the other.
+const PAIRS: &[u8; 200] = b"\
+    0001020304050607080910111213141516171819\
+    2021222324252627282930313233343536373839\
+    4041424344454647484950515253545556575859\
+    6061626364656667686970717273747576777879\
+    8081828384858687888990919293949596979899";
+
+/// Writes the last `out.len()` decimal digits of `n` into `out`, zero
+/// padded, two digits per division (the encoding's inner loop: one
+/// division by 100 instead of two by 10 per pair of digits).
+#[inline]
+fn digits_into(out: &mut [u8], mut n: u64) {
+    let mut end = out.len();
+    while end >= 2 {
+        let pair = (n % 100) as usize * 2;
+        n /= 100;
+        out[end - 2..end].copy_from_slice(&PAIRS[pair..pair + 2]);
+        end -= 2;
+    }
+    if end == 1 {
+        out[0] = b'0' + (n % 10) as u8;
     }
 }
 
@@ -127,10 +149,11 @@ pub(super) fn point_lines(
     points: &[Vec3],
     to_file: impl Fn(&Vec3) -> [f64; 3],
 ) {
+    let mut line = Line::new();
     for p in points {
         let c = to_file(p);
         if c.iter().all(|&x| encodable(x)) {
-            let mut line = Line::new();
+            line.clear();
             for &b in prefix {
                 line.byte(b);
             }
@@ -154,16 +177,20 @@ pub(super) fn point_lines(
 /// Appends an `f a//a b//b c//c` line per triangle: vertex and normal of
 /// the same one-based rank.
 pub(super) fn triangle_lines(out: &mut Vec<u8>, triangles: &[[u32; 3]]) {
+    let mut line = Line::new();
     for t in triangles {
-        let mut line = Line::new();
+        line.clear();
         line.byte(b'f');
         for &v in t {
-            let v = u64::from(v) + 1;
             line.byte(b' ');
-            line.decimal(v);
+            // `a//a`: the digits encoded once, then copied.
+            let from = line.len;
+            line.decimal(u64::from(v) + 1);
+            let to = line.len;
             line.byte(b'/');
             line.byte(b'/');
-            line.decimal(v);
+            line.buf.copy_within(from..to, line.len);
+            line.len += to - from;
         }
         line.byte(b'\n');
         out.extend_from_slice(line.as_bytes());
@@ -173,8 +200,9 @@ pub(super) fn triangle_lines(out: &mut Vec<u8>, triangles: &[[u32; 3]]) {
 /// Appends an `l a b` line per segment (one-based; no normal index, which
 /// is not valid on a line).
 pub(super) fn segment_lines(out: &mut Vec<u8>, segments: &[[u32; 2]]) {
+    let mut line = Line::new();
     for s in segments {
-        let mut line = Line::new();
+        line.clear();
         line.byte(b'l');
         for &v in s {
             line.byte(b' ');
@@ -309,5 +337,30 @@ mod tests {
             String::from_utf8(out).unwrap(),
             format!("f 1//1 10//10 {0}//{0}\nl 100 101\n", u32::MAX)
         );
+    }
+
+    /// Every digit count, odd and even (the digits go two at a time),
+    /// and the numbers either side of each power of ten.
+    #[test]
+    fn indices_of_every_length_print_as_core_fmt_does() {
+        let mut ranks = vec![0u32, u32::MAX - 1];
+        for k in 1..10 {
+            let p = 10u32.pow(k);
+            ranks.extend([p - 2, p - 1, p, p + 7]);
+        }
+        let triangles: Vec<[u32; 3]> = ranks
+            .chunks(3)
+            .map(|c| [c[0], c[c.len() / 2], c[c.len() - 1]])
+            .collect();
+        let mut out = Vec::new();
+        triangle_lines(&mut out, &triangles);
+        let expected: String = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| u64::from(v) + 1);
+                format!("f {a}//{a} {b}//{b} {c}//{c}\n")
+            })
+            .collect();
+        assert_eq!(String::from_utf8(out).unwrap(), expected);
     }
 }
