@@ -180,7 +180,13 @@ pub(crate) fn bucket(dims: [usize; 3], boxes: &[Option<CellBox>]) -> (Vec<u32>, 
         }
     }
     starts[n_bins] = total;
-    let items: Vec<AtomicU32> = (0..total).map(|_| AtomicU32::new(0)).collect();
+    // Made and read back in parallel (a 100k-particle skin lists about a
+    // million places).
+    let items: Vec<AtomicU32> = (0..total)
+        .into_par_iter()
+        .with_min_len(MIN_PARALLEL_LEN)
+        .map(|_| AtomicU32::new(0))
+        .collect();
     chunks
         .par_iter()
         .zip(places.par_iter_mut())
@@ -198,7 +204,11 @@ pub(crate) fn bucket(dims: [usize; 3], boxes: &[Option<CellBox>]) -> (Vec<u32>, 
         });
     (
         starts,
-        items.into_iter().map(AtomicU32::into_inner).collect(),
+        items
+            .into_par_iter()
+            .with_min_len(MIN_PARALLEL_LEN)
+            .map(AtomicU32::into_inner)
+            .collect(),
     )
 }
 
