@@ -114,6 +114,9 @@ impl Reactions {
 pub struct ClippedField<'a, F: ScalarField + ?Sized> {
     field: &'a F,
     colliders: Vec<(&'a dyn Shape, Pose)>,
+    /// Each collider's bounding box at its pose (infinite for a
+    /// half-space).
+    boxes: Vec<(Point3, Point3)>,
     slope: Real,
 }
 
@@ -121,19 +124,62 @@ impl<'a, F: ScalarField + ?Sized> ClippedField<'a, F> {
     /// `field` clipped by `colliders` (shape, pose) with slope `slope`
     /// (> 0; `ISO / cell_size` makes the clip one cell thick).
     pub fn new(field: &'a F, colliders: Vec<(&'a dyn Shape, Pose)>, slope: Real) -> Self {
+        let boxes = colliders
+            .iter()
+            .map(|(shape, pose)| {
+                let b = shape.compute_aabb(pose);
+                (
+                    Point3::new(b.mins.x, b.mins.y, b.mins.z),
+                    Point3::new(b.maxs.x, b.maxs.y, b.maxs.z),
+                )
+            })
+            .collect();
         ClippedField {
             field,
             colliders,
+            boxes,
             slope,
         }
     }
 
-    /// The smallest `ISO + g s_k` and its gradient, if any collider is
-    /// near enough to matter at `p` (the clip only bites where it is below
-    /// the field's largest value, 1).
+    /// The smallest `ISO + g s_k` and its gradient over every collider
+    /// (the tests' reference for [`ClippedField::clip_below`]).
+    #[cfg(test)]
     fn clip(&self, p: &Point3) -> Option<(Real, Vec3)> {
+        self.clip_below(p, Real::INFINITY)
+    }
+
+    /// A value no higher than collider `k`'s clip `ISO + g s_k` at `p`,
+    /// from its bounding box alone: a point outside the box by `d` is at
+    /// least `d` from the shape, and the signed distance's round-off is far
+    /// below the millionth (of `1 + d` and the coordinates' size) taken
+    /// off; rounding keeps the order of `ISO + g s` in `s` for `g > 0`. In
+    /// the box (where the point may be inside, `s_k < 0`), minus infinity.
+    fn clip_floor(&self, k: usize, p: &Point3) -> Real {
+        let (lo, hi) = &self.boxes[k];
+        let d = (0..3)
+            .map(|i| (lo[i] - p[i]).max(p[i] - hi[i]).max(0.0).powi(2))
+            .sum::<Real>()
+            .sqrt();
+        if d > 0.0 {
+            ISO + self.slope * (d - 1e-6 * (1.0 + d + p.coords.amax()))
+        } else {
+            Real::NEG_INFINITY
+        }
+    }
+
+    /// The smallest `ISO + g s_k` and its gradient among the colliders
+    /// whose clip can be below `f` at `p`: a collider whose
+    /// [`ClippedField::clip_floor`] is at least `f` is passed over without
+    /// its signed distance (a clip at or above the field leaves the field
+    /// as it is, so the clipped value and gradient are the same bits as
+    /// with every collider's).
+    fn clip_below(&self, p: &Point3, f: Real) -> Option<(Real, Vec3)> {
         let mut best: Option<(Real, Vec3)> = None;
-        for (shape, pose) in &self.colliders {
+        for (k, (shape, pose)) in self.colliders.iter().enumerate() {
+            if self.slope > 0.0 && self.clip_floor(k, p) >= f {
+                continue;
+            }
             // Exactly on the surface the normal is undefined: s = 0 there.
             let (s, n) = signed_distance(*shape, pose, &p.coords).unwrap_or((0.0, Vec3::zeros()));
             let v = ISO + self.slope * s;
@@ -144,10 +190,11 @@ impl<'a, F: ScalarField + ?Sized> ClippedField<'a, F> {
         best
     }
 
-    /// The clip's value at `p`: the smallest `ISO + g s_k`, if any
-    /// collider.
-    pub(crate) fn clip_value(&self, p: &Point3) -> Option<Real> {
-        self.clip(p).map(|(v, _)| v)
+    /// The clip's value at `p` where it can be below `f` (the smallest
+    /// `ISO + g s_k` of the colliders [`ClippedField::clip_below`] keeps),
+    /// for lowering a value `f` to it.
+    pub(crate) fn clip_value_below(&self, p: &Point3, f: Real) -> Option<Real> {
+        self.clip_below(p, f).map(|(v, _)| v)
     }
 
     /// A lower bound of the clip's value over the ball of centre `c` and
@@ -167,7 +214,7 @@ impl<'a, F: ScalarField + ?Sized> ClippedField<'a, F> {
 impl<F: ScalarField + ?Sized> ScalarField for ClippedField<'_, F> {
     fn value(&self, p: &Point3) -> Real {
         let f = self.field.value(p);
-        match self.clip(p) {
+        match self.clip_below(p, f) {
             Some((c, _)) => f.min(c),
             None => f,
         }
@@ -175,7 +222,7 @@ impl<F: ScalarField + ?Sized> ScalarField for ClippedField<'_, F> {
 
     fn value_and_gradient(&self, p: &Point3) -> ValueGradient {
         let (f, g) = self.field.value_and_gradient(p);
-        match self.clip(p) {
+        match self.clip_below(p, f) {
             Some((c, gc)) if c < f => (c, gc),
             _ => (f, g),
         }
@@ -233,6 +280,83 @@ mod tests {
         ObstacleContact::new(skin.field(), &slab, &pose)
             .reactions(&ImplicitContactParams::new(10.0, 0.05))
             .unwrap()
+    }
+
+    /// The clip answers as with every signed distance computed: for
+    /// points around a tilted box, a ball and a half-space (a fifth of them
+    /// just beyond the ball's box at a face centre, where the ball touches
+    /// its box) and field values just above, at and below the clip, the
+    /// clipped value and the gradient chosen have the same bits. A bound
+    /// that took 1e-4 too much (the margin's sign flipped and widened)
+    /// fails it.
+    #[test]
+    fn the_box_floor_leaves_the_clip_as_it_was() {
+        use op_test_support::Rng;
+        use parry3d_f64::math::Rotation;
+        use parry3d_f64::shape::{Ball, HalfSpace};
+        let tilted = Cuboid::new(Vector::new(1.0, 0.5, 0.25));
+        let turned = Pose::from_parts(
+            Vector::new(0.5, -0.3, 0.2),
+            Rotation::from_scaled_axis(Vector::new(0.3, -0.5, 0.7)),
+        );
+        let ball = Ball::new(1.5);
+        let half = HalfSpace::new(Vector::new(0.1, -0.2, 1.0).normalize());
+        let at = Pose::from_parts(Vector::new(0.3, -0.1, 0.2), Rotation::IDENTITY);
+        let empty = Field::new(Vec::new());
+        let g = ISO / 0.25;
+        let clipped = ClippedField::new(
+            &empty,
+            vec![
+                (&tilted as &dyn Shape, turned),
+                (&ball as &dyn Shape, at),
+                (&half as &dyn Shape, at),
+            ],
+            g,
+        );
+        let one = |k: usize| {
+            let (shape, pose) = clipped.colliders[k];
+            ClippedField::new(&empty, vec![(shape, pose)], g)
+        };
+        let fields = [one(0), one(1), one(2), clipped];
+        let mut rng = Rng::new(23);
+        let mut near = 0;
+        for field in &fields {
+            for _ in 0..3000 {
+                let mut x = Point3::new(
+                    rng.uniform(-4.0, 4.0),
+                    rng.uniform(-4.0, 4.0),
+                    rng.uniform(-4.0, 4.0),
+                );
+                if rng.uniform(0.0, 1.0) < 0.2 {
+                    // Beyond the ball's +x face centre, by 0 to 0.3.
+                    x = Point3::new(1.8 + rng.uniform(0.0, 0.3), -0.1, 0.2);
+                }
+                let full = field.clip(&x);
+                let Some((v, _)) = full else { continue };
+                for f in [
+                    v - 1e-3,
+                    v - 1e-9,
+                    v,
+                    v + 1e-9,
+                    v + 1e-5,
+                    v + 1e-3,
+                    0.0,
+                    1.0,
+                ] {
+                    let fast = field.clip_below(&x, f);
+                    let value = |c: Option<(Real, Vec3)>| c.map_or(f, |(c, _)| f.min(c));
+                    let chosen = |c: Option<(Real, Vec3)>| match c {
+                        Some((c, gc)) if c < f => Some((c, gc)),
+                        _ => None,
+                    };
+                    assert_eq!(value(fast).to_bits(), value(full).to_bits(), "{x} {f}");
+                    assert_eq!(chosen(fast), chosen(full), "{x} {f}");
+                    near += usize::from(fast.is_none());
+                }
+            }
+        }
+        // The shortcut was taken.
+        assert!(near > 1000, "{near}");
     }
 
     /// A ball skin sunk into a floor, clipped by it: the mesh stays

@@ -346,7 +346,7 @@ fn clip_block<C: ScalarField + ?Sized>(
     let [a, bb, c] = block.start;
     for (n, v) in values.iter_mut().enumerate() {
         let (i, j, k) = (n % nx, (n / nx) % ny, n / (nx * ny));
-        if let Some(cv) = clip.clip_value(&grid.node(a + i, bb + j, c + k)) {
+        if let Some(cv) = clip.clip_value_below(&grid.node(a + i, bb + j, c + k), *v) {
             *v = v.min(cv);
         }
     }
