@@ -629,15 +629,15 @@ mod tests {
     #[test]
     fn close_pairs_are_every_close_pair_in_order_of_the_first() {
         // More points than one parallel chunk, a few thousand close pairs.
-        let mut seed = 7u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = op_test_support::Rng::new(7);
         let pts: Vec<Point3> = (0..5000)
-            .map(|_| Point3::new(20.0 * next(), 20.0 * next(), 2.0 * next()))
+            .map(|_| {
+                Point3::new(
+                    rng.uniform(0.0, 20.0),
+                    rng.uniform(0.0, 20.0),
+                    rng.uniform(0.0, 2.0),
+                )
+            })
             .collect();
         let reach = 0.5;
         let found = close_pairs(&pts, reach);
