@@ -102,6 +102,16 @@ impl Reactions {
     }
 }
 
+/// The bounding box `(lo, hi)` of `shape` at `pose` (infinite for an
+/// unbounded shape, a half-space).
+pub(crate) fn shape_box(shape: &dyn Shape, pose: &Pose) -> (Point3, Point3) {
+    let b = shape.compute_aabb(pose);
+    (
+        Point3::new(b.mins.x, b.mins.y, b.mins.z),
+        Point3::new(b.maxs.x, b.maxs.y, b.maxs.z),
+    )
+}
+
 /// A skin pressed against rigid colliders, deformed so that it lies on
 /// their surfaces where it would enter them (Gascuel with only the
 /// deformable skin compressed, seed 002 §6): the exported skin of an object
@@ -126,13 +136,7 @@ impl<'a, F: ScalarField + ?Sized> ClippedField<'a, F> {
     pub fn new(field: &'a F, colliders: Vec<(&'a dyn Shape, Pose)>, slope: Real) -> Self {
         let boxes = colliders
             .iter()
-            .map(|(shape, pose)| {
-                let b = shape.compute_aabb(pose);
-                (
-                    Point3::new(b.mins.x, b.mins.y, b.mins.z),
-                    Point3::new(b.maxs.x, b.maxs.y, b.maxs.z),
-                )
-            })
+            .map(|(shape, pose)| shape_box(*shape, pose))
             .collect();
         ClippedField {
             field,

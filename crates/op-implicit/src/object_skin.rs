@@ -268,15 +268,12 @@ impl SkinTool {
     /// cell wider.
     pub(crate) fn region(&self, t: Real, cell_size: Real) -> (Point3, Point3) {
         let pose = self.tool.pose(t);
-        let aabb = self
-            .tool
-            .shape()
-            .compute_aabb(&parry_pose(&pose.position, &pose.rotation));
+        let (lo, hi) = crate::contact::shape_box(
+            self.tool.shape(),
+            &parry_pose(&pose.position, &pose.rotation),
+        );
         let pad = Vec3::repeat(cell_size);
-        (
-            Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z) - pad,
-            Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z) + pad,
-        )
+        (lo - pad, hi + pad)
     }
 
     /// The reactions at world time `t` on the skin of field `field` (given

@@ -132,14 +132,10 @@ struct Obstacle<'a> {
 impl<'a> Obstacle<'a> {
     /// `shape` at `pose`, its bounding box computed once.
     fn new(shape: &'a dyn Shape, pose: &'a Pose) -> Self {
-        let aabb = shape.compute_aabb(pose);
         Obstacle {
             shape,
             pose,
-            aabb: (
-                Point3::new(aabb.mins.x, aabb.mins.y, aabb.mins.z),
-                Point3::new(aabb.maxs.x, aabb.maxs.y, aabb.maxs.z),
-            ),
+            aabb: crate::contact::shape_box(shape, pose),
         }
     }
 
